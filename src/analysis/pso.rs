@@ -1,1 +1,685 @@
-//! (being written)
+//! A generic particle swarm optimiser (PSO), section 2.3.2 of the paper,
+//! used to choose the absorber parameters `(k_h, c_h)` (section 2.3) and the
+//! time-delay feedback parameters `(g, tau)` (section 4.2).
+//!
+//! # Algorithm
+//!
+//! A swarm of `m` particles moves in a box `[lower, upper]` of `R^n`. Each
+//! particle `i` has a position `X_i`, a velocity `V_i` and remembers its
+//! individual best position `P_i`; the swarm shares the global best position
+//! `P_g`. At iteration `k` every component `d` is updated with Eq. (7):
+//!
+//! ```text
+//! V_id^{k+1} = w^k V_id^k + c1 r1 (P_id^k - X_id^k) + c2 r2 (P_gd^k - X_id^k)
+//! X_id^{k+1} = X_id^k + V_id^{k+1}                                      (7)
+//! ```
+//!
+//! where `w^k` is the inertia weight, `c1` (cognitive) and `c2` (social) are
+//! the learning factors and `r1`, `r2` are uniform random numbers in
+//! `[0, 1)`, drawn afresh for every particle, component and iteration.
+//!
+//! Implementation choices the paper leaves open:
+//! - the inertia weight decreases linearly from
+//!   [`PsoSettings::inertia_start`] at the first update to
+//!   [`PsoSettings::inertia_end`] at the last one:
+//!   `w^k = w_start - (w_start - w_end) k / (N - 1)`, `k = 0, ..., N - 1`
+//!   (`w^0 = w_start` when `N = 1`);
+//! - each velocity component is clamped to `|V_id| <= v_max,d` with
+//!   `v_max,d = max_velocity_fraction * (upper_d - lower_d)`;
+//! - a position leaving the box is clamped back onto the violated bound and
+//!   that velocity component is set to zero ("absorbing wall"), so every
+//!   evaluated candidate lies in `[lower, upper]`. For an open range such as
+//!   the paper's `(0, k_s)` the caller passes slightly shrunk bounds;
+//! - the update is synchronous: the whole swarm moves with the bests of the
+//!   previous iteration, then all particles are evaluated (in parallel), then
+//!   the individual bests and the global best are updated;
+//! - an objective returning `None`, NaN or an infinite value marks an
+//!   infeasible candidate (e.g. an unstable controller): it counts as
+//!   `+infinity` and never becomes a best. While a particle (or the swarm)
+//!   has no feasible best yet, the corresponding attraction term of Eq. (7)
+//!   is left out (its random number is still drawn).
+//!
+//! # Determinism
+//!
+//! All random numbers (initial positions, initial velocities, `r1`, `r2`)
+//! are drawn sequentially on the calling thread from a
+//! [`ChaCha8Rng`] seeded with [`PsoSettings::seed`], in a fixed order
+//! (particle by particle, component by component, `r1` before `r2`). Only
+//! the objective evaluations run in parallel (rayon), and their results are
+//! collected in particle order. Ties are broken deterministically: a best is
+//! replaced only by a strictly smaller value, and the global best is the
+//! first particle (lowest index) holding the smallest value. Hence, for a
+//! deterministic objective, the same seed gives a bit-identical
+//! [`PsoResult`] whatever the number of threads.
+
+use rand::RngExt;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+
+use crate::error::{Error, Result};
+
+/// Settings of the particle swarm optimiser.
+///
+/// The default is the paper's swarm (section 4.2): 100 particles and 200
+/// iterations, with the inertia weight decreasing linearly from 0.9 to 0.4,
+/// learning factors `c1 = c2 = 1.49445`, velocities clamped to 20 % of each
+/// dimension's range, and seed 1.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PsoSettings {
+    /// Number of particles `m` (at least 1).
+    pub particles: usize,
+    /// Number of iterations `N` (position updates after the initial swarm).
+    pub iterations: usize,
+    /// Inertia weight `w^k` at the first update (`k = 0`).
+    pub inertia_start: f64,
+    /// Inertia weight `w^k` at the last update (`k = N - 1`); the schedule is
+    /// linear in between.
+    pub inertia_end: f64,
+    /// Cognitive learning factor `c1` (attraction to the individual best).
+    pub cognitive: f64,
+    /// Social learning factor `c2` (attraction to the global best).
+    pub social: f64,
+    /// Velocity clamp as a fraction of each dimension's range
+    /// `upper_d - lower_d`; must be positive. Initial velocities are uniform
+    /// in `[-v_max,d, v_max,d)`.
+    pub max_velocity_fraction: f64,
+    /// Seed of the [`ChaCha8Rng`] that draws every random number.
+    pub seed: u64,
+}
+
+impl Default for PsoSettings {
+    fn default() -> Self {
+        Self {
+            particles: 100,
+            iterations: 200,
+            inertia_start: 0.9,
+            inertia_end: 0.4,
+            cognitive: 1.49445,
+            social: 1.49445,
+            max_velocity_fraction: 0.2,
+            seed: 1,
+        }
+    }
+}
+
+impl PsoSettings {
+    /// Checks the settings: at least one particle, finite non-negative
+    /// inertia weights and learning factors, and a finite positive velocity
+    /// fraction.
+    pub fn validate(&self) -> Result<()> {
+        if self.particles == 0 {
+            return Err(Error::InvalidSetting {
+                name: "particles",
+                value: 0,
+                reason: "the swarm needs at least one particle",
+            });
+        }
+        let non_negative = [
+            ("inertia_start", self.inertia_start),
+            ("inertia_end", self.inertia_end),
+            ("cognitive", self.cognitive),
+            ("social", self.social),
+        ];
+        for (name, value) in non_negative {
+            if !value.is_finite() || value < 0.0 {
+                return Err(Error::InvalidParameter {
+                    name,
+                    value,
+                    reason: "must be finite and non-negative",
+                });
+            }
+        }
+        if !self.max_velocity_fraction.is_finite() || self.max_velocity_fraction <= 0.0 {
+            return Err(Error::InvalidParameter {
+                name: "max_velocity_fraction",
+                value: self.max_velocity_fraction,
+                reason: "must be finite and positive",
+            });
+        }
+        Ok(())
+    }
+
+    /// Inertia weight `w^k` of the update at (0-based) iteration `k`:
+    /// linear from `inertia_start` (`k = 0`) to `inertia_end`
+    /// (`k = iterations - 1`).
+    pub fn inertia(&self, k: usize) -> f64 {
+        if self.iterations <= 1 {
+            return self.inertia_start;
+        }
+        let t = k as f64 / (self.iterations - 1) as f64;
+        self.inertia_start + (self.inertia_end - self.inertia_start) * t
+    }
+}
+
+/// The search box `[lower, upper]`, one entry per dimension.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Bounds {
+    /// Lower bound of each dimension.
+    pub lower: Vec<f64>,
+    /// Upper bound of each dimension (strictly greater than the lower one).
+    pub upper: Vec<f64>,
+}
+
+impl Bounds {
+    /// Builds and validates a box (see [`Bounds::validate`]).
+    pub fn new(lower: Vec<f64>, upper: Vec<f64>) -> Result<Self> {
+        let bounds = Self { lower, upper };
+        bounds.validate()?;
+        Ok(bounds)
+    }
+
+    /// Number of dimensions.
+    pub fn dim(&self) -> usize {
+        self.lower.len()
+    }
+
+    /// Checks that there is at least one dimension, that both vectors have
+    /// the same length, that all bounds are finite, that `lower < upper`
+    /// componentwise and that each range `upper - lower` is finite.
+    pub fn validate(&self) -> Result<()> {
+        if self.lower.is_empty() {
+            return Err(Error::InvalidSetting {
+                name: "bounds.lower.len",
+                value: 0,
+                reason: "at least one dimension is required",
+            });
+        }
+        if self.upper.len() != self.lower.len() {
+            return Err(Error::InvalidSetting {
+                name: "bounds.upper.len",
+                value: i64::try_from(self.upper.len()).unwrap_or(i64::MAX),
+                reason: "must equal the number of lower bounds",
+            });
+        }
+        for (&lo, &hi) in self.lower.iter().zip(&self.upper) {
+            if !lo.is_finite() {
+                return Err(Error::InvalidParameter {
+                    name: "bounds.lower",
+                    value: lo,
+                    reason: "must be finite",
+                });
+            }
+            if !hi.is_finite() {
+                return Err(Error::InvalidParameter {
+                    name: "bounds.upper",
+                    value: hi,
+                    reason: "must be finite",
+                });
+            }
+            if lo >= hi {
+                return Err(Error::InvalidParameter {
+                    name: "bounds.upper",
+                    value: hi,
+                    reason: "must be strictly greater than the lower bound of its dimension",
+                });
+            }
+            if !(hi - lo).is_finite() {
+                return Err(Error::InvalidParameter {
+                    name: "bounds.upper",
+                    value: hi,
+                    reason: "the range upper - lower overflows",
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Outcome of [`pso_minimize`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct PsoResult {
+    /// Best feasible position found (inside the bounds).
+    pub best_position: Vec<f64>,
+    /// Objective value at [`PsoResult::best_position`] (finite).
+    pub best_value: f64,
+    /// Global best value after each iteration: `history[k]` is the best
+    /// value once iteration `k + 1` of `N` is done, so
+    /// `history.len() == iterations` and the initial swarm's best is not
+    /// included. Non-increasing; an entry is `+infinity` while no feasible
+    /// candidate has been found yet.
+    pub history: Vec<f64>,
+    /// Number of objective evaluations: `particles * (iterations + 1)`.
+    pub evaluations: usize,
+}
+
+/// Maps an objective value to the fitness used for comparisons: `None`,
+/// NaN and infinite values are infeasible (`+infinity`).
+fn fitness(value: Option<f64>) -> f64 {
+    match value {
+        Some(v) if v.is_finite() => v,
+        _ => f64::INFINITY,
+    }
+}
+
+/// Evaluates the whole swarm in parallel; results are in particle order.
+fn evaluate<F>(objective: &F, positions: &[Vec<f64>]) -> Vec<f64>
+where
+    F: Fn(&[f64]) -> Option<f64> + Sync,
+{
+    positions
+        .par_iter()
+        .map(|x| fitness(objective(x)))
+        .collect()
+}
+
+/// Minimises `objective` over `bounds` with the particle swarm optimiser of
+/// Eq. (7) (see the [module documentation](self) for the details).
+///
+/// `objective` returns `None` for an infeasible candidate (e.g. an unstable
+/// controller); such candidates, and NaN or infinite values, never become a
+/// best. It is called from rayon worker threads, hence `Sync`.
+///
+/// `progress`, if given, is called on the calling thread after each
+/// iteration with the number of completed iterations (`1..=iterations`) and
+/// the current global best value (`+infinity` while nothing feasible has
+/// been found).
+///
+/// # Errors
+///
+/// [`Error::InvalidParameter`] / [`Error::InvalidSetting`] for invalid
+/// `bounds` or `settings`, and [`Error::Numerical`] if no evaluated candidate
+/// was feasible.
+pub fn pso_minimize<F>(
+    objective: F,
+    bounds: &Bounds,
+    settings: &PsoSettings,
+    progress: Option<&dyn Fn(usize, f64)>,
+) -> Result<PsoResult>
+where
+    F: Fn(&[f64]) -> Option<f64> + Sync,
+{
+    bounds.validate()?;
+    settings.validate()?;
+
+    let dim = bounds.dim();
+    let m = settings.particles;
+    let range: Vec<f64> = bounds
+        .upper
+        .iter()
+        .zip(&bounds.lower)
+        .map(|(hi, lo)| hi - lo)
+        .collect();
+    let v_max: Vec<f64> = range
+        .iter()
+        .map(|r| settings.max_velocity_fraction * r)
+        .collect();
+
+    let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
+
+    // Step 1: random initial positions and velocities, drawn sequentially.
+    let mut positions: Vec<Vec<f64>> = Vec::with_capacity(m);
+    let mut velocities: Vec<Vec<f64>> = Vec::with_capacity(m);
+    for _ in 0..m {
+        let mut x = Vec::with_capacity(dim);
+        let mut v = Vec::with_capacity(dim);
+        for d in 0..dim {
+            let u: f64 = rng.random();
+            // `lower + u * range` can round up to `upper` but never beyond it
+            // in a way `clamp` would not fix.
+            x.push((bounds.lower[d] + u * range[d]).clamp(bounds.lower[d], bounds.upper[d]));
+            let u: f64 = rng.random();
+            v.push((2.0 * u - 1.0) * v_max[d]);
+        }
+        positions.push(x);
+        velocities.push(v);
+    }
+
+    // Step 3: fitness of the initial swarm, individual and global bests.
+    let values = evaluate(&objective, &positions);
+    let mut evaluations = m;
+    let mut personal_pos = positions.clone();
+    let mut personal_val = values;
+    let mut global: Option<usize> = None; // index into personal_* of the best
+    let mut global_val = f64::INFINITY;
+    let mut global_pos: Vec<f64> = Vec::new();
+    for (i, &val) in personal_val.iter().enumerate() {
+        if val < global_val {
+            global_val = val;
+            global = Some(i);
+        }
+    }
+    if let Some(i) = global {
+        global_pos.clone_from(&personal_pos[i]);
+    }
+
+    let mut history = Vec::with_capacity(settings.iterations);
+    for k in 0..settings.iterations {
+        // Step 4: Eq. (7), random numbers drawn sequentially.
+        let w = settings.inertia(k);
+        for i in 0..m {
+            let x = &mut positions[i];
+            let v = &mut velocities[i];
+            let own_best = personal_val[i].is_finite();
+            let swarm_best = global.is_some();
+            for d in 0..dim {
+                let r1: f64 = rng.random();
+                let r2: f64 = rng.random();
+                let mut vd = w * v[d];
+                if own_best {
+                    vd += settings.cognitive * r1 * (personal_pos[i][d] - x[d]);
+                }
+                if swarm_best {
+                    vd += settings.social * r2 * (global_pos[d] - x[d]);
+                }
+                vd = vd.clamp(-v_max[d], v_max[d]);
+                let xd = x[d] + vd;
+                if xd < bounds.lower[d] {
+                    x[d] = bounds.lower[d];
+                    v[d] = 0.0;
+                } else if xd > bounds.upper[d] {
+                    x[d] = bounds.upper[d];
+                    v[d] = 0.0;
+                } else {
+                    x[d] = xd;
+                    v[d] = vd;
+                }
+            }
+        }
+
+        // Steps 2, 3 and 5: evaluate, then update the bests in particle order.
+        let values = evaluate(&objective, &positions);
+        evaluations += m;
+        for (i, &val) in values.iter().enumerate() {
+            if val < personal_val[i] {
+                personal_val[i] = val;
+                personal_pos[i].clone_from(&positions[i]);
+            }
+        }
+        let mut improved = false;
+        for (i, &val) in personal_val.iter().enumerate() {
+            if val < global_val {
+                global_val = val;
+                global = Some(i);
+                improved = true;
+            }
+        }
+        if improved && let Some(i) = global {
+            global_pos.clone_from(&personal_pos[i]);
+        }
+
+        history.push(global_val);
+        if let Some(report) = progress {
+            report(k + 1, global_val);
+        }
+    }
+
+    // Step 6: output the optimum.
+    if global.is_none() {
+        return Err(Error::Numerical {
+            what: "particle swarm optimisation",
+            reason: format!("no feasible candidate among {evaluations} evaluations"),
+        });
+    }
+    Ok(PsoResult {
+        best_position: global_pos,
+        best_value: global_val,
+        history,
+        evaluations,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::cell::RefCell;
+
+    fn sphere(x: &[f64]) -> Option<f64> {
+        Some(x.iter().map(|v| v * v).sum())
+    }
+
+    fn rosenbrock(x: &[f64]) -> Option<f64> {
+        let (a, b) = (x[0], x[1]);
+        Some((1.0 - a).powi(2) + 100.0 * (b - a * a).powi(2))
+    }
+
+    fn small(particles: usize, iterations: usize, seed: u64) -> PsoSettings {
+        PsoSettings {
+            particles,
+            iterations,
+            seed,
+            ..PsoSettings::default()
+        }
+    }
+
+    fn cube(dim: usize, lo: f64, hi: f64) -> Bounds {
+        Bounds::new(vec![lo; dim], vec![hi; dim]).unwrap()
+    }
+
+    fn assert_non_increasing(history: &[f64]) {
+        for pair in history.windows(2) {
+            assert!(pair[1] <= pair[0], "history increased: {pair:?}");
+        }
+    }
+
+    #[test]
+    fn default_matches_the_paper_swarm() {
+        let s = PsoSettings::default();
+        assert_eq!((s.particles, s.iterations), (100, 200));
+        assert_eq!(s.inertia(0), 0.9);
+        assert!((s.inertia(199) - 0.4).abs() < 1e-15);
+        assert!(s.inertia(100) < s.inertia(99));
+        s.validate().unwrap();
+    }
+
+    #[test]
+    fn sphere_2d() {
+        let r = pso_minimize(sphere, &cube(2, -5.0, 5.0), &small(20, 150, 7), None).unwrap();
+        assert!(r.best_value < 1e-8, "best {}", r.best_value);
+        assert_eq!(r.history.len(), 150);
+        assert_eq!(r.evaluations, 20 * 151);
+        assert_eq!(*r.history.last().unwrap(), r.best_value);
+        assert_non_increasing(&r.history);
+    }
+
+    #[test]
+    fn sphere_5d() {
+        let r = pso_minimize(sphere, &cube(5, -5.0, 5.0), &small(30, 300, 3), None).unwrap();
+        assert!(r.best_value < 1e-8, "best {}", r.best_value);
+        assert_eq!(sphere(&r.best_position), Some(r.best_value));
+        assert_non_increasing(&r.history);
+    }
+
+    #[test]
+    fn rosenbrock_2d() {
+        let r = pso_minimize(rosenbrock, &cube(2, -2.0, 2.0), &small(30, 400, 11), None).unwrap();
+        let p = &r.best_position;
+        assert!(
+            (p[0] - 1.0).abs() < 1e-3 && (p[1] - 1.0).abs() < 1e-3,
+            "best position {p:?}, value {}",
+            r.best_value
+        );
+        assert_non_increasing(&r.history);
+    }
+
+    #[test]
+    fn same_seed_same_result_and_other_seed_differs() {
+        let b = cube(3, -3.0, 4.0);
+        let a = pso_minimize(rosenbrock3, &b, &small(15, 40, 42), None).unwrap();
+        let again = pso_minimize(rosenbrock3, &b, &small(15, 40, 42), None).unwrap();
+        assert_eq!(a, again);
+        let other = pso_minimize(rosenbrock3, &b, &small(15, 40, 43), None).unwrap();
+        assert_ne!(a.best_position, other.best_position);
+    }
+
+    fn rosenbrock3(x: &[f64]) -> Option<f64> {
+        Some(
+            x.windows(2)
+                .map(|p| (1.0 - p[0]).powi(2) + 100.0 * (p[1] - p[0] * p[0]).powi(2))
+                .sum(),
+        )
+    }
+
+    #[test]
+    fn bit_identical_whatever_the_thread_count() {
+        let b = cube(3, -3.0, 4.0);
+        let s = small(17, 60, 5);
+        // An objective with a few infeasible regions, to exercise those paths.
+        let f = |x: &[f64]| {
+            if x[0] > 3.0 {
+                None
+            } else if x[1] > 3.5 {
+                Some(f64::NAN)
+            } else {
+                rosenbrock3(x)
+            }
+        };
+        let run = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| pso_minimize(f, &b, &s, None).unwrap())
+        };
+        let one = run(1);
+        let two = run(2);
+        let four = run(4);
+        let ambient = pso_minimize(f, &b, &s, None).unwrap();
+        for other in [&two, &four, &ambient] {
+            assert_eq!(one.best_value.to_bits(), other.best_value.to_bits());
+            assert_eq!(one.best_position.len(), other.best_position.len());
+            for (p, q) in one.best_position.iter().zip(&other.best_position) {
+                assert_eq!(p.to_bits(), q.to_bits());
+            }
+            let h1: Vec<u64> = one.history.iter().map(|v| v.to_bits()).collect();
+            let h2: Vec<u64> = other.history.iter().map(|v| v.to_bits()).collect();
+            assert_eq!(h1, h2);
+            assert_eq!(one.evaluations, other.evaluations);
+        }
+    }
+
+    #[test]
+    fn infeasible_half_domain_is_avoided() {
+        // Minimum of the unconstrained function at (-1, 0) is infeasible; the
+        // feasible minimum is (0, 0) with value 1, on the feasibility edge.
+        let f = |x: &[f64]| {
+            if x[0] < 0.0 {
+                None
+            } else {
+                Some((x[0] + 1.0).powi(2) + x[1] * x[1])
+            }
+        };
+        let r = pso_minimize(f, &cube(2, -2.0, 2.0), &small(20, 200, 9), None).unwrap();
+        assert!(r.best_position[0] >= 0.0);
+        assert!((r.best_value - 1.0).abs() < 1e-6, "best {}", r.best_value);
+        assert!(r.best_position[1].abs() < 1e-3);
+        assert_non_increasing(&r.history);
+    }
+
+    #[test]
+    fn interior_feasible_minimum_with_nan_region() {
+        // NaN on half the domain: treated as infeasible, never a best.
+        let f = |x: &[f64]| {
+            if x[1] < 0.0 {
+                Some(f64::NAN)
+            } else {
+                Some((x[0] - 0.5).powi(2) + (x[1] - 1.0).powi(2))
+            }
+        };
+        let r = pso_minimize(f, &cube(2, -3.0, 3.0), &small(20, 150, 2), None).unwrap();
+        assert!(r.best_value < 1e-8, "best {}", r.best_value);
+        assert!(r.best_value.is_finite());
+    }
+
+    #[test]
+    fn minimum_on_the_bound_is_reached() {
+        // Minimum outside the box: the optimum is the corner (1, 1).
+        let f = |x: &[f64]| Some((x[0] - 3.0).powi(2) + (x[1] - 3.0).powi(2));
+        let r = pso_minimize(f, &cube(2, 0.0, 1.0), &small(10, 50, 4), None).unwrap();
+        assert_eq!(r.best_position, vec![1.0, 1.0]);
+        assert_eq!(r.best_value, 8.0);
+    }
+
+    #[test]
+    fn positions_stay_inside_the_bounds() {
+        let b = Bounds::new(vec![0.0, 10.0], vec![1e-3, 20.0]).unwrap();
+        let f = |x: &[f64]| {
+            assert!((0.0..=1e-3).contains(&x[0]), "x0 = {}", x[0]);
+            assert!((10.0..=20.0).contains(&x[1]), "x1 = {}", x[1]);
+            Some(-x[0] * x[1])
+        };
+        let r = pso_minimize(f, &b, &small(8, 30, 1), None).unwrap();
+        assert!(r.best_value < 0.0);
+    }
+
+    #[test]
+    fn all_infeasible_is_an_error() {
+        let err =
+            pso_minimize(|_: &[f64]| None, &cube(2, 0.0, 1.0), &small(5, 4, 1), None).unwrap_err();
+        assert!(matches!(err, Error::Numerical { .. }), "{err}");
+    }
+
+    #[test]
+    fn progress_is_reported_every_iteration() {
+        let seen = RefCell::new(Vec::new());
+        let report = |k: usize, best: f64| seen.borrow_mut().push((k, best));
+        let r = pso_minimize(sphere, &cube(2, -1.0, 1.0), &small(6, 12, 8), Some(&report)).unwrap();
+        let seen = seen.into_inner();
+        assert_eq!(seen.len(), 12);
+        for (j, (k, best)) in seen.iter().enumerate() {
+            assert_eq!(*k, j + 1);
+            assert_eq!(*best, r.history[j]);
+        }
+    }
+
+    #[test]
+    fn zero_iterations_returns_the_initial_best() {
+        let r = pso_minimize(sphere, &cube(2, -1.0, 1.0), &small(6, 0, 8), None).unwrap();
+        assert!(r.history.is_empty());
+        assert_eq!(r.evaluations, 6);
+        assert!(r.best_value.is_finite());
+    }
+
+    #[test]
+    fn invalid_bounds_are_rejected() {
+        let cases = [
+            (vec![0.0, 1.0], vec![1.0]),
+            (vec![], vec![]),
+            (vec![1.0], vec![1.0]),
+            (vec![2.0], vec![1.0]),
+            (vec![f64::NAN], vec![1.0]),
+            (vec![0.0], vec![f64::INFINITY]),
+            (vec![-f64::MAX], vec![f64::MAX]),
+        ];
+        for (lower, upper) in cases {
+            let err = Bounds::new(lower.clone(), upper.clone()).unwrap_err();
+            assert!(
+                matches!(
+                    err,
+                    Error::InvalidParameter { .. } | Error::InvalidSetting { .. }
+                ),
+                "{err}"
+            );
+            // The optimiser validates public-field bounds too.
+            let b = Bounds { lower, upper };
+            assert!(pso_minimize(sphere, &b, &small(4, 2, 1), None).is_err());
+        }
+    }
+
+    #[test]
+    fn invalid_settings_are_rejected() {
+        let b = cube(2, -1.0, 1.0);
+        let bad = [
+            PsoSettings {
+                particles: 0,
+                ..PsoSettings::default()
+            },
+            PsoSettings {
+                inertia_start: f64::NAN,
+                ..PsoSettings::default()
+            },
+            PsoSettings {
+                social: -1.0,
+                ..PsoSettings::default()
+            },
+            PsoSettings {
+                max_velocity_fraction: 0.0,
+                ..PsoSettings::default()
+            },
+        ];
+        for s in bad {
+            assert!(s.validate().is_err());
+            assert!(pso_minimize(sphere, &b, &s, None).is_err());
+        }
+    }
+}

@@ -1,0 +1,110 @@
+//! Helpers shared by the integration tests: an independent reference
+//! integrator for the delay equation and a small FFT.
+#![allow(dead_code)]
+
+use tdvass::model::{Plant, State, V_T, X_T};
+
+/// Classical RK4 with the method of steps for
+/// `X' = A X + b x_t(t − tau) + e x_g(t)`, a constant history X0 for t < 0,
+/// and a step that divides tau. Delayed values at half steps come from the
+/// cubic Hermite interpolant of the stored (x_t, v_t) nodes (fourth order,
+/// like RK4 itself). Returns X at `duration`.
+pub fn rk4_method_of_steps(
+    plant: &Plant,
+    tau: f64,
+    x0: State,
+    road: impl Fn(f64) -> f64,
+    step: f64,
+    duration: f64,
+) -> State {
+    let m = if tau > 0.0 { (tau / step).round() as usize } else { 0 };
+    assert!(m == 0 || ((m as f64) * step - tau).abs() < 1e-12 * tau, "step must divide tau");
+    let n = (duration / step).round() as usize;
+    assert!((n as f64 * step - duration).abs() < 1e-9 * duration, "step must divide the duration");
+    let mut nodes: Vec<[f64; 2]> = Vec::with_capacity(n + 1);
+    nodes.push([x0[X_T], x0[V_T]]);
+    let delayed = |nodes: &Vec<[f64; 2]>, k: usize, frac: f64, x_now: &State| -> f64 {
+        if m == 0 {
+            return x_now[X_T];
+        }
+        if k < m {
+            return x0[X_T];
+        }
+        let [xa, va] = nodes[k - m];
+        if frac == 0.0 {
+            return xa;
+        }
+        let [xb, vb] = nodes[k - m + 1];
+        let (s, h) = (frac * step, step);
+        let slope = (xb - xa) / h;
+        let c2 = (3.0 * slope - 2.0 * va - vb) / h;
+        let c3 = (va + vb - 2.0 * slope) / (h * h);
+        xa + s * (va + s * (c2 + s * c3))
+    };
+    let mut x = x0;
+    for k in 0..n {
+        let t = k as f64 * step;
+        let f = |x: &State, frac: f64, nodes: &Vec<[f64; 2]>| {
+            plant.derivative(x, delayed(nodes, k, frac, x), road(t + frac * step))
+        };
+        let k1 = f(&x, 0.0, &nodes);
+        let k2 = f(&(x + k1 * (step / 2.0)), 0.5, &nodes);
+        let k3 = f(&(x + k2 * (step / 2.0)), 0.5, &nodes);
+        // The end of the step lies on the next history node.
+        let x4 = x + k3 * step;
+        let k4 = if m == 0 {
+            plant.derivative(&x4, x4[X_T], road(t + step))
+        } else {
+            plant.derivative(&x4, delayed(&nodes, k + 1, 0.0, &x4), road(t + step))
+        };
+        x += (k1 + k2 * 2.0 + k3 * 2.0 + k4) * (step / 6.0);
+        nodes.push([x[X_T], x[V_T]]);
+    }
+    x
+}
+
+/// In-place radix-2 FFT of (re, im); the length must be a power of two.
+pub fn fft(re: &mut [f64], im: &mut [f64]) {
+    let n = re.len();
+    assert!(n.is_power_of_two() && im.len() == n);
+    let mut j = 0;
+    for i in 1..n {
+        let mut bit = n >> 1;
+        while j & bit != 0 {
+            j ^= bit;
+            bit >>= 1;
+        }
+        j |= bit;
+        if i < j {
+            re.swap(i, j);
+            im.swap(i, j);
+        }
+    }
+    let mut len = 2;
+    while len <= n {
+        let angle = -2.0 * std::f64::consts::PI / len as f64;
+        for start in (0..n).step_by(len) {
+            for k in 0..len / 2 {
+                let (s, c) = (angle * k as f64).sin_cos();
+                let (a, b) = (start + k, start + k + len / 2);
+                let (tr, ti) = (re[b] * c - im[b] * s, re[b] * s + im[b] * c);
+                re[b] = re[a] - tr;
+                im[b] = im[a] - ti;
+                re[a] += tr;
+                im[a] += ti;
+            }
+        }
+        len <<= 1;
+    }
+}
+
+/// A small deterministic generator for random step lengths in tests.
+pub struct Lcg(pub u64);
+
+impl Lcg {
+    /// Uniform in [0, 1).
+    pub fn next_f64(&mut self) -> f64 {
+        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
