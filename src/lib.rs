@@ -20,6 +20,7 @@
 //! an FMI 2.0 Co-Simulation FMU.
 
 pub mod analysis;
+pub mod cli;
 pub mod error;
 pub mod fmi2;
 pub mod metrics;

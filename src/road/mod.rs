@@ -229,7 +229,10 @@ impl RoadSpec {
                 _ => {
                     return Err(Error::RoadFile {
                         path: path.to_string(),
-                        reason: format!("line {}: expected `t,x_g`, found `{line}`", line_number + 1),
+                        reason: format!(
+                            "line {}: expected `t,x_g`, found `{line}`",
+                            line_number + 1
+                        ),
                     });
                 }
             }
@@ -425,7 +428,7 @@ pub struct Road {
 #[derive(Debug, Clone)]
 enum RoadKind {
     Harmonic(RoadPiece),
-    Nodes(NodeSequence),
+    Nodes(Box<NodeSequence>),
     Samples(Arc<Vec<(f64, f64)>>),
     Input(RoadPiece),
 }
@@ -457,8 +460,15 @@ impl Road {
                 let rate = 2.0 * PI * road.cutoff_frequency;
                 let decay = (-rate * ISO_NODE_INTERVAL).exp();
                 let diffusion = road.noise_gain() / std::f64::consts::SQRT_2;
-                let gain = diffusion * (-(-2.0 * rate * ISO_NODE_INTERVAL).exp_m1() / (2.0 * rate)).sqrt();
-                RoadKind::Nodes(NodeSequence::new(start_time, ISO_NODE_INTERVAL, decay, gain, road.seed))
+                let gain =
+                    diffusion * (-(-2.0 * rate * ISO_NODE_INTERVAL).exp_m1() / (2.0 * rate)).sqrt();
+                RoadKind::Nodes(Box::new(NodeSequence::new(
+                    start_time,
+                    ISO_NODE_INTERVAL,
+                    decay,
+                    gain,
+                    road.seed,
+                )))
             }
             RoadSpec::PaperCompatible {
                 road,
@@ -466,7 +476,13 @@ impl Road {
             } => {
                 let d = *sample_interval;
                 let decay = 1.0 - 2.0 * PI * road.cutoff_frequency * d;
-                RoadKind::Nodes(NodeSequence::new(start_time, d, decay, d * road.noise_gain(), road.seed))
+                RoadKind::Nodes(Box::new(NodeSequence::new(
+                    start_time,
+                    d,
+                    decay,
+                    d * road.noise_gain(),
+                    road.seed,
+                )))
             }
             RoadSpec::Samples(samples) => RoadKind::Samples(samples.clone()),
         };

@@ -351,7 +351,11 @@ impl Simulator {
         })
     }
 
-    fn operators(plant: &Plant, config: &SimulationConfig, grid: &DelayGrid) -> (Matrix6<f64>, StepOperator) {
+    fn operators(
+        plant: &Plant,
+        config: &SimulationConfig,
+        grid: &DelayGrid,
+    ) -> (Matrix6<f64>, StepOperator) {
         let mut a = plant.a;
         let mut b = plant.b;
         if !grid.resolves_delay() {
@@ -434,7 +438,8 @@ impl Simulator {
 
     fn partial_operator(&mut self, length: f64) -> &StepOperator {
         let key = (length / self.grid.step * PARTIAL_STEP_RESOLUTION).round() as u64;
-        if self.partial_steps.len() >= OPERATOR_CACHE_SIZE && !self.partial_steps.contains_key(&key) {
+        if self.partial_steps.len() >= OPERATOR_CACHE_SIZE && !self.partial_steps.contains_key(&key)
+        {
             self.partial_steps.clear();
         }
         let (a, b, e) = (self.solver_matrix, self.solver_input_column(), self.plant.e);
@@ -480,7 +485,8 @@ impl Simulator {
                 .then(|| self.delayed_input(k, start - step_start));
             let length = end - start;
             state = if self.coincide(length, self.grid.step) {
-                self.full_step.apply(&state, delayed.as_ref(), &piece, start)
+                self.full_step
+                    .apply(&state, delayed.as_ref(), &piece, start)
             } else {
                 self.partial_operator(length)
                     .apply(&state, delayed.as_ref(), &piece, start)
@@ -499,7 +505,7 @@ impl Simulator {
             } else {
                 DIVERGENCE_VELOCITY
             };
-            if !(value.abs() <= bound) {
+            if value.is_nan() || value.abs() > bound {
                 return Err(Error::Diverged {
                     time,
                     variable: crate::model::STATE_NAMES[i],
@@ -515,7 +521,9 @@ impl Simulator {
     /// the simulator stays at the last good grid node and returns
     /// [`Error::Diverged`].
     pub fn advance_to(&mut self, t_end: f64) -> Result<()> {
-        if !t_end.is_finite() || (t_end < self.current_time && !self.coincide(t_end, self.current_time)) {
+        if !t_end.is_finite()
+            || (t_end < self.current_time && !self.coincide(t_end, self.current_time))
+        {
             return Err(Error::InvalidTime {
                 name: "t_end",
                 value: t_end,
@@ -526,7 +534,12 @@ impl Simulator {
             let k = self.grid_index;
             let next_node = self.grid_time(k + 1);
             if next_node < t_end || self.coincide(next_node, t_end) {
-                let x = self.integrate_within_step(k, self.committed_time, self.committed_state, next_node);
+                let x = self.integrate_within_step(
+                    k,
+                    self.committed_time,
+                    self.committed_state,
+                    next_node,
+                );
                 self.check_divergence(next_node, &x)?;
                 self.commit_node(k + 1, next_node, x);
                 if self.coincide(next_node, t_end) {
@@ -537,7 +550,12 @@ impl Simulator {
                 if self.coincide(self.committed_time, t_end) {
                     self.current_state = self.committed_state;
                 } else {
-                    let x = self.integrate_within_step(k, self.committed_time, self.committed_state, t_end);
+                    let x = self.integrate_within_step(
+                        k,
+                        self.committed_time,
+                        self.committed_state,
+                        t_end,
+                    );
                     self.check_divergence(t_end, &x)?;
                     self.current_state = x;
                 }
@@ -579,7 +597,10 @@ impl Simulator {
 
     /// Changes the feedback gain g (tunable); the history is kept.
     pub fn set_gain(&mut self, g: f64) -> Result<()> {
-        let params = Params { g, ..self.config.params };
+        let params = Params {
+            g,
+            ..self.config.params
+        };
         let plant = Plant::new(params, self.config.variant)?;
         self.config.params = params;
         let (matrix, step) = Self::operators(&plant, &self.config, &self.grid);
@@ -596,7 +617,10 @@ impl Simulator {
     }
 
     fn step_offset(&self) -> (u64, f64) {
-        (self.grid_index, self.current_time - self.grid_time(self.grid_index))
+        (
+            self.grid_index,
+            self.current_time - self.grid_time(self.grid_index),
+        )
     }
 
     fn road_piece_now(&mut self) -> RoadPiece {
