@@ -36,7 +36,11 @@ fn table2_all_nine_values() {
         (Variant::Tdvass, [0.3068, 0.0388, 0.6251]),
     ];
     for (variant, expected) in paper {
-        let run = simulate(config(variant, Params::default(), RoadSpec::paper_harmonic()), 15.0).unwrap();
+        let run = simulate(
+            config(variant, Params::default(), RoadSpec::paper_harmonic()),
+            15.0,
+        )
+        .unwrap();
         let ours = [
             run.rms.body_acceleration,
             run.rms.suspension_deflection,
@@ -51,7 +55,11 @@ fn table2_all_nine_values() {
     }
 }
 
-fn rms_over_seeds(variant: Variant, params: Params, seeds: std::ops::RangeInclusive<u64>) -> Vec<RmsValues> {
+fn rms_over_seeds(
+    variant: Variant,
+    params: Params,
+    seeds: std::ops::RangeInclusive<u64>,
+) -> Vec<RmsValues> {
     seeds
         .map(|seed| {
             let road = RoadSpec::PaperCompatible {
@@ -160,13 +168,18 @@ fn results_do_not_depend_on_how_the_interval_is_split() {
     // communication points and the road nodes all fall between grid nodes.
     for (variant, params) in [
         (Variant::Tdvass, Params::default()),
-        (Variant::Tdvass, Params::with_controller(PAPER_G2, PAPER_TAU2)),
+        (
+            Variant::Tdvass,
+            Params::with_controller(PAPER_G2, PAPER_TAU2),
+        ),
         (Variant::Cs, Params::default()),
     ] {
         for road in &roads {
             let cfg = config(variant, params, road.clone());
             let duration = 15.0;
-            let common: Vec<f64> = (1..=(duration / 0.073) as usize).map(|i| i as f64 * 0.073).collect();
+            let common: Vec<f64> = (1..=(duration / 0.073) as usize)
+                .map(|i| i as f64 * 0.073)
+                .collect();
             let one_call = {
                 let mut sim = Simulator::new(cfg.clone()).unwrap();
                 sim.advance_to(duration).unwrap();
@@ -218,7 +231,14 @@ fn fourth_order_convergence_against_rk4_method_of_steps() {
     let x0 = State::new(0.01, 0.0, 0.0, 0.0, 0.0, 0.0);
     let plant = Plant::new(params, Variant::Tdvass).unwrap();
     let duration = 0.6;
-    let reference = rk4_method_of_steps(&plant, params.tau, x0, |t| 0.05 * (5.0 * t).sin(), 0.03 / 6000.0, duration);
+    let reference = rk4_method_of_steps(
+        &plant,
+        params.tau,
+        x0,
+        |t| 0.05 * (5.0 * t).sin(),
+        0.03 / 6000.0,
+        duration,
+    );
     let mut errors = Vec::new();
     for m in [3u32, 6, 12, 24] {
         let cfg = SimulationConfig {
@@ -266,10 +286,24 @@ fn zero_and_non_multiple_delays_agree_with_the_reference() {
     // Table 2 changes by a fraction of a percent with tau = 0 (measured:
     // BA 0.23 %, notes.md says "< 0.2 %").
     let with_delay = simulate(SimulationConfig::default(), 15.0).unwrap();
-    let without = simulate(config(Variant::Tdvass, Params::with_controller(5386.0, 0.0), RoadSpec::paper_harmonic()), 15.0).unwrap();
+    let without = simulate(
+        config(
+            Variant::Tdvass,
+            Params::with_controller(5386.0, 0.0),
+            RoadSpec::paper_harmonic(),
+        ),
+        15.0,
+    )
+    .unwrap();
     let pairs = [
-        (with_delay.rms.body_acceleration, without.rms.body_acceleration),
-        (with_delay.rms.suspension_deflection, without.rms.suspension_deflection),
+        (
+            with_delay.rms.body_acceleration,
+            without.rms.body_acceleration,
+        ),
+        (
+            with_delay.rms.suspension_deflection,
+            without.rms.suspension_deflection,
+        ),
         (with_delay.rms.tire_deflection, without.rms.tire_deflection),
     ];
     for (a, b) in pairs {
@@ -284,9 +318,12 @@ fn tiny_delays_are_continuous_with_zero_and_huge_delays_are_refused() {
     // which the delay is folded into the plant. (RMS values are sampled on
     // the internal grid, which follows tau, so they are not compared here.)
     let state_at = |tau: f64| {
-        let mut sim =
-            Simulator::new(config(Variant::Tdvass, Params::with_controller(5386.0, tau), RoadSpec::paper_harmonic()))
-                .unwrap();
+        let mut sim = Simulator::new(config(
+            Variant::Tdvass,
+            Params::with_controller(5386.0, tau),
+            RoadSpec::paper_harmonic(),
+        ))
+        .unwrap();
         sim.advance_to(2.0).unwrap();
         sim.state()
     };
@@ -295,18 +332,39 @@ fn tiny_delays_are_continuous_with_zero_and_huge_delays_are_refused() {
     let scale = states[0].amax();
     for i in 1..taus.len() {
         let change = (states[i] - states[i - 1]).amax();
-        assert!(change <= 10.0 * (taus[i] - taus[i - 1]) * scale + 1e-12 * scale, "tau {} -> {}: {change:e}", taus[i - 1], taus[i]);
+        assert!(
+            change <= 10.0 * (taus[i] - taus[i - 1]) * scale + 1e-12 * scale,
+            "tau {} -> {}: {change:e}",
+            taus[i - 1],
+            taus[i]
+        );
     }
     assert!((states[4] - states[0]).amax() > 0.0);
-    let err = Simulator::new(config(Variant::Tdvass, Params::with_controller(5386.0, 1e4), RoadSpec::paper_harmonic()))
-        .unwrap_err();
-    assert!(matches!(err, Error::InvalidParameter { name: "tau", .. }), "{err}");
+    let err = Simulator::new(config(
+        Variant::Tdvass,
+        Params::with_controller(5386.0, 1e4),
+        RoadSpec::paper_harmonic(),
+    ))
+    .unwrap_err();
+    assert!(
+        matches!(err, Error::InvalidParameter { name: "tau", .. }),
+        "{err}"
+    );
     let err = Simulator::new(SimulationConfig {
         max_internal_step: 0.0,
         ..SimulationConfig::default()
     })
     .unwrap_err();
-    assert!(matches!(err, Error::InvalidParameter { name: "max_internal_step", .. }), "{err}");
+    assert!(
+        matches!(
+            err,
+            Error::InvalidParameter {
+                name: "max_internal_step",
+                ..
+            }
+        ),
+        "{err}"
+    );
 }
 
 #[test]
@@ -355,7 +413,10 @@ fn iso8608_road_has_the_standard_spatial_psd() {
             }
         }
         let ratio = measured / expected;
-        assert!(bins > 10.0 && (ratio - 1.0).abs() < 0.15, "band {band}: ratio {ratio}");
+        assert!(
+            bins > 10.0 && (ratio - 1.0).abs() < 0.15,
+            "band {band}: ratio {ratio}"
+        );
         band *= 2.0;
     }
 }
@@ -375,7 +436,12 @@ fn divergence_is_reported_before_anything_is_not_finite() {
     let mut sim = Simulator::new(cfg).unwrap();
     let err = sim.advance_to(1e5).unwrap_err();
     match err {
-        Error::Diverged { time, variable, value, .. } => {
+        Error::Diverged {
+            time,
+            variable,
+            value,
+            ..
+        } => {
             assert!(time > 0.15 && !variable.is_empty() && value.is_finite() || value.is_nan());
         }
         other => panic!("expected divergence, got {other}"),
@@ -392,7 +458,12 @@ fn saved_bytes_continue_bit_identically() {
         RoadSpec::Iso8608(RandomRoad::default()),
         RoadSpec::Input,
     ] {
-        let mut sim = Simulator::new(config(Variant::Tdvass, Params::with_controller(PAPER_G2, PAPER_TAU2), road)).unwrap();
+        let mut sim = Simulator::new(config(
+            Variant::Tdvass,
+            Params::with_controller(PAPER_G2, PAPER_TAU2),
+            road,
+        ))
+        .unwrap();
         if sim.config().road == RoadSpec::Input {
             sim.set_road_input(0.01, 0.1).unwrap();
         }
@@ -403,7 +474,10 @@ fn saved_bytes_continue_bit_identically() {
         for t in [1.3, 2.0, 3.0001] {
             sim.advance_to(t).unwrap();
             restored.advance_to(t).unwrap();
-            assert_eq!(output_vector(&sim.outputs()), output_vector(&restored.outputs()));
+            assert_eq!(
+                output_vector(&sim.outputs()),
+                output_vector(&restored.outputs())
+            );
         }
         for cut in [0, 7, bytes.len() / 2, bytes.len() - 1] {
             assert!(Simulator::from_bytes(&bytes[..cut]).is_err());
@@ -416,10 +490,12 @@ fn external_input_reproduces_the_harmonic_road() {
     // Feeding 0.05 sin 5t through the input with exact first derivatives on
     // 1 ms communication steps matches the built-in harmonic road closely.
     let builtin = simulate(SimulationConfig::default(), 5.0).unwrap();
-    let mut sim = Simulator::new(config(Variant::Tdvass, Params::default(), RoadSpec::Input)).unwrap();
+    let mut sim =
+        Simulator::new(config(Variant::Tdvass, Params::default(), RoadSpec::Input)).unwrap();
     for i in 0..5000 {
         let t = i as f64 * 1e-3;
-        sim.set_road_input(0.05 * (5.0 * t).sin(), 0.25 * (5.0 * t).cos()).unwrap();
+        sim.set_road_input(0.05 * (5.0 * t).sin(), 0.25 * (5.0 * t).cos())
+            .unwrap();
         sim.advance_to(t + 1e-3).unwrap();
     }
     let fed = sim.rms();
@@ -438,10 +514,19 @@ fn bad_configurations_are_typed_errors() {
         ..SimulationConfig::default()
     };
     let err = Simulator::new(bad).unwrap_err();
-    assert!(err.to_string().contains("k_t") && err.to_string().contains("-5"), "{err}");
+    assert!(
+        err.to_string().contains("k_t") && err.to_string().contains("-5"),
+        "{err}"
+    );
     let mut sim = Simulator::new(SimulationConfig::default()).unwrap();
     sim.advance_to(1.0).unwrap();
-    assert!(matches!(sim.advance_to(0.5), Err(Error::InvalidTime { .. })));
-    assert!(matches!(sim.advance_to(f64::NAN), Err(Error::InvalidTime { .. })));
+    assert!(matches!(
+        sim.advance_to(0.5),
+        Err(Error::InvalidTime { .. })
+    ));
+    assert!(matches!(
+        sim.advance_to(f64::NAN),
+        Err(Error::InvalidTime { .. })
+    ));
     assert!(sim.set_road_input(0.0, 0.0).is_err());
 }

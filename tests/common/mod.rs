@@ -17,10 +17,20 @@ pub fn rk4_method_of_steps(
     step: f64,
     duration: f64,
 ) -> State {
-    let m = if tau > 0.0 { (tau / step).round() as usize } else { 0 };
-    assert!(m == 0 || ((m as f64) * step - tau).abs() < 1e-12 * tau, "step must divide tau");
+    let m = if tau > 0.0 {
+        (tau / step).round() as usize
+    } else {
+        0
+    };
+    assert!(
+        m == 0 || ((m as f64) * step - tau).abs() < 1e-12 * tau,
+        "step must divide tau"
+    );
     let n = (duration / step).round() as usize;
-    assert!((n as f64 * step - duration).abs() < 1e-9 * duration, "step must divide the duration");
+    assert!(
+        (n as f64 * step - duration).abs() < 1e-9 * duration,
+        "step must divide the duration"
+    );
     let mut nodes: Vec<[f64; 2]> = Vec::with_capacity(n + 1);
     nodes.push([x0[X_T], x0[V_T]]);
     let delayed = |nodes: &Vec<[f64; 2]>, k: usize, frac: f64, x_now: &State| -> f64 {
@@ -104,7 +114,10 @@ pub struct Lcg(pub u64);
 impl Lcg {
     /// Uniform in [0, 1).
     pub fn next_f64(&mut self) -> f64 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         (self.0 >> 11) as f64 / (1u64 << 53) as f64
     }
 }
