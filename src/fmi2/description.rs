@@ -1,0 +1,579 @@
+//! `modelDescription.xml` and `documentation/index.html`, generated from the
+//! variable table with quick-xml (no markup is written by hand, so every
+//! value is escaped). The output is deterministic: no timestamps.
+
+use super::variables::{Causality, Quantity, UNITS, VARIABLES, VarType, Variable, index_of};
+use super::{
+    DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, FMI_VERSION, LOG_CATEGORIES,
+    MODEL_IDENTIFIER, MODEL_NAME, guid,
+};
+use quick_xml::Writer;
+use quick_xml::events::{BytesDecl, BytesText, Event};
+use std::io::Cursor;
+
+type XmlWriter = Writer<Cursor<Vec<u8>>>;
+type XmlResult = std::io::Result<()>;
+
+/// One-line description of the model.
+pub const MODEL_DESCRIPTION: &str = "Quarter-car suspension with an annular vibration-absorbing structure and time-delay feedback of the tire displacement (TDVASS), with the conventional (CS) and uncontrolled absorber (PVASS) suspensions for comparison";
+
+/// Short number formatting: Rust's shortest round-trip representation.
+fn number(v: f64) -> String {
+    format!("{v}")
+}
+
+fn start_text(v: &Variable) -> Option<String> {
+    v.start.map(|s| match v.var_type() {
+        VarType::Integer => format!("{}", s as i64),
+        _ => number(s),
+    })
+}
+
+fn bound_text(v: &Variable, b: Option<f64>) -> Option<String> {
+    b.map(|b| match v.var_type() {
+        VarType::Integer => format!("{}", b as i64),
+        _ => number(b),
+    })
+}
+
+fn write_unit_definitions(w: &mut XmlWriter) -> XmlResult {
+    w.create_element("UnitDefinitions")
+        .write_inner_content(|w| {
+            for unit in UNITS {
+                w.create_element("Unit")
+                    .with_attribute(("name", unit.name))
+                    .write_inner_content(|w| {
+                        let exponents: Vec<(String, String)> = unit
+                            .base
+                            .iter()
+                            .map(|(b, e)| (b.to_string(), e.to_string()))
+                            .collect();
+                        w.create_element("BaseUnit")
+                            .with_attributes(
+                                exponents.iter().map(|(b, e)| (b.as_str(), e.as_str())),
+                            )
+                            .write_empty()?;
+                        for (name, factor) in unit.display {
+                            w.create_element("DisplayUnit")
+                                .with_attribute(("name", *name))
+                                .with_attribute(("factor", number(*factor).as_str()))
+                                .write_empty()?;
+                        }
+                        Ok(())
+                    })?;
+            }
+            Ok(())
+        })?;
+    Ok(())
+}
+
+fn write_type_definitions(w: &mut XmlWriter) -> XmlResult {
+    w.create_element("TypeDefinitions")
+        .write_inner_content(|w| {
+            for q in Quantity::TYPED {
+                let (name, quantity, unit) = q.type_definition().expect("typed quantity");
+                w.create_element("SimpleType")
+                    .with_attribute(("name", name))
+                    .write_inner_content(|w| {
+                        w.create_element("Real")
+                            .with_attribute(("quantity", quantity))
+                            .with_attribute(("unit", unit))
+                            .write_empty()?;
+                        Ok(())
+                    })?;
+            }
+            Ok(())
+        })?;
+    Ok(())
+}
+
+fn write_variable(w: &mut XmlWriter, v: &Variable) -> XmlResult {
+    let vr = v.vr.to_string();
+    let mut element = w
+        .create_element("ScalarVariable")
+        .with_attribute(("name", v.name))
+        .with_attribute(("valueReference", vr.as_str()))
+        .with_attribute(("description", v.description))
+        .with_attribute(("causality", v.causality.as_str()))
+        .with_attribute(("variability", v.variability.as_str()));
+    if let Some(initial) = v.initial() {
+        element = element.with_attribute(("initial", initial.as_str()));
+    }
+    element.write_inner_content(|w| {
+        let mut attributes: Vec<(&str, String)> = Vec::new();
+        if let Some((type_name, _, unit)) = v.quantity.type_definition() {
+            attributes.push(("declaredType", type_name.into()));
+            attributes.push(("unit", unit.into()));
+        }
+        if let Some(display) = v.display_unit {
+            attributes.push(("displayUnit", display.into()));
+        }
+        let (min, max) = v.range.bounds();
+        if let Some(min) = bound_text(v, min) {
+            attributes.push(("min", min));
+        }
+        if let Some(max) = bound_text(v, max) {
+            attributes.push(("max", max));
+        }
+        if let Some(start) = start_text(v) {
+            attributes.push(("start", start));
+        }
+        w.create_element(v.var_type().as_str())
+            .with_attributes(attributes.iter().map(|(k, v)| (*k, v.as_str())))
+            .write_empty()?;
+        Ok(())
+    })?;
+    Ok(())
+}
+
+fn indices(names: &[&str]) -> String {
+    let mut idx: Vec<usize> = names
+        .iter()
+        .map(|n| index_of(n).unwrap_or_else(|| panic!("unknown dependency `{n}`")))
+        .collect();
+    idx.sort_unstable();
+    idx.iter()
+        .map(|i| i.to_string())
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+fn write_model_structure(w: &mut XmlWriter) -> XmlResult {
+    w.create_element("ModelStructure")
+        .write_inner_content(|w| {
+            w.create_element("Outputs").write_inner_content(|w| {
+                for (i, v) in VARIABLES.iter().enumerate() {
+                    if v.causality != Causality::Output {
+                        continue;
+                    }
+                    // The direct dependence on x_g is linear with a factor that
+                    // depends on the fixed parameter `road`.
+                    let kinds = vec!["fixed"; v.feedthrough.len()].join(" ");
+                    let mut unknown = w
+                        .create_element("Unknown")
+                        .with_attribute(("index", (i + 1).to_string().as_str()))
+                        .with_attribute(("dependencies", indices(v.feedthrough).as_str()));
+                    if !kinds.is_empty() {
+                        unknown = unknown.with_attribute(("dependenciesKind", kinds.as_str()));
+                    }
+                    unknown.write_empty()?;
+                }
+                Ok(())
+            })?;
+            w.create_element("InitialUnknowns")
+                .write_inner_content(|w| {
+                    for (i, v) in VARIABLES.iter().enumerate() {
+                        if !matches!(
+                            v.causality,
+                            Causality::Output | Causality::CalculatedParameter
+                        ) {
+                            continue;
+                        }
+                        w.create_element("Unknown")
+                            .with_attribute(("index", (i + 1).to_string().as_str()))
+                            .with_attribute((
+                                "dependencies",
+                                indices(v.initial_dependencies).as_str(),
+                            ))
+                            .write_empty()?;
+                    }
+                    Ok(())
+                })?;
+            Ok(())
+        })?;
+    Ok(())
+}
+
+fn finish(w: XmlWriter) -> String {
+    let mut text = String::from_utf8(w.into_inner().into_inner()).expect("quick-xml writes UTF-8");
+    text.push('\n');
+    text
+}
+
+/// The complete `modelDescription.xml`.
+pub fn model_description_xml() -> String {
+    let mut w = Writer::new_with_indent(Cursor::new(Vec::new()), b' ', 2);
+    let write = |w: &mut XmlWriter| -> XmlResult {
+        w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
+        let guid = guid();
+        let tool = format!("tdvass fmu-build {}", env!("CARGO_PKG_VERSION"));
+        w.create_element("fmiModelDescription")
+            .with_attribute(("fmiVersion", FMI_VERSION))
+            .with_attribute(("modelName", MODEL_NAME))
+            .with_attribute(("guid", guid.as_str()))
+            .with_attribute(("description", MODEL_DESCRIPTION))
+            .with_attribute(("version", env!("CARGO_PKG_VERSION")))
+            .with_attribute(("license", "MIT"))
+            .with_attribute(("generationTool", tool.as_str()))
+            .with_attribute(("variableNamingConvention", "flat"))
+            .write_inner_content(|w| {
+                w.create_element("CoSimulation")
+                    .with_attribute(("modelIdentifier", MODEL_IDENTIFIER))
+                    .with_attribute(("needsExecutionTool", "false"))
+                    .with_attribute(("canHandleVariableCommunicationStepSize", "true"))
+                    .with_attribute(("canInterpolateInputs", "true"))
+                    .with_attribute(("maxOutputDerivativeOrder", "1"))
+                    .with_attribute(("canBeInstantiatedOnlyOncePerProcess", "false"))
+                    .with_attribute(("canNotUseMemoryManagementFunctions", "true"))
+                    .with_attribute(("canGetAndSetFMUstate", "true"))
+                    .with_attribute(("canSerializeFMUstate", "true"))
+                    .with_attribute(("providesDirectionalDerivative", "true"))
+                    .write_empty()?;
+                write_unit_definitions(w)?;
+                write_type_definitions(w)?;
+                w.create_element("LogCategories").write_inner_content(|w| {
+                    for (name, description) in LOG_CATEGORIES {
+                        w.create_element("Category")
+                            .with_attribute(("name", name))
+                            .with_attribute(("description", description))
+                            .write_empty()?;
+                    }
+                    Ok(())
+                })?;
+                w.create_element("DefaultExperiment")
+                    .with_attribute(("startTime", number(DEFAULT_START_TIME).as_str()))
+                    .with_attribute(("stopTime", number(DEFAULT_STOP_TIME).as_str()))
+                    .with_attribute(("stepSize", number(DEFAULT_STEP_SIZE).as_str()))
+                    .write_empty()?;
+                w.create_element("ModelVariables")
+                    .write_inner_content(|w| {
+                        for (i, v) in VARIABLES.iter().enumerate() {
+                            w.write_event(Event::Comment(BytesText::new(&format!(
+                                " index {} ",
+                                i + 1
+                            ))))?;
+                            write_variable(w, v)?;
+                        }
+                        Ok(())
+                    })?;
+                write_model_structure(w)
+            })?;
+        Ok(())
+    };
+    write(&mut w).expect("writing to memory cannot fail");
+    finish(w)
+}
+
+// ------------------------------------------------------------ documentation
+
+fn text_element(w: &mut XmlWriter, name: &str, text: &str) -> XmlResult {
+    w.create_element(name)
+        .write_text_content(BytesText::new(text))?;
+    Ok(())
+}
+
+fn paragraph(w: &mut XmlWriter, text: &str) -> XmlResult {
+    text_element(w, "p", text)
+}
+
+fn list(w: &mut XmlWriter, items: &[&str]) -> XmlResult {
+    w.create_element("ul").write_inner_content(|w| {
+        for item in items {
+            text_element(w, "li", item)?;
+        }
+        Ok(())
+    })?;
+    Ok(())
+}
+
+fn table(w: &mut XmlWriter, header: &[&str], rows: &[Vec<String>]) -> XmlResult {
+    w.create_element("table").write_inner_content(|w| {
+        w.create_element("tr").write_inner_content(|w| {
+            for h in header {
+                text_element(w, "th", h)?;
+            }
+            Ok(())
+        })?;
+        for row in rows {
+            w.create_element("tr").write_inner_content(|w| {
+                for cell in row {
+                    text_element(w, "td", cell)?;
+                }
+                Ok(())
+            })?;
+        }
+        Ok(())
+    })?;
+    Ok(())
+}
+
+fn variable_row(v: &Variable) -> Vec<String> {
+    let range = v.range.describe();
+    let unit = match (v.unit(), v.display_unit) {
+        (Some(u), Some(d)) => format!("{u} (shown in {d})"),
+        (Some(u), None) => u.to_string(),
+        (None, _) => "-".to_string(),
+    };
+    let kind = format!("{}, {}", v.causality.as_str(), v.variability.as_str());
+    vec![
+        v.name.to_string(),
+        v.vr.to_string(),
+        v.var_type().as_str().to_string(),
+        kind,
+        start_text(v).unwrap_or_else(|| "calculated".into()),
+        unit,
+        range,
+        v.description.to_string(),
+    ]
+}
+
+/// The complete `documentation/index.html`.
+pub fn documentation_html() -> String {
+    let mut w = Writer::new_with_indent(Cursor::new(Vec::new()), b' ', 2);
+    let write = |w: &mut XmlWriter| -> XmlResult {
+        w.write_event(Event::DocType(BytesText::from_escaped("html")))?;
+        w.create_element("html")
+            .with_attribute(("lang", "en"))
+            .write_inner_content(|w| {
+                w.create_element("head").write_inner_content(|w| {
+                    w.create_element("meta")
+                        .with_attribute(("charset", "utf-8"))
+                        .write_empty()?;
+                    text_element(w, "title", &format!("{MODEL_NAME} FMU"))?;
+                    text_element(
+                        w,
+                        "style",
+                        "body{font-family:sans-serif;max-width:70em;margin:auto;padding:1em}table{border-collapse:collapse}td,th{border:1px solid #bbb;padding:0.2em 0.5em;text-align:left;vertical-align:top}",
+                    )
+                })?;
+                w.create_element("body").write_inner_content(write_body)?;
+                Ok(())
+            })?;
+        Ok(())
+    };
+    write(&mut w).expect("writing to memory cannot fail");
+    finish(w)
+}
+
+fn write_body(w: &mut XmlWriter) -> XmlResult {
+    text_element(w, "h1", &format!("{MODEL_NAME}: FMI 2.0 Co-Simulation FMU"))?;
+    paragraph(w, MODEL_DESCRIPTION)?;
+    paragraph(
+        w,
+        &format!(
+            "modelIdentifier {MODEL_IDENTIFIER}, GUID {} (a hash of the variable names, value references, types, causalities and variabilities), version {}.",
+            guid(),
+            env!("CARGO_PKG_VERSION")
+        ),
+    )?;
+
+    text_element(w, "h2", "The model")?;
+    paragraph(
+        w,
+        "State X = [x_s, v_s, x_h, v_h, x_t, v_t]: body, annular absorber and wheel displacements and velocities. The plant is dX/dt = A X + b x_t(t - tau) + e x_g(t) (Eq. 2 of the paper): the body (m_s) sits on the absorber through k_s, c_s; the absorber (m_h) on the wheel through k_h, c_h; the wheel (m_t) on the road through k_t. TDVASS adds the control force u = g x_t(t - tau), acting with -u on the absorber and +u on the wheel. PVASS is the same structure with g = 0; CS is the conventional 2-DOF quarter car (body on wheel through k_s, c_s), for which x_h and v_h mirror x_t and v_t.",
+    )?;
+    paragraph(
+        w,
+        "Outputs: BA = d2x_s/dt2, SDD = x_s - x_t, TDD = x_t - x_g, their running RMS values from the start time (sampled on the internal grid, as Eq. 6) and J = w_ba RMS(BA) + w_sdd RMS(SDD) + w_tdd RMS(TDD) with TDD in metres.",
+    )?;
+    paragraph(
+        w,
+        "Integration: the precise (fine) integration method of the paper (section 4.1) on an internal grid anchored at the start time, whose step divides tau exactly and is at most max_internal_step. The delayed wheel displacement is a cubic Hermite interpolant of the stored history, the road is exact over each internal step. Results do not depend on how the master splits time into communication steps (except with road = 0, where the input changes at communication points).",
+    )?;
+    text_element(w, "h3", "Static gain of the controlled suspension")?;
+    paragraph(
+        w,
+        "The controller feeds back the absolute wheel displacement. This changes the static body gain: at zero frequency X_s/X_g = 1 - g/k_h (0.164 at g = 5386 N/m, k_h = 6444 N/m), so a slowly changing road (a ramp, a hill) moves the body by only a sixth of its height, and for g > k_h the body moves against the road. Keep this in mind for roads with a large low-frequency content.",
+    )?;
+    text_element(w, "h3", "Roads")?;
+    list(
+        w,
+        &[
+            "road = 0: the input x_g, set by the master at each communication point; with fmi2SetRealInputDerivatives (order 1) the FMU extrapolates it linearly over the step (until x_g or its slope is set again); fmi2SetReal on x_g resets the slope to 0. Without derivatives the input is held constant over each step, and TDD = x_t - x_g sampled where the held input jumps is biased by about half a step of road change; prefer input derivatives, or communication steps that do not coincide with the internal grid.",
+            "road = 1: x_g = road_amplitude sin(road_angular_frequency t), the paper's 0.05 sin 5t by default (Table 2).",
+            "road = 2: ISO 8608 filtered white noise dx_g/dt = -2 pi f0 x_g + 2 pi n0 sqrt(Gq(n0) u) w(t), class road_class, speed vehicle_speed, cut-off road_cutoff_frequency, seed road_seed.",
+            "road = 3: the paper-compatible random road that reproduces the paper's Table 3 (noise samples held for road_sample_interval without 1/sqrt(D) scaling); about ten times weaker than a true class-C road. Say so when you report results obtained with it.",
+        ],
+    )?;
+
+    text_element(w, "h2", "Variables")?;
+    let rows: Vec<Vec<String>> = VARIABLES.iter().map(variable_row).collect();
+    table(
+        w,
+        &[
+            "name",
+            "value reference",
+            "type",
+            "causality, variability",
+            "start",
+            "unit",
+            "range",
+            "meaning",
+        ],
+        &rows,
+    )?;
+    paragraph(
+        w,
+        "Parameters are fixed (settable before the end of initialization) unless tunable: g, w_ba, w_sdd and w_tdd can be changed between communication steps. Values outside the range, NaN or infinite are refused with fmi2Error naming the variable and value; the remaining checks (for example a delay needing too many history nodes) are made by fmi2ExitInitializationMode, which then stays in initialization mode so that the value can be corrected.",
+    )?;
+
+    text_element(w, "h2", "Default experiment")?;
+    paragraph(
+        w,
+        &format!(
+            "startTime {DEFAULT_START_TIME} s, stopTime {DEFAULT_STOP_TIME} s, stepSize {DEFAULT_STEP_SIZE} s. With the start values (TDVASS, Table 1, g = 5386 N/m, tau = 0.2 ms, harmonic road 0.05 sin 5t, from rest) the running RMS outputs at t = 15 s reproduce the TDVASS row of the paper's Table 2: BA 0.3068 m/s2, SDD 0.0388 m, TDD 0.6251 mm. variant = 1 and 2 give the CS and PVASS rows."
+        ),
+    )?;
+    paragraph(
+        w,
+        "To reproduce the paper's stability verification (section 3.3), set g and tau (for example g = -40000 N/m, tau = 0.11 s, unstable) and the initial state x_s_start = 0.01 m; spectral_abscissa and stable report the rightmost characteristic root.",
+    )?;
+
+    text_element(w, "h2", "Behaviour")?;
+    list(
+        w,
+        &[
+            "Divergence: an unstable (g, tau) makes the states grow; before anything becomes non-finite (|displacement| > 1000 m or |velocity| > 1e6 m/s) fmi2DoStep returns fmi2Discard, logs time, variable and value, and the FMU stays at the last good internal grid node: fmi2GetRealStatus(fmi2LastSuccessfulTime) tells where, fmi2GetBooleanStatus(fmi2Terminated) is true. Outputs stay finite. An unstable (g, tau) is also reported as a warning by fmi2ExitInitializationMode and when g is tuned.",
+            "fmi2DoStep: currentCommunicationPoint must equal the FMU time (relative 1e-9), the step must be finite and > 0 and must not pass a stop time given to fmi2SetupExperiment. Any step length is accepted.",
+            "Refused calls (wrong state, unknown value reference, bad value) return fmi2Error, are logged and change nothing.",
+            "FMU states: fmi2GetFMUstate copies everything (settings, time, solver state, delay history, road generator, RMS accumulators). fmi2SetFMUstate and fmi2FreeFMUstate accept states of the same instance only. Serialized states (versioned, checksummed, position independent) restore in any instance or process of the same FMU and continue bit-identically; they carry every parameter value.",
+            "fmi2GetDirectionalDerivative: exact partials of the outputs with respect to the input x_g and the states, the latter addressed by the value references of the outputs x_s .. v_t. The running RMS values and J depend on the past only (partials 0).",
+            "fmi2GetRealOutputDerivatives: exact first derivatives (order 1); the running RMS values and J are piecewise constant in time (derivative 0).",
+            "Logging categories: logEvents, logStatusWarning, logStatusDiscard, logStatusError, logStatusFatal, logAll. Discards, errors and fatal errors are always reported; warnings unless switched off.",
+        ],
+    )?;
+
+    text_element(w, "h2", "References")?;
+    list(
+        w,
+        &[
+            "Mechanism of time-delay feedback control of suspension damping with an annular vibration-absorbing structure (the source paper: model Eq. 1-2, objective Eq. 6, precise integration section 4.1, Table 1 parameters, Table 2 results).",
+            "ISO 8608: Mechanical vibration - Road surface profiles - Reporting of measured data.",
+            "Functional Mock-up Interface for Model Exchange and Co-Simulation, version 2.0.",
+        ],
+    )?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use quick_xml::Reader;
+    use quick_xml::events::Event;
+    use std::collections::HashMap;
+
+    /// Every element with its attributes, in document order.
+    fn elements(xml: &str) -> Vec<(String, HashMap<String, String>)> {
+        let mut reader = Reader::from_str(xml);
+        let mut out = Vec::new();
+        loop {
+            match reader.read_event().expect("well-formed XML") {
+                Event::Start(e) | Event::Empty(e) => {
+                    let name = e.name().0.to_string();
+                    let attrs = e
+                        .attributes()
+                        .map(|a| {
+                            let a = a.unwrap();
+                            (
+                                a.key.0.to_string(),
+                                a.normalized_value(quick_xml::XmlVersion::Implicit1_0)
+                                    .unwrap()
+                                    .into_owned(),
+                            )
+                        })
+                        .collect();
+                    out.push((name, attrs));
+                }
+                Event::Eof => break,
+                _ => {}
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn model_description_has_every_variable() {
+        let xml = model_description_xml();
+        let els = elements(&xml);
+        let root = &els[0];
+        assert_eq!(root.0, "fmiModelDescription");
+        assert_eq!(root.1["guid"], guid());
+        assert_eq!(root.1["modelName"], "TDVASS");
+        assert_eq!(root.1["fmiVersion"], "2.0");
+        let cs = els.iter().find(|e| e.0 == "CoSimulation").unwrap();
+        assert_eq!(cs.1["modelIdentifier"], "tdvass");
+        for flag in [
+            "canHandleVariableCommunicationStepSize",
+            "canInterpolateInputs",
+            "canGetAndSetFMUstate",
+            "canSerializeFMUstate",
+            "providesDirectionalDerivative",
+        ] {
+            assert_eq!(cs.1[flag], "true", "{flag}");
+        }
+        assert_eq!(cs.1["maxOutputDerivativeOrder"], "1");
+        let experiment = els.iter().find(|e| e.0 == "DefaultExperiment").unwrap();
+        assert_eq!(experiment.1["stopTime"], "15");
+        assert_eq!(experiment.1["stepSize"], "0.001");
+        let vars: Vec<_> = els.iter().filter(|e| e.0 == "ScalarVariable").collect();
+        assert_eq!(vars.len(), VARIABLES.len());
+        for (v, el) in VARIABLES.iter().zip(&vars) {
+            assert_eq!(el.1["name"], v.name);
+            assert_eq!(el.1["valueReference"], v.vr.to_string());
+            assert_eq!(el.1["causality"], v.causality.as_str());
+        }
+        let categories: Vec<_> = els
+            .iter()
+            .filter(|e| e.0 == "Category")
+            .map(|e| e.1["name"].as_str())
+            .collect();
+        for c in [
+            "logEvents",
+            "logStatusWarning",
+            "logStatusError",
+            "logStatusFatal",
+            "logAll",
+        ] {
+            assert!(categories.contains(&c), "{c}");
+        }
+        let mm = els
+            .iter()
+            .find(|e| e.0 == "DisplayUnit" && e.1["name"] == "mm")
+            .unwrap();
+        assert_eq!(mm.1["factor"], "1000");
+        let tdd = els
+            .iter()
+            .position(|e| e.0 == "ScalarVariable" && e.1["name"] == "tire_deflection")
+            .unwrap();
+        assert_eq!(els[tdd + 1].1["displayUnit"], "mm");
+        assert_eq!(els[tdd + 1].1["unit"], "m");
+    }
+
+    #[test]
+    fn model_structure_lists_outputs_and_initial_unknowns() {
+        let xml = model_description_xml();
+        let els = elements(&xml);
+        let outputs_at = els.iter().position(|e| e.0 == "Outputs").unwrap();
+        let initial_at = els.iter().position(|e| e.0 == "InitialUnknowns").unwrap();
+        let outputs: Vec<_> = els[outputs_at + 1..initial_at].iter().collect();
+        let initial: Vec<_> = els[initial_at + 1..].iter().collect();
+        assert_eq!(outputs.len(), 15);
+        assert_eq!(initial.len(), 17);
+        let x_g = index_of("x_g").unwrap().to_string();
+        let tdd = index_of("tire_deflection").unwrap().to_string();
+        let o = outputs.iter().find(|e| e.1["index"] == tdd).unwrap();
+        assert_eq!(o.1["dependencies"], x_g);
+        assert_eq!(o.1["dependenciesKind"], "fixed");
+        let x_s = index_of("x_s").unwrap().to_string();
+        let o = outputs.iter().find(|e| e.1["index"] == x_s).unwrap();
+        assert_eq!(o.1["dependencies"], "");
+    }
+
+    #[test]
+    fn documentation_describes_every_variable() {
+        let html = documentation_html();
+        assert!(html.starts_with("<!DOCTYPE html>"));
+        elements(html.trim_start_matches("<!DOCTYPE html>"));
+        for v in VARIABLES {
+            assert!(html.contains(&format!("<td>{}</td>", v.name)), "{}", v.name);
+        }
+        assert!(html.contains("1 - g/k_h"));
+        assert!(html.contains("0.3068"));
+    }
+
+    #[test]
+    fn output_is_deterministic() {
+        assert_eq!(model_description_xml(), model_description_xml());
+        assert_eq!(documentation_html(), documentation_html());
+    }
+}

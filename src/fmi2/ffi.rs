@@ -1,0 +1,982 @@
+//! The C ABI: every fmi2 function of FMI 2.0 Co-Simulation, exported with C
+//! linkage, plus the Model Exchange functions as stubs that return
+//! `fmi2Error` with a log message.
+//!
+//! This layer only null-checks, converts raw pointers to slices and strings,
+//! and calls the safe [`Instance`] through [`Instance::run`] (which enforces
+//! the state table and logs failures). Every entry point runs inside
+//! [`std::panic::catch_unwind`]: a panic becomes `fmi2Fatal` (the instance
+//! goes to `fatal`) instead of unwinding into the host.
+//!
+//! # Safety
+//!
+//! The master must respect the FMI 2.0 calling convention: `c` is NULL or a
+//! component returned by `fmi2Instantiate` and not yet freed; every array
+//! argument is NULL or points to at least as many elements as its count
+//! says; strings are NUL-terminated. Within that contract nothing here is
+//! undefined behaviour; NULL pointers, wrong counts of zero, unaligned
+//! pointers and foreign FMU-state pointers are detected and refused. An
+//! instance must not be used from two threads at the same time (FMI 2.0
+//! allows that restriction); distinct instances are independent (no global
+//! mutable state).
+#![allow(non_camel_case_types, non_snake_case, clippy::missing_safety_doc)]
+
+use super::instance::{FMI2_COSIMULATION, Instance, InstantiateRequest, LogSink};
+use super::states::Function;
+use super::{FmiError, Status};
+use libc::{c_char, c_double, c_int, c_uint, c_void, size_t};
+use std::ffi::{CStr, CString};
+use std::panic::{AssertUnwindSafe, catch_unwind};
+
+pub type fmi2Component = *mut c_void;
+pub type fmi2ComponentEnvironment = *mut c_void;
+pub type fmi2FMUstate = *mut c_void;
+pub type fmi2ValueReference = c_uint;
+pub type fmi2Real = c_double;
+pub type fmi2Integer = c_int;
+pub type fmi2Boolean = c_int;
+pub type fmi2Char = c_char;
+pub type fmi2String = *const fmi2Char;
+pub type fmi2Byte = c_char;
+pub type fmi2Status = c_int;
+pub type fmi2Type = c_int;
+pub type fmi2StatusKind = c_int;
+
+/// `fmi2CallbackLogger` (printf-like; we pass a pre-formatted message with
+/// every `%` doubled, so no variadic argument is ever read).
+pub type fmi2CallbackLogger = Option<
+    unsafe extern "C" fn(
+        fmi2ComponentEnvironment,
+        fmi2String,
+        fmi2Status,
+        fmi2String,
+        fmi2String,
+        ...
+    ),
+>;
+pub type fmi2CallbackAllocateMemory = Option<unsafe extern "C" fn(size_t, size_t) -> *mut c_void>;
+pub type fmi2CallbackFreeMemory = Option<unsafe extern "C" fn(*mut c_void)>;
+pub type fmi2StepFinished = Option<unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2Status)>;
+
+/// `fmi2CallbackFunctions`.
+#[repr(C)]
+pub struct fmi2CallbackFunctions {
+    pub logger: fmi2CallbackLogger,
+    pub allocateMemory: fmi2CallbackAllocateMemory,
+    pub freeMemory: fmi2CallbackFreeMemory,
+    pub stepFinished: fmi2StepFinished,
+    pub componentEnvironment: fmi2ComponentEnvironment,
+}
+
+/// `fmi2EventInfo` (Model Exchange; only for the stub's signature).
+#[repr(C)]
+pub struct fmi2EventInfo {
+    pub newDiscreteStatesNeeded: fmi2Boolean,
+    pub terminateSimulation: fmi2Boolean,
+    pub nominalsOfContinuousStatesChanged: fmi2Boolean,
+    pub valuesOfContinuousStatesChanged: fmi2Boolean,
+    pub nextEventTimeDefined: fmi2Boolean,
+    pub nextEventTime: fmi2Real,
+}
+
+const FMI2_TRUE: fmi2Boolean = 1;
+const FMI2_FALSE: fmi2Boolean = 0;
+
+/// What a component pointer points to: a tag (checked on every call, reset
+/// on free, so a pointer that is not a live component of this FMU is
+/// usually recognised) and the instance. `repr(C)` keeps the tag first, so
+/// it can be read before a reference to the whole handle is made.
+#[repr(C)]
+struct Handle {
+    magic: u64,
+    instance: Instance,
+}
+
+const HANDLE_MAGIC: u64 = 0x5444_5641_5353_4649; // "TDVASSFI"
+
+fn status(s: Status) -> fmi2Status {
+    s as fmi2Status
+}
+
+/// A C string for the logger: interior NULs shown as `\0`.
+fn c_string(text: &str) -> CString {
+    CString::new(text.replace('\0', "\\0")).unwrap_or_default()
+}
+
+/// Copies a C string (lossy UTF-8), `None` for NULL.
+///
+/// # Safety
+/// `s` is NULL or a NUL-terminated string.
+unsafe fn copy_str(s: fmi2String) -> Option<String> {
+    if s.is_null() {
+        return None;
+    }
+    // SAFETY: non-NULL and NUL-terminated by the caller's contract; the bytes
+    // are copied before returning.
+    Some(unsafe { CStr::from_ptr(s) }.to_string_lossy().into_owned())
+}
+
+/// The master's logger as a [`LogSink`].
+fn c_logger(
+    logger: unsafe extern "C" fn(
+        fmi2ComponentEnvironment,
+        fmi2String,
+        fmi2Status,
+        fmi2String,
+        fmi2String,
+        ...
+    ),
+    environment: fmi2ComponentEnvironment,
+    instance_name: &str,
+) -> LogSink {
+    let name = c_string(instance_name);
+    Box::new(move |s: Status, category: &str, message: &str| {
+        let category = c_string(category);
+        let message = c_string(&message.replace('%', "%%"));
+        // SAFETY: `logger` is the master's callback with the FMI signature;
+        // every string is NUL-terminated and outlives the call; the message
+        // contains no conversion specification (every `%` is doubled), so
+        // the callee reads no variadic argument.
+        unsafe {
+            logger(
+                environment,
+                name.as_ptr(),
+                status(s),
+                category.as_ptr(),
+                message.as_ptr(),
+            )
+        }
+    })
+}
+
+/// The handle behind `c`, if `c` looks like a live component.
+///
+/// # Safety
+/// `c` is NULL or a pointer returned by `fmi2Instantiate`.
+unsafe fn handle<'a>(c: fmi2Component) -> Option<&'a mut Handle> {
+    let h = c as *mut Handle;
+    if h.is_null() || !h.is_aligned() {
+        return None;
+    }
+    // SAFETY: non-NULL and aligned; by the caller's contract it points to a
+    // live `Handle`, whose first field is the tag (`repr(C)`). Only the tag
+    // is read here, through the raw pointer.
+    let magic = unsafe { std::ptr::addr_of!((*h).magic).read() };
+    if magic != HANDLE_MAGIC {
+        return None;
+    }
+    // SAFETY: the tag says this is a live handle made by `fmi2Instantiate`;
+    // the master does not use an instance from two threads at once.
+    Some(unsafe { &mut *h })
+}
+
+/// A read-only array argument: empty for `n == 0` (the pointer may then be
+/// NULL), refused when NULL, unaligned or absurdly long.
+///
+/// # Safety
+/// `ptr` is NULL or points to `n` initialised elements.
+unsafe fn input<'a, T>(ptr: *const T, n: size_t, what: &str) -> Result<&'a [T], FmiError> {
+    if n == 0 {
+        return Ok(&[]);
+    }
+    if ptr.is_null() {
+        return Err(FmiError::error(format!(
+            "{what} is NULL while its length is {n}"
+        )));
+    }
+    if !ptr.is_aligned() || n > isize::MAX as usize / std::mem::size_of::<T>().max(1) {
+        return Err(FmiError::error(format!(
+            "{what} is not a valid array of {n} elements"
+        )));
+    }
+    // SAFETY: non-NULL, aligned, size in range; the caller guarantees `n`
+    // initialised elements that stay valid and unmodified during the call.
+    Ok(unsafe { std::slice::from_raw_parts(ptr, n) })
+}
+
+/// A writable array argument (same rules as [`input`]).
+///
+/// # Safety
+/// `ptr` is NULL or points to `n` writable elements not aliased by another
+/// argument.
+unsafe fn output<'a, T>(ptr: *mut T, n: size_t, what: &str) -> Result<&'a mut [T], FmiError> {
+    if n == 0 {
+        return Ok(&mut []);
+    }
+    if ptr.is_null() {
+        return Err(FmiError::error(format!(
+            "{what} is NULL while its length is {n}"
+        )));
+    }
+    if !ptr.is_aligned() || n > isize::MAX as usize / std::mem::size_of::<T>().max(1) {
+        return Err(FmiError::error(format!(
+            "{what} is not a valid array of {n} elements"
+        )));
+    }
+    // SAFETY: non-NULL, aligned, size in range; the caller guarantees `n`
+    // writable elements, exclusively ours during the call.
+    Ok(unsafe { std::slice::from_raw_parts_mut(ptr, n) })
+}
+
+/// A single output value.
+///
+/// # Safety
+/// `ptr` is NULL or points to a writable `T`.
+unsafe fn out_value<'a, T>(ptr: *mut T, what: &str) -> Result<&'a mut T, FmiError> {
+    // SAFETY: forwarded contract; a length of one.
+    unsafe { output(ptr, 1, what) }.map(|s| &mut s[0])
+}
+
+fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
+    payload
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "unknown panic".into())
+}
+
+/// Runs `op` on the instance behind `c` as `function`: state table, logging,
+/// panics caught (then `fmi2Fatal`). An invalid `c` gives `fmi2Error`.
+fn with_instance<T>(
+    c: fmi2Component,
+    function: Function,
+    op: impl FnOnce(&mut Instance) -> Result<T, FmiError>,
+) -> Result<T, Status> {
+    // SAFETY: `c` comes from the master, which passes a component of this FMU
+    // (module contract).
+    let Some(h) = (unsafe { handle(c) }) else {
+        return Err(Status::Error);
+    };
+    let instance = &mut h.instance;
+    match catch_unwind(AssertUnwindSafe(|| instance.run(function, op))) {
+        Ok(result) => result,
+        Err(payload) => {
+            let text = panic_text(&*payload);
+            let _ = catch_unwind(AssertUnwindSafe(|| instance.on_panic(function, &text)));
+            Err(Status::Fatal)
+        }
+    }
+}
+
+/// For functions returning `fmi2Status`.
+fn call(
+    c: fmi2Component,
+    function: Function,
+    op: impl FnOnce(&mut Instance) -> Result<Status, FmiError>,
+) -> fmi2Status {
+    match with_instance(c, function, op) {
+        Ok(s) | Err(s) => status(s),
+    }
+}
+
+fn bools_from(values: &[fmi2Boolean]) -> Vec<bool> {
+    values.iter().map(|&v| v != FMI2_FALSE).collect()
+}
+
+// ------------------------------------------------------------------ common
+
+/// `TYPES_PLATFORM` as a C string.
+const TYPES_PLATFORM_C: &CStr = c"default";
+/// `FMI_VERSION` as a C string.
+const FMI_VERSION_C: &CStr = c"2.0";
+
+#[unsafe(no_mangle)]
+pub extern "C" fn fmi2GetTypesPlatform() -> *const c_char {
+    catch_unwind(|| TYPES_PLATFORM_C.as_ptr()).unwrap_or(std::ptr::null())
+}
+
+#[unsafe(no_mangle)]
+pub extern "C" fn fmi2GetVersion() -> *const c_char {
+    catch_unwind(|| FMI_VERSION_C.as_ptr()).unwrap_or(std::ptr::null())
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2SetDebugLogging(
+    c: fmi2Component,
+    loggingOn: fmi2Boolean,
+    nCategories: size_t,
+    categories: *const fmi2String,
+) -> fmi2Status {
+    call(c, Function::SetDebugLogging, |i| {
+        // SAFETY: module contract: `categories` holds `nCategories` strings.
+        let pointers = unsafe { input(categories, nCategories, "categories") }?;
+        let mut names = Vec::with_capacity(pointers.len());
+        for (k, &p) in pointers.iter().enumerate() {
+            // SAFETY: each entry is NULL or a NUL-terminated string.
+            let name = unsafe { copy_str(p) }
+                .ok_or_else(|| FmiError::error(format!("categories[{k}] is NULL")))?;
+            names.push(name);
+        }
+        let names: Vec<&str> = names.iter().map(String::as_str).collect();
+        i.set_debug_logging(loggingOn != FMI2_FALSE, &names)
+    })
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2Instantiate(
+    instanceName: fmi2String,
+    fmuType: fmi2Type,
+    fmuGUID: fmi2String,
+    fmuResourceLocation: fmi2String,
+    functions: *const fmi2CallbackFunctions,
+    _visible: fmi2Boolean,
+    loggingOn: fmi2Boolean,
+) -> fmi2Component {
+    let made = catch_unwind(|| {
+        if functions.is_null() || !functions.is_aligned() {
+            return std::ptr::null_mut();
+        }
+        // SAFETY: non-NULL, aligned, and by contract an fmi2CallbackFunctions;
+        // the two fields needed are copied out.
+        let (logger, environment) =
+            unsafe { ((*functions).logger, (*functions).componentEnvironment) };
+        let Some(logger) = logger else {
+            return std::ptr::null_mut();
+        };
+        // SAFETY (all three): NULL or NUL-terminated strings; copied.
+        let name = unsafe { copy_str(instanceName) };
+        let guid = unsafe { copy_str(fmuGUID) };
+        let resource = unsafe { copy_str(fmuResourceLocation) };
+        let sink = c_logger(logger, environment, name.as_deref().unwrap_or(""));
+        let request = InstantiateRequest {
+            instance_name: name.as_deref(),
+            fmu_type: fmuType,
+            guid: guid.as_deref(),
+            resource_location: resource.as_deref(),
+            logging_on: loggingOn != FMI2_FALSE,
+        };
+        match Instance::instantiate(request, sink) {
+            Some(instance) => Box::into_raw(Box::new(Handle {
+                magic: HANDLE_MAGIC,
+                instance,
+            })) as fmi2Component,
+            None => std::ptr::null_mut(),
+        }
+    });
+    made.unwrap_or(std::ptr::null_mut())
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
+    let _ = catch_unwind(|| {
+        // SAFETY: module contract.
+        if let Some(h) = unsafe { handle(c) }
+            && h.instance.run(Function::FreeInstance, |_| Ok(())).is_ok()
+        {
+            h.magic = 0;
+            // SAFETY: `c` was created by `Box::into_raw` in fmi2Instantiate
+            // and is freed exactly once here (the magic is cleared first).
+            drop(unsafe { Box::from_raw(c as *mut Handle) });
+        }
+    });
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2SetupExperiment(
+    c: fmi2Component,
+    toleranceDefined: fmi2Boolean,
+    tolerance: fmi2Real,
+    startTime: fmi2Real,
+    stopTimeDefined: fmi2Boolean,
+    stopTime: fmi2Real,
+) -> fmi2Status {
+    call(c, Function::SetupExperiment, |i| {
+        i.setup_experiment(
+            (toleranceDefined != FMI2_FALSE).then_some(tolerance),
+            startTime,
+            (stopTimeDefined != FMI2_FALSE).then_some(stopTime),
+        )
+    })
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2Status {
+    call(
+        c,
+        Function::EnterInitializationMode,
+        Instance::enter_initialization_mode,
+    )
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Status {
+    call(
+        c,
+        Function::ExitInitializationMode,
+        Instance::exit_initialization_mode,
+    )
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2Terminate(c: fmi2Component) -> fmi2Status {
+    call(c, Function::Terminate, Instance::terminate)
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
+    call(c, Function::Reset, Instance::reset)
+}
+
+// ------------------------------------------------------------- get and set
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetReal(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: size_t,
+    value: *mut fmi2Real,
+) -> fmi2Status {
+    call(c, Function::GetReal, |i| {
+        // SAFETY: module contract (arrays of nvr elements).
+        let (vrs, values) = unsafe { (input(vr, nvr, "vr")?, output(value, nvr, "value")?) };
+        i.get_real(vrs, values)
+    })
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetInteger(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: size_t,
+    value: *mut fmi2Integer,
+) -> fmi2Status {
+    call(c, Function::GetInteger, |i| {
+        // SAFETY: module contract (arrays of nvr elements).
+        let (vrs, values) = unsafe { (input(vr, nvr, "vr")?, output(value, nvr, "value")?) };
+        i.get_integer(vrs, values)
+    })
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetBoolean(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: size_t,
+    value: *mut fmi2Boolean,
+) -> fmi2Status {
+    call(c, Function::GetBoolean, |i| {
+        // SAFETY: module contract (arrays of nvr elements).
+        let (vrs, values) = unsafe { (input(vr, nvr, "vr")?, output(value, nvr, "value")?) };
+        let mut flags = vec![false; vrs.len()];
+        let s = i.get_boolean(vrs, &mut flags)?;
+        for (v, f) in values.iter_mut().zip(flags) {
+            *v = if f { FMI2_TRUE } else { FMI2_FALSE };
+        }
+        Ok(s)
+    })
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetString(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: size_t,
+    value: *mut fmi2String,
+) -> fmi2Status {
+    call(c, Function::GetString, |i| {
+        // SAFETY: module contract (arrays of nvr elements). No String
+        // variable exists, so nothing is ever written.
+        let (vrs, _) = unsafe { (input(vr, nvr, "vr")?, output(value, nvr, "value")?) };
+        i.get_string(vrs)
+    })
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2SetReal(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: size_t,
+    value: *const fmi2Real,
+) -> fmi2Status {
+    call(c, Function::SetReal, |i| {
+        // SAFETY: module contract (arrays of nvr elements).
+        let (vrs, values) = unsafe { (input(vr, nvr, "vr")?, input(value, nvr, "value")?) };
+        i.set_real(vrs, values)
+    })
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2SetInteger(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: size_t,
+    value: *const fmi2Integer,
+) -> fmi2Status {
+    call(c, Function::SetInteger, |i| {
+        // SAFETY: module contract (arrays of nvr elements).
+        let (vrs, values) = unsafe { (input(vr, nvr, "vr")?, input(value, nvr, "value")?) };
+        i.set_integer(vrs, values)
+    })
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2SetBoolean(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: size_t,
+    value: *const fmi2Boolean,
+) -> fmi2Status {
+    call(c, Function::SetBoolean, |i| {
+        // SAFETY: module contract (arrays of nvr elements).
+        let (vrs, values) = unsafe { (input(vr, nvr, "vr")?, input(value, nvr, "value")?) };
+        i.set_boolean(vrs, &bools_from(values))
+    })
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2SetString(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: size_t,
+    value: *const fmi2String,
+) -> fmi2Status {
+    call(c, Function::SetString, |i| {
+        // SAFETY: module contract (arrays of nvr elements). The strings are
+        // never read: no String variable exists.
+        let (vrs, _) = unsafe { (input(vr, nvr, "vr")?, input(value, nvr, "value")?) };
+        i.set_string(vrs)
+    })
+}
+
+// -------------------------------------------------------------- FMU states
+
+/// The handle stored at `*state`, `None` for NULL.
+///
+/// # Safety
+/// `state` is a valid pointer to an `fmi2FMUstate`.
+unsafe fn state_slot<'a>(
+    state: *mut fmi2FMUstate,
+    what: &str,
+) -> Result<&'a mut fmi2FMUstate, FmiError> {
+    // SAFETY: forwarded contract.
+    unsafe { out_value(state, what) }
+}
+
+fn reuse_of(state: fmi2FMUstate) -> Option<usize> {
+    (!state.is_null()).then_some(state as usize)
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetFMUstate(
+    c: fmi2Component,
+    FMUstate: *mut fmi2FMUstate,
+) -> fmi2Status {
+    call(c, Function::GetFmuState, |i| {
+        // SAFETY: module contract: FMUstate points to an fmi2FMUstate.
+        let slot = unsafe { state_slot(FMUstate, "FMUstate") }?;
+        *slot = i.get_fmu_state(reuse_of(*slot))? as fmi2FMUstate;
+        Ok(Status::Ok)
+    })
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, FMUstate: fmi2FMUstate) -> fmi2Status {
+    call(c, Function::SetFmuState, |i| {
+        let handle = reuse_of(FMUstate).ok_or_else(|| FmiError::error("FMUstate is NULL"))?;
+        i.set_fmu_state(handle)
+    })
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2FreeFMUstate(
+    c: fmi2Component,
+    FMUstate: *mut fmi2FMUstate,
+) -> fmi2Status {
+    call(c, Function::FreeFmuState, |i| {
+        if FMUstate.is_null() {
+            return Ok(Status::Ok);
+        }
+        // SAFETY: module contract: FMUstate points to an fmi2FMUstate.
+        let slot = unsafe { state_slot(FMUstate, "FMUstate") }?;
+        let Some(handle) = reuse_of(*slot) else {
+            return Ok(Status::Ok);
+        };
+        i.free_fmu_state(handle)?;
+        *slot = std::ptr::null_mut();
+        Ok(Status::Ok)
+    })
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
+    c: fmi2Component,
+    FMUstate: fmi2FMUstate,
+    size: *mut size_t,
+) -> fmi2Status {
+    call(c, Function::SerializedFmuStateSize, |i| {
+        // SAFETY: module contract: size points to a size_t.
+        let size = unsafe { out_value(size, "size") }?;
+        let handle = reuse_of(FMUstate).ok_or_else(|| FmiError::error("FMUstate is NULL"))?;
+        *size = i.serialize_fmu_state(handle)?.len();
+        Ok(Status::Ok)
+    })
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2SerializeFMUstate(
+    c: fmi2Component,
+    FMUstate: fmi2FMUstate,
+    serializedState: *mut fmi2Byte,
+    size: size_t,
+) -> fmi2Status {
+    call(c, Function::SerializeFmuState, |i| {
+        let handle = reuse_of(FMUstate).ok_or_else(|| FmiError::error("FMUstate is NULL"))?;
+        let bytes = i.serialize_fmu_state(handle)?;
+        if size < bytes.len() {
+            return Err(FmiError::error(format!(
+                "the buffer has {size} bytes, the state needs {} (fmi2SerializedFMUstateSize)",
+                bytes.len()
+            )));
+        }
+        // SAFETY: module contract: serializedState holds `size` writable bytes.
+        let out = unsafe { output(serializedState as *mut u8, bytes.len(), "serializedState") }?;
+        out.copy_from_slice(&bytes);
+        Ok(Status::Ok)
+    })
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
+    c: fmi2Component,
+    serializedState: *const fmi2Byte,
+    size: size_t,
+    FMUstate: *mut fmi2FMUstate,
+) -> fmi2Status {
+    call(c, Function::DeSerializeFmuState, |i| {
+        // SAFETY: module contract: `size` readable bytes and a state slot.
+        let (bytes, slot) = unsafe {
+            (
+                input(serializedState as *const u8, size, "serializedState")?,
+                state_slot(FMUstate, "FMUstate")?,
+            )
+        };
+        *slot = i.deserialize_fmu_state(bytes, reuse_of(*slot))? as fmi2FMUstate;
+        Ok(Status::Ok)
+    })
+}
+
+// ------------------------------------------------------------- derivatives
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
+    c: fmi2Component,
+    vUnknown_ref: *const fmi2ValueReference,
+    nUnknown: size_t,
+    vKnown_ref: *const fmi2ValueReference,
+    nKnown: size_t,
+    dvKnown: *const fmi2Real,
+    dvUnknown: *mut fmi2Real,
+) -> fmi2Status {
+    call(c, Function::GetDirectionalDerivative, |i| {
+        // SAFETY: module contract (arrays of the given lengths).
+        let (unknowns, knowns, seed, result) = unsafe {
+            (
+                input(vUnknown_ref, nUnknown, "vUnknown_ref")?,
+                input(vKnown_ref, nKnown, "vKnown_ref")?,
+                input(dvKnown, nKnown, "dvKnown")?,
+                output(dvUnknown, nUnknown, "dvUnknown")?,
+            )
+        };
+        i.directional_derivative(unknowns, knowns, seed, result)
+    })
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: size_t,
+    order: *const fmi2Integer,
+    value: *const fmi2Real,
+) -> fmi2Status {
+    call(c, Function::SetRealInputDerivatives, |i| {
+        // SAFETY: module contract (arrays of nvr elements).
+        let (vrs, orders, values) = unsafe {
+            (
+                input(vr, nvr, "vr")?,
+                input(order, nvr, "order")?,
+                input(value, nvr, "value")?,
+            )
+        };
+        i.set_real_input_derivatives(vrs, orders, values)
+    })
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: size_t,
+    order: *const fmi2Integer,
+    value: *mut fmi2Real,
+) -> fmi2Status {
+    call(c, Function::GetRealOutputDerivatives, |i| {
+        // SAFETY: module contract (arrays of nvr elements).
+        let (vrs, orders, values) = unsafe {
+            (
+                input(vr, nvr, "vr")?,
+                input(order, nvr, "order")?,
+                output(value, nvr, "value")?,
+            )
+        };
+        i.get_real_output_derivatives(vrs, orders, values)
+    })
+}
+
+// ------------------------------------------------------------------- steps
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2DoStep(
+    c: fmi2Component,
+    currentCommunicationPoint: fmi2Real,
+    communicationStepSize: fmi2Real,
+    _noSetFMUStatePriorToCurrentPoint: fmi2Boolean,
+) -> fmi2Status {
+    call(c, Function::DoStep, |i| {
+        i.do_step(currentCommunicationPoint, communicationStepSize)
+    })
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
+    call(c, Function::CancelStep, Instance::cancel_step)
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetStatus(
+    c: fmi2Component,
+    s: fmi2StatusKind,
+    value: *mut fmi2Status,
+) -> fmi2Status {
+    call(c, Function::GetStatus, |i| {
+        // SAFETY: module contract: value points to an fmi2Status.
+        let value = unsafe { out_value(value, "value") }?;
+        *value = status(i.get_status(s)?);
+        Ok(Status::Ok)
+    })
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetRealStatus(
+    c: fmi2Component,
+    s: fmi2StatusKind,
+    value: *mut fmi2Real,
+) -> fmi2Status {
+    call(c, Function::GetRealStatus, |i| {
+        // SAFETY: module contract: value points to an fmi2Real.
+        let value = unsafe { out_value(value, "value") }?;
+        *value = i.get_real_status(s)?;
+        Ok(Status::Ok)
+    })
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetIntegerStatus(
+    c: fmi2Component,
+    s: fmi2StatusKind,
+    value: *mut fmi2Integer,
+) -> fmi2Status {
+    call(c, Function::GetIntegerStatus, |i| {
+        // SAFETY: module contract: value points to an fmi2Integer.
+        let value = unsafe { out_value(value, "value") }?;
+        *value = i.get_integer_status(s)?;
+        Ok(Status::Ok)
+    })
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetBooleanStatus(
+    c: fmi2Component,
+    s: fmi2StatusKind,
+    value: *mut fmi2Boolean,
+) -> fmi2Status {
+    call(c, Function::GetBooleanStatus, |i| {
+        // SAFETY: module contract: value points to an fmi2Boolean.
+        let value = unsafe { out_value(value, "value") }?;
+        *value = if i.get_boolean_status(s)? {
+            FMI2_TRUE
+        } else {
+            FMI2_FALSE
+        };
+        Ok(Status::Ok)
+    })
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetStringStatus(
+    c: fmi2Component,
+    s: fmi2StatusKind,
+    value: *mut fmi2String,
+) -> fmi2Status {
+    call(c, Function::GetStringStatus, |i| {
+        // SAFETY: module contract: value points to an fmi2String. Nothing is
+        // written: no String status is ever available.
+        unsafe { out_value(value, "value") }?;
+        i.get_string_status(s)
+    })
+}
+
+// ------------------------------------------- Model Exchange (not supported)
+
+fn model_exchange_only(c: fmi2Component, function: &str) -> fmi2Status {
+    let refused = catch_unwind(AssertUnwindSafe(|| {
+        // SAFETY: module contract.
+        if let Some(h) = unsafe { handle(c) } {
+            h.instance.refuse_model_exchange(function);
+        }
+    }));
+    let _ = refused;
+    status(Status::Error)
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2EnterEventMode(c: fmi2Component) -> fmi2Status {
+    model_exchange_only(c, "fmi2EnterEventMode")
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2NewDiscreteStates(
+    c: fmi2Component,
+    _eventInfo: *mut fmi2EventInfo,
+) -> fmi2Status {
+    model_exchange_only(c, "fmi2NewDiscreteStates")
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2EnterContinuousTimeMode(c: fmi2Component) -> fmi2Status {
+    model_exchange_only(c, "fmi2EnterContinuousTimeMode")
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2CompletedIntegratorStep(
+    c: fmi2Component,
+    _noSetFMUStatePriorToCurrentPoint: fmi2Boolean,
+    _enterEventMode: *mut fmi2Boolean,
+    _terminateSimulation: *mut fmi2Boolean,
+) -> fmi2Status {
+    model_exchange_only(c, "fmi2CompletedIntegratorStep")
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2SetTime(c: fmi2Component, _time: fmi2Real) -> fmi2Status {
+    model_exchange_only(c, "fmi2SetTime")
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2SetContinuousStates(
+    c: fmi2Component,
+    _x: *const fmi2Real,
+    _nx: size_t,
+) -> fmi2Status {
+    model_exchange_only(c, "fmi2SetContinuousStates")
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetDerivatives(
+    c: fmi2Component,
+    _derivatives: *mut fmi2Real,
+    _nx: size_t,
+) -> fmi2Status {
+    model_exchange_only(c, "fmi2GetDerivatives")
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetEventIndicators(
+    c: fmi2Component,
+    _eventIndicators: *mut fmi2Real,
+    _ni: size_t,
+) -> fmi2Status {
+    model_exchange_only(c, "fmi2GetEventIndicators")
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetContinuousStates(
+    c: fmi2Component,
+    _x: *mut fmi2Real,
+    _nx: size_t,
+) -> fmi2Status {
+    model_exchange_only(c, "fmi2GetContinuousStates")
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi2GetNominalsOfContinuousStates(
+    c: fmi2Component,
+    _x_nominal: *mut fmi2Real,
+    _nx: size_t,
+) -> fmi2Status {
+    model_exchange_only(c, "fmi2GetNominalsOfContinuousStates")
+}
+
+const _: () = assert!(FMI2_COSIMULATION == 1);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fmi2::{FMI_VERSION, TYPES_PLATFORM};
+
+    #[test]
+    fn panics_are_caught_and_make_the_instance_fatal() {
+        let guid = crate::fmi2::guid();
+        let instance = Instance::instantiate(
+            InstantiateRequest {
+                instance_name: Some("p"),
+                fmu_type: FMI2_COSIMULATION,
+                guid: Some(&guid),
+                ..Default::default()
+            },
+            Box::new(|_, _, _| {}),
+        )
+        .unwrap();
+        let c = Box::into_raw(Box::new(Handle {
+            magic: HANDLE_MAGIC,
+            instance,
+        })) as fmi2Component;
+        let s = call(c, Function::Reset, |_| panic!("deliberate"));
+        assert_eq!(s, status(Status::Fatal));
+        // SAFETY: `c` is the live handle created above.
+        unsafe {
+            assert_eq!(fmi2Reset(c), status(Status::Error));
+            fmi2FreeInstance(c);
+        }
+    }
+
+    #[test]
+    fn null_and_foreign_components_are_refused() {
+        // SAFETY: NULL is a valid argument by contract.
+        unsafe {
+            assert_eq!(fmi2Reset(std::ptr::null_mut()), status(Status::Error));
+            fmi2FreeInstance(std::ptr::null_mut());
+            assert!(
+                fmi2Instantiate(
+                    c"x".as_ptr(),
+                    1,
+                    c"{}".as_ptr(),
+                    std::ptr::null(),
+                    std::ptr::null(),
+                    0,
+                    0
+                )
+                .is_null()
+            );
+        }
+        let mut not_a_handle = [0u64; 8];
+        let c = not_a_handle.as_mut_ptr() as fmi2Component;
+        // SAFETY: points to readable memory the size of a handle tag.
+        assert_eq!(unsafe { fmi2Terminate(c) }, status(Status::Error));
+    }
+
+    #[test]
+    fn version_strings() {
+        // SAFETY: static NUL-terminated strings.
+        unsafe {
+            assert_eq!(
+                CStr::from_ptr(fmi2GetVersion()).to_str().unwrap(),
+                FMI_VERSION
+            );
+            assert_eq!(
+                CStr::from_ptr(fmi2GetTypesPlatform()).to_str().unwrap(),
+                TYPES_PLATFORM
+            );
+        }
+    }
+}

@@ -1,0 +1,475 @@
+//! Serialized FMU states: a versioned, position-independent byte format.
+//!
+//! ```text
+//! offset  size  content
+//! 0       8     magic "TDVASSFS"
+//! 8       4     format version (u32 LE), currently 1
+//! 12      4     GUID length n (u32 LE)
+//! 16      n     GUID of the FMU that wrote the state (ASCII)
+//! 16+n    8     payload length (u64 LE)
+//! 24+n    4     CRC-32 (IEEE) of the payload (u32 LE)
+//! 28+n    ...   payload
+//! ```
+//!
+//! The payload is the FMU-level state ([`Model`]): machine state, every
+//! setting (by value reference, so the layout follows the variable table),
+//! input slope, start and stop time, last successful time, the terminate
+//! flag, then [`Simulator::to_bytes`] (time, solver state, the delay
+//! history, the road generator, the RMS accumulators, the configuration).
+//! All numbers are little-endian; floats are stored as their bit patterns,
+//! so a restored state continues bit-identically.
+//!
+//! Reading checks the header field by field, the CRC (which detects every
+//! single-bit error), the admissible range of every setting and the
+//! consistency of the settings with the simulator: truncated, corrupted or
+//! foreign bytes give an error, never a panic.
+
+use super::FmiError;
+use super::instance::Model;
+use super::states::MachineState;
+use super::variables::{Access, Settings, VARIABLES, by_vr};
+use crate::solver::Simulator;
+
+/// First bytes of every serialized state.
+pub const MAGIC: &[u8; 8] = b"TDVASSFS";
+/// Format version written (and the only one read).
+pub const FORMAT_VERSION: u32 = 1;
+/// Longest GUID accepted in a header.
+const MAX_GUID_LEN: usize = 64;
+
+const fn crc32_table() -> [u32; 256] {
+    let mut table = [0u32; 256];
+    let mut i = 0;
+    while i < 256 {
+        let mut c = i as u32;
+        let mut k = 0;
+        while k < 8 {
+            c = if c & 1 != 0 {
+                0xEDB8_8320 ^ (c >> 1)
+            } else {
+                c >> 1
+            };
+            k += 1;
+        }
+        table[i] = c;
+        i += 1;
+    }
+    table
+}
+
+const CRC32_TABLE: [u32; 256] = crc32_table();
+
+/// CRC-32 (IEEE 802.3, as in zip and PNG).
+pub fn crc32(bytes: &[u8]) -> u32 {
+    !bytes.iter().fold(!0u32, |c, &b| {
+        CRC32_TABLE[((c ^ b as u32) & 0xff) as usize] ^ (c >> 8)
+    })
+}
+
+#[derive(Default)]
+struct Writer(Vec<u8>);
+
+impl Writer {
+    fn u8(&mut self, v: u8) {
+        self.0.push(v);
+    }
+    fn u32(&mut self, v: u32) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn u64(&mut self, v: u64) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn f64(&mut self, v: f64) {
+        self.u64(v.to_bits());
+    }
+    fn bytes(&mut self, v: &[u8]) {
+        self.0.extend_from_slice(v);
+    }
+}
+
+struct Reader<'a> {
+    bytes: &'a [u8],
+    offset: usize,
+}
+
+fn invalid(message: impl std::fmt::Display) -> FmiError {
+    FmiError::error(format!("invalid serialized FMU state: {message}"))
+}
+
+impl<'a> Reader<'a> {
+    fn new(bytes: &'a [u8]) -> Self {
+        Reader { bytes, offset: 0 }
+    }
+    fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8], FmiError> {
+        let left = self.bytes.len() - self.offset;
+        if left < n {
+            return Err(invalid(format_args!(
+                "truncated at byte {} reading {what}: {n} bytes needed, {left} left",
+                self.offset
+            )));
+        }
+        let out = &self.bytes[self.offset..self.offset + n];
+        self.offset += n;
+        Ok(out)
+    }
+    fn array<const N: usize>(&mut self, what: &str) -> Result<[u8; N], FmiError> {
+        let mut out = [0u8; N];
+        out.copy_from_slice(self.take(N, what)?);
+        Ok(out)
+    }
+    fn u8(&mut self, what: &str) -> Result<u8, FmiError> {
+        Ok(self.array::<1>(what)?[0])
+    }
+    fn flag(&mut self, what: &str) -> Result<bool, FmiError> {
+        match self.u8(what)? {
+            0 => Ok(false),
+            1 => Ok(true),
+            other => Err(invalid(format_args!("{what} flag is {other}, not 0 or 1"))),
+        }
+    }
+    fn u32(&mut self, what: &str) -> Result<u32, FmiError> {
+        Ok(u32::from_le_bytes(self.array(what)?))
+    }
+    fn u64(&mut self, what: &str) -> Result<u64, FmiError> {
+        Ok(u64::from_le_bytes(self.array(what)?))
+    }
+    fn f64(&mut self, what: &str) -> Result<f64, FmiError> {
+        Ok(f64::from_bits(self.u64(what)?))
+    }
+    fn finite(&mut self, what: &str) -> Result<f64, FmiError> {
+        let v = self.f64(what)?;
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(invalid(format_args!("{what} = {v} is not finite")))
+        }
+    }
+    fn rest(&mut self) -> &'a [u8] {
+        let out = &self.bytes[self.offset..];
+        self.offset = self.bytes.len();
+        out
+    }
+}
+
+fn encode_payload(model: &Model) -> Vec<u8> {
+    let mut w = Writer::default();
+    w.u8(model.machine.code());
+    let settings: Vec<_> = VARIABLES
+        .iter()
+        .filter_map(|v| match v.access {
+            Access::Real { get, .. } => Some((v.vr, get(&model.settings).to_bits())),
+            Access::Integer { get, .. } => Some((v.vr, get(&model.settings) as i64 as u64)),
+            _ => None,
+        })
+        .collect();
+    w.u32(settings.len() as u32);
+    for (vr, bits) in settings {
+        w.u32(vr);
+        w.u64(bits);
+    }
+    w.f64(model.input_slope);
+    w.u8(model.input_pending as u8);
+    w.f64(model.start_time);
+    w.u8(model.stop_time.is_some() as u8);
+    w.f64(model.stop_time.unwrap_or(0.0));
+    w.f64(model.last_successful_time);
+    w.u8(model.terminate_requested as u8);
+    match &model.sim {
+        Some(sim) => {
+            let bytes = sim.to_bytes();
+            w.u8(1);
+            w.u64(bytes.len() as u64);
+            w.bytes(&bytes);
+        }
+        None => w.u8(0),
+    }
+    w.0
+}
+
+fn decode_settings(r: &mut Reader) -> Result<Settings, FmiError> {
+    let mut settings = Settings::start_values();
+    let expected: Vec<_> = VARIABLES
+        .iter()
+        .filter(|v| matches!(v.access, Access::Real { .. } | Access::Integer { .. }))
+        .collect();
+    let count = r.u32("the number of settings")? as usize;
+    if count != expected.len() {
+        return Err(invalid(format_args!(
+            "{count} settings where {} were expected",
+            expected.len()
+        )));
+    }
+    let mut seen = vec![false; expected.len()];
+    for _ in 0..count {
+        let vr = r.u32("a value reference")?;
+        let bits = r.u64("a setting")?;
+        let position = expected.iter().position(|v| v.vr == vr);
+        let (Some(i), Some(var)) = (position, by_vr(vr)) else {
+            return Err(invalid(format_args!(
+                "unknown setting value reference {vr}"
+            )));
+        };
+        if std::mem::replace(&mut seen[i], true) {
+            return Err(invalid(format_args!(
+                "setting `{}` appears twice",
+                var.name
+            )));
+        }
+        match var.access {
+            Access::Real { set, .. } => {
+                let value = f64::from_bits(bits);
+                var.range
+                    .check(var.name, value)
+                    .map_err(|e| invalid(e.message))?;
+                set(&mut settings, value);
+            }
+            Access::Integer { set, .. } => {
+                let value = i32::try_from(bits as i64).map_err(|_| {
+                    invalid(format_args!(
+                        "`{}` = {} is not a 32-bit integer",
+                        var.name, bits as i64
+                    ))
+                })?;
+                var.range
+                    .check(var.name, value as f64)
+                    .map_err(|e| invalid(e.message))?;
+                set(&mut settings, value);
+            }
+            _ => unreachable!("only settings are listed"),
+        }
+    }
+    Ok(settings)
+}
+
+fn decode_payload(bytes: &[u8]) -> Result<Model, FmiError> {
+    let mut r = Reader::new(bytes);
+    let code = r.u8("the machine state")?;
+    let machine = MachineState::from_code(code)
+        .filter(|s| *s != MachineState::Fatal)
+        .ok_or_else(|| invalid(format_args!("machine state code {code}")))?;
+    let settings = decode_settings(&mut r)?;
+    let input_slope = r.finite("the input slope")?;
+    let input_pending = r.flag("input pending")?;
+    let start_time = r.finite("the start time")?;
+    let stop_defined = r.flag("stop time defined")?;
+    let stop = r.f64("the stop time")?;
+    let stop_time = if stop_defined {
+        if !(stop.is_finite() && stop >= start_time) {
+            return Err(invalid(format_args!(
+                "stop time {stop} before the start time {start_time}"
+            )));
+        }
+        Some(stop)
+    } else {
+        None
+    };
+    let last_successful_time = r.finite("the last successful time")?;
+    let terminate_requested = r.flag("terminate requested")?;
+    let sim = if r.flag("simulator present")? {
+        let len = r.u64("the simulator length")?;
+        let bytes = r.rest();
+        if len != bytes.len() as u64 {
+            return Err(invalid(format_args!(
+                "simulator of {len} bytes where {} remain",
+                bytes.len()
+            )));
+        }
+        Some(Simulator::from_bytes(bytes).map_err(invalid)?)
+    } else {
+        None
+    };
+    if !r.rest().is_empty() {
+        return Err(invalid("trailing bytes"));
+    }
+    if machine.is_simulating() != sim.is_some() {
+        return Err(invalid(format_args!(
+            "state {} {} a simulator",
+            machine.name(),
+            if sim.is_some() { "with" } else { "without" }
+        )));
+    }
+    if let Some(sim) = &sim {
+        let config = settings.to_config(start_time).map_err(invalid)?;
+        if *sim.config() != config {
+            return Err(invalid("the simulator does not match the settings"));
+        }
+    }
+    Ok(Model {
+        machine,
+        settings,
+        input_slope,
+        input_pending,
+        start_time,
+        stop_time,
+        last_successful_time,
+        terminate_requested,
+        sim,
+    })
+}
+
+/// Serializes `model` for the FMU with `guid`.
+pub fn serialize(model: &Model, guid: &str) -> Vec<u8> {
+    let payload = encode_payload(model);
+    let mut w = Writer::default();
+    w.bytes(MAGIC);
+    w.u32(FORMAT_VERSION);
+    w.u32(guid.len() as u32);
+    w.bytes(guid.as_bytes());
+    w.u64(payload.len() as u64);
+    w.u32(crc32(&payload));
+    w.bytes(&payload);
+    w.0
+}
+
+/// Reads what [`serialize`] wrote, for the FMU with `guid`.
+pub fn deserialize(bytes: &[u8], guid: &str) -> Result<Model, FmiError> {
+    let mut r = Reader::new(bytes);
+    if bytes.len() < MAGIC.len() || &bytes[..MAGIC.len()] != MAGIC {
+        return Err(invalid(format_args!(
+            "not a tdvass FMU state ({} bytes without the magic `TDVASSFS`)",
+            bytes.len()
+        )));
+    }
+    r.take(MAGIC.len(), "the magic")?;
+    let version = r.u32("the format version")?;
+    if version != FORMAT_VERSION {
+        return Err(invalid(format_args!(
+            "format version {version} is not supported (this FMU reads version {FORMAT_VERSION})"
+        )));
+    }
+    let guid_len = r.u32("the GUID length")? as usize;
+    if guid_len > MAX_GUID_LEN {
+        return Err(invalid(format_args!("GUID length {guid_len}")));
+    }
+    let written_by = r.take(guid_len, "the GUID")?;
+    if written_by != guid.as_bytes() {
+        return Err(invalid(format_args!(
+            "written by the FMU with GUID {}, this FMU has GUID {guid}",
+            String::from_utf8_lossy(written_by)
+        )));
+    }
+    let len = r.u64("the payload length")?;
+    let checksum = r.u32("the checksum")?;
+    let payload = r.rest();
+    if len != payload.len() as u64 {
+        return Err(invalid(format_args!(
+            "payload of {len} bytes announced, {} present",
+            payload.len()
+        )));
+    }
+    let actual = crc32(payload);
+    if actual != checksum {
+        return Err(invalid(format_args!(
+            "checksum mismatch (stored {checksum:08x}, computed {actual:08x})"
+        )));
+    }
+    decode_payload(payload)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fmi2::guid;
+
+    fn running_model() -> Model {
+        let mut model = Model::new();
+        let config = model.settings.to_config(0.0).unwrap();
+        let mut sim = Simulator::new(config).unwrap();
+        sim.advance_to(0.0123).unwrap();
+        model.sim = Some(sim);
+        model.machine = MachineState::StepComplete;
+        model.stop_time = Some(15.0);
+        model.last_successful_time = 0.0123;
+        model
+    }
+
+    #[test]
+    fn crc32_check_value() {
+        assert_eq!(crc32(b"123456789"), 0xCBF4_3926);
+        assert_eq!(crc32(b""), 0);
+    }
+
+    #[test]
+    fn round_trip_is_exact() {
+        let model = running_model();
+        let bytes = serialize(&model, &guid());
+        let back = deserialize(&bytes, &guid()).unwrap();
+        assert_eq!(serialize(&back, &guid()), bytes);
+        assert_eq!(back.machine, MachineState::StepComplete);
+        assert_eq!(back.stop_time, Some(15.0));
+        let (mut a, mut b) = (model.sim.unwrap(), back.sim.unwrap());
+        a.advance_to(0.5).unwrap();
+        b.advance_to(0.5).unwrap();
+        assert_eq!(a.outputs(), b.outputs());
+        let fresh = Model::new();
+        let back = deserialize(&serialize(&fresh, &guid()), &guid()).unwrap();
+        assert!(back.sim.is_none());
+        assert_eq!(back.settings, fresh.settings);
+    }
+
+    #[test]
+    fn envelope_errors() {
+        let g = guid();
+        let bytes = serialize(&running_model(), &g);
+        let err = |b: &[u8]| deserialize(b, &g).unwrap_err().message;
+        assert!(err(&[]).contains("magic"));
+        assert!(err(b"TDVASSF").contains("magic"));
+        assert!(err(b"something else entirely").contains("magic"));
+        for cut in [8, 11, 12, 20, 60, 70, bytes.len() / 2, bytes.len() - 1] {
+            let e = err(&bytes[..cut]);
+            assert!(
+                e.contains("truncated") || e.contains("payload"),
+                "{cut}: {e}"
+            );
+        }
+        let mut v2 = bytes.clone();
+        v2[8] = 2;
+        assert!(err(&v2).contains("format version 2"));
+        assert!(
+            deserialize(&bytes, "{00000000-0000-0000-0000-000000000000}")
+                .unwrap_err()
+                .message
+                .contains("GUID")
+        );
+        let mut long = bytes.clone();
+        long.push(0);
+        assert!(err(&long).contains("payload"));
+        let mut bad_len = bytes.clone();
+        bad_len[12] = 200;
+        assert!(err(&bad_len).contains("GUID length"));
+    }
+
+    #[test]
+    fn every_single_bit_flip_is_detected() {
+        let g = guid();
+        let bytes = serialize(&running_model(), &g);
+        let mut flipped = bytes.clone();
+        for i in 0..bytes.len() {
+            for bit in 0..8 {
+                flipped[i] ^= 1 << bit;
+                assert!(deserialize(&flipped, &g).is_err(), "byte {i} bit {bit}");
+                flipped[i] ^= 1 << bit;
+            }
+        }
+    }
+
+    #[test]
+    fn consistent_checksum_but_bad_content_is_refused() {
+        let g = guid();
+        let model = running_model();
+        let mut payload = encode_payload(&model);
+        // A negative mass (m_s is the second setting: machine byte, count, then vr/value pairs).
+        let m_s_at = 1 + 4 + 12 + 4;
+        payload[m_s_at..m_s_at + 8].copy_from_slice(&(-1.0f64).to_bits().to_le_bytes());
+        let mut w = Writer::default();
+        w.bytes(MAGIC);
+        w.u32(FORMAT_VERSION);
+        w.u32(g.len() as u32);
+        w.bytes(g.as_bytes());
+        w.u64(payload.len() as u64);
+        w.u32(crc32(&payload));
+        w.bytes(&payload);
+        let e = deserialize(&w.0, &g).unwrap_err().message;
+        assert!(e.contains("m_s") && e.contains("-1"), "{e}");
+    }
+}

@@ -1,0 +1,339 @@
+//! The FMI 2.0 Co-Simulation state machine, as one declarative table
+//! ([`ALLOWED`]) of which function may be called in which state, checked by
+//! one function ([`check`]).
+//!
+//! The table follows the state table of the FMI 2.0 standard (section
+//! 4.2.4). This FMU steps synchronously, so `stepInProgress` and
+//! `stepCanceled` never occur and `fmi2CancelStep` is never allowed. One
+//! deliberate extension: `fmi2FreeInstance` is also allowed in `fatal`, so
+//! that a master can always release the memory.
+//!
+//! `fmi2GetTypesPlatform`, `fmi2GetVersion` and `fmi2Instantiate` take no
+//! instance and are always allowed.
+
+use super::FmiError;
+
+/// State of an instance.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum MachineState {
+    Instantiated,
+    InitializationMode,
+    StepComplete,
+    StepFailed,
+    Terminated,
+    Error,
+    Fatal,
+}
+
+impl MachineState {
+    /// Every state.
+    pub const ALL: [MachineState; 7] = [
+        MachineState::Instantiated,
+        MachineState::InitializationMode,
+        MachineState::StepComplete,
+        MachineState::StepFailed,
+        MachineState::Terminated,
+        MachineState::Error,
+        MachineState::Fatal,
+    ];
+
+    /// The standard's name of the state.
+    pub fn name(self) -> &'static str {
+        match self {
+            MachineState::Instantiated => "instantiated",
+            MachineState::InitializationMode => "initializationMode",
+            MachineState::StepComplete => "stepComplete",
+            MachineState::StepFailed => "stepFailed",
+            MachineState::Terminated => "terminated",
+            MachineState::Error => "error",
+            MachineState::Fatal => "fatal",
+        }
+    }
+
+    /// Stable code used in serialized FMU states.
+    pub fn code(self) -> u8 {
+        self as u8
+    }
+
+    /// Inverse of [`MachineState::code`].
+    pub fn from_code(code: u8) -> Option<MachineState> {
+        MachineState::ALL.get(code as usize).copied()
+    }
+
+    /// Whether the instance has a running simulation (after initialization).
+    pub fn is_simulating(self) -> bool {
+        !matches!(
+            self,
+            MachineState::Instantiated | MachineState::InitializationMode
+        )
+    }
+
+    const fn bit(self) -> u8 {
+        1 << self as u8
+    }
+}
+
+/// A set of states.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct StateSet(u8);
+
+impl StateSet {
+    /// The set of `states`.
+    pub const fn of(states: &[MachineState]) -> StateSet {
+        let mut bits = 0;
+        let mut i = 0;
+        while i < states.len() {
+            bits |= states[i].bit();
+            i += 1;
+        }
+        StateSet(bits)
+    }
+
+    /// Whether `state` is in the set.
+    pub fn contains(self, state: MachineState) -> bool {
+        self.0 & state.bit() != 0
+    }
+}
+
+/// The fmi2 functions that take an instance.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Function {
+    SetDebugLogging,
+    FreeInstance,
+    SetupExperiment,
+    EnterInitializationMode,
+    ExitInitializationMode,
+    Terminate,
+    Reset,
+    GetReal,
+    GetInteger,
+    GetBoolean,
+    GetString,
+    SetReal,
+    SetInteger,
+    SetBoolean,
+    SetString,
+    GetFmuState,
+    SetFmuState,
+    FreeFmuState,
+    SerializedFmuStateSize,
+    SerializeFmuState,
+    DeSerializeFmuState,
+    GetDirectionalDerivative,
+    SetRealInputDerivatives,
+    GetRealOutputDerivatives,
+    DoStep,
+    CancelStep,
+    GetStatus,
+    GetRealStatus,
+    GetIntegerStatus,
+    GetBooleanStatus,
+    GetStringStatus,
+}
+
+impl Function {
+    /// The C name.
+    pub fn name(self) -> &'static str {
+        use Function::*;
+        match self {
+            SetDebugLogging => "fmi2SetDebugLogging",
+            FreeInstance => "fmi2FreeInstance",
+            SetupExperiment => "fmi2SetupExperiment",
+            EnterInitializationMode => "fmi2EnterInitializationMode",
+            ExitInitializationMode => "fmi2ExitInitializationMode",
+            Terminate => "fmi2Terminate",
+            Reset => "fmi2Reset",
+            GetReal => "fmi2GetReal",
+            GetInteger => "fmi2GetInteger",
+            GetBoolean => "fmi2GetBoolean",
+            GetString => "fmi2GetString",
+            SetReal => "fmi2SetReal",
+            SetInteger => "fmi2SetInteger",
+            SetBoolean => "fmi2SetBoolean",
+            SetString => "fmi2SetString",
+            GetFmuState => "fmi2GetFMUstate",
+            SetFmuState => "fmi2SetFMUstate",
+            FreeFmuState => "fmi2FreeFMUstate",
+            SerializedFmuStateSize => "fmi2SerializedFMUstateSize",
+            SerializeFmuState => "fmi2SerializeFMUstate",
+            DeSerializeFmuState => "fmi2DeSerializeFMUstate",
+            GetDirectionalDerivative => "fmi2GetDirectionalDerivative",
+            SetRealInputDerivatives => "fmi2SetRealInputDerivatives",
+            GetRealOutputDerivatives => "fmi2GetRealOutputDerivatives",
+            DoStep => "fmi2DoStep",
+            CancelStep => "fmi2CancelStep",
+            GetStatus => "fmi2GetStatus",
+            GetRealStatus => "fmi2GetRealStatus",
+            GetIntegerStatus => "fmi2GetIntegerStatus",
+            GetBooleanStatus => "fmi2GetBooleanStatus",
+            GetStringStatus => "fmi2GetStringStatus",
+        }
+    }
+
+    /// The states in which the function may be called.
+    pub fn allowed_states(self) -> StateSet {
+        ALLOWED
+            .iter()
+            .find(|(f, _)| *f == self)
+            .map(|(_, set)| *set)
+            .unwrap_or(StateSet(0))
+    }
+}
+
+use MachineState::{
+    Error as Err_, Fatal, InitializationMode as Init, Instantiated as Inst, StepComplete as Done,
+    StepFailed as Failed, Terminated as Term,
+};
+
+/// Every state but `fatal`.
+const NOT_FATAL: StateSet = StateSet::of(&[Inst, Init, Done, Failed, Term, Err_]);
+/// Where values can be read.
+const READABLE: StateSet = StateSet::of(&[Init, Done, Failed, Term, Err_]);
+/// Where values can be set (which ones depends on causality and variability).
+const SETTABLE: StateSet = StateSet::of(&[Inst, Init, Done]);
+/// Where the step status can be inquired.
+const STATUS: StateSet = StateSet::of(&[Done, Failed, Term]);
+
+/// The state table: which function is allowed in which state.
+pub const ALLOWED: &[(Function, StateSet)] = {
+    use Function::*;
+    &[
+        (SetDebugLogging, NOT_FATAL),
+        (
+            FreeInstance,
+            StateSet::of(&[Inst, Init, Done, Failed, Term, Err_, Fatal]),
+        ),
+        (SetupExperiment, StateSet::of(&[Inst])),
+        (EnterInitializationMode, StateSet::of(&[Inst])),
+        (ExitInitializationMode, StateSet::of(&[Init])),
+        (Terminate, StateSet::of(&[Done, Failed])),
+        (Reset, NOT_FATAL),
+        (GetReal, READABLE),
+        (GetInteger, READABLE),
+        (GetBoolean, READABLE),
+        (GetString, READABLE),
+        (SetReal, SETTABLE),
+        (SetInteger, SETTABLE),
+        (SetBoolean, SETTABLE),
+        (SetString, SETTABLE),
+        (GetFmuState, NOT_FATAL),
+        (SetFmuState, NOT_FATAL),
+        (FreeFmuState, NOT_FATAL),
+        (SerializedFmuStateSize, NOT_FATAL),
+        (SerializeFmuState, NOT_FATAL),
+        (DeSerializeFmuState, NOT_FATAL),
+        (GetDirectionalDerivative, READABLE),
+        (SetRealInputDerivatives, SETTABLE),
+        (
+            GetRealOutputDerivatives,
+            StateSet::of(&[Done, Failed, Term, Err_]),
+        ),
+        (DoStep, StateSet::of(&[Done])),
+        // Only in stepInProgress, which a synchronous fmi2DoStep never leaves behind.
+        (CancelStep, StateSet::of(&[])),
+        (GetStatus, STATUS),
+        (GetRealStatus, STATUS),
+        (GetIntegerStatus, STATUS),
+        (GetBooleanStatus, STATUS),
+        (GetStringStatus, STATUS),
+    ]
+};
+
+/// Refuses `function` in `state` with "not allowed in state Y" (the caller
+/// prefixes the function name).
+pub fn check(function: Function, state: MachineState) -> Result<(), FmiError> {
+    if function.allowed_states().contains(state) {
+        Ok(())
+    } else {
+        Err(FmiError::error(format!(
+            "not allowed in state {}",
+            state.name()
+        )))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The standard's table, restated independently: one row per function,
+    /// columns instantiated, initializationMode, stepComplete, stepFailed,
+    /// terminated, error, fatal.
+    const EXPECTED: &[(&str, &str)] = &[
+        ("fmi2SetDebugLogging", "xxxxxx."),
+        ("fmi2FreeInstance", "xxxxxxx"),
+        ("fmi2SetupExperiment", "x......"),
+        ("fmi2EnterInitializationMode", "x......"),
+        ("fmi2ExitInitializationMode", ".x....."),
+        ("fmi2Terminate", "..xx..."),
+        ("fmi2Reset", "xxxxxx."),
+        ("fmi2GetReal", ".xxxxx."),
+        ("fmi2GetInteger", ".xxxxx."),
+        ("fmi2GetBoolean", ".xxxxx."),
+        ("fmi2GetString", ".xxxxx."),
+        ("fmi2SetReal", "xxx...."),
+        ("fmi2SetInteger", "xxx...."),
+        ("fmi2SetBoolean", "xxx...."),
+        ("fmi2SetString", "xxx...."),
+        ("fmi2GetFMUstate", "xxxxxx."),
+        ("fmi2SetFMUstate", "xxxxxx."),
+        ("fmi2FreeFMUstate", "xxxxxx."),
+        ("fmi2SerializedFMUstateSize", "xxxxxx."),
+        ("fmi2SerializeFMUstate", "xxxxxx."),
+        ("fmi2DeSerializeFMUstate", "xxxxxx."),
+        ("fmi2GetDirectionalDerivative", ".xxxxx."),
+        ("fmi2SetRealInputDerivatives", "xxx...."),
+        ("fmi2GetRealOutputDerivatives", "..xxxx."),
+        ("fmi2DoStep", "..x...."),
+        ("fmi2CancelStep", "......."),
+        ("fmi2GetStatus", "..xxx.."),
+        ("fmi2GetRealStatus", "..xxx.."),
+        ("fmi2GetIntegerStatus", "..xxx.."),
+        ("fmi2GetBooleanStatus", "..xxx.."),
+        ("fmi2GetStringStatus", "..xxx.."),
+    ];
+
+    #[test]
+    fn every_function_appears_once() {
+        for (i, (f, _)) in ALLOWED.iter().enumerate() {
+            assert!(
+                ALLOWED[i + 1..].iter().all(|(g, _)| g != f),
+                "{} twice",
+                f.name()
+            );
+        }
+        assert_eq!(ALLOWED.len(), EXPECTED.len());
+    }
+
+    #[test]
+    fn table_matches_the_standard() {
+        for (name, row) in EXPECTED {
+            let (function, set) = ALLOWED
+                .iter()
+                .find(|(f, _)| f.name() == *name)
+                .unwrap_or_else(|| panic!("{name} missing"));
+            for (state, mark) in MachineState::ALL.iter().zip(row.chars()) {
+                assert_eq!(
+                    set.contains(*state),
+                    mark == 'x',
+                    "{name} in {}",
+                    state.name()
+                );
+                let checked = check(*function, *state);
+                assert_eq!(checked.is_ok(), mark == 'x');
+                if let Err(e) = checked {
+                    assert_eq!(e.message, format!("not allowed in state {}", state.name()));
+                    assert_eq!(e.status, crate::fmi2::Status::Error);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn state_codes_round_trip() {
+        for s in MachineState::ALL {
+            assert_eq!(MachineState::from_code(s.code()), Some(s));
+        }
+        assert_eq!(MachineState::from_code(7), None);
+    }
+}

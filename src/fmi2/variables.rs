@@ -1,0 +1,1490 @@
+//! The one table of FMU variables, [`VARIABLES`].
+//!
+//! Each variable is declared once: name, value reference, causality,
+//! variability, physical quantity (hence type definition and unit), display
+//! unit, start value, admissible range (hence `min`/`max` and the check made
+//! when it is set), description, its direct dependencies (ModelStructure) and
+//! how it is read or written ([`Access`]). Everything else is derived: the
+//! get/set dispatch of [`super::Instance`], `modelDescription.xml` and
+//! `documentation/index.html` ([`super::description`]), the serialized
+//! settings ([`super::snapshot`]) and the GUID ([`guid`]).
+//!
+//! Value references are unique across all types.
+
+use super::FmiError;
+use crate::metrics::Weights;
+use crate::model::{Params, State, V_H, V_S, V_T, Variant, X_H, X_S, X_T};
+use crate::road::{RandomRoad, RoadClass, RoadSpec};
+use crate::solver::{OutputDerivatives, Outputs, SimulationConfig};
+
+/// FMI causality.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Causality {
+    Parameter,
+    CalculatedParameter,
+    Input,
+    Output,
+}
+
+impl Causality {
+    /// The XML attribute value.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Causality::Parameter => "parameter",
+            Causality::CalculatedParameter => "calculatedParameter",
+            Causality::Input => "input",
+            Causality::Output => "output",
+        }
+    }
+}
+
+/// FMI variability.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Variability {
+    Fixed,
+    Tunable,
+    Continuous,
+}
+
+impl Variability {
+    /// The XML attribute value.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Variability::Fixed => "fixed",
+            Variability::Tunable => "tunable",
+            Variability::Continuous => "continuous",
+        }
+    }
+}
+
+/// FMI `initial` attribute.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Initial {
+    Exact,
+    Calculated,
+}
+
+impl Initial {
+    /// The XML attribute value.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Initial::Exact => "exact",
+            Initial::Calculated => "calculated",
+        }
+    }
+}
+
+/// FMI 2.0 base type of a variable.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum VarType {
+    Real,
+    Integer,
+    Boolean,
+    String,
+}
+
+impl VarType {
+    /// The XML element name.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            VarType::Real => "Real",
+            VarType::Integer => "Integer",
+            VarType::Boolean => "Boolean",
+            VarType::String => "String",
+        }
+    }
+}
+
+/// A unit of `UnitDefinitions`: name, SI base-unit exponents and display
+/// units `(name, factor)` (display value = factor × value).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UnitDefinition {
+    /// Unit name, as used in the `unit` attributes.
+    pub name: &'static str,
+    /// `BaseUnit` exponents, e.g. `[("kg", 1), ("s", -2)]`.
+    pub base: &'static [(&'static str, i32)],
+    /// `DisplayUnit`s.
+    pub display: &'static [(&'static str, f64)],
+}
+
+/// Every unit used by the variables.
+pub const UNITS: &[UnitDefinition] = &[
+    UnitDefinition {
+        name: "kg",
+        base: &[("kg", 1)],
+        display: &[],
+    },
+    UnitDefinition {
+        name: "N/m",
+        base: &[("kg", 1), ("s", -2)],
+        display: &[],
+    },
+    UnitDefinition {
+        name: "N.s/m",
+        base: &[("kg", 1), ("s", -1)],
+        display: &[],
+    },
+    UnitDefinition {
+        name: "m",
+        base: &[("m", 1)],
+        display: &[("mm", 1000.0)],
+    },
+    UnitDefinition {
+        name: "m/s",
+        base: &[("m", 1), ("s", -1)],
+        display: &[("mm/s", 1000.0)],
+    },
+    UnitDefinition {
+        name: "m/s2",
+        base: &[("m", 1), ("s", -2)],
+        display: &[],
+    },
+    UnitDefinition {
+        name: "N",
+        base: &[("kg", 1), ("m", 1), ("s", -2)],
+        display: &[],
+    },
+    UnitDefinition {
+        name: "s",
+        base: &[("s", 1)],
+        display: &[("ms", 1000.0)],
+    },
+    UnitDefinition {
+        name: "rad/s",
+        base: &[("s", -1), ("rad", 1)],
+        display: &[],
+    },
+    UnitDefinition {
+        name: "Hz",
+        base: &[("s", -1)],
+        display: &[],
+    },
+    UnitDefinition {
+        name: "1/s",
+        base: &[("s", -1)],
+        display: &[],
+    },
+];
+
+/// Physical quantity of a Real variable: its `TypeDefinitions` entry
+/// (`declaredType`) and unit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Quantity {
+    /// No unit (codes, weights, the objective, Booleans).
+    Dimensionless,
+    Mass,
+    Stiffness,
+    Damping,
+    Length,
+    Velocity,
+    Acceleration,
+    Force,
+    Time,
+    AngularFrequency,
+    Frequency,
+    Rate,
+}
+
+impl Quantity {
+    /// Every quantity that has a type definition, in declaration order.
+    pub const TYPED: [Quantity; 11] = [
+        Quantity::Mass,
+        Quantity::Stiffness,
+        Quantity::Damping,
+        Quantity::Length,
+        Quantity::Velocity,
+        Quantity::Acceleration,
+        Quantity::Force,
+        Quantity::Time,
+        Quantity::AngularFrequency,
+        Quantity::Frequency,
+        Quantity::Rate,
+    ];
+
+    /// `(type name, quantity, unit)` of the `SimpleType`, `None` when dimensionless.
+    pub fn type_definition(self) -> Option<(&'static str, &'static str, &'static str)> {
+        Some(match self {
+            Quantity::Dimensionless => return None,
+            Quantity::Mass => ("Mass", "Mass", "kg"),
+            Quantity::Stiffness => ("Stiffness", "TranslationalSpringConstant", "N/m"),
+            Quantity::Damping => ("Damping", "TranslationalDampingConstant", "N.s/m"),
+            Quantity::Length => ("Length", "Length", "m"),
+            Quantity::Velocity => ("Velocity", "Velocity", "m/s"),
+            Quantity::Acceleration => ("Acceleration", "Acceleration", "m/s2"),
+            Quantity::Force => ("Force", "Force", "N"),
+            Quantity::Time => ("Time", "Time", "s"),
+            Quantity::AngularFrequency => ("AngularFrequency", "AngularFrequency", "rad/s"),
+            Quantity::Frequency => ("Frequency", "Frequency", "Hz"),
+            Quantity::Rate => ("GrowthRate", "GrowthRate", "1/s"),
+        })
+    }
+
+    /// The unit, `None` when dimensionless.
+    pub fn unit(self) -> Option<&'static str> {
+        self.type_definition().map(|(_, _, unit)| unit)
+    }
+}
+
+/// Admissible values: checked when a variable is set; `min`/`max` in the
+/// description derive from it (`Positive` is declared as `min="0"`, the
+/// strict bound is in the check and the description).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Range {
+    /// Any finite value.
+    Finite,
+    /// Finite and `>= min`.
+    AtLeast(f64),
+    /// Finite and `> 0`.
+    Positive,
+    /// An integer in `min..=max`.
+    Integers(i32, i32),
+    /// Computed by the FMU (outputs, calculated parameters): no check.
+    Computed,
+}
+
+impl Range {
+    /// `(min, max)` as declared in the description.
+    pub fn bounds(self) -> (Option<f64>, Option<f64>) {
+        match self {
+            Range::Finite | Range::Computed => (None, None),
+            Range::AtLeast(min) => (Some(min), None),
+            Range::Positive => (Some(0.0), None),
+            Range::Integers(min, max) => (Some(min as f64), Some(max as f64)),
+        }
+    }
+
+    /// The admissible values in words (documentation).
+    pub fn describe(self) -> String {
+        match self {
+            Range::Finite => "finite".into(),
+            Range::AtLeast(min) => format!(">= {min}"),
+            Range::Positive => "> 0".into(),
+            Range::Integers(min, max) => format!("{min} .. {max}"),
+            Range::Computed => String::new(),
+        }
+    }
+
+    /// Whether `value` is admissible; the error names the variable and value.
+    pub fn check(self, name: &str, value: f64) -> Result<(), FmiError> {
+        let reason = match self {
+            Range::Computed => return Ok(()),
+            _ if !value.is_finite() => "must be finite".to_string(),
+            Range::Finite => return Ok(()),
+            Range::AtLeast(min) if value < min => format!("must be >= {min}"),
+            Range::Positive if value <= 0.0 => "must be > 0".to_string(),
+            Range::Integers(min, max) if !(min as f64..=max as f64).contains(&value) => {
+                format!("must be in {min}..={max}")
+            }
+            _ => return Ok(()),
+        };
+        Err(FmiError::error(format!(
+            "invalid value {value} for `{name}`: {reason}"
+        )))
+    }
+}
+
+/// Every setting of an instance: the parameters and the input. Start values
+/// come from [`VARIABLES`] ([`Settings::default`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Settings {
+    pub variant: i32,
+    pub m_s: f64,
+    pub m_h: f64,
+    pub m_t: f64,
+    pub k_s: f64,
+    pub k_h: f64,
+    pub k_t: f64,
+    pub c_s: f64,
+    pub c_h: f64,
+    pub g: f64,
+    pub tau: f64,
+    pub road: i32,
+    pub road_amplitude: f64,
+    pub road_angular_frequency: f64,
+    pub road_class: i32,
+    pub vehicle_speed: f64,
+    pub road_cutoff_frequency: f64,
+    pub road_seed: i32,
+    pub road_sample_interval: f64,
+    pub max_internal_step: f64,
+    pub w_ba: f64,
+    pub w_sdd: f64,
+    pub w_tdd: f64,
+    /// `[x_s, v_s, x_h, v_h, x_t, v_t]` at the start time.
+    pub initial_state: [f64; 6],
+    /// The input `x_g` (m).
+    pub x_g: f64,
+}
+
+impl Settings {
+    /// The settings with every start value of [`VARIABLES`].
+    pub fn start_values() -> Settings {
+        let mut s = Settings {
+            variant: 0,
+            m_s: 0.0,
+            m_h: 0.0,
+            m_t: 0.0,
+            k_s: 0.0,
+            k_h: 0.0,
+            k_t: 0.0,
+            c_s: 0.0,
+            c_h: 0.0,
+            g: 0.0,
+            tau: 0.0,
+            road: 0,
+            road_amplitude: 0.0,
+            road_angular_frequency: 0.0,
+            road_class: 0,
+            vehicle_speed: 0.0,
+            road_cutoff_frequency: 0.0,
+            road_seed: 0,
+            road_sample_interval: 0.0,
+            max_internal_step: 0.0,
+            w_ba: 0.0,
+            w_sdd: 0.0,
+            w_tdd: 0.0,
+            initial_state: [0.0; 6],
+            x_g: 0.0,
+        };
+        for v in VARIABLES {
+            match (v.access, v.start) {
+                (Access::Real { set, .. }, Some(start)) => set(&mut s, start),
+                (Access::Integer { set, .. }, Some(start)) => set(&mut s, start as i32),
+                _ => {}
+            }
+        }
+        s
+    }
+
+    /// The physical parameters.
+    pub fn params(&self) -> Params {
+        Params {
+            m_s: self.m_s,
+            m_h: self.m_h,
+            m_t: self.m_t,
+            k_s: self.k_s,
+            k_h: self.k_h,
+            k_t: self.k_t,
+            c_s: self.c_s,
+            c_h: self.c_h,
+            g: self.g,
+            tau: self.tau,
+        }
+    }
+
+    /// The variant (`variant` code checked).
+    pub fn variant(&self) -> crate::Result<Variant> {
+        Variant::from_code(self.variant as i64)
+    }
+
+    /// The weights of J.
+    pub fn weights(&self) -> Weights {
+        Weights {
+            body_acceleration: self.w_ba,
+            suspension_deflection: self.w_sdd,
+            tire_deflection: self.w_tdd,
+        }
+    }
+
+    /// Whether the road is the input `x_g` (`road = 0`).
+    pub fn road_is_input(&self) -> bool {
+        self.road == 0
+    }
+
+    /// The road (`road` code and the fields it uses checked).
+    pub fn road_spec(&self) -> crate::Result<RoadSpec> {
+        let random = || -> crate::Result<RandomRoad> {
+            Ok(RandomRoad {
+                class: RoadClass::from_code(self.road_class as i64)?,
+                speed: self.vehicle_speed,
+                cutoff_frequency: self.road_cutoff_frequency,
+                seed: u64::try_from(self.road_seed).map_err(|_| crate::Error::InvalidSetting {
+                    name: "road_seed",
+                    value: self.road_seed as i64,
+                    reason: "must be >= 0",
+                })?,
+            })
+        };
+        Ok(match self.road {
+            0 => RoadSpec::Input,
+            1 => RoadSpec::Harmonic {
+                amplitude: self.road_amplitude,
+                angular_frequency: self.road_angular_frequency,
+            },
+            2 => RoadSpec::Iso8608(random()?),
+            3 => RoadSpec::PaperCompatible {
+                road: random()?,
+                sample_interval: self.road_sample_interval,
+            },
+            other => {
+                return Err(crate::Error::InvalidSetting {
+                    name: "road",
+                    value: other as i64,
+                    reason: "must be 0 (input x_g), 1 (harmonic), 2 (ISO 8608) or 3 (paper-compatible)",
+                });
+            }
+        })
+    }
+
+    /// The simulation these settings describe, starting at `start_time`.
+    /// Only the codes are checked here; [`crate::solver::Simulator::new`]
+    /// validates the rest.
+    pub fn to_config(&self, start_time: f64) -> crate::Result<SimulationConfig> {
+        Ok(SimulationConfig {
+            params: self.params(),
+            variant: self.variant()?,
+            road: self.road_spec()?,
+            max_internal_step: self.max_internal_step,
+            start_time,
+            initial_state: State::from(self.initial_state),
+            weights: self.weights(),
+        })
+    }
+}
+
+/// An output of the simulator.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum OutputId {
+    /// Component of the reported state `[x_s, v_s, x_h, v_h, x_t, v_t]`.
+    State(usize),
+    BodyAcceleration,
+    SuspensionDeflection,
+    TireDeflection,
+    RoadDisplacement,
+    ControlForce,
+    RmsBodyAcceleration,
+    RmsSuspensionDeflection,
+    RmsTireDeflection,
+    Objective,
+}
+
+/// A "known" of `fmi2GetDirectionalDerivative`: the input `x_g` or a
+/// component of the state `X` (addressed by the value reference of the
+/// state output of the same name).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Known {
+    RoadInput,
+    State(usize),
+}
+
+/// What the partial derivatives of the outputs depend on, at the current point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Linearization {
+    /// Row `v_s` of A: BA = row · X.
+    pub body_acceleration_row: [f64; 6],
+    /// CS reports `x_h = x_t`, `v_h = v_t`.
+    pub conventional: bool,
+    /// `road = 0`: the applied road is the input.
+    pub road_is_input: bool,
+    /// `(g, tau)` when the control force is `g (x_t − tau v_t)` of the current
+    /// state (delay folded into the plant); `None` when it acts on the delayed
+    /// history only (or there is no control).
+    pub instantaneous_control: Option<(f64, f64)>,
+}
+
+impl OutputId {
+    /// The value in `outputs`.
+    pub fn value(self, o: &Outputs) -> f64 {
+        match self {
+            OutputId::State(i) => o.state[i],
+            OutputId::BodyAcceleration => o.performance.body_acceleration,
+            OutputId::SuspensionDeflection => o.performance.suspension_deflection,
+            OutputId::TireDeflection => o.performance.tire_deflection,
+            OutputId::RoadDisplacement => o.road_displacement,
+            OutputId::ControlForce => o.control_force,
+            OutputId::RmsBodyAcceleration => o.rms.body_acceleration,
+            OutputId::RmsSuspensionDeflection => o.rms.suspension_deflection,
+            OutputId::RmsTireDeflection => o.rms.tire_deflection,
+            OutputId::Objective => o.objective,
+        }
+    }
+
+    /// The first time derivative. The running RMS values and J change only
+    /// at internal grid nodes (they are piecewise constant in time): 0.
+    pub fn derivative(self, d: &OutputDerivatives) -> f64 {
+        match self {
+            OutputId::State(i) => d.state[i],
+            OutputId::BodyAcceleration => d.performance.body_acceleration,
+            OutputId::SuspensionDeflection => d.performance.suspension_deflection,
+            OutputId::TireDeflection => d.performance.tire_deflection,
+            OutputId::RoadDisplacement => d.road_displacement,
+            OutputId::ControlForce => d.control_force,
+            OutputId::RmsBodyAcceleration
+            | OutputId::RmsSuspensionDeflection
+            | OutputId::RmsTireDeflection
+            | OutputId::Objective => 0.0,
+        }
+    }
+
+    /// The exact partial derivative with respect to `known` at the current
+    /// point. The running RMS values and J are integrals over the past: their
+    /// partials with respect to the current state and input are 0.
+    pub fn partial(self, known: Known, lin: &Linearization) -> f64 {
+        let indicator = |b: bool| if b { 1.0 } else { 0.0 };
+        match (self, known) {
+            (OutputId::State(i), Known::State(j)) => {
+                let source = match i {
+                    X_H if lin.conventional => X_T,
+                    V_H if lin.conventional => V_T,
+                    _ => i,
+                };
+                indicator(source == j)
+            }
+            (OutputId::BodyAcceleration, Known::State(j)) => lin.body_acceleration_row[j],
+            (OutputId::SuspensionDeflection, Known::State(j)) => {
+                indicator(j == X_S) - indicator(j == X_T)
+            }
+            (OutputId::TireDeflection, Known::State(j)) => indicator(j == X_T),
+            (OutputId::TireDeflection, Known::RoadInput) => -indicator(lin.road_is_input),
+            (OutputId::RoadDisplacement, Known::RoadInput) => indicator(lin.road_is_input),
+            (OutputId::ControlForce, Known::State(j)) => match lin.instantaneous_control {
+                Some((g, _)) if j == X_T => g,
+                Some((g, tau)) if j == V_T => -g * tau,
+                _ => 0.0,
+            },
+            _ => 0.0,
+        }
+    }
+}
+
+/// A calculated parameter.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Calculated {
+    /// Real part of the rightmost characteristic root (1/s).
+    SpectralAbscissa,
+    /// `spectral_abscissa < 0`.
+    Stable,
+}
+
+/// How a variable is read and written.
+#[derive(Debug, Clone, Copy)]
+pub enum Access {
+    /// A Real setting (parameter or input).
+    Real {
+        get: fn(&Settings) -> f64,
+        set: fn(&mut Settings, f64),
+    },
+    /// An Integer setting (parameter).
+    Integer {
+        get: fn(&Settings) -> i32,
+        set: fn(&mut Settings, i32),
+    },
+    /// A Real output of the simulator.
+    Output(OutputId),
+    /// A calculated parameter.
+    Calculated(Calculated),
+}
+
+/// One FMU variable.
+#[derive(Debug, Clone, Copy)]
+pub struct Variable {
+    pub name: &'static str,
+    pub vr: u32,
+    pub causality: Causality,
+    pub variability: Variability,
+    pub quantity: Quantity,
+    /// `displayUnit`, one of the unit's display units.
+    pub display_unit: Option<&'static str>,
+    /// Start value (Integer values are exact in f64); `None` for calculated ones.
+    pub start: Option<f64>,
+    pub range: Range,
+    pub access: Access,
+    pub description: &'static str,
+    /// Outputs: the inputs the value depends on directly (ModelStructure/Outputs).
+    pub feedthrough: &'static [&'static str],
+    /// Outputs and calculated parameters: the parameters and inputs the
+    /// initial value depends on (ModelStructure/InitialUnknowns).
+    pub initial_dependencies: &'static [&'static str],
+}
+
+impl Variable {
+    /// The FMI base type.
+    pub fn var_type(&self) -> VarType {
+        match self.access {
+            Access::Real { .. } | Access::Output(_) => VarType::Real,
+            Access::Integer { .. } => VarType::Integer,
+            Access::Calculated(Calculated::SpectralAbscissa) => VarType::Real,
+            Access::Calculated(Calculated::Stable) => VarType::Boolean,
+        }
+    }
+
+    /// The `initial` attribute (`None` for inputs, where it is not allowed).
+    pub fn initial(&self) -> Option<Initial> {
+        match self.causality {
+            Causality::Parameter => Some(Initial::Exact),
+            Causality::CalculatedParameter | Causality::Output => Some(Initial::Calculated),
+            Causality::Input => None,
+        }
+    }
+
+    /// The unit, if any.
+    pub fn unit(&self) -> Option<&'static str> {
+        self.quantity.unit()
+    }
+
+    const fn display(mut self, unit: &'static str) -> Variable {
+        self.display_unit = Some(unit);
+        self
+    }
+}
+
+/// Looks a variable up by value reference.
+pub fn by_vr(vr: u32) -> Option<&'static Variable> {
+    VARIABLES.iter().find(|v| v.vr == vr)
+}
+
+/// Looks a variable up by name.
+pub fn by_name(name: &str) -> Option<&'static Variable> {
+    VARIABLES.iter().find(|v| v.name == name)
+}
+
+/// 1-based index of a variable in `ModelVariables`.
+pub fn index_of(name: &str) -> Option<usize> {
+    VARIABLES.iter().position(|v| v.name == name).map(|i| i + 1)
+}
+
+macro_rules! real {
+    ($($field:tt)+) => {
+        Access::Real {
+            get: |s: &Settings| s.$($field)+,
+            set: |s: &mut Settings, v: f64| s.$($field)+ = v,
+        }
+    };
+}
+
+macro_rules! integer {
+    ($field:ident) => {
+        Access::Integer {
+            get: |s: &Settings| s.$field,
+            set: |s: &mut Settings, v: i32| s.$field = v,
+        }
+    };
+}
+
+#[allow(clippy::too_many_arguments)]
+const fn parameter(
+    name: &'static str,
+    vr: u32,
+    variability: Variability,
+    quantity: Quantity,
+    start: f64,
+    range: Range,
+    access: Access,
+    description: &'static str,
+) -> Variable {
+    Variable {
+        name,
+        vr,
+        causality: Causality::Parameter,
+        variability,
+        quantity,
+        display_unit: None,
+        start: Some(start),
+        range,
+        access,
+        description,
+        feedthrough: &[],
+        initial_dependencies: &[],
+    }
+}
+
+const fn output(
+    name: &'static str,
+    vr: u32,
+    quantity: Quantity,
+    id: OutputId,
+    description: &'static str,
+    feedthrough: &'static [&'static str],
+    initial_dependencies: &'static [&'static str],
+) -> Variable {
+    Variable {
+        name,
+        vr,
+        causality: Causality::Output,
+        variability: Variability::Continuous,
+        quantity,
+        display_unit: None,
+        start: None,
+        range: Range::Computed,
+        access: Access::Output(id),
+        description,
+        feedthrough,
+        initial_dependencies,
+    }
+}
+
+const fn calculated(
+    name: &'static str,
+    vr: u32,
+    quantity: Quantity,
+    which: Calculated,
+    description: &'static str,
+) -> Variable {
+    Variable {
+        name,
+        vr,
+        causality: Causality::CalculatedParameter,
+        // Depends on the tunable g.
+        variability: Variability::Tunable,
+        quantity,
+        display_unit: None,
+        start: None,
+        range: Range::Computed,
+        access: Access::Calculated(which),
+        description,
+        feedthrough: &[],
+        initial_dependencies: SPECTRUM_DEPENDENCIES,
+    }
+}
+
+use Quantity as Q;
+use Variability::{Fixed, Tunable};
+
+const SPECTRUM_DEPENDENCIES: &[&str] = &[
+    "variant", "m_s", "m_h", "m_t", "k_s", "k_h", "k_t", "c_s", "c_h", "g", "tau",
+];
+const ROAD_DEPENDENCIES: &[&str] = &["road", "road_amplitude", "road_angular_frequency", "x_g"];
+
+/// Every FMU variable, in `ModelVariables` order.
+pub static VARIABLES: &[Variable] = &[
+    parameter(
+        "variant",
+        1,
+        Fixed,
+        Q::Dimensionless,
+        3.0,
+        Range::Integers(1, 3),
+        integer!(variant),
+        "Suspension: 1 = CS (conventional 2-DOF), 2 = PVASS (annular absorber, no control), 3 = TDVASS (absorber with time-delay feedback)",
+    ),
+    parameter(
+        "m_s",
+        2,
+        Fixed,
+        Q::Mass,
+        345.0,
+        Range::Positive,
+        real!(m_s),
+        "Body (sprung) mass (> 0)",
+    ),
+    parameter(
+        "m_h",
+        3,
+        Fixed,
+        Q::Mass,
+        4.05,
+        Range::Positive,
+        real!(m_h),
+        "Annular absorber mass (> 0)",
+    ),
+    parameter(
+        "m_t",
+        4,
+        Fixed,
+        Q::Mass,
+        40.5,
+        Range::Positive,
+        real!(m_t),
+        "Wheel (unsprung) mass (> 0)",
+    ),
+    parameter(
+        "k_s",
+        5,
+        Fixed,
+        Q::Stiffness,
+        16000.0,
+        Range::AtLeast(0.0),
+        real!(k_s),
+        "Suspension stiffness",
+    ),
+    parameter(
+        "k_h",
+        6,
+        Fixed,
+        Q::Stiffness,
+        6444.0,
+        Range::AtLeast(0.0),
+        real!(k_h),
+        "Absorber stiffness",
+    ),
+    parameter(
+        "k_t",
+        7,
+        Fixed,
+        Q::Stiffness,
+        190000.0,
+        Range::AtLeast(0.0),
+        real!(k_t),
+        "Tire stiffness",
+    ),
+    parameter(
+        "c_s",
+        8,
+        Fixed,
+        Q::Damping,
+        1500.0,
+        Range::AtLeast(0.0),
+        real!(c_s),
+        "Suspension damping",
+    ),
+    parameter(
+        "c_h",
+        9,
+        Fixed,
+        Q::Damping,
+        348.0,
+        Range::AtLeast(0.0),
+        real!(c_h),
+        "Absorber damping",
+    ),
+    parameter(
+        "g",
+        10,
+        Tunable,
+        Q::Stiffness,
+        5386.0,
+        Range::Finite,
+        real!(g),
+        "Feedback gain of u = g x_t(t - tau) (TDVASS only; tunable between steps)",
+    ),
+    parameter(
+        "tau",
+        11,
+        Fixed,
+        Q::Time,
+        2e-4,
+        Range::AtLeast(0.0),
+        real!(tau),
+        "Feedback delay (>= 0; TDVASS only)",
+    ),
+    parameter(
+        "road",
+        12,
+        Fixed,
+        Q::Dimensionless,
+        1.0,
+        Range::Integers(0, 3),
+        integer!(road),
+        "Road: 0 = input x_g, 1 = harmonic road_amplitude sin(road_angular_frequency t), 2 = ISO 8608 filtered white noise, 3 = paper-compatible random road (reproduces the paper's Table 3; about 10 times weaker than a true class-C road)",
+    ),
+    parameter(
+        "road_amplitude",
+        13,
+        Fixed,
+        Q::Length,
+        0.05,
+        Range::Finite,
+        real!(road_amplitude),
+        "Harmonic road amplitude",
+    ),
+    parameter(
+        "road_angular_frequency",
+        14,
+        Fixed,
+        Q::AngularFrequency,
+        5.0,
+        Range::Finite,
+        real!(road_angular_frequency),
+        "Harmonic road angular frequency",
+    ),
+    parameter(
+        "road_class",
+        15,
+        Fixed,
+        Q::Dimensionless,
+        3.0,
+        Range::Integers(1, 8),
+        integer!(road_class),
+        "ISO 8608 road class 1..8 = A..H (random roads)",
+    ),
+    parameter(
+        "vehicle_speed",
+        16,
+        Fixed,
+        Q::Velocity,
+        20.0,
+        Range::Positive,
+        real!(vehicle_speed),
+        "Vehicle speed u (random roads; > 0)",
+    ),
+    parameter(
+        "road_cutoff_frequency",
+        17,
+        Fixed,
+        Q::Frequency,
+        0.1,
+        Range::Positive,
+        real!(road_cutoff_frequency),
+        "Lower cut-off frequency f0 of the random roads (> 0)",
+    ),
+    parameter(
+        "road_seed",
+        18,
+        Fixed,
+        Q::Dimensionless,
+        1.0,
+        Range::Integers(0, i32::MAX),
+        integer!(road_seed),
+        "Random road seed (same seed, same road)",
+    ),
+    parameter(
+        "road_sample_interval",
+        19,
+        Fixed,
+        Q::Time,
+        0.1,
+        Range::Positive,
+        real!(road_sample_interval),
+        "Paper-compatible road: hold interval D of the noise samples (> 0)",
+    ),
+    parameter(
+        "max_internal_step",
+        20,
+        Fixed,
+        Q::Time,
+        1e-4,
+        Range::Positive,
+        real!(max_internal_step),
+        "Upper bound of the internal integration step (> 0); the step divides tau exactly",
+    ),
+    parameter(
+        "w_ba",
+        21,
+        Tunable,
+        Q::Dimensionless,
+        0.4,
+        Range::AtLeast(0.0),
+        real!(w_ba),
+        "Weight z1 of RMS(BA) in the objective J (Eq. 6; tunable)",
+    ),
+    parameter(
+        "w_sdd",
+        22,
+        Tunable,
+        Q::Dimensionless,
+        0.2,
+        Range::AtLeast(0.0),
+        real!(w_sdd),
+        "Weight z2 of RMS(SDD) in the objective J (Eq. 6; tunable)",
+    ),
+    parameter(
+        "w_tdd",
+        23,
+        Tunable,
+        Q::Dimensionless,
+        0.4,
+        Range::AtLeast(0.0),
+        real!(w_tdd),
+        "Weight z3 of RMS(TDD) in the objective J (Eq. 6, TDD in m; tunable)",
+    ),
+    parameter(
+        "x_s_start",
+        24,
+        Fixed,
+        Q::Length,
+        0.0,
+        Range::Finite,
+        real!(initial_state[0]),
+        "Initial body displacement (also the history before the start)",
+    ),
+    parameter(
+        "v_s_start",
+        25,
+        Fixed,
+        Q::Velocity,
+        0.0,
+        Range::Finite,
+        real!(initial_state[1]),
+        "Initial body velocity",
+    ),
+    parameter(
+        "x_h_start",
+        26,
+        Fixed,
+        Q::Length,
+        0.0,
+        Range::Finite,
+        real!(initial_state[2]),
+        "Initial absorber displacement (ignored by CS)",
+    ),
+    parameter(
+        "v_h_start",
+        27,
+        Fixed,
+        Q::Velocity,
+        0.0,
+        Range::Finite,
+        real!(initial_state[3]),
+        "Initial absorber velocity (ignored by CS)",
+    ),
+    parameter(
+        "x_t_start",
+        28,
+        Fixed,
+        Q::Length,
+        0.0,
+        Range::Finite,
+        real!(initial_state[4]),
+        "Initial wheel displacement (also the delayed history before the start)",
+    ),
+    parameter(
+        "v_t_start",
+        29,
+        Fixed,
+        Q::Velocity,
+        0.0,
+        Range::Finite,
+        real!(initial_state[5]),
+        "Initial wheel velocity",
+    ),
+    Variable {
+        name: "x_g",
+        vr: 30,
+        causality: Causality::Input,
+        variability: Variability::Continuous,
+        quantity: Q::Length,
+        display_unit: None,
+        start: Some(0.0),
+        range: Range::Finite,
+        access: real!(x_g),
+        description: "Road displacement when road = 0 (linearly extrapolated with the slope from fmi2SetRealInputDerivatives)",
+        feedthrough: &[],
+        initial_dependencies: &[],
+    },
+    output(
+        "x_s",
+        31,
+        Q::Length,
+        OutputId::State(X_S),
+        "Body displacement",
+        &[],
+        &["x_s_start"],
+    ),
+    output(
+        "v_s",
+        32,
+        Q::Velocity,
+        OutputId::State(V_S),
+        "Body velocity",
+        &[],
+        &["v_s_start"],
+    ),
+    output(
+        "x_h",
+        33,
+        Q::Length,
+        OutputId::State(X_H),
+        "Absorber displacement (CS: mirrors x_t)",
+        &[],
+        &["variant", "x_h_start", "x_t_start"],
+    ),
+    output(
+        "v_h",
+        34,
+        Q::Velocity,
+        OutputId::State(V_H),
+        "Absorber velocity (CS: mirrors v_t)",
+        &[],
+        &["variant", "v_h_start", "v_t_start"],
+    ),
+    output(
+        "x_t",
+        35,
+        Q::Length,
+        OutputId::State(X_T),
+        "Wheel displacement",
+        &[],
+        &["x_t_start"],
+    ),
+    output(
+        "v_t",
+        36,
+        Q::Velocity,
+        OutputId::State(V_T),
+        "Wheel velocity",
+        &[],
+        &["v_t_start"],
+    ),
+    output(
+        "body_acceleration",
+        37,
+        Q::Acceleration,
+        OutputId::BodyAcceleration,
+        "Body acceleration BA = d2x_s/dt2",
+        &[],
+        &[
+            "variant",
+            "m_s",
+            "k_s",
+            "c_s",
+            "x_s_start",
+            "v_s_start",
+            "x_h_start",
+            "v_h_start",
+            "x_t_start",
+            "v_t_start",
+        ],
+    ),
+    output(
+        "suspension_deflection",
+        38,
+        Q::Length,
+        OutputId::SuspensionDeflection,
+        "Suspension dynamic deflection SDD = x_s - x_t",
+        &[],
+        &["x_s_start", "x_t_start"],
+    ),
+    output(
+        "tire_deflection",
+        39,
+        Q::Length,
+        OutputId::TireDeflection,
+        "Tire dynamic displacement TDD = x_t - x_g",
+        &["x_g"],
+        &[
+            "road",
+            "road_amplitude",
+            "road_angular_frequency",
+            "x_t_start",
+            "x_g",
+        ],
+    )
+    .display("mm"),
+    output(
+        "road_displacement",
+        40,
+        Q::Length,
+        OutputId::RoadDisplacement,
+        "Road displacement x_g actually applied",
+        &["x_g"],
+        ROAD_DEPENDENCIES,
+    ),
+    output(
+        "control_force",
+        41,
+        Q::Force,
+        OutputId::ControlForce,
+        "Control force u = g x_t(t - tau) (0 unless TDVASS)",
+        &[],
+        &["variant", "g", "tau", "x_t_start", "v_t_start"],
+    ),
+    output(
+        "rms_body_acceleration",
+        42,
+        Q::Acceleration,
+        OutputId::RmsBodyAcceleration,
+        "Running RMS of BA from the start time to now, sampled on the internal grid",
+        &[],
+        &[],
+    ),
+    output(
+        "rms_suspension_deflection",
+        43,
+        Q::Length,
+        OutputId::RmsSuspensionDeflection,
+        "Running RMS of SDD from the start time to now, sampled on the internal grid",
+        &[],
+        &[],
+    ),
+    output(
+        "rms_tire_deflection",
+        44,
+        Q::Length,
+        OutputId::RmsTireDeflection,
+        "Running RMS of TDD from the start time to now, sampled on the internal grid",
+        &[],
+        &[],
+    )
+    .display("mm"),
+    output(
+        "objective",
+        45,
+        Q::Dimensionless,
+        OutputId::Objective,
+        "Objective J = w_ba RMS(BA) + w_sdd RMS(SDD) + w_tdd RMS(TDD) (Eq. 6, TDD in m) from the running RMS values",
+        &[],
+        &[],
+    ),
+    calculated(
+        "spectral_abscissa",
+        46,
+        Q::Rate,
+        Calculated::SpectralAbscissa,
+        "Real part of the rightmost characteristic root at the current (g, tau)",
+    ),
+    calculated(
+        "stable",
+        47,
+        Q::Dimensionless,
+        Calculated::Stable,
+        "spectral_abscissa < 0 (asymptotically stable)",
+    ),
+];
+
+/// FNV-1a, 128 bits.
+fn fnv1a_128(bytes: &[u8]) -> u128 {
+    const OFFSET: u128 = 0x6c62272e07bb014262b821756295c58d;
+    const PRIME: u128 = 0x0000000001000000000000000000013B;
+    bytes
+        .iter()
+        .fold(OFFSET, |h, &b| (h ^ b as u128).wrapping_mul(PRIME))
+}
+
+/// The GUID of an interface: a hash of every variable's name, value
+/// reference, type, causality and variability, formatted
+/// `{xxxxxxxx-xxxx-xxxx-xxxx-xxxxxxxxxxxx}`.
+pub fn guid_of(variables: &[Variable]) -> String {
+    let mut text = String::from("tdvass FMI 2.0 Co-Simulation interface\n");
+    for v in variables {
+        text.push_str(&format!(
+            "{}\t{}\t{}\t{}\t{}\n",
+            v.name,
+            v.vr,
+            v.var_type().as_str(),
+            v.causality.as_str(),
+            v.variability.as_str()
+        ));
+    }
+    let h = format!("{:032x}", fnv1a_128(text.as_bytes()));
+    format!(
+        "{{{}-{}-{}-{}-{}}}",
+        &h[0..8],
+        &h[8..12],
+        &h[12..16],
+        &h[16..20],
+        &h[20..32]
+    )
+}
+
+/// The GUID of this FMU.
+pub fn guid() -> String {
+    guid_of(VARIABLES)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::HashSet;
+
+    #[test]
+    fn names_and_value_references_are_unique() {
+        let names: HashSet<_> = VARIABLES.iter().map(|v| v.name).collect();
+        let vrs: HashSet<_> = VARIABLES.iter().map(|v| v.vr).collect();
+        assert_eq!(names.len(), VARIABLES.len());
+        assert_eq!(vrs.len(), VARIABLES.len());
+    }
+
+    #[test]
+    fn interface_of_the_spec_is_present() {
+        let spec: [(&str, Causality, VarType); 44] = {
+            use Causality::*;
+            use VarType::*;
+            [
+                ("variant", Parameter, Integer),
+                ("m_s", Parameter, Real),
+                ("m_h", Parameter, Real),
+                ("m_t", Parameter, Real),
+                ("k_s", Parameter, Real),
+                ("k_h", Parameter, Real),
+                ("k_t", Parameter, Real),
+                ("c_s", Parameter, Real),
+                ("c_h", Parameter, Real),
+                ("g", Parameter, Real),
+                ("tau", Parameter, Real),
+                ("road", Parameter, Integer),
+                ("road_amplitude", Parameter, Real),
+                ("road_angular_frequency", Parameter, Real),
+                ("road_class", Parameter, Integer),
+                ("vehicle_speed", Parameter, Real),
+                ("road_cutoff_frequency", Parameter, Real),
+                ("road_seed", Parameter, Integer),
+                ("road_sample_interval", Parameter, Real),
+                ("max_internal_step", Parameter, Real),
+                ("w_ba", Parameter, Real),
+                ("w_sdd", Parameter, Real),
+                ("w_tdd", Parameter, Real),
+                ("x_g", Input, Real),
+                ("x_s", Output, Real),
+                ("x_h", Output, Real),
+                ("x_t", Output, Real),
+                ("v_s", Output, Real),
+                ("v_h", Output, Real),
+                ("v_t", Output, Real),
+                ("body_acceleration", Output, Real),
+                ("suspension_deflection", Output, Real),
+                ("tire_deflection", Output, Real),
+                ("road_displacement", Output, Real),
+                ("control_force", Output, Real),
+                ("rms_body_acceleration", Output, Real),
+                ("rms_suspension_deflection", Output, Real),
+                ("rms_tire_deflection", Output, Real),
+                ("objective", Output, Real),
+                ("spectral_abscissa", CalculatedParameter, Real),
+                ("stable", CalculatedParameter, Boolean),
+                ("x_s_start", Parameter, Real),
+                ("v_s_start", Parameter, Real),
+                ("x_t_start", Parameter, Real),
+            ]
+        };
+        for (name, causality, ty) in spec {
+            let v = by_name(name).unwrap_or_else(|| panic!("{name} missing"));
+            assert_eq!(v.causality, causality, "{name}");
+            assert_eq!(v.var_type(), ty, "{name}");
+        }
+        let tunable: Vec<_> = VARIABLES
+            .iter()
+            .filter(|v| v.causality == Causality::Parameter && v.variability == Tunable)
+            .map(|v| v.name)
+            .collect();
+        assert_eq!(tunable, ["g", "w_ba", "w_sdd", "w_tdd"]);
+        assert_eq!(by_name("tire_deflection").unwrap().display_unit, Some("mm"));
+    }
+
+    #[test]
+    fn start_values_are_admissible_and_match_the_library_defaults() {
+        for v in VARIABLES {
+            match v.causality {
+                Causality::Parameter | Causality::Input => {
+                    let start = v.start.unwrap_or_else(|| panic!("{} has no start", v.name));
+                    v.range.check(v.name, start).unwrap();
+                    let (min, max) = v.range.bounds();
+                    assert!(min.is_none_or(|m| start >= m) && max.is_none_or(|m| start <= m));
+                }
+                _ => assert!(v.start.is_none(), "{} is calculated", v.name),
+            }
+        }
+        let s = Settings::start_values();
+        let config = s.to_config(0.0).unwrap();
+        assert_eq!(config, SimulationConfig::default());
+        assert_eq!(s.x_g, 0.0);
+    }
+
+    #[test]
+    fn every_variable_is_readable_and_settings_round_trip() {
+        let mut s = Settings::start_values();
+        for (i, v) in VARIABLES.iter().enumerate() {
+            match v.access {
+                Access::Real { get, set } => {
+                    set(&mut s, 1000.0 + i as f64);
+                    assert_eq!(get(&s), 1000.0 + i as f64, "{}", v.name);
+                }
+                Access::Integer { get, set } => {
+                    set(&mut s, 1000 + i as i32);
+                    assert_eq!(get(&s), 1000 + i as i32, "{}", v.name);
+                }
+                Access::Output(_) => assert_eq!(v.causality, Causality::Output),
+                Access::Calculated(_) => assert_eq!(v.causality, Causality::CalculatedParameter),
+            }
+        }
+        // Distinct fields: every value written is still there.
+        for (i, v) in VARIABLES.iter().enumerate() {
+            match v.access {
+                Access::Real { get, .. } => assert_eq!(get(&s), 1000.0 + i as f64, "{}", v.name),
+                Access::Integer { get, .. } => assert_eq!(get(&s), 1000 + i as i32, "{}", v.name),
+                _ => {}
+            }
+        }
+        let outputs: Vec<_> = VARIABLES
+            .iter()
+            .filter(|v| v.causality == Causality::Output)
+            .collect();
+        assert_eq!(outputs.len(), 15);
+        assert!(
+            outputs
+                .iter()
+                .all(|v| matches!(v.access, Access::Output(_)))
+        );
+    }
+
+    #[test]
+    fn units_and_dependencies_are_declared() {
+        for v in VARIABLES {
+            if let Some(unit) = v.unit() {
+                let def = UNITS.iter().find(|u| u.name == unit).expect(unit);
+                if let Some(d) = v.display_unit {
+                    assert!(def.display.iter().any(|(n, _)| *n == d), "{}", v.name);
+                }
+            }
+            for dep in v.feedthrough {
+                assert_eq!(by_name(dep).unwrap().causality, Causality::Input);
+            }
+            for dep in v.initial_dependencies {
+                let known = by_name(dep).unwrap_or_else(|| panic!("{dep}"));
+                assert!(matches!(
+                    known.causality,
+                    Causality::Input | Causality::Parameter
+                ));
+            }
+        }
+    }
+
+    #[test]
+    fn range_checks_name_variable_and_value() {
+        let e = Range::Positive.check("m_s", -1.0).unwrap_err();
+        assert!(
+            e.message.contains("m_s") && e.message.contains("-1"),
+            "{}",
+            e.message
+        );
+        assert!(Range::Finite.check("g", f64::NAN).is_err());
+        assert!(Range::AtLeast(0.0).check("tau", f64::INFINITY).is_err());
+        assert!(Range::Integers(1, 8).check("road_class", 9.0).is_err());
+        assert!(Range::Integers(1, 8).check("road_class", 8.0).is_ok());
+        assert!(Range::Computed.check("x_s", f64::NAN).is_ok());
+    }
+
+    #[test]
+    fn guid_is_stable_and_tracks_the_interface() {
+        let g = guid();
+        assert_eq!(g, guid());
+        assert_eq!(g.len(), 38);
+        assert!(g.starts_with('{') && g.ends_with('}'));
+        let mut changed: Vec<Variable> = VARIABLES.to_vec();
+        changed[3].vr = 999;
+        assert_ne!(guid_of(&changed), g);
+        let mut renamed: Vec<Variable> = VARIABLES.to_vec();
+        renamed[0].name = "variant2";
+        assert_ne!(guid_of(&renamed), g);
+        let mut retuned: Vec<Variable> = VARIABLES.to_vec();
+        retuned[1].variability = Tunable;
+        assert_ne!(guid_of(&retuned), g);
+        // Descriptions and start values are not part of the interface.
+        let mut described: Vec<Variable> = VARIABLES.to_vec();
+        described[1].description = "another text";
+        described[1].start = Some(1.0);
+        assert_eq!(guid_of(&described), g);
+    }
+
+    #[test]
+    fn partials_of_the_outputs() {
+        let lin = Linearization {
+            body_acceleration_row: [1.0, 2.0, 3.0, 4.0, 5.0, 6.0],
+            conventional: true,
+            road_is_input: true,
+            instantaneous_control: Some((10.0, 0.5)),
+        };
+        assert_eq!(OutputId::State(X_H).partial(Known::State(X_T), &lin), 1.0);
+        assert_eq!(OutputId::State(X_H).partial(Known::State(X_H), &lin), 0.0);
+        assert_eq!(
+            OutputId::BodyAcceleration.partial(Known::State(V_H), &lin),
+            4.0
+        );
+        assert_eq!(
+            OutputId::TireDeflection.partial(Known::RoadInput, &lin),
+            -1.0
+        );
+        assert_eq!(
+            OutputId::ControlForce.partial(Known::State(V_T), &lin),
+            -5.0
+        );
+        assert_eq!(OutputId::Objective.partial(Known::State(X_S), &lin), 0.0);
+        let lin = Linearization {
+            road_is_input: false,
+            ..lin
+        };
+        assert_eq!(
+            OutputId::RoadDisplacement.partial(Known::RoadInput, &lin),
+            0.0
+        );
+    }
+}

@@ -1,0 +1,47 @@
+"""Fixtures for the fmpy tests of the built FMU (target/fmu/tdvass.fmu).
+
+Nothing is built here: run `cargo run --release -p fmu-build` first.
+"""
+
+import sys
+from pathlib import Path
+
+import pytest
+from fmpy import extract, read_model_description
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from fmu_helpers import Slave, fmu_path  # noqa: E402
+
+
+@pytest.fixture(scope="session")
+def fmu_file() -> Path:
+    path = fmu_path()
+    if not path.is_file():
+        pytest.fail(f"{path} not found; build it with `cargo run --release -p fmu-build`")
+    return path
+
+
+@pytest.fixture(scope="session")
+def model_description(fmu_file):
+    return read_model_description(str(fmu_file))
+
+
+@pytest.fixture(scope="session")
+def unzipdir(fmu_file, tmp_path_factory):
+    return Path(extract(str(fmu_file), unzipdir=str(tmp_path_factory.mktemp("fmu"))))
+
+
+@pytest.fixture
+def make_slave(unzipdir, model_description):
+    """Factory of instances, all freed at the end of the test."""
+    made = []
+
+    def make(name="tdvass", **kwargs):
+        slave = Slave(unzipdir, model_description, name=name, **kwargs)
+        made.append(slave)
+        return slave
+
+    yield make
+    for slave in made:
+        slave.free()
