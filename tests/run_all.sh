@@ -11,9 +11,9 @@ echo "== cargo clippy"
 cargo clippy --workspace --all-targets -- -D warnings
 echo "== cargo test"
 cargo test --workspace
-echo "== fmu-build"
-cargo run --release -p fmu-build
+echo "== fmu-build (the checked-in modelDescription must be current, then build the FMU)"
 cargo run --release -p fmu-build -- --check
+cargo run --release -p fmu-build
 echo "== pytest (fmpy suite and examples)"
 cargo build --release --bin tdvass
 "$python" -m pytest tests/python -q
