@@ -26,8 +26,8 @@ pub fn precise_exp<const D: usize>(m: &SMatrix<f64, D, D>) -> SMatrix<f64, D, D>
     };
     let scaled = m * 0.5f64.powi(squarings as i32);
     let scaled2 = scaled * scaled;
-    let mut increment =
-        scaled + scaled2 * (0.5 * SMatrix::identity() + scaled * (1.0 / 6.0) + scaled2 * (1.0 / 24.0));
+    let mut increment = scaled
+        + scaled2 * (0.5 * SMatrix::identity() + scaled * (1.0 / 6.0) + scaled2 * (1.0 / 24.0));
     for _ in 0..squarings {
         increment = increment * 2.0 + increment * increment;
     }
@@ -69,6 +69,9 @@ mod tests {
         let shift = nalgebra::Matrix3::new(0.0, 2.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0);
         let e = precise_exp(&shift);
         assert!((e[(0, 2)] - 2.0).abs() < 1e-14);
-        assert_eq!(precise_exp(&nalgebra::Matrix3::<f64>::zeros()), nalgebra::Matrix3::identity());
+        assert_eq!(
+            precise_exp(&nalgebra::Matrix3::<f64>::zeros()),
+            nalgebra::Matrix3::identity()
+        );
     }
 }

@@ -280,9 +280,18 @@ impl Simulator {
             return Err(Error::InvalidState("trailing bytes".into()));
         }
         let times = [sim.committed_time, sim.current_time];
-        let values_finite = sim.committed_state.iter().chain(sim.current_state.iter()).all(|v| v.is_finite());
-        if !values_finite || times.iter().any(|t| !t.is_finite()) || sim.current_time < sim.committed_time {
-            return Err(Error::InvalidState("non-finite or inconsistent time or state".into()));
+        let values_finite = sim
+            .committed_state
+            .iter()
+            .chain(sim.current_state.iter())
+            .all(|v| v.is_finite());
+        if !values_finite
+            || times.iter().any(|t| !t.is_finite())
+            || sim.current_time < sim.committed_time
+        {
+            return Err(Error::InvalidState(
+                "non-finite or inconsistent time or state".into(),
+            ));
         }
         Ok(sim)
     }
