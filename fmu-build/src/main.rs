@@ -14,11 +14,14 @@ use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
 use tdvass::fmi2::description::{documentation_html, model_description_xml};
+use tdvass::fmi2::markdown::{BEGIN_MARKER, END_MARKER, splice_into};
 use tdvass::fmi2::{MODEL_IDENTIFIER, guid};
 use zip::write::SimpleFileOptions;
 use zip::{CompressionMethod, DateTime, ZipArchive, ZipWriter};
 
 const CHECKED_IN: &str = "modelDescription/modelDescription.xml";
+/// The README, whose FMU variable table is generated.
+const README: &str = "README.md";
 
 type Result<T> = std::result::Result<T, String>;
 
@@ -114,23 +117,58 @@ fn check_fmu(path: &Path, entries: &[(&str, &[u8], u32)]) -> Result<()> {
     Ok(())
 }
 
+/// A generated file kept in the repository, with the content it must have.
+struct CheckedIn {
+    path: &'static str,
+    expected: String,
+    current: Option<String>,
+}
+
+/// The checked-in copies: the model description, and the variable table in
+/// README.md (between its markers).
+fn checked_in(root: &Path, description: &str) -> Result<Vec<CheckedIn>> {
+    let read = |path: &str| fs::read_to_string(root.join(path)).ok();
+    let readme = read(README).ok_or(format!("{README} cannot be read"))?;
+    let readme_expected = splice_into(&readme).ok_or(format!(
+        "{README} lacks the lines `{BEGIN_MARKER}` and `{END_MARKER}` around the variable table"
+    ))?;
+    Ok(vec![
+        CheckedIn {
+            path: CHECKED_IN,
+            expected: description.to_string(),
+            current: read(CHECKED_IN),
+        },
+        CheckedIn {
+            path: README,
+            expected: readme_expected,
+            current: Some(readme),
+        },
+    ])
+}
+
 fn check_only(root: &Path, description: &str) -> Result<()> {
-    let path = root.join(CHECKED_IN);
-    let current = fs::read_to_string(&path).map_err(|e| {
-        format!("{CHECKED_IN} cannot be read ({e}); run `cargo run --release -p fmu-build` and commit it")
-    })?;
-    if current != description {
-        let line = current
-            .lines()
-            .zip(description.lines())
-            .position(|(a, b)| a != b)
-            .map(|i| i + 1)
-            .unwrap_or(current.lines().count().min(description.lines().count()) + 1);
-        return Err(format!(
-            "{CHECKED_IN} is stale (first difference at line {line}); run `cargo run --release -p fmu-build` and commit the result"
-        ));
+    for copy in checked_in(root, description)? {
+        let current = copy.current.as_deref().ok_or(format!(
+            "{} cannot be read; run `cargo run --release -p fmu-build` and commit it",
+            copy.path
+        ))?;
+        if current != copy.expected {
+            let line = current
+                .lines()
+                .zip(copy.expected.lines())
+                .position(|(a, b)| a != b)
+                .map(|i| i + 1)
+                .unwrap_or(current.lines().count().min(copy.expected.lines().count()) + 1);
+            return Err(format!(
+                "{} is stale (first difference at line {line}); run `cargo run --release -p fmu-build` and commit the result",
+                copy.path
+            ));
+        }
     }
-    eprintln!("fmu-build: {CHECKED_IN} is up to date (GUID {})", guid());
+    eprintln!(
+        "fmu-build: {CHECKED_IN} and the variable table of {README} are up to date (GUID {})",
+        guid()
+    );
     Ok(())
 }
 
@@ -151,21 +189,29 @@ fn build(root: &Path, description: &str) -> Result<()> {
     let fmu = out_dir.join(format!("{MODEL_IDENTIFIER}.fmu"));
     write_fmu(&fmu, &entries)?;
     check_fmu(&fmu, &entries)?;
-    let copy = root.join(CHECKED_IN);
-    if let Some(dir) = copy.parent() {
-        fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
-    }
-    let unchanged = fs::read_to_string(&copy).is_ok_and(|c| c == description);
-    if !unchanged {
-        fs::write(&copy, description)
-            .map_err(|e| format!("cannot write {}: {e}", copy.display()))?;
+    let mut refreshed = Vec::new();
+    for copy in checked_in(root, description)? {
+        if copy.current.as_deref() != Some(copy.expected.as_str()) {
+            let path = root.join(copy.path);
+            if let Some(dir) = path.parent() {
+                fs::create_dir_all(dir)
+                    .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+            }
+            fs::write(&path, &copy.expected)
+                .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+            refreshed.push(copy.path);
+        }
     }
     eprintln!(
-        "fmu-build: wrote {} ({} bytes; GUID {}); {CHECKED_IN} {}",
+        "fmu-build: wrote {} ({} bytes; GUID {}); refreshed: {}",
         fmu.display(),
         fs::metadata(&fmu).map(|m| m.len()).unwrap_or(0),
         guid(),
-        if unchanged { "unchanged" } else { "refreshed" }
+        if refreshed.is_empty() {
+            "nothing".to_string()
+        } else {
+            refreshed.join(", ")
+        }
     );
     Ok(())
 }

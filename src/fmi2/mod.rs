@@ -42,6 +42,8 @@
 pub mod description;
 pub mod ffi;
 pub mod instance;
+pub mod limits;
+pub mod markdown;
 pub mod snapshot;
 pub mod states;
 pub mod uri;
