@@ -71,9 +71,9 @@ mod tests {
                 v.name
             );
         }
-        let document = format!("intro\n{BEGIN_MARKER}\nold\n{END_MARKER}\nrest\n");
+        let document = format!("intro\n{BEGIN_MARKER}\nSTALE ROW\n{END_MARKER}\nrest\n");
         let once = splice_into(&document).unwrap();
-        assert!(!once.contains("old") && once.ends_with(&format!("{END_MARKER}\nrest\n")));
+        assert!(!once.contains("STALE ROW") && once.ends_with(&format!("{END_MARKER}\nrest\n")));
         assert_eq!(splice_into(&once).unwrap(), once);
         assert_eq!(splice_into("no markers"), None);
     }
