@@ -64,6 +64,15 @@ impl RunningRms {
         self.samples += 1;
     }
 
+    /// Adds one sample given as its three values (BA, SDD, TDD).
+    #[inline(always)]
+    pub fn add_values(&mut self, body_acceleration: f64, suspension: f64, tire: f64) {
+        self.sums_of_squares[0] += body_acceleration * body_acceleration;
+        self.sums_of_squares[1] += suspension * suspension;
+        self.sums_of_squares[2] += tire * tire;
+        self.samples += 1;
+    }
+
     /// The RMS values so far (zero before the first sample).
     pub fn values(&self) -> RmsValues {
         if self.samples == 0 {

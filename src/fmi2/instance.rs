@@ -8,7 +8,7 @@ use super::variables::{
     Access, Calculated, Causality, Known, Linearization, OutputId, Settings, VarType, Variability,
     Variable, by_vr,
 };
-use super::{FmiError, LOG_CATEGORIES, Status, TIME_TOLERANCE, snapshot};
+use super::{FmiError, LOG_CATEGORIES, Status, TIME_TOLERANCE, limits, snapshot};
 use crate::model::{Params, V_S, Variant};
 use crate::solver::{Outputs, Simulator};
 use std::collections::HashMap;
@@ -338,9 +338,16 @@ impl Instance {
     /// input applied.
     fn build_simulator(&self) -> Result<Simulator, FmiError> {
         let m = &self.model;
+        limits::check_rates(&m.settings)?;
         let mut sim = Simulator::new(m.settings.to_config(m.start_time)?)?;
+        limits::check_time_resolution("startTime", m.start_time, sim.grid().step)?;
         if m.settings.road_is_input() {
             sim.set_road_input(m.settings.x_g, m.input_slope)?;
+        }
+        if let Some((name, value)) = limits::non_finite_output(&sim.outputs()) {
+            return Err(FmiError::error(format!(
+                "the settings give a non-finite initial output `{name}` = {value}"
+            )));
         }
         Ok(sim)
     }
@@ -494,6 +501,13 @@ impl Instance {
                     unreachable!("type checked")
                 }
             };
+            if !value.is_finite() {
+                let bad = std::mem::replace(value, 0.0);
+                return Err(FmiError::error(format!(
+                    "`{}` = {bad} is not finite; no value returned",
+                    var.name
+                )));
+            }
         }
         Ok(Status::Ok)
     }
@@ -547,7 +561,10 @@ impl Instance {
                     var.name
                 )))
             }
-            _ => var.range.check(var.name, value),
+            _ => {
+                var.range.check(var.name, value)?;
+                limits::check_value(var.name, value)
+            }
         }
     }
 
@@ -580,6 +597,15 @@ impl Instance {
             let var = self.variable(vr, VarType::Real)?;
             self.check_settable(var, value)?;
             checked.push((var, value));
+        }
+        if self.model.machine.is_simulating() {
+            let mut candidate = self.model.settings;
+            for (var, value) in &checked {
+                if let Access::Real { set, .. } = var.access {
+                    set(&mut candidate, *value);
+                }
+            }
+            limits::check_rates(&candidate)?;
         }
         let mut gain_tuned = false;
         for (var, value) in checked {
@@ -659,15 +685,27 @@ impl Instance {
         let Some(sim) = self.model.sim.as_mut() else {
             unreachable!("stepComplete has a simulator")
         };
+        limits::check_step_work(&settings, sim.grid().step, target - now)?;
+        limits::check_time_resolution("the step end", target, sim.grid().step)?;
         if pending && settings.road_is_input() {
             sim.set_road_input(settings.x_g, slope)?;
         }
         self.model.input_pending = false;
         match sim.advance_to(target) {
-            Ok(()) => {
-                self.model.last_successful_time = sim.time();
-                Ok(Status::Ok)
-            }
+            Ok(()) => match limits::non_finite_output(&sim.outputs()) {
+                None => {
+                    self.model.last_successful_time = sim.time();
+                    Ok(Status::Ok)
+                }
+                Some((name, value)) => {
+                    self.model.terminate_requested = true;
+                    self.model.machine = MachineState::StepFailed;
+                    Err(FmiError::discard(format!(
+                        "output `{name}` = {value} is not finite at t = {target} s; the outputs are not available, fmi2LastSuccessfulTime is {} s, the FMU asks to terminate (fmi2Terminated)",
+                        self.model.last_successful_time
+                    )))
+                }
+            },
             Err(e @ crate::Error::Diverged { .. }) => {
                 let stopped = sim.time();
                 self.model.last_successful_time = stopped;
@@ -717,6 +755,7 @@ impl Instance {
                 )));
             }
             if order == 1 {
+                limits::check_value("x_g derivative", value)?;
                 slope = Some(value);
             } else {
                 ignored.push(order);
@@ -763,6 +802,13 @@ impl Instance {
                 )));
             }
             *value = id.derivative(&derivatives);
+            if !value.is_finite() {
+                let bad = std::mem::replace(value, 0.0);
+                return Err(FmiError::error(format!(
+                    "the derivative of `{}` = {bad} is not finite; no value returned",
+                    var.name
+                )));
+            }
         }
         Ok(Status::Ok)
     }
@@ -817,6 +863,12 @@ impl Instance {
                 .zip(seed)
                 .map(|(k, dv)| out.partial(*k, &lin) * dv)
                 .sum();
+            if !r.is_finite() {
+                let bad = std::mem::replace(r, 0.0);
+                return Err(FmiError::error(format!(
+                    "a directional derivative = {bad} is not finite (seed too large); no value returned"
+                )));
+            }
         }
         Ok(Status::Ok)
     }

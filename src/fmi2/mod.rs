@@ -17,6 +17,7 @@
 //! - [`snapshot`]: the versioned, checksummed, position-independent byte
 //!   format of serialized FMU states.
 //! - [`uri`]: parsing of `fmuResourceLocation`.
+//! - [`limits`]: the numerical limits (values, rates, work per step).
 //! - [`description`]: `modelDescription.xml` and `documentation/index.html`
 //!   (quick-xml, never written by hand).
 //! - [`ffi`]: the thin `extern "C"` layer: null checks, pointer-to-slice
@@ -35,6 +36,13 @@
 //!   are refused with `fmi2Error`, so double frees are harmless). To move a
 //!   state between instances (or processes) serialize it: a deserialized
 //!   state carries every parameter value and replaces the target's.
+//! - Beyond the declared ranges, [`limits`] keeps every output finite and
+//!   every call short: initial states and the road within the divergence
+//!   bounds, rates (stiffness, damping, gain over mass) up to 1e12 1/s²,
+//!   weights up to 1e12, and at most 2^22 internal steps (plus road
+//!   breakpoints) per `fmi2DoStep`; beyond them the call is refused with
+//!   `fmi2Error` naming the variable and value. A non-finite output is never
+//!   handed out.
 //! - `fmi2SetReal` on `x_g` resets its slope to 0; `fmi2SetRealInputDerivatives`
 //!   (order 1) sets the slope used from the current communication point on.
 //!   Higher orders are ignored with `fmi2Warning`.

@@ -36,6 +36,9 @@ pub const MAGIC: &[u8; 8] = b"TDVASSFS";
 pub const FORMAT_VERSION: u32 = 1;
 /// Longest GUID accepted in a header.
 const MAX_GUID_LEN: usize = 64;
+/// Most internal steps between the start and a restored state (2^52: node
+/// indices stay exact in f64).
+const MAX_STEPS: f64 = 4_503_599_627_370_496.0;
 
 const fn crc32_table() -> [u32; 256] {
     let mut table = [0u32; 256];
@@ -220,6 +223,7 @@ fn decode_settings(r: &mut Reader) -> Result<Settings, FmiError> {
                 let value = f64::from_bits(bits);
                 var.range
                     .check(var.name, value)
+                    .and_then(|()| super::limits::check_value(var.name, value))
                     .map_err(|e| invalid(e.message))?;
                 set(&mut settings, value);
             }
@@ -265,7 +269,7 @@ fn decode_payload(bytes: &[u8]) -> Result<Model, FmiError> {
     };
     let last_successful_time = r.finite("the last successful time")?;
     let terminate_requested = r.flag("terminate requested")?;
-    let sim = if r.flag("simulator present")? {
+    let mut sim = if r.flag("simulator present")? {
         let len = r.u64("the simulator length")?;
         let bytes = r.rest();
         if len != bytes.len() as u64 {
@@ -288,10 +292,26 @@ fn decode_payload(bytes: &[u8]) -> Result<Model, FmiError> {
             if sim.is_some() { "with" } else { "without" }
         )));
     }
-    if let Some(sim) = &sim {
+    if let Some(sim) = &mut sim {
+        super::limits::check_rates(&settings).map_err(|e| invalid(e.message))?;
         let config = settings.to_config(start_time).map_err(invalid)?;
         if *sim.config() != config {
             return Err(invalid("the simulator does not match the settings"));
+        }
+        // The current time lies at most one internal step past the committed
+        // one, which lies a representable number of steps after the start.
+        let (now, committed, step) = (sim.time(), sim.committed_time(), sim.grid().step);
+        let steps = (committed - start_time) / step;
+        if !((0.0..MAX_STEPS).contains(&steps)
+            && now >= committed
+            && now - committed <= step * 1.000001)
+        {
+            return Err(invalid(format_args!(
+                "simulator time {now} s (committed {committed} s) does not fit its start {start_time} s and internal step {step} s"
+            )));
+        }
+        if let Some((name, value)) = super::limits::non_finite_output(&sim.outputs()) {
+            return Err(invalid(format_args!("output `{name}` = {value}")));
         }
     }
     Ok(Model {

@@ -395,9 +395,14 @@ impl NodeSequence {
     fn piece(&mut self, t: f64) -> RoadPiece {
         let offset = ((t - self.origin) / self.interval).floor().max(0.0);
         let mut n = offset as u64;
-        // Guard the floor against rounding at a node.
-        if self.node_time(n + 1) <= t {
+        // Correct the floor against rounding at a node: n is the node with
+        // node_time(n) <= t < node_time(n + 1) (n = 0 before the origin), so
+        // the piece is exactly the one whose [start, end) holds t.
+        while self.node_time(n + 1) <= t {
             n += 1;
+        }
+        while n > 0 && self.node_time(n) > t {
+            n -= 1;
         }
         let n = n.max(self.first);
         let (x0, x1) = (self.node(n), self.node(n + 1));
@@ -423,6 +428,11 @@ impl NodeSequence {
 pub struct Road {
     spec: RoadSpec,
     kind: RoadKind,
+    /// The last linear piece handed out by a random or sampled road. Such a
+    /// road's piece at t is the one whose `[start, end)` holds t, so a
+    /// query inside the cached piece returns it unchanged (the cache never
+    /// changes a result; it is not part of the saved state).
+    cache: Option<RoadPiece>,
 }
 
 #[derive(Debug, Clone)]
@@ -489,6 +499,7 @@ impl Road {
         Ok(Road {
             spec: spec.clone(),
             kind,
+            cache: None,
         })
     }
 
@@ -498,11 +509,25 @@ impl Road {
     }
 
     /// The piece valid at `t` (a right-continuous choice at breakpoints).
+    #[inline]
     pub fn piece(&mut self, t: f64) -> RoadPiece {
         match &mut self.kind {
             RoadKind::Harmonic(piece) | RoadKind::Input(piece) => *piece,
-            RoadKind::Nodes(nodes) => nodes.piece(t),
-            RoadKind::Samples(samples) => sample_piece(samples, t),
+            kind => {
+                if let Some(cached @ RoadPiece::Linear { start, end, .. }) = self.cache
+                    && start <= t
+                    && t < end
+                {
+                    return cached;
+                }
+                let piece = match kind {
+                    RoadKind::Nodes(nodes) => nodes.piece(t),
+                    RoadKind::Samples(samples) => sample_piece(samples, t),
+                    RoadKind::Harmonic(piece) | RoadKind::Input(piece) => *piece,
+                };
+                self.cache = Some(piece);
+                piece
+            }
         }
     }
 
@@ -571,6 +596,7 @@ impl Road {
 
     /// Restores what [`Road::dynamic_state`] returned.
     pub(crate) fn restore_dynamic_state(&mut self, state: &RoadState) -> Result<()> {
+        self.cache = None;
         match &mut self.kind {
             RoadKind::Nodes(n) => {
                 if state.nodes.is_empty() {

@@ -29,7 +29,7 @@ mod persist;
 
 use crate::error::{Error, Result};
 use crate::metrics::{RmsValues, RunningRms, Weights};
-use crate::model::{Params, Performance, Plant, State, V_T, Variant, X_T};
+use crate::model::{Params, Performance, Plant, State, V_T, Variant, X_S, X_T};
 use crate::road::{Road, RoadPiece, RoadSpec};
 use nalgebra::{Matrix6, SMatrix, Vector2, Vector4};
 use std::collections::HashMap;
@@ -51,6 +51,21 @@ pub const DIVERGENCE_VELOCITY: f64 = 1e6;
 const OPERATOR_CACHE_SIZE: usize = 512;
 /// Resolution of partial step lengths: 2^-40 of the grid step.
 const PARTIAL_STEP_RESOLUTION: f64 = 1099511627776.0;
+/// The harmonic road's phase `A [sin ω t_k, cos ω t_k]` at grid node k is
+/// evaluated exactly at every node `k ≡ 0 (mod PHASE_ANCHOR)` and carried
+/// to the following nodes by the rotation over one step (a power of two, so
+/// the test is a mask). The rounding drift between anchors stays of the
+/// order of PHASE_ANCHOR ulp; the phase is a function of k alone.
+const PHASE_ANCHOR: u64 = 1024;
+/// Divergence bounds in state order.
+const DIVERGENCE_BOUNDS: [f64; 6] = [
+    DIVERGENCE_DISPLACEMENT,
+    DIVERGENCE_VELOCITY,
+    DIVERGENCE_DISPLACEMENT,
+    DIVERGENCE_VELOCITY,
+    DIVERGENCE_DISPLACEMENT,
+    DIVERGENCE_VELOCITY,
+];
 
 /// Everything that defines a simulation.
 #[derive(Debug, Clone, PartialEq)]
@@ -220,6 +235,255 @@ fn hermite(nodes: [f64; 4], h: f64, offset: f64) -> Vector4<f64> {
     )
 }
 
+/// Columns of a 6-row matrix, stored as plain arrays for the hot loop.
+type Columns<const N: usize> = [[f64; 6]; N];
+
+fn columns<const C: usize>(m: &SMatrix<f64, 6, C>) -> Columns<C> {
+    std::array::from_fn(|j| std::array::from_fn(|i| m[(i, j)]))
+}
+
+/// `Σ_j cols[j] v[j]` for six columns, summed pairwise so that the
+/// dependency chain is short.
+#[inline(always)]
+fn combine6(c: &Columns<6>, v: &[f64; 6]) -> [f64; 6] {
+    std::array::from_fn(|i| {
+        ((c[0][i] * v[0] + c[1][i] * v[1]) + (c[2][i] * v[2] + c[3][i] * v[3]))
+            + (c[4][i] * v[4] + c[5][i] * v[5])
+    })
+}
+
+/// `Σ_j cols[j] v[j]` for four columns, summed pairwise.
+#[inline(always)]
+fn combine4(c: &Columns<4>, v: &[f64; 4]) -> [f64; 6] {
+    std::array::from_fn(|i| (c[0][i] * v[0] + c[1][i] * v[1]) + (c[2][i] * v[2] + c[3][i] * v[3]))
+}
+
+/// `cols[0] v[0] + cols[1] v[1]`.
+#[inline(always)]
+fn combine2(c: &Columns<2>, v: &[f64; 2]) -> [f64; 6] {
+    std::array::from_fn(|i| c[0][i] * v[0] + c[1][i] * v[1])
+}
+
+#[inline(always)]
+fn add6(a: [f64; 6], b: [f64; 6]) -> [f64; 6] {
+    std::array::from_fn(|i| a[i] + b[i])
+}
+
+/// The exact map of one whole grid step from a grid node, in the form the
+/// hot loop uses. At offset 0 over a whole step the Hermite vector is linear
+/// in the two history nodes, `p = H [x_0, v_0, x_1, v_1]`, so the delayed
+/// input acts through `Γ_u H` directly on the nodes (no division per step).
+#[derive(Debug, Clone, PartialEq)]
+struct GridStep {
+    /// Columns of Φ.
+    transition: Columns<6>,
+    /// Columns of `Γ_u H`, acting on `[x_t, v_t](k − m)`, `[x_t, v_t](k − m + 1)`.
+    nodes: Columns<4>,
+    /// Columns of `Γ_h`, acting on `A [sin ω t_k, cos ω t_k]`.
+    harmonic: Columns<2>,
+    /// Columns of `Γ_l`, acting on `[x_g, x_g'](t_k)`.
+    linear: Columns<2>,
+    /// The road phase rotation over one step, `z' = r_1 z + r_2 swap(z)` with
+    /// `r_1 = [cos ω h, cos ω h]`, `r_2 = [sin ω h, −sin ω h]`.
+    rotation: [[f64; 2]; 2],
+    /// Columns of the 2×6 map from X to `[BA, SDD]` (row V_S of A, and
+    /// `x_s − x_t`).
+    outputs: [[f64; 2]; 6],
+}
+
+impl GridStep {
+    fn new(op: &StepOperator, a: &Matrix6<f64>, angular_frequency: f64, h: f64) -> GridStep {
+        // [u, u', u'', u'''] at the start of the Hermite interpolant of
+        // (x0, v0) and (x1, v1) over [0, h].
+        let (h2, h3) = (h * h, h * h * h);
+        #[rustfmt::skip]
+        let hermite = nalgebra::Matrix4::new(
+            1.0, 0.0, 0.0, 0.0,
+            0.0, 1.0, 0.0, 0.0,
+            -6.0 / h2, -4.0 / h, 6.0 / h2, -2.0 / h,
+            12.0 / h3, 6.0 / h2, -12.0 / h3, 6.0 / h2,
+        );
+        let (sin, cos) = (angular_frequency * h).sin_cos();
+        GridStep {
+            transition: columns(&op.transition),
+            nodes: columns(&(op.delayed_input * hermite)),
+            harmonic: columns(&op.harmonic_road),
+            linear: columns(&op.linear_road),
+            rotation: [[cos, cos], [sin, -sin]],
+            outputs: std::array::from_fn(|j| {
+                let sdd = match j {
+                    X_S => 1.0,
+                    X_T => -1.0,
+                    _ => 0.0,
+                };
+                [a[(crate::model::V_S, j)], sdd]
+            }),
+        }
+    }
+
+    /// Road phase at the node after one with phase `z`.
+    #[inline(always)]
+    fn rotate(&self, z: [f64; 2]) -> [f64; 2] {
+        let [c, s] = self.rotation;
+        [c[0] * z[0] + s[0] * z[1], c[1] * z[1] + s[1] * z[0]]
+    }
+
+    /// `[BA, SDD]` at state x, summed pairwise like [`combine6`] (in the
+    /// hot loop the products share their broadcasts of x with `Φ x`).
+    #[inline(always)]
+    fn ba_sdd(&self, x: &[f64; 6]) -> [f64; 2] {
+        let c = &self.outputs;
+        std::array::from_fn(|i| {
+            ((c[0][i] * x[0] + c[1][i] * x[1]) + (c[2][i] * x[2] + c[3][i] * x[3]))
+                + (c[4][i] * x[4] + c[5][i] * x[5])
+        })
+    }
+
+    /// Adds node X's BA, SDD and TDD (road displacement `road`) to `rms`.
+    #[inline(always)]
+    fn count(&self, rms: &mut RunningRms, x: &[f64; 6], road: f64) {
+        let [ba, sdd] = self.ba_sdd(x);
+        rms.add_values(ba, sdd, x[X_T] - road);
+    }
+}
+
+/// Whether every state component is within its divergence bound (false
+/// for NaN), with one branch for the whole state.
+#[inline(always)]
+fn within_bounds(x: &[f64; 6]) -> bool {
+    let b = DIVERGENCE_BOUNDS;
+    (x[0].abs() <= b[0])
+        & (x[1].abs() <= b[1])
+        & (x[2].abs() <= b[2])
+        & (x[3].abs() <= b[3])
+        & (x[4].abs() <= b[4])
+        & (x[5].abs() <= b[5])
+}
+
+/// What the harmonic whole-step loop carries from node to node.
+#[derive(Clone, Copy)]
+struct HotState {
+    x: [f64; 6],
+    /// `A [sin ω t_k, cos ω t_k]`.
+    z: [f64; 2],
+    k: u64,
+    /// Ring slot of node k + 1 (it holds node k − m until overwritten).
+    slot: usize,
+    rms: RunningRms,
+}
+
+/// One run of the harmonic whole-step loop, within which neither a phase
+/// anchor nor the start of the history is crossed.
+struct Segment<'a> {
+    op: &'a GridStep,
+    history: &'a mut [[f64; 2]],
+    /// The node the segment stops at.
+    end: u64,
+    /// The nodes `[x, 0, x, 0]` of the constant history before the start.
+    before_start: [f64; 4],
+}
+
+/// The hot loop: `X_{k+1} = Φ X_k + Γ_uH n_k + Γ_h z_k`, the road phase
+/// rotated, the new node stored in the history. The BA, SDD, TDD of every
+/// node after the first are added to the RMS sums, except the last one's,
+/// which the caller adds (its road phase is exact at an anchor). Stops at
+/// `end` or before a state out of bounds, which it returns. `DELAY`: the delay is resolved on the grid; `BEFORE`: all the
+/// delayed nodes lie before the start.
+#[inline(always)]
+fn harmonic_segment<const DELAY: bool, const BEFORE: bool>(
+    seg: Segment,
+    hot: &mut HotState,
+) -> Option<[f64; 6]> {
+    let op = seg.op;
+    let history = seg.history;
+    let len = history.len();
+    assert!(hot.slot < len);
+    let HotState {
+        mut x,
+        mut z,
+        mut k,
+        mut slot,
+        mut rms,
+    } = *hot;
+    let mut diverged = None;
+    // Node k, where the segment starts, was counted in the RMS sums already;
+    // each later node is counted in the step that leaves it.
+    let mut count = false;
+    while k < seg.end {
+        let next_slot = if slot + 1 == len { 0 } else { slot + 1 };
+        let mut input = combine2(&op.harmonic, &z);
+        if DELAY {
+            let nodes = if BEFORE {
+                seg.before_start
+            } else {
+                debug_assert!(slot < len && next_slot < len);
+                // SAFETY: both slots are < len (the ring's length): slot
+                // starts below len and next_slot wraps to 0 at len.
+                let ([x0, v0], [x1, v1]) = unsafe {
+                    (
+                        *history.get_unchecked(slot),
+                        *history.get_unchecked(next_slot),
+                    )
+                };
+                [x0, v0, x1, v1]
+            };
+            input = add6(combine4(&op.nodes, &nodes), input);
+        }
+        let x_next = add6(combine6(&op.transition, &x), input);
+        if count {
+            op.count(&mut rms, &x, z[0]);
+        }
+        count = true;
+        if !within_bounds(&x_next) {
+            diverged = Some(x_next);
+            break;
+        }
+        z = op.rotate(z);
+        // SAFETY: slot < len, as above.
+        unsafe { *history.get_unchecked_mut(slot) = [x_next[X_T], x_next[V_T]] };
+        x = x_next;
+        slot = next_slot;
+        k += 1;
+    }
+    *hot = HotState { x, z, k, slot, rms };
+    diverged
+}
+
+/// [`harmonic_segment`] compiled for AVX2 (the same operations in the
+/// same order, without FMA, so the results are bit-identical).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn harmonic_segment_avx2<const DELAY: bool, const BEFORE: bool>(
+    seg: Segment,
+    hot: &mut HotState,
+) -> Option<[f64; 6]> {
+    harmonic_segment::<DELAY, BEFORE>(seg, hot)
+}
+
+/// Runs [`harmonic_segment`] with the widest vector unit available.
+fn run_harmonic_segment<const DELAY: bool, const BEFORE: bool>(
+    seg: Segment,
+    hot: &mut HotState,
+) -> Option<[f64; 6]> {
+    #[cfg(target_arch = "x86_64")]
+    if wide_vectors() {
+        // SAFETY: the CPU supports AVX2 (checked at run time).
+        return unsafe { harmonic_segment_avx2::<DELAY, BEFORE>(seg, hot) };
+    }
+    harmonic_segment::<DELAY, BEFORE>(seg, hot)
+}
+
+/// Whether the AVX2 loop is used: the CPU has it and `TDVASS_NO_AVX2` is
+/// not set (to compare the two loops).
+#[cfg(target_arch = "x86_64")]
+fn wide_vectors() -> bool {
+    use std::sync::OnceLock;
+    static WIDE: OnceLock<bool> = OnceLock::new();
+    *WIDE.get_or_init(|| {
+        std::arch::is_x86_feature_detected!("avx2") && std::env::var_os("TDVASS_NO_AVX2").is_none()
+    })
+}
+
 /// Every output of the model at one instant (the FMU's outputs).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Outputs {
@@ -272,6 +536,8 @@ pub struct Simulator {
     solver_matrix: Matrix6<f64>,
     grid: DelayGrid,
     full_step: StepOperator,
+    /// `full_step` in the form of the whole-step loop.
+    grid_step: GridStep,
     partial_steps: HashMap<u64, StepOperator>,
     road: Road,
     /// Index k of the grid node at or before the committed time.
@@ -283,6 +549,10 @@ pub struct Simulator {
     /// (x_t, v_t) at grid nodes `grid_index − m ..= grid_index`, by `index % (m + 1)`.
     history: Vec<[f64; 2]>,
     rms: RunningRms,
+    /// Harmonic road phase `(k, A [sin ω t_k, cos ω t_k])` at the last grid
+    /// node reached by the whole-step loop: a cache of a function of k alone
+    /// (see [`PHASE_ANCHOR`]), so it is not part of the saved state.
+    phase: Option<(u64, [f64; 2])>,
 }
 
 impl Simulator {
@@ -331,13 +601,14 @@ impl Simulator {
             initial[crate::model::X_H] = 0.0;
             initial[crate::model::V_H] = 0.0;
         }
-        let (solver_matrix, full_step) = Self::operators(&plant, &config, &grid);
+        let (solver_matrix, full_step, grid_step) = Self::operators(&plant, &config, &grid);
         let history = vec![[initial[X_T], initial[V_T]]; grid.delay_steps as usize + 1];
         Ok(Simulator {
             plant,
             solver_matrix,
             grid,
             full_step,
+            grid_step,
             partial_steps: HashMap::new(),
             road,
             grid_index: 0,
@@ -347,6 +618,7 @@ impl Simulator {
             current_state: initial,
             history,
             rms: RunningRms::default(),
+            phase: None,
             config,
         })
     }
@@ -355,7 +627,7 @@ impl Simulator {
         plant: &Plant,
         config: &SimulationConfig,
         grid: &DelayGrid,
-    ) -> (Matrix6<f64>, StepOperator) {
+    ) -> (Matrix6<f64>, StepOperator, GridStep) {
         let mut a = plant.a;
         let mut b = plant.b;
         if !grid.resolves_delay() {
@@ -378,7 +650,8 @@ impl Simulator {
             _ => 0.0,
         };
         let step = StepOperator::new(&a, &b, &plant.e, omega, grid.step);
-        (a, step)
+        let grid_step = GridStep::new(&step, &a, omega, grid.step);
+        (a, step, grid_step)
     }
 
     /// The configuration.
@@ -534,15 +807,22 @@ impl Simulator {
             let k = self.grid_index;
             let next_node = self.grid_time(k + 1);
             if next_node < t_end || self.coincide(next_node, t_end) {
-                let x = self.integrate_within_step(
-                    k,
-                    self.committed_time,
-                    self.committed_state,
-                    next_node,
-                );
-                self.check_divergence(next_node, &x)?;
-                self.commit_node(k + 1, next_node, x);
-                if self.coincide(next_node, t_end) {
+                if self.committed_time == self.grid_time(k) {
+                    // On a grid node: whole steps up to the last node the
+                    // interval reaches, in one tight loop.
+                    let last = self.last_node_until(t_end);
+                    self.whole_steps(last)?;
+                } else {
+                    let x = self.integrate_within_step(
+                        k,
+                        self.committed_time,
+                        self.committed_state,
+                        next_node,
+                    );
+                    self.check_divergence(next_node, &x)?;
+                    self.commit_node(k + 1, next_node, x);
+                }
+                if self.coincide(self.committed_time, t_end) {
                     self.current_time = t_end;
                     return Ok(());
                 }
@@ -562,6 +842,239 @@ impl Simulator {
                 self.current_time = t_end;
                 return Ok(());
             }
+        }
+    }
+
+    /// The largest grid index `j >= grid_index` whose node lies before
+    /// `t_end` or coincides with it.
+    fn last_node_until(&self, t_end: f64) -> u64 {
+        let reached = |j: u64| {
+            let t = self.grid_time(j);
+            t < t_end || self.coincide(t, t_end)
+        };
+        let k = self.grid_index;
+        let estimate = ((t_end - self.config.start_time) / self.grid.step).floor();
+        let mut j = if estimate > k as f64 {
+            estimate as u64
+        } else {
+            k
+        };
+        while j > k && !reached(j) {
+            j -= 1;
+        }
+        while reached(j + 1) {
+            j += 1;
+        }
+        j
+    }
+
+    /// `A [sin ω t_k, cos ω t_k]` of the harmonic road, evaluated directly.
+    fn exact_phase(&self, k: u64) -> [f64; 2] {
+        match self.config.road {
+            RoadSpec::Harmonic {
+                amplitude,
+                angular_frequency,
+            } => {
+                let (sin, cos) = (angular_frequency * self.grid_time(k)).sin_cos();
+                [amplitude * sin, amplitude * cos]
+            }
+            _ => [0.0; 2],
+        }
+    }
+
+    /// The harmonic road phase at grid node k as the whole-step loop
+    /// carries it: exact at the last anchor node, then rotated.
+    fn harmonic_phase(&self, k: u64) -> [f64; 2] {
+        if let Some((index, z)) = self.phase
+            && index == k
+        {
+            return z;
+        }
+        let anchor = k - k % PHASE_ANCHOR;
+        let mut z = self.exact_phase(anchor);
+        for _ in anchor..k {
+            z = self.grid_step.rotate(z);
+        }
+        z
+    }
+
+    /// Commits the grid nodes `grid_index + 1 ..= last`, each by one whole
+    /// step from the node before (the committed state is on node
+    /// `grid_index`). Each node's state is a function of its index alone.
+    fn whole_steps(&mut self, last: u64) -> Result<()> {
+        let harmonic = matches!(self.config.road, RoadSpec::Harmonic { .. });
+        match (self.grid.resolves_delay(), harmonic) {
+            (true, true) => self.harmonic_whole_steps::<true>(last),
+            (false, true) => self.harmonic_whole_steps::<false>(last),
+            (true, false) => self.whole_steps_with::<true>(last),
+            (false, false) => self.whole_steps_with::<false>(last),
+        }
+    }
+
+    /// [`Self::whole_steps`] on the harmonic road: segments that end at the
+    /// phase anchors (and at node m, where the history starts), each run by
+    /// [`harmonic_segment`].
+    fn harmonic_whole_steps<const DELAY: bool>(&mut self, last: u64) -> Result<()> {
+        let m = self.grid.delay_steps;
+        let first = self.grid_index;
+        let len = self.history.len();
+        let x0 = self.config.initial_state[X_T];
+        let mut hot = HotState {
+            x: self.committed_state.into(),
+            z: self.harmonic_phase(first),
+            k: first,
+            slot: ((first + 1) % len as u64) as usize,
+            rms: self.rms,
+        };
+        let mut diverged = None;
+        while hot.k < last {
+            let start = hot.k;
+            let mut end = last.min((hot.k / PHASE_ANCHOR + 1) * PHASE_ANCHOR);
+            let before_history = DELAY && hot.k < m;
+            if before_history {
+                end = end.min(m);
+            }
+            let segment = Segment {
+                op: &self.grid_step,
+                history: &mut self.history,
+                end,
+                before_start: [x0, 0.0, x0, 0.0],
+            };
+            diverged = match (DELAY, before_history) {
+                (true, false) => run_harmonic_segment::<true, false>(segment, &mut hot),
+                (true, true) => run_harmonic_segment::<true, true>(segment, &mut hot),
+                _ => run_harmonic_segment::<false, false>(segment, &mut hot),
+            };
+            if hot.k.is_multiple_of(PHASE_ANCHOR) {
+                hot.z = self.exact_phase(hot.k);
+            }
+            if diverged.is_some() {
+                break;
+            }
+            if hot.k > start {
+                self.grid_step.count(&mut hot.rms, &hot.x, hot.z[0]);
+            }
+        }
+        self.rms = hot.rms;
+        self.phase = Some((hot.k, hot.z));
+        self.set_committed_node(first, hot.k, hot.x);
+        match diverged {
+            Some(x) => self.check_divergence(self.grid_time(hot.k + 1), &State::from(x)),
+            None => Ok(()),
+        }
+    }
+
+    /// Records node k (reached by the whole-step loop from node `first`) as
+    /// the committed and current state.
+    fn set_committed_node(&mut self, first: u64, k: u64, x: [f64; 6]) {
+        if k > first {
+            let time = self.grid_time(k);
+            self.grid_index = k;
+            self.committed_time = time;
+            self.committed_state = State::from(x);
+            self.current_time = time;
+            self.current_state = self.committed_state;
+            self.road.release_before(time);
+        }
+    }
+
+    /// [`Self::whole_steps`] on piecewise-linear roads: a step that a road
+    /// breakpoint splits goes through [`Self::integrate_within_step`].
+    fn whole_steps_with<const DELAY: bool>(&mut self, last: u64) -> Result<()> {
+        #[cfg(target_arch = "x86_64")]
+        if wide_vectors() {
+            // SAFETY: the CPU supports AVX2 (checked at run time).
+            return unsafe { self.whole_steps_with_avx2::<DELAY>(last) };
+        }
+        self.whole_steps_with_body::<DELAY>(last)
+    }
+
+    /// [`Self::whole_steps_with`] compiled for AVX2 (bit-identical).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn whole_steps_with_avx2<const DELAY: bool>(&mut self, last: u64) -> Result<()> {
+        self.whole_steps_with_body::<DELAY>(last)
+    }
+
+    #[inline(always)]
+    fn whole_steps_with_body<const DELAY: bool>(&mut self, last: u64) -> Result<()> {
+        let m = self.grid.delay_steps;
+        let len = self.history.len();
+        let first = self.grid_index;
+        let mut k = first;
+        let mut x: [f64; 6] = self.committed_state.into();
+        let before_start = {
+            let x0 = self.config.initial_state[X_T];
+            [x0, 0.0, x0, 0.0]
+        };
+        // Ring slot of node k + 1, which holds node k − m until overwritten.
+        let mut slot = ((k + 1) % len as u64) as usize;
+        let mut rms = self.rms;
+        // The piece at the node just reached, looked up for its road
+        // displacement and used again for the step that leaves it.
+        let mut piece_at_node = None;
+        let result = loop {
+            if k >= last {
+                break Ok(());
+            }
+            let next_slot = if slot + 1 == len { 0 } else { slot + 1 };
+            let (t, to) = (self.grid_time(k), self.grid_time(k + 1));
+            let x_next = match self.piece_over(t, to, piece_at_node.take()) {
+                Some(piece) => {
+                    let mut input =
+                        combine2(&self.grid_step.linear, &[piece.value(t), piece.slope(t)]);
+                    if DELAY {
+                        let nodes = if k < m {
+                            before_start
+                        } else {
+                            let [x0, v0] = self.history[slot];
+                            let [x1, v1] = self.history[next_slot];
+                            [x0, v0, x1, v1]
+                        };
+                        input = add6(input, combine4(&self.grid_step.nodes, &nodes));
+                    }
+                    add6(combine6(&self.grid_step.transition, &x), input)
+                }
+                None => self.integrate_within_step(k, t, State::from(x), to).into(),
+            };
+            if (k + 1).is_multiple_of(PHASE_ANCHOR) {
+                self.road.release_before(t);
+            }
+            let piece_next = self.road.piece(to);
+            let road_next = piece_next.value(to);
+            piece_at_node = Some(piece_next);
+            if !within_bounds(&x_next)
+                && let Err(e) = self.check_divergence(to, &State::from(x_next))
+            {
+                break Err(e);
+            }
+            self.history[slot] = [x_next[X_T], x_next[V_T]];
+            self.grid_step.count(&mut rms, &x_next, road_next);
+            x = x_next;
+            slot = next_slot;
+            k += 1;
+        };
+        self.rms = rms;
+        self.set_committed_node(first, k, x);
+        result
+    }
+
+    /// The road piece used over the whole step `[t, to]` if no breakpoint
+    /// splits it (the same choice as [`Self::integrate_within_step`]).
+    /// `at_t`: `self.road.piece(t)` if already known.
+    #[inline(always)]
+    fn piece_over(&mut self, t: f64, to: f64, at_t: Option<RoadPiece>) -> Option<RoadPiece> {
+        let mut piece = match at_t {
+            Some(piece) => piece,
+            None => self.road.piece(t),
+        };
+        if piece.end() <= t || self.coincide(piece.end(), t) {
+            piece = self.road.piece(piece.end().max(t));
+        }
+        if piece.end() < to && !self.coincide(piece.end(), to) {
+            None
+        } else {
+            Some(piece)
         }
     }
 
@@ -603,10 +1116,11 @@ impl Simulator {
         };
         let plant = Plant::new(params, self.config.variant)?;
         self.config.params = params;
-        let (matrix, step) = Self::operators(&plant, &self.config, &self.grid);
+        let (matrix, step, grid_step) = Self::operators(&plant, &self.config, &self.grid);
         self.plant = plant;
         self.solver_matrix = matrix;
         self.full_step = step;
+        self.grid_step = grid_step;
         self.partial_steps.clear();
         Ok(())
     }
@@ -711,4 +1225,181 @@ impl Simulator {
 /// Simulates `config` from its start for `duration` seconds.
 pub fn simulate(config: SimulationConfig, duration: f64) -> Result<RunSummary> {
     Simulator::new(config)?.run_for(duration)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::road::RandomRoad;
+
+    fn bits(sim: &mut Simulator) -> Vec<u64> {
+        let o = sim.outputs();
+        let mut v: Vec<f64> = o.state.iter().copied().collect();
+        v.extend([
+            o.performance.body_acceleration,
+            o.performance.suspension_deflection,
+            o.performance.tire_deflection,
+            o.road_displacement,
+            o.control_force,
+            o.rms.body_acceleration,
+            o.rms.suspension_deflection,
+            o.rms.tire_deflection,
+            o.objective,
+            o.time,
+        ]);
+        v.extend(sim.committed_state.iter().copied());
+        v.extend(sim.rms.sums_of_squares);
+        v.push(sim.rms.samples as f64);
+        v.into_iter().map(f64::to_bits).collect()
+    }
+
+    fn configs() -> Vec<SimulationConfig> {
+        let base = SimulationConfig::default();
+        vec![
+            base.clone(),
+            SimulationConfig {
+                variant: Variant::Pvass,
+                ..base.clone()
+            },
+            SimulationConfig {
+                params: Params::with_controller(40000.0, 0.03),
+                initial_state: State::new(0.01, 0.0, 0.0, 0.0, 0.0, 0.0),
+                ..base.clone()
+            },
+            SimulationConfig {
+                params: Params::with_controller(2528.0, 1.28e-4),
+                road: RoadSpec::Iso8608(RandomRoad::default()),
+                ..base.clone()
+            },
+            SimulationConfig {
+                road: RoadSpec::PaperCompatible {
+                    road: RandomRoad::default(),
+                    sample_interval: 0.1,
+                },
+                ..base
+            },
+        ]
+    }
+
+    #[test]
+    fn any_split_gives_bit_identical_results() {
+        // Splits that cut the whole-step loop at phase anchors, before the
+        // history starts, in the middle of anchor segments, and step by step.
+        for cfg in configs() {
+            let stops: Vec<f64> = (1..=40).map(|i| i as f64 * 0.0517).collect();
+            let mut reference = Vec::new();
+            let mut sim = Simulator::new(cfg.clone()).unwrap();
+            for &t in &stops {
+                sim.advance_to(t).unwrap();
+                reference.push(bits(&mut sim));
+            }
+            let mut one_by_one = Simulator::new(cfg.clone()).unwrap();
+            let h = one_by_one.grid().step;
+            let mut i = 0;
+            for (stop, expected) in stops.iter().zip(&reference) {
+                loop {
+                    let t = (i + 1) as f64 * h * 0.73;
+                    if t >= *stop {
+                        break;
+                    }
+                    one_by_one.advance_to(t).unwrap();
+                    i += 1;
+                }
+                one_by_one.advance_to(*stop).unwrap();
+                assert_eq!(&bits(&mut one_by_one), expected, "{:?}", cfg.road);
+            }
+            let mut cut = Simulator::new(cfg.clone()).unwrap();
+            for t in [h * 1023.0, h * 1024.0, h * 1025.5, h * 3000.0] {
+                cut.advance_to(t).unwrap();
+            }
+            cut.advance_to(stops[39]).unwrap();
+            assert_eq!(&bits(&mut cut), reference.last().unwrap());
+        }
+    }
+
+    #[test]
+    fn restored_simulator_continues_bit_identically_inside_a_segment() {
+        for cfg in configs() {
+            let mut sim = Simulator::new(cfg).unwrap();
+            let h = sim.grid().step;
+            // Node 1500 lies inside the second phase-anchor segment.
+            sim.advance_to(1500.3 * h).unwrap();
+            let mut restored = Simulator::from_bytes(&sim.to_bytes()).unwrap();
+            for t in [2047.0 * h, 2048.0 * h, 5000.5 * h, 0.9] {
+                sim.advance_to(t).unwrap();
+                restored.advance_to(t).unwrap();
+                assert_eq!(bits(&mut sim), bits(&mut restored));
+            }
+        }
+    }
+
+    #[test]
+    fn whole_steps_match_the_general_step_closely() {
+        // The whole-step loop (node form of the delayed input, rotated road
+        // phase) against one general step per node (Hermite form, sin/cos).
+        let cfg = SimulationConfig {
+            params: Params::with_controller(40000.0, 0.03),
+            initial_state: State::new(0.01, 0.0, 0.0, 0.0, 0.0, 0.0),
+            ..SimulationConfig::default()
+        };
+        let mut fast = Simulator::new(cfg.clone()).unwrap();
+        let mut general = Simulator::new(cfg).unwrap();
+        for k in 0..3000u64 {
+            let to = general.grid_time(k + 1);
+            let x = general.integrate_within_step(
+                k,
+                general.committed_time,
+                general.committed_state,
+                to,
+            );
+            general.commit_node(k + 1, to, x);
+        }
+        fast.advance_to(general.committed_time).unwrap();
+        let scale = general.committed_state.amax();
+        assert!((fast.committed_state - general.committed_state).amax() < 1e-12 * scale);
+        let (a, b) = (fast.rms(), general.rms());
+        assert!((a.body_acceleration - b.body_acceleration).abs() < 1e-12 * b.body_acceleration);
+        assert!((a.tire_deflection - b.tire_deflection).abs() < 1e-12 * b.tire_deflection);
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn avx2_loop_is_bit_identical_to_the_baseline_loop() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        let mut sim = Simulator::new(SimulationConfig::default()).unwrap();
+        sim.advance_to(0.01).unwrap();
+        let start = HotState {
+            x: sim.committed_state.into(),
+            z: sim.harmonic_phase(sim.grid_index),
+            k: sim.grid_index,
+            slot: ((sim.grid_index + 1) % sim.history.len() as u64) as usize,
+            rms: sim.rms,
+        };
+        let end = sim.grid_index + 1000;
+        let mut results = Vec::new();
+        for wide in [false, true] {
+            let mut history = sim.history.clone();
+            let mut hot = HotState { ..start };
+            let seg = Segment {
+                op: &sim.grid_step,
+                history: &mut history,
+                end,
+                before_start: [0.0; 4],
+            };
+            if wide {
+                // SAFETY: AVX2 was detected above.
+                unsafe { harmonic_segment_avx2::<true, false>(seg, &mut hot) };
+            } else {
+                harmonic_segment::<true, false>(seg, &mut hot);
+            }
+            let mut v: Vec<u64> = hot.x.iter().map(|v| v.to_bits()).collect();
+            v.extend(hot.rms.sums_of_squares.map(f64::to_bits));
+            v.extend(hot.z.map(f64::to_bits));
+            v.extend(history.iter().flatten().map(|v| v.to_bits()));
+            results.push(v);
+        }
+        assert_eq!(results[0], results[1]);
+    }
 }

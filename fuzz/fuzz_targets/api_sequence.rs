@@ -1,0 +1,434 @@
+//! Fuzzes sequences of FMI calls with random arguments on up to two
+//! instances and their FMU states: wrong states, NULL arrays, unknown value
+//! references, NaN/Inf/huge values, bad steps, foreign and freed FMU
+//! states, corrupted serializations, Model Exchange calls.
+//!
+//! Invariants: no call returns fmi2Fatal (a panic inside the library) or an
+//! unknown status; a successful fmi2GetReal or fmi2DoStep never leaves a
+//! non-finite output; every call returns (libFuzzer's -timeout catches a
+//! hang).
+#![no_main]
+
+#[path = "common.rs"]
+mod common;
+
+use common::*;
+use libfuzzer_sys::fuzz_target;
+use std::ptr::{null, null_mut};
+
+struct Slot {
+    c: fmi2Component,
+    /// The time the master believes the instance is at.
+    time: f64,
+}
+
+struct State {
+    owner: usize,
+    handle: fmi2FMUstate,
+    time: f64,
+}
+
+const STEPS: [f64; 12] = [
+    1e-4,
+    1e-3,
+    0.01,
+    0.1,
+    0.5,
+    0.0,
+    -1e-3,
+    f64::NAN,
+    f64::INFINITY,
+    1e9,
+    1e-12,
+    2.0,
+];
+
+/// `FUZZ_TRACE=1`: print the calls (to minimise a finding by hand).
+fn trace() -> bool {
+    static TRACE: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *TRACE.get_or_init(|| std::env::var_os("FUZZ_TRACE").is_some())
+}
+
+fn slot_of(b: &mut Bytes) -> usize {
+    b.u8() as usize % 2
+}
+
+/// `n` value references, or NULL (with `n` > 0 sometimes).
+fn vrs(b: &mut Bytes, n: usize) -> Vec<u32> {
+    (0..n).map(|_| value_reference(b)).collect()
+}
+
+fn maybe_null<T>(b: &mut Bytes, v: &[T]) -> *const T {
+    if b.u8().is_multiple_of(16) {
+        null()
+    } else {
+        v.as_ptr()
+    }
+}
+
+fn maybe_null_mut<T>(b: &mut Bytes, v: &mut [T]) -> *mut T {
+    if b.u8().is_multiple_of(16) {
+        null_mut()
+    } else {
+        v.as_mut_ptr()
+    }
+}
+
+fuzz_target!(|data: &[u8]| {
+    let callbacks = callbacks();
+    let guid = guid();
+    let mut b = Bytes::new(data);
+    let mut slots: [Option<Slot>; 2] = [None, None];
+    let mut states: Vec<State> = Vec::new();
+    let mut calls = 0;
+    while !b.is_empty() && calls < 64 {
+        calls += 1;
+        let op = b.u8() % 22;
+        let i = slot_of(&mut b);
+        if trace() {
+            eprintln!("call {calls}: op {op} on slot {i}");
+        }
+        if op == 0 {
+            if slots[i].is_none() {
+                let name = b.pick(&[c"a".as_ptr(), c"".as_ptr(), null()]);
+                let kind = b.pick(&[1, 1, 1, 0, 7]);
+                let g = b.pick(&[guid.as_ptr(), guid.as_ptr(), c"{x}".as_ptr(), null()]);
+                let uri = b.pick(&[
+                    null(),
+                    c"file:///tmp/r".as_ptr(),
+                    c"http://x/y".as_ptr(),
+                    c"file:///%zz".as_ptr(),
+                    c"".as_ptr(),
+                ]);
+                // SAFETY: valid or NULL strings, callbacks outliving the instance.
+                let c = unsafe {
+                    fmi2Instantiate(name, kind, g, uri, &callbacks, 0, b.u8() as i32 % 2)
+                };
+                if !c.is_null() {
+                    slots[i] = Some(Slot { c, time: 0.0 });
+                }
+            }
+            continue;
+        }
+        // Calls on NULL when the slot is empty.
+        let c = slots[i].as_ref().map_or(null_mut(), |s| s.c);
+        // SAFETY (every call below): `c` is NULL or a live instance; every
+        // array holds at least the count passed, or is NULL.
+        unsafe {
+            match op {
+                1 => {
+                    fmi2FreeInstance(c);
+                    if slots[i].take().is_some() {
+                        states.retain(|s| s.owner != i);
+                    }
+                }
+                2 => {
+                    let (start, stop) = (real(&mut b), real(&mut b));
+                    if trace() {
+                        eprintln!("  fmi2SetupExperiment(start = {start:e}, stop = {stop:e})");
+                    }
+                    let s = check(fmi2SetupExperiment(
+                        c,
+                        1,
+                        real(&mut b),
+                        start,
+                        b.u8() as i32 % 2,
+                        stop,
+                    ));
+                    if s == OK
+                        && let Some(slot) = slots[i].as_mut()
+                    {
+                        slot.time = start;
+                    }
+                }
+                3 => {
+                    check(fmi2EnterInitializationMode(c));
+                }
+                4 => {
+                    check(fmi2ExitInitializationMode(c));
+                }
+                5 => {
+                    check(fmi2Terminate(c));
+                }
+                6 => {
+                    if check(fmi2Reset(c)) == OK
+                        && let Some(slot) = slots[i].as_mut()
+                    {
+                        slot.time = 0.0;
+                    }
+                }
+                7 => {
+                    let n = b.u8() as usize % 4;
+                    let v = vrs(&mut b, n);
+                    let values: Vec<f64> = (0..n).map(|_| real(&mut b)).collect();
+                    if trace() {
+                        eprintln!("  fmi2SetReal({v:?}, {values:?})");
+                    }
+                    check(fmi2SetReal(
+                        c,
+                        maybe_null(&mut b, &v),
+                        n,
+                        maybe_null(&mut b, &values),
+                    ));
+                }
+                8 => {
+                    let n = b.u8() as usize % 4;
+                    let v = vrs(&mut b, n);
+                    let values: Vec<i32> = (0..n)
+                        .map(|_| b.pick(&[0, 1, 2, 3, 4, 8, 9, -1, i32::MAX, i32::MIN]))
+                        .collect();
+                    if trace() {
+                        eprintln!("  fmi2SetInteger({v:?}, {values:?})");
+                    }
+                    check(fmi2SetInteger(
+                        c,
+                        maybe_null(&mut b, &v),
+                        n,
+                        maybe_null(&mut b, &values),
+                    ));
+                }
+                9 => {
+                    let n = b.u8() as usize % 3;
+                    let v = vrs(&mut b, n);
+                    let values: Vec<i32> = (0..n).map(|_| b.u8() as i32 - 1).collect();
+                    check(fmi2SetBoolean(
+                        c,
+                        maybe_null(&mut b, &v),
+                        n,
+                        maybe_null(&mut b, &values),
+                    ));
+                }
+                10 => {
+                    let n = b.u8() as usize % 5;
+                    let v = vrs(&mut b, n);
+                    let mut reals = vec![0.0; n];
+                    let p = maybe_null(&mut b, &v);
+                    let out = maybe_null_mut(&mut b, &mut reals);
+                    if check(fmi2GetReal(c, p, n, out)) == OK {
+                        assert!(
+                            reals.iter().all(|x| x.is_finite()),
+                            "fmi2GetReal gave {reals:?} for {v:?}"
+                        );
+                    }
+                    let mut ints = vec![0; n];
+                    check(fmi2GetInteger(c, p, n, maybe_null_mut(&mut b, &mut ints)));
+                    check(fmi2GetBoolean(c, p, n, maybe_null_mut(&mut b, &mut ints)));
+                    let mut strings = vec![null(); n];
+                    check(fmi2GetString(c, p, n, maybe_null_mut(&mut b, &mut strings)));
+                }
+                11 => {
+                    let slot_time = slots[i].as_ref().map_or(0.0, |s| s.time);
+                    let t = if b.u8().is_multiple_of(8) {
+                        real(&mut b)
+                    } else {
+                        slot_time
+                    };
+                    let h = if b.u8().is_multiple_of(8) {
+                        real(&mut b)
+                    } else {
+                        b.pick(&STEPS)
+                    };
+                    if trace() {
+                        eprintln!("  fmi2DoStep(t = {t:e}, h = {h:e})");
+                    }
+                    let s = check(fmi2DoStep(c, t, h, 0));
+                    if s == OK {
+                        if let Some(slot) = slots[i].as_mut() {
+                            slot.time = t + h;
+                        }
+                        assert_outputs_finite(c);
+                    }
+                }
+                12 => {
+                    let mut handle: fmi2FMUstate = null_mut();
+                    let reuse = states
+                        .iter()
+                        .position(|s| s.owner == i && b.u8().is_multiple_of(2));
+                    if let Some(k) = reuse {
+                        handle = states[k].handle;
+                    }
+                    if check(fmi2GetFMUstate(c, &mut handle)) == OK {
+                        let time = slots[i].as_ref().map_or(0.0, |s| s.time);
+                        match reuse {
+                            Some(k) => states[k].time = time,
+                            None => states.push(State {
+                                owner: i,
+                                handle,
+                                time,
+                            }),
+                        }
+                    }
+                }
+                13 => {
+                    // Own, foreign (another instance's) or NULL states.
+                    let pick = if states.is_empty() {
+                        None
+                    } else {
+                        Some(b.u8() as usize % states.len())
+                    };
+                    let handle = pick.map_or(null_mut(), |k| states[k].handle);
+                    if check(fmi2SetFMUstate(c, handle)) == OK
+                        && let (Some(k), Some(slot)) = (pick, slots[i].as_mut())
+                    {
+                        slot.time = states[k].time;
+                    }
+                }
+                14 => {
+                    if states.is_empty() {
+                        check(fmi2FreeFMUstate(c, null_mut()));
+                    } else {
+                        let k = b.u8() as usize % states.len();
+                        let mut handle = states[k].handle;
+                        if check(fmi2FreeFMUstate(c, &mut handle)) == OK && handle.is_null() {
+                            states.remove(k);
+                        }
+                    }
+                }
+                15 => {
+                    if let Some(k) = (!states.is_empty()).then(|| b.u8() as usize % states.len()) {
+                        let handle = states[k].handle;
+                        let mut size = 0usize;
+                        if check(fmi2SerializedFMUstateSize(c, handle, &mut size)) == OK {
+                            let mut bytes = vec![0u8; size];
+                            let short = (b.u8() as usize).is_multiple_of(4);
+                            let n = if short { size / 2 } else { size };
+                            if check(fmi2SerializeFMUstate(
+                                c,
+                                handle,
+                                bytes.as_mut_ptr().cast(),
+                                n,
+                            )) == OK
+                            {
+                                if b.u8().is_multiple_of(2) && size > 0 {
+                                    let at = b.u32() as usize % size;
+                                    bytes[at] ^= b.u8() | 1;
+                                }
+                                let cut = if b.u8().is_multiple_of(4) {
+                                    b.u32() as usize % (size + 1)
+                                } else {
+                                    size
+                                };
+                                let target = slot_of(&mut b);
+                                let tc = slots[target].as_ref().map_or(null_mut(), |s| s.c);
+                                let mut out: fmi2FMUstate = null_mut();
+                                if check(fmi2DeSerializeFMUstate(
+                                    tc,
+                                    bytes.as_ptr().cast(),
+                                    cut,
+                                    &mut out,
+                                )) == OK
+                                {
+                                    states.push(State {
+                                        owner: target,
+                                        handle: out,
+                                        time: states[k].time,
+                                    });
+                                }
+                            }
+                        }
+                    }
+                }
+                16 => {
+                    let kind = b.pick(&[0, 1, 2, 3, -1, 99]);
+                    let mut status = 0;
+                    let mut real_value = 0.0;
+                    let mut int = 0;
+                    let mut string: fmi2String = null();
+                    check(fmi2GetStatus(
+                        c,
+                        kind,
+                        maybe_null_mut(&mut b, std::slice::from_mut(&mut status)),
+                    ));
+                    check(fmi2GetRealStatus(
+                        c,
+                        kind,
+                        maybe_null_mut(&mut b, std::slice::from_mut(&mut real_value)),
+                    ));
+                    check(fmi2GetIntegerStatus(c, kind, &mut int));
+                    check(fmi2GetBooleanStatus(c, kind, &mut int));
+                    check(fmi2GetStringStatus(c, kind, &mut string));
+                }
+                17 => {
+                    let n = b.u8() as usize % 3;
+                    let m = b.u8() as usize % 3;
+                    let unknowns = vrs(&mut b, n);
+                    let knowns = vrs(&mut b, m);
+                    let seed: Vec<f64> = (0..m).map(|_| real(&mut b)).collect();
+                    let mut result = vec![0.0; n];
+                    if check(fmi2GetDirectionalDerivative(
+                        c,
+                        maybe_null(&mut b, &unknowns),
+                        n,
+                        maybe_null(&mut b, &knowns),
+                        m,
+                        maybe_null(&mut b, &seed),
+                        maybe_null_mut(&mut b, &mut result),
+                    )) == OK
+                    {
+                        assert!(result.iter().all(|x| x.is_finite()), "{result:?}");
+                    }
+                }
+                18 => {
+                    let n = b.u8() as usize % 3;
+                    let v = vrs(&mut b, n);
+                    let orders: Vec<i32> = (0..n).map(|_| b.pick(&[1, 1, 2, 0, -1, 3])).collect();
+                    let values: Vec<f64> = (0..n).map(|_| real(&mut b)).collect();
+                    check(fmi2SetRealInputDerivatives(
+                        c,
+                        maybe_null(&mut b, &v),
+                        n,
+                        orders.as_ptr(),
+                        values.as_ptr(),
+                    ));
+                    let mut out = vec![0.0; n];
+                    if check(fmi2GetRealOutputDerivatives(
+                        c,
+                        v.as_ptr(),
+                        n,
+                        orders.as_ptr(),
+                        out.as_mut_ptr(),
+                    )) == OK
+                    {
+                        assert!(out.iter().all(|x| x.is_finite()), "{out:?}");
+                    }
+                }
+                19 => {
+                    let categories = [
+                        c"logEvents".as_ptr(),
+                        c"logAll".as_ptr(),
+                        c"nope".as_ptr(),
+                        null(),
+                    ];
+                    let n = b.u8() as usize % 3;
+                    let list: Vec<fmi2String> = (0..n).map(|_| b.pick(&categories)).collect();
+                    check(fmi2SetDebugLogging(
+                        c,
+                        b.u8() as i32 % 2,
+                        n,
+                        maybe_null(&mut b, &list),
+                    ));
+                }
+                20 => {
+                    check(fmi2CancelStep(c));
+                    check(fmi2SetTime(c, real(&mut b)));
+                    check(fmi2EnterEventMode(c));
+                }
+                _ => {
+                    // Tunable and input values while simulating.
+                    let vr = b.pick(&[10u32, 21, 22, 23, 30]);
+                    let value = real(&mut b);
+                    if trace() {
+                        eprintln!("  fmi2SetReal([{vr}], [{value:e}])");
+                    }
+                    check(fmi2SetReal(c, &vr, 1, &value));
+                }
+            }
+        }
+    }
+    for slot in slots.iter_mut() {
+        if let Some(s) = slot.take() {
+            // SAFETY: a live instance.
+            unsafe { fmi2FreeInstance(s.c) };
+        }
+    }
+});

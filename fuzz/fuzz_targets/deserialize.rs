@@ -1,0 +1,100 @@
+//! Fuzzes `fmi2DeSerializeFMUstate`.
+//!
+//! The first byte chooses how the rest is used: as a whole serialized state
+//! (envelope included), or (most of the time) as a payload put behind a
+//! valid header with the right CRC, so that the fuzzer reaches the checks of
+//! the content. An accepted state must serialize again to bytes that are
+//! accepted and reproduce themselves; it is then set and stepped, and every
+//! output must stay finite. No call may return fmi2Fatal (a panic).
+#![no_main]
+
+#[path = "common.rs"]
+mod common;
+
+use common::*;
+use libfuzzer_sys::fuzz_target;
+use tdvass::fmi2::snapshot;
+
+/// `payload` behind a valid header of this FMU.
+fn envelope(payload: &[u8]) -> Vec<u8> {
+    let guid = tdvass::fmi2::guid();
+    let mut out = Vec::with_capacity(payload.len() + 64);
+    out.extend_from_slice(snapshot::MAGIC);
+    out.extend_from_slice(&snapshot::FORMAT_VERSION.to_le_bytes());
+    out.extend_from_slice(&(guid.len() as u32).to_le_bytes());
+    out.extend_from_slice(guid.as_bytes());
+    out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+    out.extend_from_slice(&snapshot::crc32(payload).to_le_bytes());
+    out.extend_from_slice(payload);
+    out
+}
+
+fn deserialize(c: fmi2Component, bytes: &[u8]) -> (fmi2Status, fmi2FMUstate) {
+    let mut state: fmi2FMUstate = std::ptr::null_mut();
+    // SAFETY: `bytes.len()` readable bytes and a state slot.
+    let s = unsafe { fmi2DeSerializeFMUstate(c, bytes.as_ptr().cast(), bytes.len(), &mut state) };
+    (check(s), state)
+}
+
+fn serialize(c: fmi2Component, state: fmi2FMUstate) -> Vec<u8> {
+    let mut size = 0usize;
+    // SAFETY: a state of `c` and a size slot; then a buffer of that size.
+    unsafe {
+        assert_eq!(check(fmi2SerializedFMUstateSize(c, state, &mut size)), OK);
+        let mut bytes = vec![0u8; size];
+        assert_eq!(
+            check(fmi2SerializeFMUstate(
+                c,
+                state,
+                bytes.as_mut_ptr().cast(),
+                size
+            )),
+            OK
+        );
+        bytes
+    }
+}
+
+fuzz_target!(|data: &[u8]| {
+    let callbacks = callbacks();
+    let c = instantiate(&callbacks, false);
+    assert!(!c.is_null());
+    let mut input = Bytes::new(data);
+    let mode = input.u8();
+    let steps = input.u8();
+    let bytes = if mode.is_multiple_of(4) {
+        input.rest().to_vec()
+    } else {
+        envelope(input.rest())
+    };
+    let (status, state) = deserialize(c, &bytes);
+    if status == OK {
+        assert!(!state.is_null());
+        let first = serialize(c, state);
+        let (again_status, again) = deserialize(c, &first);
+        assert_eq!(again_status, OK, "the FMU refuses its own serialization");
+        assert_eq!(serialize(c, again), first, "serialization is not stable");
+        // SAFETY: states of this instance.
+        unsafe {
+            assert_eq!(check(fmi2SetFMUstate(c, state)), OK);
+        }
+        let model = snapshot::deserialize(&bytes, &tdvass::fmi2::guid()).expect("accepted above");
+        if let Some(sim) = &model.sim {
+            assert_outputs_finite(c);
+            // A few short steps from where the state stands.
+            let mut t = sim.time();
+            for k in 0..steps % 4 {
+                let h = [1e-4, 1e-3, 0.01, 0.05][(steps as usize >> (2 * k)) % 4];
+                // SAFETY: a live instance.
+                let s = check(unsafe { fmi2DoStep(c, t, h, 0) });
+                if s != OK {
+                    break;
+                }
+                t += h;
+                assert_outputs_finite(c);
+            }
+        }
+    }
+    // SAFETY: the live instance; its states go with it.
+    unsafe { fmi2FreeInstance(c) };
+});

@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Builds the fuzz targets with libFuzzer on the stable toolchain (plain
+# cargo: SanitizerCoverage through stable -C flags, libFuzzer compiled by
+# libfuzzer-sys with the system C++ compiler), replays the regression
+# inputs, then fuzzes.
+#
+#   fuzz/run.sh TARGET SECONDS [libFuzzer flags...]   TARGET: deserialize | api_sequence
+#   fuzz/run.sh build                                  only build
+#
+# The corpus grows in fuzz/corpus/TARGET (only the checked-in seed-* files
+# are versioned); crashing inputs land in fuzz/artifacts/TARGET/ — copy
+# them to fuzz/regressions/TARGET/ to keep them as regression tests.
+# `cargo fuzz run TARGET` (with RUSTC_BOOTSTRAP=1 -s none on stable) works too.
+set -euo pipefail
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+cd "$here"
+export CARGO_TARGET_DIR="${FUZZ_TARGET_DIR:-$here/target}"
+export RUSTFLAGS="--cfg fuzzing -Cpasses=sancov-module -Cllvm-args=-sanitizer-coverage-level=4 -Cllvm-args=-sanitizer-coverage-inline-8bit-counters -Cllvm-args=-sanitizer-coverage-pc-table -Cllvm-args=-sanitizer-coverage-trace-compares -Cdebug-assertions -Coverflow-checks"
+# With an explicit --target the flags reach the targets only, not build scripts.
+triple="$(rustc -vV | sed -n 's/^host: //p')"
+cargo build --release --bins --quiet --target "$triple"
+[ "${1:-build}" = build ] && exit 0
+target="$1"
+seconds="${2:-60}"
+shift 2 || shift $#
+binary="$CARGO_TARGET_DIR/$triple/release/$target"
+mkdir -p "corpus/$target" "artifacts/$target" "regressions/$target"
+regressions=("regressions/$target"/*)
+if [ -e "${regressions[0]}" ]; then
+    echo "== $target: replaying ${#regressions[@]} regression input(s)"
+    "$binary" -timeout=20 "${regressions[@]}"
+fi
+echo "== $target: fuzzing for $seconds s"
+"$binary" -max_total_time="$seconds" -timeout=20 -rss_limit_mb=4096 -max_len=32768 \
+    -print_final_stats=1 -artifact_prefix="artifacts/$target/" "$@" \
+    "corpus/$target" "regressions/$target"

@@ -1,0 +1,213 @@
+//! Numerical limits of the FMU, beyond the declared ranges of the variable
+//! table: what keeps every output finite and every call bounded in time.
+//!
+//! - **Values** ([`check_value`]): initial displacements and the road
+//!   (`x_s_start` .. `x_t_start`, `road_amplitude`, `x_g`) within the
+//!   divergence bound of displacements, initial velocities and the slope of
+//!   `x_g` within the bound of velocities, `road_angular_frequency` and the
+//!   weights of J within [`MAX_RATE`] and [`MAX_WEIGHT`]. Checked when the
+//!   value is set (and when a serialized state is read).
+//! - **Rates** ([`check_rates`]): every stiffness, damping and the gain over
+//!   every mass it can act on at most [`MAX_RATE`] (natural frequencies up to
+//!   1e6 rad/s). With states inside the divergence bounds this keeps every
+//!   output finite. Checked when the simulation is built and when `g` is
+//!   tuned.
+//! - **Work per step** ([`step_work`]): one `fmi2DoStep` may need at most
+//!   [`MAX_WORK_PER_STEP`] internal steps and road breakpoints, so that no
+//!   call runs for more than a few seconds (a huge communication step
+//!   without a stop time, a tiny `max_internal_step` or a tiny
+//!   `road_sample_interval`). A longer step is refused: the master splits it.
+//! - **Outputs** ([`non_finite_output`]): a last line of defence; a
+//!   non-finite output is never handed out.
+
+use super::FmiError;
+use super::variables::{Access, Settings, VARIABLES};
+use crate::solver::{DIVERGENCE_DISPLACEMENT, DIVERGENCE_VELOCITY, Outputs};
+
+/// Largest stiffness, damping or gain over a mass (1/s² or 1/s).
+pub const MAX_RATE: f64 = 1e12;
+/// Largest weight of the objective J.
+pub const MAX_WEIGHT: f64 = 1e12;
+/// Most internal steps plus road breakpoints in one `fmi2DoStep` (2^22).
+pub const MAX_WORK_PER_STEP: f64 = 4_194_304.0;
+/// Node interval of the ISO 8608 road (s).
+const ISO_NODE_INTERVAL: f64 = crate::road::ISO_NODE_INTERVAL;
+
+fn beyond(name: &str, value: f64, reason: String) -> FmiError {
+    FmiError::error(format!("invalid value {value} for `{name}`: {reason}"))
+}
+
+/// The limit on a single value (already in its declared range), if any.
+pub fn check_value(name: &str, value: f64) -> Result<(), FmiError> {
+    let (bound, what) = match name {
+        "x_s_start" | "x_h_start" | "x_t_start" | "road_amplitude" | "x_g" => (
+            DIVERGENCE_DISPLACEMENT,
+            "the divergence bound of displacements (m)",
+        ),
+        "v_s_start" | "v_h_start" | "v_t_start" | "x_g derivative" => (
+            DIVERGENCE_VELOCITY,
+            "the divergence bound of velocities (m/s)",
+        ),
+        "road_angular_frequency" => (MAX_RATE.sqrt(), "the numerical limit (rad/s)"),
+        "w_ba" | "w_sdd" | "w_tdd" => (MAX_WEIGHT, "the numerical limit of the weights"),
+        _ => return Ok(()),
+    };
+    if value.abs() > bound {
+        return Err(beyond(
+            name,
+            value,
+            format!("its magnitude exceeds {bound:e}, {what}"),
+        ));
+    }
+    Ok(())
+}
+
+/// Every single-value limit of `settings`.
+pub fn check_values(settings: &Settings) -> Result<(), FmiError> {
+    for v in VARIABLES {
+        match v.access {
+            Access::Real { get, .. } => check_value(v.name, get(settings))?,
+            Access::Integer { get, .. } => check_value(v.name, get(settings) as f64)?,
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+/// Every coefficient over every mass it acts on at most [`MAX_RATE`].
+pub fn check_rates(s: &Settings) -> Result<(), FmiError> {
+    let absorber = s.variant != 1;
+    let masses = [
+        ("m_s", s.m_s, true),
+        ("m_h", s.m_h, absorber),
+        ("m_t", s.m_t, true),
+    ];
+    let coefficients = [
+        ("k_s", s.k_s, true),
+        ("c_s", s.c_s, true),
+        ("k_h", s.k_h, absorber),
+        ("c_h", s.c_h, absorber),
+        ("k_t", s.k_t, true),
+        ("g", s.g, s.variant == 3),
+    ];
+    for (name, value, used) in coefficients {
+        for (mass_name, mass, mass_used) in masses {
+            let rate = value.abs() / mass;
+            if used && mass_used && rate > MAX_RATE {
+                return Err(FmiError::error(format!(
+                    "invalid combination `{name}` = {value} over `{mass_name}` = {mass}: the rate {rate:e} exceeds the numerical limit {MAX_RATE:e} (natural frequencies up to 1e6 rad/s)"
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The internal steps and road breakpoints a step of `h` s needs with the
+/// internal step `grid_step`.
+pub fn step_work(s: &Settings, grid_step: f64, h: f64) -> f64 {
+    let road = match s.road {
+        2 => h / ISO_NODE_INTERVAL,
+        3 => h / s.road_sample_interval,
+        _ => 0.0,
+    };
+    h / grid_step + road
+}
+
+/// Refuses a step of `h` s that needs more than [`MAX_WORK_PER_STEP`]
+/// internal steps and road breakpoints.
+pub fn check_step_work(s: &Settings, grid_step: f64, h: f64) -> Result<(), FmiError> {
+    let work = step_work(s, grid_step, h);
+    if work > MAX_WORK_PER_STEP {
+        let longest = h * MAX_WORK_PER_STEP / work;
+        return Err(FmiError::error(format!(
+            "a communication step of {h} s needs {work:e} internal steps (internal step {grid_step:e} s{}), more than the limit of {MAX_WORK_PER_STEP} per fmi2DoStep; use communication steps of at most {longest:e} s",
+            match s.road {
+                2 => format!(", road nodes every {ISO_NODE_INTERVAL} s"),
+                3 => format!(", road_sample_interval {} s", s.road_sample_interval),
+                _ => String::new(),
+            }
+        )));
+    }
+    Ok(())
+}
+
+/// Largest |time| in internal steps (2^42): beyond it, times no longer
+/// resolve the internal step well (and at 2^52 not at all).
+pub const MAX_TIME_IN_STEPS: f64 = 4_398_046_511_104.0;
+
+/// Refuses a time `t` (s) too large for the internal step `grid_step`.
+pub fn check_time_resolution(what: &str, t: f64, grid_step: f64) -> Result<(), FmiError> {
+    if t.abs() > grid_step * MAX_TIME_IN_STEPS {
+        return Err(FmiError::error(format!(
+            "{what} {t} s is too large for the internal step {grid_step:e} s: |time| must be at most {:e} s (2^42 internal steps) so that times resolve the steps",
+            grid_step * MAX_TIME_IN_STEPS
+        )));
+    }
+    Ok(())
+}
+
+/// The first output of `outputs` that is not finite, with its value.
+pub fn non_finite_output(outputs: &Outputs) -> Option<(&'static str, f64)> {
+    VARIABLES.iter().find_map(|v| match v.access {
+        Access::Output(id) => {
+            let value = id.value(outputs);
+            (!value.is_finite()).then_some((v.name, value))
+        }
+        _ => None,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_within_the_limits() {
+        let s = Settings::start_values();
+        check_values(&s).unwrap();
+        check_rates(&s).unwrap();
+        check_step_work(&s, 1e-4, 15.0).unwrap();
+    }
+
+    #[test]
+    fn limits_name_variable_and_value() {
+        let e = check_value("x_s_start", -2e3).unwrap_err().message;
+        assert!(e.contains("`x_s_start`") && e.contains("-2000"), "{e}");
+        let e = check_value("w_tdd", 1e300).unwrap_err().message;
+        assert!(
+            e.contains("`w_tdd`") && e.contains(&1e300.to_string()),
+            "{e}"
+        );
+        let mut s = Settings::start_values();
+        s.k_s = 1e300;
+        let e = check_rates(&s).unwrap_err().message;
+        assert!(
+            e.contains("`k_s` = ") && e.contains(&1e300.to_string()),
+            "{e}"
+        );
+        let mut s = Settings::start_values();
+        s.m_h = 1e-300;
+        assert!(check_rates(&s).unwrap_err().message.contains("m_h"));
+        s.variant = 1;
+        check_rates(&s).unwrap();
+        let mut s = Settings::start_values();
+        s.g = -1e13;
+        assert!(check_rates(&s).is_err());
+        s.variant = 2;
+        check_rates(&s).unwrap();
+    }
+
+    #[test]
+    fn work_per_step() {
+        let mut s = Settings::start_values();
+        assert!(check_step_work(&s, 1e-4, 1e9).is_err());
+        assert!(check_step_work(&s, 1e-12, 0.01).is_err());
+        assert!(check_time_resolution("startTime", -4.3e42, 1e-4).is_err());
+        assert!(check_time_resolution("startTime", 4e8, 1e-4).is_ok());
+        s.road = 3;
+        s.road_sample_interval = 1e-300;
+        let e = check_step_work(&s, 1e-4, 0.01).unwrap_err().message;
+        assert!(e.contains("road_sample_interval"), "{e}");
+    }
+}
