@@ -99,18 +99,20 @@ def sample_times(duration):
 def rms_values(t, x):
     """RMS of BA, SDD, TDD over the samples after the start."""
     t, x = t[1:], x[1:]
-    ba = x @ A[1]
-    sdd = x[:, 0] - x[:, 4]
-    tdd = x[:, 4] - road(t)
-    return np.sqrt(np.mean(np.stack([ba, sdd, tdd]) ** 2, axis=1))
+    with np.errstate(all="ignore"):  # a diverged peer gives inf, not a warning
+        ba = x @ A[1]
+        sdd = x[:, 0] - x[:, 4]
+        tdd = x[:, 4] - road(t)
+        return np.sqrt(np.mean(np.stack([ba, sdd, tdd]) ** 2, axis=1))
 
 
 def errors(x, rms, ref):
     """State error (relative max norm) and RMS errors against `ref`."""
     n = min(len(x), len(ref["x"]))
     scale = np.abs(ref["x"][:n]).max(axis=0)
-    state = float((np.abs(x[:n] - ref["x"][:n]) / scale).max())
-    rms_err = np.abs(rms - ref["rms"]) / ref["rms"]
+    with np.errstate(all="ignore"):
+        state = float((np.abs(x[:n] - ref["x"][:n]) / scale).max())
+        rms_err = np.abs(rms - ref["rms"]) / ref["rms"]
     return state, [float(v) for v in rms_err]
 
 
@@ -243,13 +245,14 @@ def jitcdde_build(rtol, atol):
 
 
 def jitcdde_run(dde, duration):
-    # JiTCDDE warns when a sampling point lies inside its last step.
-    warnings.filterwarnings("ignore", category=UserWarning, module="jitcdde")
-    dde.adjust_diff()
     ts = sample_times(duration)
     out = np.zeros((len(ts), 6))
-    for i, ti in enumerate(ts[1:], start=1):
-        out[i] = dde.integrate(ti)
+    with warnings.catch_warnings():
+        # JiTCDDE warns when a sampling point lies inside its last step.
+        warnings.simplefilter("ignore")
+        dde.adjust_diff()
+        for i, ti in enumerate(ts[1:], start=1):
+            out[i] = dde.integrate(ti)
     return {"t": ts, "x": out, "rms": rms_values(ts, out)}
 
 
@@ -328,7 +331,7 @@ def main():
 
     tight = None
     if "scipy" not in skip:
-        for rtol in [1e-6, 1e-9, 1e-12]:
+        for rtol in [1e-6, 1e-12]:
             run, seconds, _ = timed(
                 lambda rtol=rtol: scipy_method_of_steps(duration, rtol, rtol * 1e-3), repeats
             )
@@ -391,9 +394,9 @@ def main():
     for row in results[1:]:
         print(f"  {row['solver']:34s} {row['seconds'] / base['seconds']:10.0f}x   "
               f"state err {row['state_error']:8.1e} (tdvass {base['state_error']:.1e})")
-    for row in results:
-        if not np.isfinite(row["state_error"]):
-            sys.exit(f"{row['solver']}: non-finite error")
+    # Only tdvass is held to an accuracy here (the peers' errors are data).
+    if not base["state_error"] < 1e-6:
+        sys.exit(f"tdvass: state error {base['state_error']:.1e} against the reference")
     if args.json:
         Path(args.json).write_text(json.dumps(
             {"machine": info, "duration": duration, "results": results}, indent=2))

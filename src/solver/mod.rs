@@ -23,6 +23,15 @@
 //! splits an interval does not change any result: outputs agree bit for bit.
 //! An external road input (`RoadSpec::Input`) is the exception: the state is
 //! committed where the input changes.
+//!
+//! **Hot path.** From a committed grid node, [`Simulator::advance_to`] runs
+//! every whole step the call reaches in one loop (see BENCHMARKS.md): the
+//! delayed input acts on the two history nodes through `Γ_u H`
+//! precomputed, the harmonic road phase is rotated from node to node
+//! (exact every `PHASE_ANCHOR` = 1024 nodes), and BA, SDD, TDD go straight into
+//! the RMS sums. Each node's state, phase and sums are functions of its
+//! index alone, so splits and `to_bytes`/`from_bytes` stay bit-identical
+//! (unit tests at the end of this file).
 
 pub mod expm;
 mod persist;
