@@ -3,7 +3,7 @@
 mod common;
 
 use common::{Lcg, fft, rk4_method_of_steps};
-use tdvass::model::{PAPER_G2, PAPER_TAU2, Params, Plant, State, Variant};
+use tdvass::model::{PAPER_G2, PAPER_TAU2, Params, Plant, State, Variant, X_T};
 use tdvass::road::{ISO_NODE_INTERVAL, RandomRoad, Road, RoadClass, RoadSpec};
 use tdvass::solver::{Outputs, SimulationConfig, Simulator, simulate};
 use tdvass::{Error, metrics::RmsValues};
@@ -309,6 +309,57 @@ fn zero_and_non_multiple_delays_agree_with_the_reference() {
     for (a, b) in pairs {
         let change = (a - b).abs() / a;
         assert!(change < 3e-3 && change > 0.0, "{a} vs {b}: {change}");
+    }
+}
+
+#[test]
+fn delays_shorter_than_the_step_agree_with_the_reference() {
+    // 1e-7 <= tau < max_internal_step: the grid keeps h = max_internal_step
+    // and the delayed argument of the last part of each step lies inside
+    // the step. Checked against RK4 on a grid that divides tau, at a grid
+    // node and between nodes (dense output), from a non-zero initial state
+    // (so the constant history before t = 0 matters).
+    let x0 = State::new(0.01, 0.0, 0.0, 0.0, 0.002, 0.1);
+    let road = |t: f64| 0.05 * (5.0 * t).sin();
+    // (tau, reference step, [a grid node, a time between nodes]); the
+    // reference step divides both times.
+    for (tau, reference_step, times) in [
+        (7.3e-5, 7.3e-6, [0.438, 0.5000135]),
+        (3e-5, 3e-6, [0.3, 0.500001]),
+        (2e-6, 1e-6, [0.5, 0.500001]),
+        (1.5e-7, 1.5e-7, [0.3, 0.3000015]),
+    ] {
+        let params = Params::with_controller(40000.0, tau);
+        let plant = Plant::new(params, Variant::Tdvass).unwrap();
+        let cfg = SimulationConfig {
+            params,
+            initial_state: x0,
+            max_internal_step: 1e-4,
+            ..SimulationConfig::default()
+        };
+        let mut sim = Simulator::new(cfg.clone()).unwrap();
+        assert_eq!(sim.grid().step, 1e-4);
+        assert_eq!(sim.grid().inner_delay, tau);
+        for duration in times {
+            let reference = rk4_method_of_steps(&plant, tau, x0, road, reference_step, duration);
+            sim.advance_to(duration).unwrap();
+            let error = (sim.state() - reference).amax() / reference.amax();
+            // Measured: 8e-14 to 3.5e-13.
+            assert!(
+                error < 1e-10,
+                "tau = {tau}, t = {duration}: relative error {error:e}"
+            );
+            // The control force is g x_t(t − tau), with x_t one delay back
+            // from a second run (the dense output there).
+            let mut earlier = Simulator::new(cfg.clone()).unwrap();
+            earlier.advance_to(duration - tau).unwrap();
+            let expected = params.g * earlier.state()[X_T];
+            let force = sim.outputs().control_force;
+            assert!(
+                (force - expected).abs() <= 1e-9 * expected.abs(),
+                "tau = {tau}, t = {duration}: force {force} vs {expected}"
+            );
+        }
     }
 }
 

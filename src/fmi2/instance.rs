@@ -366,11 +366,15 @@ impl Instance {
         self.model.terminate_requested = false;
         let s = &self.model.settings;
         self.event(format!(
-            "fmi2ExitInitializationMode: variant {}, road {}, internal step {} s ({} steps per delay), start {} s, stop {}",
+            "fmi2ExitInitializationMode: variant {}, road {}, internal step {} s ({}), start {} s, stop {}",
             s.variant,
             s.road,
             grid.step,
-            grid.delay_steps,
+            if grid.delay_inside_step() {
+                "delay inside the step".to_string()
+            } else {
+                format!("{} steps per delay", grid.delay_steps)
+            },
             self.model.start_time,
             self.model
                 .stop_time

@@ -945,7 +945,7 @@ pub static VARIABLES: &[Variable] = &[
         1e-4,
         Range::Positive,
         real!(max_internal_step),
-        "Upper bound of the internal integration step (> 0); the step divides tau exactly",
+        "Upper bound of the internal integration step (> 0); the step divides tau exactly when tau is longer",
     ),
     parameter(
         "w_ba",

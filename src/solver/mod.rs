@@ -8,7 +8,10 @@
 //! - the delayed tire displacement `u = x_t(t − tau)` is the cubic Hermite
 //!   interpolant of `x_t` and its derivative `v_t` (a state) at the grid
 //!   nodes one delay earlier (the grid step divides tau exactly), so the
-//!   method is fourth-order accurate in the step;
+//!   method is fourth-order accurate in the step; a delay shorter than the
+//!   step bound keeps the step and splits it at tau, the end node of the
+//!   step entering its own interpolant through a 2×2 solve
+//!   ([`DelayGrid::inner_delay`]);
 //! - the road is a sine (an exosystem) or a straight line (see
 //!   [`crate::road`]).
 //!
@@ -40,7 +43,7 @@ use crate::error::{Error, Result};
 use crate::metrics::{RmsValues, RunningRms, Weights};
 use crate::model::{Params, Performance, Plant, State, V_T, Variant, X_S, X_T};
 use crate::road::{Road, RoadPiece, RoadSpec};
-use nalgebra::{Matrix6, SMatrix, Vector2, Vector4};
+use nalgebra::{Matrix2, Matrix4, Matrix6, SMatrix, Vector2, Vector4};
 use std::collections::HashMap;
 
 /// Default upper bound of the internal step (s).
@@ -115,13 +118,22 @@ impl Default for SimulationConfig {
 pub struct DelayGrid {
     /// Internal step h (s).
     pub step: f64,
-    /// tau = m h; 0 when the delay is folded into the plant.
+    /// The delayed nodes are `m` steps back: `tau = m h` for a delay of at
+    /// least one step, `m = 1` for a delay shorter than a step (see
+    /// `inner_delay`), 0 when the delay is folded into the plant.
     pub delay_steps: u64,
+    /// The delay when it is shorter than the step (`0 < tau < h`), else 0.
+    /// Then the delayed argument of the first `tau` of each step lies in the
+    /// step before (nodes k − 1, k) and that of the rest in the step itself
+    /// (nodes k, k + 1): node k + 1 follows from a 2×2 linear solve.
+    pub inner_delay: f64,
 }
 
 impl DelayGrid {
-    /// `h = tau / m` with `m = ceil(tau / h_max)`, or `h = h_max` when the
-    /// delay is zero or below [`MIN_RESOLVED_DELAY`].
+    /// `h = tau / m` with `m = ceil(tau / h_max)` when `tau >= h_max`;
+    /// `h = h_max` with the delay inside the step when
+    /// [`MIN_RESOLVED_DELAY`] `<= tau < h_max`; `h = h_max` with the delay
+    /// folded when tau is zero or below [`MIN_RESOLVED_DELAY`].
     pub fn new(tau: f64, max_internal_step: f64) -> Result<DelayGrid> {
         if !(max_internal_step.is_finite() && max_internal_step > 0.0) {
             return Err(Error::InvalidParameter {
@@ -141,6 +153,7 @@ impl DelayGrid {
             return Ok(DelayGrid {
                 step: max_internal_step,
                 delay_steps: 0,
+                inner_delay: 0.0,
             });
         }
         let ratio = (tau / max_internal_step * (1.0 - 1e-12)).ceil().max(1.0);
@@ -151,16 +164,29 @@ impl DelayGrid {
                 reason: "the delay needs more than 8388608 history nodes at this max_internal_step",
             });
         }
+        if ratio == 1.0 && tau < max_internal_step * (1.0 - 1e-12) {
+            return Ok(DelayGrid {
+                step: max_internal_step,
+                delay_steps: 1,
+                inner_delay: tau,
+            });
+        }
         let delay_steps = ratio as u64;
         Ok(DelayGrid {
             step: tau / delay_steps as f64,
             delay_steps,
+            inner_delay: 0.0,
         })
     }
 
     /// Whether the delay is resolved on the grid (not folded).
     pub fn resolves_delay(&self) -> bool {
         self.delay_steps > 0
+    }
+
+    /// Whether the delay is shorter than the step (see `inner_delay`).
+    pub fn delay_inside_step(&self) -> bool {
+        self.inner_delay > 0.0
     }
 }
 
@@ -244,6 +270,24 @@ fn hermite(nodes: [f64; 4], h: f64, offset: f64) -> Vector4<f64> {
     )
 }
 
+/// The 4×4 matrix of [`hermite`]: `[u, u', u'', u''']` at offset σ is
+/// `hermite_matrix(h, σ) [x_0, v_0, x_1, v_1]`.
+fn hermite_matrix(h: f64, offset: f64) -> Matrix4<f64> {
+    Matrix4::from_fn(|i, j| {
+        let mut nodes = [0.0; 4];
+        nodes[j] = 1.0;
+        hermite(nodes, h, offset)[i]
+    })
+}
+
+/// `C`: the 2×6 map from X to a history node `(x_t, v_t)`.
+fn tire_pick() -> SMatrix<f64, 2, 6> {
+    let mut pick = SMatrix::<f64, 2, 6>::zeros();
+    pick[(0, X_T)] = 1.0;
+    pick[(1, V_T)] = 1.0;
+    pick
+}
+
 /// Columns of a 6-row matrix, stored as plain arrays for the hot loop.
 type Columns<const N: usize> = [[f64; 6]; N];
 
@@ -312,12 +356,73 @@ impl GridStep {
             -6.0 / h2, -4.0 / h, 6.0 / h2, -2.0 / h,
             12.0 / h3, 6.0 / h2, -12.0 / h3, 6.0 / h2,
         );
+        Self::from_matrices(
+            &op.transition,
+            &(op.delayed_input * hermite),
+            op,
+            a,
+            angular_frequency,
+            h,
+        )
+    }
+
+    /// The whole step when the delay `tau` is shorter than the step h
+    /// ([`DelayGrid::inner_delay`]). Over `[t_k, t_k + tau)` the delayed
+    /// argument lies in step k − 1 (Hermite offsets from `h − tau`), over
+    /// `[t_k + tau, t_{k+1})` in step k itself (offsets from 0), so
+    /// `X_{k+1} = Φ X_k + D_1 n_{k−1,k} + D_2 n_{k,k+1} + road` with
+    /// `D_1 = Φ(h − tau) Γ_u(tau) H(h − tau)` and `D_2 = Γ_u(h − tau) H(0)`.
+    /// Node k + 1 appears on both sides through its `(x_t, v_t) = C X_{k+1}`;
+    /// with `S = (I − D_2'' C)^{-1}` (`D_2''` the columns acting on node
+    /// k + 1, `D_2'` those on node k) the explicit step is
+    /// `X_{k+1} = S (Φ + D_2' C) X_k + S D_1 n_{k−1,k} + S road`.
+    /// `None` when `I − D_2'' C` is singular.
+    fn inner_delay(
+        whole: &StepOperator,
+        parts: [&StepOperator; 2],
+        a: &Matrix6<f64>,
+        angular_frequency: f64,
+        h: f64,
+        tau: f64,
+    ) -> Option<GridStep> {
+        let [first, rest] = parts;
+        let earlier = rest.transition * first.delayed_input * hermite_matrix(h, h - tau);
+        let current = rest.delayed_input * hermite_matrix(h, 0.0);
+        let pick = tire_pick();
+        let implicit = Matrix6::identity() - current.fixed_view::<6, 2>(0, 2) * pick;
+        let solve = implicit.try_inverse()?;
+        let scaled = StepOperator {
+            transition: solve * (whole.transition + current.fixed_view::<6, 2>(0, 0) * pick),
+            delayed_input: solve * earlier,
+            linear_road: solve * whole.linear_road,
+            harmonic_road: solve * whole.harmonic_road,
+        };
+        Some(Self::from_matrices(
+            &scaled.transition,
+            &scaled.delayed_input,
+            &scaled,
+            a,
+            angular_frequency,
+            h,
+        ))
+    }
+
+    /// `nodes`: the 6×4 map from the two history nodes to the state; the
+    /// road columns come from `road`.
+    fn from_matrices(
+        transition: &Matrix6<f64>,
+        nodes: &SMatrix<f64, 6, 4>,
+        road: &StepOperator,
+        a: &Matrix6<f64>,
+        angular_frequency: f64,
+        h: f64,
+    ) -> GridStep {
         let (sin, cos) = (angular_frequency * h).sin_cos();
         GridStep {
-            transition: columns(&op.transition),
-            nodes: columns(&(op.delayed_input * hermite)),
-            harmonic: columns(&op.harmonic_road),
-            linear: columns(&op.linear_road),
+            transition: columns(transition),
+            nodes: columns(nodes),
+            harmonic: columns(&road.harmonic_road),
+            linear: columns(&road.linear_road),
             rotation: [[cos, cos], [sin, -sin]],
             outputs: std::array::from_fn(|j| {
                 let sdd = match j {
@@ -610,7 +715,7 @@ impl Simulator {
             initial[crate::model::X_H] = 0.0;
             initial[crate::model::V_H] = 0.0;
         }
-        let (solver_matrix, full_step, grid_step) = Self::operators(&plant, &config, &grid);
+        let (solver_matrix, full_step, grid_step) = Self::operators(&plant, &config, &grid)?;
         let history = vec![[initial[X_T], initial[V_T]]; grid.delay_steps as usize + 1];
         Ok(Simulator {
             plant,
@@ -636,7 +741,7 @@ impl Simulator {
         plant: &Plant,
         config: &SimulationConfig,
         grid: &DelayGrid,
-    ) -> (Matrix6<f64>, StepOperator, GridStep) {
+    ) -> Result<(Matrix6<f64>, StepOperator, GridStep)> {
         let mut a = plant.a;
         let mut b = plant.b;
         if !grid.resolves_delay() {
@@ -658,9 +763,22 @@ impl Simulator {
             } => angular_frequency,
             _ => 0.0,
         };
-        let step = StepOperator::new(&a, &b, &plant.e, omega, grid.step);
-        let grid_step = GridStep::new(&step, &a, omega, grid.step);
-        (a, step, grid_step)
+        let (h, tau) = (grid.step, grid.inner_delay);
+        let step = StepOperator::new(&a, &b, &plant.e, omega, h);
+        let grid_step = if grid.delay_inside_step() {
+            let first = StepOperator::new(&a, &b, &plant.e, omega, tau);
+            let rest = StepOperator::new(&a, &b, &plant.e, omega, h - tau);
+            GridStep::inner_delay(&step, [&first, &rest], &a, omega, h, tau).ok_or(
+                Error::InvalidParameter {
+                    name: "g",
+                    value: config.params.g,
+                    reason: "the step with the delay inside it is singular at this gain",
+                },
+            )?
+        } else {
+            GridStep::new(&step, &a, omega, h)
+        };
+        Ok((a, step, grid_step))
     }
 
     /// The configuration.
@@ -748,6 +866,15 @@ impl Simulator {
     /// Integrates from (a, x) to b, all inside grid step k, splitting at road
     /// breakpoints.
     fn integrate_within_step(&mut self, k: u64, from: f64, x: State, to: f64) -> State {
+        if self.grid.delay_inside_step() {
+            let next = self.grid_time(k + 1);
+            let (node, end) = self.inner_delay_next_node(k, from, x);
+            if to == next {
+                return node;
+            }
+            let (state, sensitivity) = self.integrate_inner_delay(k, from, x, to);
+            return state + sensitivity * Vector2::from(end);
+        }
         let step_start = self.grid_time(k);
         let mut start = from;
         let mut state = x;
@@ -775,6 +902,74 @@ impl Simulator {
             };
             if end == to {
                 return state;
+            }
+            start = end;
+        }
+    }
+
+    /// Delay inside the step ([`DelayGrid::inner_delay`]): the state at grid
+    /// node k + 1 reached from (from, x) in step k, and that node's
+    /// `(x_t, v_t)`, which the delayed input of `[t_k + tau, t_{k+1})`
+    /// interpolates (a 2×2 solve; NaN if it is singular, which the
+    /// divergence check reports).
+    fn inner_delay_next_node(&mut self, k: u64, from: f64, x: State) -> (State, [f64; 2]) {
+        let next = self.grid_time(k + 1);
+        let (state, sensitivity) = self.integrate_inner_delay(k, from, x, next);
+        let pick = tire_pick();
+        let end = (Matrix2::identity() - pick * sensitivity)
+            .lu()
+            .solve(&(pick * state))
+            .unwrap_or(Vector2::repeat(f64::NAN));
+        (state + sensitivity * end, [end[0], end[1]])
+    }
+
+    /// Delay inside the step: integrates from (from, x) to `to` inside grid
+    /// step k, splitting at road breakpoints and at `t_k + tau`, with node
+    /// k + 1 taken as zero in the delayed input. Returns that state and its
+    /// 6×2 sensitivity to node k + 1's `(x_t, v_t)` (the result is affine
+    /// in them).
+    fn integrate_inner_delay(
+        &mut self,
+        k: u64,
+        from: f64,
+        x: State,
+        to: f64,
+    ) -> (State, SMatrix<f64, 6, 2>) {
+        let (h, tau) = (self.grid.step, self.grid.inner_delay);
+        let step_start = self.grid_time(k);
+        let switch = step_start + tau;
+        let [node_x, node_v] = self.history[(k % self.history.len() as u64) as usize];
+        let mut start = from;
+        let mut state = x;
+        let mut sensitivity = SMatrix::<f64, 6, 2>::zeros();
+        loop {
+            let mut piece = self.road.piece(start);
+            if piece.end() <= start || self.coincide(piece.end(), start) {
+                piece = self.road.piece(piece.end().max(start));
+            }
+            let mut end = if piece.end() < to && !self.coincide(piece.end(), to) {
+                piece.end()
+            } else {
+                to
+            };
+            let earlier = start < switch && !self.coincide(start, switch);
+            if earlier && end > switch && !self.coincide(end, switch) {
+                end = switch;
+            }
+            let op = self.partial_operator(end - start).clone();
+            if earlier {
+                let delayed = self.delayed_input(k, h - tau + (start - step_start));
+                state = op.apply(&state, Some(&delayed), &piece, start);
+                sensitivity = op.transition * sensitivity;
+            } else {
+                let interpolant = hermite_matrix(h, (start - switch).max(0.0));
+                let delayed = interpolant * Vector4::new(node_x, node_v, 0.0, 0.0);
+                state = op.apply(&state, Some(&delayed), &piece, start);
+                sensitivity = op.transition * sensitivity
+                    + op.delayed_input * interpolant.fixed_view::<4, 2>(0, 2);
+            }
+            if end == to {
+                return (state, sensitivity);
             }
             start = end;
         }
@@ -1125,7 +1320,7 @@ impl Simulator {
         };
         let plant = Plant::new(params, self.config.variant)?;
         self.config.params = params;
-        let (matrix, step, grid_step) = Self::operators(&plant, &self.config, &self.grid);
+        let (matrix, step, grid_step) = Self::operators(&plant, &self.config, &self.grid)?;
         self.plant = plant;
         self.solver_matrix = matrix;
         self.full_step = step;
@@ -1157,8 +1352,20 @@ impl Simulator {
     }
 
     /// `[u, u']`: the delayed tire displacement and its rate now.
-    fn delayed_tire_now(&self) -> (f64, f64) {
-        if self.grid.resolves_delay() {
+    fn delayed_tire_now(&mut self) -> (f64, f64) {
+        if self.grid.delay_inside_step() {
+            let (k, offset) = self.step_offset();
+            let (h, tau) = (self.grid.step, self.grid.inner_delay);
+            let p = if offset < tau {
+                self.delayed_input(k, h - tau + offset)
+            } else {
+                let (_, [end_x, end_v]) =
+                    self.inner_delay_next_node(k, self.committed_time, self.committed_state);
+                let [node_x, node_v] = self.history[(k % self.history.len() as u64) as usize];
+                hermite([node_x, node_v, end_x, end_v], h, offset - tau)
+            };
+            (p[0], p[1])
+        } else if self.grid.resolves_delay() {
             let (k, offset) = self.step_offset();
             let p = self.delayed_input(k, offset);
             (p[0], p[1])
@@ -1285,6 +1492,17 @@ mod tests {
                     road: RandomRoad::default(),
                     sample_interval: 0.1,
                 },
+                ..base.clone()
+            },
+            // Delays inside one step, on the harmonic and a linear road.
+            SimulationConfig {
+                params: Params::with_controller(40000.0, 3.7e-5),
+                initial_state: State::new(0.01, 0.0, 0.0, 0.0, 0.002, 0.1),
+                ..base.clone()
+            },
+            SimulationConfig {
+                params: Params::with_controller(6000.0, 2e-6),
+                road: RoadSpec::Iso8608(RandomRoad::default()),
                 ..base
             },
         ]
