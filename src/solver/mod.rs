@@ -474,20 +474,85 @@ fn within_bounds(x: &[f64; 6]) -> bool {
         & (x[5].abs() <= b[5])
 }
 
-/// What the harmonic whole-step loop carries from node to node.
+/// The road as the whole-step loop carries it from grid node to grid node.
+trait NodeRoad: Copy {
+    /// The road's part of the step that leaves the current node.
+    fn input(&self, op: &GridStep) -> [f64; 6];
+    /// `x_g` at the current node (m).
+    fn displacement(&self) -> f64;
+    /// Moves to the next node.
+    fn advance(&mut self, op: &GridStep);
+}
+
+/// The harmonic road's phase `A [sin ω t_k, cos ω t_k]` at node k, rotated
+/// exactly from node to node (see [`PHASE_ANCHOR`]).
 #[derive(Clone, Copy)]
-struct HotState {
+struct HarmonicPhase([f64; 2]);
+
+impl NodeRoad for HarmonicPhase {
+    #[inline(always)]
+    fn input(&self, op: &GridStep) -> [f64; 6] {
+        combine2(&op.harmonic, &self.0)
+    }
+    #[inline(always)]
+    fn displacement(&self) -> f64 {
+        self.0[0]
+    }
+    #[inline(always)]
+    fn advance(&mut self, op: &GridStep) {
+        self.0 = op.rotate(self.0);
+    }
+}
+
+/// One linear road piece `x_g = value + slope (t − start)` at grid node
+/// `t_k = t_0 + k h`, evaluated as [`RoadPiece::value`] does.
+#[derive(Clone, Copy)]
+struct LinearPiece {
+    start_time: f64,
+    step: f64,
+    k: u64,
+    start: f64,
+    value: f64,
+    slope: f64,
+}
+
+impl LinearPiece {
+    #[inline(always)]
+    fn value_now(&self) -> f64 {
+        let t = self.start_time + self.k as f64 * self.step;
+        self.value + self.slope * (t - self.start)
+    }
+}
+
+impl NodeRoad for LinearPiece {
+    #[inline(always)]
+    fn input(&self, op: &GridStep) -> [f64; 6] {
+        combine2(&op.linear, &[self.value_now(), self.slope])
+    }
+    #[inline(always)]
+    fn displacement(&self) -> f64 {
+        self.value_now()
+    }
+    #[inline(always)]
+    fn advance(&mut self, _: &GridStep) {
+        self.k += 1;
+    }
+}
+
+/// What the whole-step loop carries from node to node.
+#[derive(Clone, Copy)]
+struct HotState<R> {
     x: [f64; 6],
-    /// `A [sin ω t_k, cos ω t_k]`.
-    z: [f64; 2],
+    road: R,
     k: u64,
     /// Ring slot of node k + 1 (it holds node k − m until overwritten).
     slot: usize,
     rms: RunningRms,
 }
 
-/// One run of the harmonic whole-step loop, within which neither a phase
-/// anchor nor the start of the history is crossed.
+/// One run of the whole-step loop, within which neither a phase anchor
+/// (harmonic road), a road breakpoint (linear roads) nor the start of the
+/// history is crossed.
 struct Segment<'a> {
     op: &'a GridStep,
     history: &'a mut [[f64; 2]],
@@ -497,16 +562,17 @@ struct Segment<'a> {
     before_start: [f64; 4],
 }
 
-/// The hot loop: `X_{k+1} = Φ X_k + Γ_uH n_k + Γ_h z_k`, the road phase
-/// rotated, the new node stored in the history. The BA, SDD, TDD of every
-/// node after the first are added to the RMS sums, except the last one's,
-/// which the caller adds (its road phase is exact at an anchor). Stops at
-/// `end` or before a state out of bounds, which it returns. `DELAY`: the delay is resolved on the grid; `BEFORE`: all the
-/// delayed nodes lie before the start.
+/// The hot loop: `X_{k+1} = Φ X_k + Γ_uH n_k + road_k`, the road moved on,
+/// the new node stored in the history. The BA, SDD, TDD of every node
+/// after the first are added to the RMS sums, except the last one's, which
+/// the caller adds (on the harmonic road its phase is exact at an anchor).
+/// Stops at `end` or before a state out of bounds, which it returns.
+/// `DELAY`: the delay is resolved on the grid; `BEFORE`: all the delayed
+/// nodes lie before the start.
 #[inline(always)]
-fn harmonic_segment<const DELAY: bool, const BEFORE: bool>(
+fn segment<R: NodeRoad, const DELAY: bool, const BEFORE: bool>(
     seg: Segment,
-    hot: &mut HotState,
+    hot: &mut HotState<R>,
 ) -> Option<[f64; 6]> {
     let op = seg.op;
     let history = seg.history;
@@ -514,7 +580,7 @@ fn harmonic_segment<const DELAY: bool, const BEFORE: bool>(
     assert!(hot.slot < len);
     let HotState {
         mut x,
-        mut z,
+        mut road,
         mut k,
         mut slot,
         mut rms,
@@ -525,7 +591,7 @@ fn harmonic_segment<const DELAY: bool, const BEFORE: bool>(
     let mut count = false;
     while k < seg.end {
         let next_slot = if slot + 1 == len { 0 } else { slot + 1 };
-        let mut input = combine2(&op.harmonic, &z);
+        let mut input = road.input(op);
         if DELAY {
             let nodes = if BEFORE {
                 seg.before_start
@@ -545,46 +611,63 @@ fn harmonic_segment<const DELAY: bool, const BEFORE: bool>(
         }
         let x_next = add6(combine6(&op.transition, &x), input);
         if count {
-            op.count(&mut rms, &x, z[0]);
+            op.count(&mut rms, &x, road.displacement());
         }
         count = true;
         if !within_bounds(&x_next) {
             diverged = Some(x_next);
             break;
         }
-        z = op.rotate(z);
+        road.advance(op);
         // SAFETY: slot < len, as above.
         unsafe { *history.get_unchecked_mut(slot) = [x_next[X_T], x_next[V_T]] };
         x = x_next;
         slot = next_slot;
         k += 1;
     }
-    *hot = HotState { x, z, k, slot, rms };
+    *hot = HotState {
+        x,
+        road,
+        k,
+        slot,
+        rms,
+    };
     diverged
 }
 
-/// [`harmonic_segment`] compiled for AVX2 (the same operations in the
-/// same order, without FMA, so the results are bit-identical).
+/// [`segment`] compiled for AVX2 (the same operations in the same order,
+/// without FMA, so the results are bit-identical).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn harmonic_segment_avx2<const DELAY: bool, const BEFORE: bool>(
+fn segment_avx2<R: NodeRoad, const DELAY: bool, const BEFORE: bool>(
     seg: Segment,
-    hot: &mut HotState,
+    hot: &mut HotState<R>,
 ) -> Option<[f64; 6]> {
-    harmonic_segment::<DELAY, BEFORE>(seg, hot)
+    segment::<R, DELAY, BEFORE>(seg, hot)
 }
 
-/// Runs [`harmonic_segment`] with the widest vector unit available.
-fn run_harmonic_segment<const DELAY: bool, const BEFORE: bool>(
+/// Runs [`segment`] with the widest vector unit available.
+fn run_segment<R: NodeRoad, const DELAY: bool>(
     seg: Segment,
-    hot: &mut HotState,
+    hot: &mut HotState<R>,
+    before: bool,
 ) -> Option<[f64; 6]> {
     #[cfg(target_arch = "x86_64")]
     if wide_vectors() {
         // SAFETY: the CPU supports AVX2 (checked at run time).
-        return unsafe { harmonic_segment_avx2::<DELAY, BEFORE>(seg, hot) };
+        return unsafe {
+            match (DELAY, before) {
+                (true, true) => segment_avx2::<R, true, true>(seg, hot),
+                (true, false) => segment_avx2::<R, true, false>(seg, hot),
+                _ => segment_avx2::<R, false, false>(seg, hot),
+            }
+        };
     }
-    harmonic_segment::<DELAY, BEFORE>(seg, hot)
+    match (DELAY, before) {
+        (true, true) => segment::<R, true, true>(seg, hot),
+        (true, false) => segment::<R, true, false>(seg, hot),
+        _ => segment::<R, false, false>(seg, hot),
+    }
 }
 
 /// Whether the AVX2 loop is used: the CPU has it and `TDVASS_NO_AVX2` is
@@ -1117,7 +1200,7 @@ impl Simulator {
 
     /// [`Self::whole_steps`] on the harmonic road: segments that end at the
     /// phase anchors (and at node m, where the history starts), each run by
-    /// [`harmonic_segment`].
+    /// [`segment`].
     fn harmonic_whole_steps<const DELAY: bool>(&mut self, last: u64) -> Result<()> {
         let m = self.grid.delay_steps;
         let first = self.grid_index;
@@ -1125,7 +1208,7 @@ impl Simulator {
         let x0 = self.config.initial_state[X_T];
         let mut hot = HotState {
             x: self.committed_state.into(),
-            z: self.harmonic_phase(first),
+            road: HarmonicPhase(self.harmonic_phase(first)),
             k: first,
             slot: ((first + 1) % len as u64) as usize,
             rms: self.rms,
@@ -1144,23 +1227,19 @@ impl Simulator {
                 end,
                 before_start: [x0, 0.0, x0, 0.0],
             };
-            diverged = match (DELAY, before_history) {
-                (true, false) => run_harmonic_segment::<true, false>(segment, &mut hot),
-                (true, true) => run_harmonic_segment::<true, true>(segment, &mut hot),
-                _ => run_harmonic_segment::<false, false>(segment, &mut hot),
-            };
+            diverged = run_segment::<_, DELAY>(segment, &mut hot, before_history);
             if hot.k.is_multiple_of(PHASE_ANCHOR) {
-                hot.z = self.exact_phase(hot.k);
+                hot.road = HarmonicPhase(self.exact_phase(hot.k));
             }
             if diverged.is_some() {
                 break;
             }
             if hot.k > start {
-                self.grid_step.count(&mut hot.rms, &hot.x, hot.z[0]);
+                self.grid_step.count(&mut hot.rms, &hot.x, hot.road.0[0]);
             }
         }
         self.rms = hot.rms;
-        self.phase = Some((hot.k, hot.z));
+        self.phase = Some((hot.k, hot.road.0));
         self.set_committed_node(first, hot.k, hot.x);
         match diverged {
             Some(x) => self.check_divergence(self.grid_time(hot.k + 1), &State::from(x)),
@@ -1214,6 +1293,9 @@ impl Simulator {
         // Ring slot of node k + 1, which holds node k − m until overwritten.
         let mut slot = ((k + 1) % len as u64) as usize;
         let mut rms = self.rms;
+        // A local copy: the compiler then knows that the history writes do
+        // not change it.
+        let op = self.grid_step.clone();
         // The piece at the node just reached, looked up for its road
         // displacement and used again for the step that leaves it.
         let mut piece_at_node = None;
@@ -1221,12 +1303,62 @@ impl Simulator {
             if k >= last {
                 break Ok(());
             }
-            let next_slot = if slot + 1 == len { 0 } else { slot + 1 };
             let (t, to) = (self.grid_time(k), self.grid_time(k + 1));
-            let x_next = match self.piece_over(t, to, piece_at_node.take()) {
+            let covering = self.piece_over(t, to, piece_at_node.take());
+            if let Some(
+                piece @ RoadPiece::Linear {
+                    start,
+                    end,
+                    value,
+                    slope,
+                },
+            ) = covering
+            {
+                // The steps whose end nodes lie inside this piece, in the
+                // hot loop (no road lookup, no breakpoint test per step).
+                let mut n = self.last_node_inside(k, last, end);
+                let before = DELAY && k < m;
+                if before {
+                    n = n.min(m);
+                }
+                if n > k {
+                    let mut hot = HotState {
+                        x,
+                        road: LinearPiece {
+                            start_time: self.config.start_time,
+                            step: self.grid.step,
+                            k,
+                            start,
+                            value,
+                            slope,
+                        },
+                        k,
+                        slot,
+                        rms,
+                    };
+                    let segment = Segment {
+                        op: &op,
+                        history: &mut self.history,
+                        end: n,
+                        before_start,
+                    };
+                    let diverged = run_segment::<_, DELAY>(segment, &mut hot, before);
+                    (x, k, slot, rms) = (hot.x, hot.k, hot.slot, hot.rms);
+                    if let Some(x_next) = diverged {
+                        break self.check_divergence(self.grid_time(k + 1), &State::from(x_next));
+                    }
+                    op.count(&mut rms, &x, hot.road.displacement());
+                    self.road.release_before(self.grid_time(k));
+                    piece_at_node = Some(piece);
+                    continue;
+                }
+            }
+            // One step: the last one of a piece, or one that a road
+            // breakpoint splits.
+            let next_slot = if slot + 1 == len { 0 } else { slot + 1 };
+            let x_next = match covering {
                 Some(piece) => {
-                    let mut input =
-                        combine2(&self.grid_step.linear, &[piece.value(t), piece.slope(t)]);
+                    let mut input = combine2(&op.linear, &[piece.value(t), piece.slope(t)]);
                     if DELAY {
                         let nodes = if k < m {
                             before_start
@@ -1235,9 +1367,9 @@ impl Simulator {
                             let [x1, v1] = self.history[next_slot];
                             [x0, v0, x1, v1]
                         };
-                        input = add6(input, combine4(&self.grid_step.nodes, &nodes));
+                        input = add6(input, combine4(&op.nodes, &nodes));
                     }
-                    add6(combine6(&self.grid_step.transition, &x), input)
+                    add6(combine6(&op.transition, &x), input)
                 }
                 None => self.integrate_within_step(k, t, State::from(x), to).into(),
             };
@@ -1253,7 +1385,7 @@ impl Simulator {
                 break Err(e);
             }
             self.history[slot] = [x_next[X_T], x_next[V_T]];
-            self.grid_step.count(&mut rms, &x_next, road_next);
+            op.count(&mut rms, &x_next, road_next);
             x = x_next;
             slot = next_slot;
             k += 1;
@@ -1261,6 +1393,29 @@ impl Simulator {
         self.rms = rms;
         self.set_committed_node(first, k, x);
         result
+    }
+
+    /// The largest node index `n` in `[k, last]` such that the nodes
+    /// `k + 1 ..= n` lie strictly inside a road piece that ends at `end`
+    /// (before it and not coinciding with it).
+    fn last_node_inside(&self, k: u64, last: u64, end: f64) -> u64 {
+        let inside = |j: u64| {
+            let t = self.grid_time(j);
+            t < end && !self.coincide(end, t)
+        };
+        let estimate = ((end - self.config.start_time) / self.grid.step).floor();
+        let mut n = if estimate > k as f64 {
+            (estimate as u64).min(last)
+        } else {
+            k
+        };
+        while n > k && !inside(n) {
+            n -= 1;
+        }
+        while n < last && inside(n + 1) {
+            n += 1;
+        }
+        n
     }
 
     /// The road piece used over the whole step `[t, to]` if no breakpoint
@@ -1595,38 +1750,59 @@ mod tests {
         if !std::arch::is_x86_feature_detected!("avx2") {
             return;
         }
+        /// Runs 1000 steps from `sim`'s node with the baseline and the AVX2
+        /// loop; returns the bits of state, RMS sums and history of each.
+        fn both<R: NodeRoad>(sim: &Simulator, road: R) -> Vec<Vec<u64>> {
+            let start = HotState {
+                x: sim.committed_state.into(),
+                road,
+                k: sim.grid_index,
+                slot: ((sim.grid_index + 1) % sim.history.len() as u64) as usize,
+                rms: sim.rms,
+            };
+            let mut results = Vec::new();
+            for wide in [false, true] {
+                let mut history = sim.history.clone();
+                let mut hot = HotState { ..start };
+                let seg = Segment {
+                    op: &sim.grid_step,
+                    history: &mut history,
+                    end: sim.grid_index + 1000,
+                    before_start: [0.0; 4],
+                };
+                if wide {
+                    // SAFETY: AVX2 was detected by the caller.
+                    unsafe { segment_avx2::<_, true, false>(seg, &mut hot) };
+                } else {
+                    segment::<_, true, false>(seg, &mut hot);
+                }
+                let mut v: Vec<u64> = hot.x.iter().map(|v| v.to_bits()).collect();
+                v.extend(hot.rms.sums_of_squares.map(f64::to_bits));
+                v.push(hot.road.displacement().to_bits());
+                v.extend(history.iter().flatten().map(|v| v.to_bits()));
+                results.push(v);
+            }
+            results
+        }
         let mut sim = Simulator::new(SimulationConfig::default()).unwrap();
         sim.advance_to(0.01).unwrap();
-        let start = HotState {
-            x: sim.committed_state.into(),
-            z: sim.harmonic_phase(sim.grid_index),
-            k: sim.grid_index,
-            slot: ((sim.grid_index + 1) % sim.history.len() as u64) as usize,
-            rms: sim.rms,
+        let phase = HarmonicPhase(sim.harmonic_phase(sim.grid_index));
+        let [baseline, wide] = &both(&sim, phase)[..] else {
+            unreachable!()
         };
-        let end = sim.grid_index + 1000;
-        let mut results = Vec::new();
-        for wide in [false, true] {
-            let mut history = sim.history.clone();
-            let mut hot = HotState { ..start };
-            let seg = Segment {
-                op: &sim.grid_step,
-                history: &mut history,
-                end,
-                before_start: [0.0; 4],
-            };
-            if wide {
-                // SAFETY: AVX2 was detected above.
-                unsafe { harmonic_segment_avx2::<true, false>(seg, &mut hot) };
-            } else {
-                harmonic_segment::<true, false>(seg, &mut hot);
-            }
-            let mut v: Vec<u64> = hot.x.iter().map(|v| v.to_bits()).collect();
-            v.extend(hot.rms.sums_of_squares.map(f64::to_bits));
-            v.extend(hot.z.map(f64::to_bits));
-            v.extend(history.iter().flatten().map(|v| v.to_bits()));
-            results.push(v);
-        }
-        assert_eq!(results[0], results[1]);
+        assert_eq!(baseline, wide);
+        // A linear piece (a ramp of the road) from the same state.
+        let ramp = LinearPiece {
+            start_time: 0.0,
+            step: sim.grid.step,
+            k: sim.grid_index,
+            start: 0.005,
+            value: 0.01,
+            slope: -0.3,
+        };
+        let [baseline, wide] = &both(&sim, ramp)[..] else {
+            unreachable!()
+        };
+        assert_eq!(baseline, wide);
     }
 }
