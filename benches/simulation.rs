@@ -5,10 +5,26 @@
 //! The floor ratio: `cargo bench --bench simulation -- 'floor ratio'`.
 //! Both sides run 1000 internal steps per iteration; divide the reported
 //! time by 1000 for the cost of one step.
+//!
+//! Criterion reports means, which move with the machine load. The published
+//! floor-ratio figures are minima, from the min-of-N harness in this file
+//! ([`min_of_n`]): the same loops, each timed over 200 batches of 10 000
+//! steps, minimum ns per step, the whole repeated 3 times. The tdvass loop
+//! uses AVX2 when the CPU has it unless `TDVASS_NO_AVX2` is set, and the
+//! process decides once, so the two instruction sets take two runs:
+//!
+//! ```text
+//! cargo bench --bench simulation -- --min-of-n                   # AVX2 tdvass loop
+//! TDVASS_NO_AVX2=1 cargo bench --bench simulation -- --min-of-n  # baseline (SSE2) tdvass loop
+//! ```
+//!
+//! Each run prints every loop's min and median-of-3 ns per step and the
+//! ratio of the tdvass loop to the fastest floor of its instruction set.
 
-use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use criterion::{Criterion, Throughput, criterion_group};
 use nalgebra::{Matrix6, SMatrix, Vector2, Vector4, Vector6};
 use std::hint::black_box;
+use std::time::Instant;
 use tdvass::model::{PAPER_G2, PAPER_TAU2, Params, Plant, Variant};
 use tdvass::road::{RandomRoad, RoadSpec};
 use tdvass::solver::expm::precise_exp;
@@ -16,6 +32,19 @@ use tdvass::solver::{SimulationConfig, Simulator, simulate};
 
 /// Steps per benchmark iteration of the floor-ratio group.
 const STEPS: u64 = 1000;
+
+/// The tdvass side of the floor ratio: the default TDVASS case (h = 1e-4,
+/// m = 2, harmonic road), advanced `n` internal steps per call by one
+/// `advance_to`, so each call does everything a step does.
+fn tdvass_steps() -> impl FnMut(u64) {
+    let mut sim = Simulator::new(SimulationConfig::default()).unwrap();
+    let h = sim.grid().step;
+    let mut k = 0u64;
+    move |n| {
+        k += n;
+        sim.advance_to(black_box(k as f64 * h)).unwrap();
+    }
+}
 
 /// The unavoidable arithmetic of one internal step of Eq. (23) on the same
 /// data layout as the solver's whole-step loop (column arrays): the 6×6
@@ -149,6 +178,15 @@ impl Floor {
         self.slot = slot;
     }
 
+    /// The operators as nalgebra matrices, for [`Floor::steps_nalgebra`].
+    fn nalgebra_ops(&self) -> (Matrix6<f64>, SMatrix<f64, 6, 4>, SMatrix<f64, 6, 2>) {
+        (
+            Matrix6::from_fn(|i, j| self.transition[j][i]),
+            SMatrix::<f64, 6, 4>::from_fn(|i, j| self.nodes[j][i]),
+            SMatrix::<f64, 6, 2>::from_fn(|i, j| self.harmonic[j][i]),
+        )
+    }
+
     /// The same arithmetic written with nalgebra's fixed-size products.
     #[inline(never)]
     fn steps_nalgebra(
@@ -177,14 +215,9 @@ impl Floor {
 fn floor_ratio(c: &mut Criterion) {
     let mut group = c.benchmark_group("floor ratio");
     group.throughput(Throughput::Elements(STEPS));
-    let mut sim = Simulator::new(SimulationConfig::default()).unwrap();
-    let h = sim.grid().step;
-    let mut k = 0u64;
+    let mut tdvass = tdvass_steps();
     group.bench_function("tdvass: 1000 internal steps in one advance_to", |b| {
-        b.iter(|| {
-            k += STEPS;
-            sim.advance_to(black_box(k as f64 * h)).unwrap();
-        })
+        b.iter(|| tdvass(STEPS))
     });
     let mut floor = floor_data();
     group.bench_function("floor: 1000 bare steps, sequential sums", |b| {
@@ -206,11 +239,7 @@ fn floor_ratio(c: &mut Criterion) {
         black_box(floor.x);
     }
     let mut floor = floor_data();
-    let ops = (
-        Matrix6::from_fn(|i, j| floor.transition[j][i]),
-        SMatrix::<f64, 6, 4>::from_fn(|i, j| floor.nodes[j][i]),
-        SMatrix::<f64, 6, 2>::from_fn(|i, j| floor.harmonic[j][i]),
-    );
+    let ops = floor.nalgebra_ops();
     group.bench_function("floor: 1000 bare steps, nalgebra products", |b| {
         b.iter(|| floor.steps_nalgebra(black_box(STEPS), &ops))
     });
@@ -348,4 +377,192 @@ criterion_group!(
     communication_steps,
     scaling
 );
-criterion_main!(benches);
+
+/// Instruction set a timed loop runs with.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Isa {
+    /// The x86-64 baseline (SSE2): what the crate is compiled for.
+    Baseline,
+    /// Code compiled with `#[target_feature(enable = "avx2")]`.
+    Avx2,
+}
+
+impl Isa {
+    fn label(self) -> &'static str {
+        match self {
+            Isa::Baseline => "SSE2",
+            Isa::Avx2 => "AVX2",
+        }
+    }
+}
+
+/// Batches timed per loop and repetition in the min-of-N harness.
+const BATCHES: usize = 200;
+/// Internal steps per timed batch.
+const BATCH_STEPS: u64 = 10_000;
+/// Untimed batches run before each loop's timed batches.
+const WARM_UP_BATCHES: usize = 20;
+/// Repetitions of the whole measurement.
+const REPETITIONS: usize = 3;
+
+/// One loop of the min-of-N harness: `run(n)` advances it `n` steps.
+struct TimedLoop {
+    name: &'static str,
+    isa: Isa,
+    run: Box<dyn FnMut(u64)>,
+}
+
+/// A floor loop as a [`TimedLoop`] body: `n` steps of `step`, with the
+/// step count and the final state passed through `black_box`.
+fn floor_loop(mut step: impl FnMut(&mut Floor, u64) + 'static) -> Box<dyn FnMut(u64)> {
+    let mut floor = floor_data();
+    Box::new(move |n| {
+        step(&mut floor, black_box(n));
+        black_box(floor.x);
+    })
+}
+
+/// Which loop the solver runs in this process: the rule of
+/// `wide_vectors()` in src/solver/mod.rs (AVX2 when the CPU has it and
+/// `TDVASS_NO_AVX2` is not set), which the solver does not export.
+fn tdvass_isa() -> Isa {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") && std::env::var_os("TDVASS_NO_AVX2").is_none() {
+        return Isa::Avx2;
+    }
+    Isa::Baseline
+}
+
+/// Minimum wall time of one step over [`BATCHES`] batches of
+/// [`BATCH_STEPS`] steps, in ns, after [`WARM_UP_BATCHES`] untimed batches.
+fn min_ns_per_step(run: &mut dyn FnMut(u64)) -> f64 {
+    for _ in 0..WARM_UP_BATCHES {
+        run(BATCH_STEPS);
+    }
+    (0..BATCHES)
+        .map(|_| {
+            let start = Instant::now();
+            run(BATCH_STEPS);
+            start.elapsed().as_nanos() as f64 / BATCH_STEPS as f64
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// The min-of-N measurement behind the published floor ratio: the loops of
+/// the 'floor ratio' group (tdvass and each floor; the AVX2 floor only if
+/// the CPU has AVX2), each timed by [`min_ns_per_step`], the whole repeated
+/// [`REPETITIONS`] times. Prints, per loop, the minimum of the repetitions'
+/// minima and their median, then the ratio of the tdvass loop to the
+/// fastest floor of the instruction set the tdvass loop used.
+fn min_of_n() {
+    let tdvass_isa = tdvass_isa();
+    let mut loops = vec![
+        TimedLoop {
+            name: "tdvass: advance_to",
+            isa: tdvass_isa,
+            run: Box::new(tdvass_steps()),
+        },
+        TimedLoop {
+            name: "floor: sequential sums",
+            isa: Isa::Baseline,
+            run: floor_loop(Floor::steps_sequential),
+        },
+        TimedLoop {
+            name: "floor: pairwise sums",
+            isa: Isa::Baseline,
+            run: floor_loop(Floor::steps_pairwise),
+        },
+        TimedLoop {
+            name: "floor: nalgebra products",
+            isa: Isa::Baseline,
+            run: {
+                let ops = floor_data().nalgebra_ops();
+                floor_loop(move |floor, n| floor.steps_nalgebra(n, &ops))
+            },
+        },
+    ];
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        loops.push(TimedLoop {
+            name: "floor: pairwise sums, AVX2",
+            isa: Isa::Avx2,
+            // SAFETY: the CPU supports AVX2.
+            run: floor_loop(|floor, n| unsafe { floor.steps_pairwise_avx2(n) }),
+        });
+    }
+
+    // minima[loop][repetition], the loops interleaved within a repetition.
+    let mut minima = vec![Vec::new(); loops.len()];
+    for _ in 0..REPETITIONS {
+        for (timed, mins) in loops.iter_mut().zip(&mut minima) {
+            mins.push(min_ns_per_step(&mut timed.run));
+        }
+    }
+    // (min, median) of each loop's repetition minima.
+    let stats: Vec<(f64, f64)> = minima
+        .into_iter()
+        .map(|mut mins| {
+            mins.sort_by(f64::total_cmp);
+            (mins[0], mins[mins.len() / 2])
+        })
+        .collect();
+
+    println!(
+        "min of {REPETITIONS} x {BATCHES} batches of {BATCH_STEPS} steps \
+         ({WARM_UP_BATCHES} warm-up batches), ns per internal step"
+    );
+    println!(
+        "tdvass loop instruction set: {} (TDVASS_NO_AVX2 {})",
+        tdvass_isa.label(),
+        if std::env::var_os("TDVASS_NO_AVX2").is_some() {
+            "set"
+        } else {
+            "unset"
+        }
+    );
+    println!();
+    println!(
+        "{:<28} {:>4} {:>9} {:>12}",
+        "loop", "isa", "min", "median of 3"
+    );
+    for (timed, (min, median)) in loops.iter().zip(&stats) {
+        println!(
+            "{:<28} {:>4} {min:>9.2} {median:>12.2}",
+            timed.name,
+            timed.isa.label()
+        );
+    }
+    println!();
+    // loops[0] is the tdvass loop, the others are floors. Fastest floor of
+    // the tdvass loop's instruction set, by each statistic:
+    let (tdvass_min, tdvass_median) = stats[0];
+    let fastest = |stat: fn(&(f64, f64)) -> f64| {
+        loops
+            .iter()
+            .zip(&stats)
+            .skip(1)
+            .filter(|(timed, _)| timed.isa == tdvass_isa)
+            .map(|(timed, s)| (timed.name, stat(s)))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .expect("a floor for every instruction set")
+    };
+    let (min_floor, min_ns) = fastest(|s| s.0);
+    let (median_floor, median_ns) = fastest(|s| s.1);
+    println!(
+        "ratio tdvass / fastest {} floor: {:.2} (min; {min_floor}), {:.2} (median of 3; {median_floor})",
+        tdvass_isa.label(),
+        tdvass_min / min_ns,
+        tdvass_median / median_ns
+    );
+}
+
+/// `criterion_main!(benches)` plus the min-of-N mode: with `--min-of-n`
+/// among the arguments, runs [`min_of_n`] instead of criterion.
+fn main() {
+    if std::env::args().any(|arg| arg == "--min-of-n") {
+        min_of_n();
+        return;
+    }
+    benches();
+    Criterion::default().configure_from_args().final_summary();
+}
