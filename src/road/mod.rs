@@ -349,6 +349,11 @@ impl RoadPiece {
     }
 }
 
+/// Largest index of a random road node (2^53, where node indices stop
+/// being exact in f64). The road holds the value of this node after its
+/// time, so a piece lookup never needs node `n + 1` beyond it.
+const MAX_NODE: u64 = 1 << 53;
+
 /// Random road node generator: node `n` is at `origin + n · interval`.
 #[derive(Debug, Clone)]
 struct NodeSequence {
@@ -392,21 +397,31 @@ impl NodeSequence {
         self.nodes[(n - self.first.min(n)) as usize]
     }
 
+    /// The node whose interval holds `t`: the largest `n <= MAX_NODE` with
+    /// `node_time(n) <= t` (0 before the origin or for NaN). The floor of
+    /// `(t − origin) / interval` is corrected against rounding by a bounded
+    /// search, also where many nodes share one floating-point time (an
+    /// interval below the spacing of floats at t).
+    fn index_at(&self, t: f64) -> u64 {
+        // `as` saturates and maps NaN to 0; the search clamps to MAX_NODE.
+        let estimate = ((t - self.origin) / self.interval).floor() as u64;
+        crate::monotone::last_index_where(0, MAX_NODE, estimate, |n| self.node_time(n) <= t)
+    }
+
+    /// The linear piece whose `[start, end)` holds `t` (the first piece
+    /// before the origin; from node [`MAX_NODE`] on, its value held).
     fn piece(&mut self, t: f64) -> RoadPiece {
-        let offset = ((t - self.origin) / self.interval).floor().max(0.0);
-        let mut n = offset as u64;
-        // Correct the floor against rounding at a node: n is the node with
-        // node_time(n) <= t < node_time(n + 1) (n = 0 before the origin), so
-        // the piece is exactly the one whose [start, end) holds t.
-        while self.node_time(n + 1) <= t {
-            n += 1;
+        let n = self.index_at(t).max(self.first);
+        let (x0, start) = (self.node(n), self.node_time(n));
+        if n >= MAX_NODE {
+            return RoadPiece::Linear {
+                start,
+                end: f64::INFINITY,
+                value: x0,
+                slope: 0.0,
+            };
         }
-        while n > 0 && self.node_time(n) > t {
-            n -= 1;
-        }
-        let n = n.max(self.first);
-        let (x0, x1) = (self.node(n), self.node(n + 1));
-        let (start, end) = (self.node_time(n), self.node_time(n + 1));
+        let (x1, end) = (self.node(n + 1), self.node_time(n + 1));
         RoadPiece::Linear {
             start,
             end,
@@ -723,6 +738,69 @@ mod tests {
             let t = 2.0 + i as f64 * 0.037;
             assert_eq!(road.value(t), restored.value(t));
         }
+    }
+
+    /// Asserts that `piece` is finite and its `[start, end)` holds `t`.
+    fn holds(piece: RoadPiece, t: f64) {
+        let RoadPiece::Linear {
+            start,
+            end,
+            value,
+            slope,
+        } = piece
+        else {
+            panic!("{piece:?}")
+        };
+        assert!(start <= t && t < end, "{t} not in {piece:?}");
+        assert!(value.is_finite() && slope.is_finite(), "{piece:?}");
+    }
+
+    #[test]
+    fn piece_lookup_is_bounded_at_huge_times() {
+        // Node indices beyond u64::MAX (the estimate saturates) and beyond
+        // MAX_NODE: the road holds the value of node MAX_NODE. The nodes
+        // before it are skipped as in a restored road.
+        let mut nodes = NodeSequence::new(0.0, 1e-3, 0.9, 0.1, 1);
+        nodes.first = MAX_NODE - 1;
+        nodes.nodes = VecDeque::from([0.1, 0.2]);
+        for t in [1e17, 1e30, f64::MAX, f64::INFINITY] {
+            let piece = nodes.piece(t);
+            assert_eq!(piece.slope(t), 0.0, "{t}");
+            assert_eq!(piece.value(nodes.node_time(MAX_NODE)), 0.2, "{t}");
+            assert_eq!(piece.end(), f64::INFINITY);
+            assert_eq!(nodes.index_at(t), MAX_NODE);
+        }
+        holds(nodes.piece(1e17), 1e17);
+        holds(nodes.piece(1e13), 1e13);
+        assert_eq!(nodes.index_at(f64::NAN), 0);
+        assert_eq!(nodes.index_at(-1e300), 0);
+    }
+
+    #[test]
+    fn piece_lookup_is_bounded_where_nodes_share_one_time() {
+        // From 1e15 s on, floats are 0.125 s apart: about 6e10 nodes
+        // 1e-12 s apart have the time 1e15 (node_time(n) == node_time(n + 1)),
+        // which a scan one node at a time would walk through.
+        let mut nodes = NodeSequence::new(1e15, 1e-12, 0.9, 0.1, 1);
+        let t = 1e15;
+        let n = nodes.index_at(t);
+        assert!(n > 50_000_000_000 && n < MAX_NODE, "{n}");
+        assert!(nodes.node_time(n) <= t && nodes.node_time(n + 1) > t);
+        assert_eq!(nodes.node_time(n - 1), nodes.node_time(n));
+        for t in [t + 0.125, t + 0.25, t + 1e3] {
+            let m = nodes.index_at(t);
+            assert!(nodes.node_time(m) <= t && nodes.node_time(m + 1) > t, "{t}");
+        }
+        // The piece holding t, from a road restored at node n; from a road
+        // restored after it, the first piece kept.
+        nodes.first = n;
+        nodes.nodes = VecDeque::from([0.1, 0.2]);
+        holds(nodes.piece(t), t);
+        nodes.first = 1 << 40;
+        let RoadPiece::Linear { start, value, .. } = nodes.piece(t) else {
+            unreachable!()
+        };
+        assert_eq!((start, value), (nodes.node_time(1 << 40), 0.1));
     }
 
     #[test]
