@@ -296,3 +296,37 @@ impl Simulator {
         Ok(sim)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn last_node_until_is_bounded_where_node_times_do_not_resolve_steps() {
+        // States no simulator reaches (`Simulator::new` refuses such start
+        // times), built field by field: the search for the last node reached
+        // returns without scanning the nodes that share one floating-point
+        // time, and without overflowing the node index.
+        let mut sim = Simulator::new(SimulationConfig::default()).unwrap();
+        let k = u64::MAX - 10;
+        sim.grid_index = k;
+        sim.committed_time = sim.grid_time(k);
+        sim.current_time = sim.committed_time;
+        for t_end in [sim.committed_time, sim.committed_time * 1.5, f64::MAX] {
+            let j = sim.last_node_until(t_end);
+            assert!(j >= k && j < u64::MAX, "{j}");
+        }
+        let mut sim = Simulator::new(SimulationConfig::default()).unwrap();
+        sim.config.start_time = 1e22;
+        sim.committed_time = 1e22;
+        sim.current_time = 1e22;
+        let reached = |sim: &Simulator, j: u64| {
+            let t = sim.grid_time(j);
+            t <= 1e22 || sim.coincide(t, 1e22)
+        };
+        let j = sim.last_node_until(1e22);
+        // About 1.8e11 nodes coincide with 1e22 s.
+        assert!(j > 1 << 36, "{j}");
+        assert!(reached(&sim, j) && !reached(&sim, j + 1));
+    }
+}
