@@ -25,6 +25,7 @@ pub mod error;
 pub mod fmi2;
 pub mod metrics;
 pub mod model;
+mod monotone;
 pub mod road;
 pub mod solver;
 

@@ -581,3 +581,37 @@ fn bad_configurations_are_typed_errors() {
     ));
     assert!(sim.set_road_input(0.0, 0.0).is_err());
 }
+
+#[test]
+fn start_times_the_internal_step_does_not_resolve_are_refused() {
+    // At |t_0| > 2^42 h, nodes t_0 + k h no longer resolve the step (at
+    // 1e15 s with h = 1e-4 s, t_0 + h == t_0).
+    for start_time in [1e15, -1e15, 4.4e8 * 1.01, 1e300] {
+        let err = Simulator::new(SimulationConfig {
+            start_time,
+            ..SimulationConfig::default()
+        })
+        .unwrap_err();
+        assert!(
+            matches!(err, Error::InvalidTime { name: "start_time", value, .. } if value == start_time),
+            "{err}"
+        );
+        assert!(err.to_string().contains("max_internal_step"), "{err}");
+    }
+    // A larger internal step resolves the same start; a late start within
+    // the limit steps normally.
+    Simulator::new(SimulationConfig {
+        params: Params::with_controller(PAPER_G2, 0.0),
+        start_time: 1e15,
+        max_internal_step: 1e4,
+        ..SimulationConfig::default()
+    })
+    .unwrap();
+    let mut sim = Simulator::new(SimulationConfig {
+        start_time: 4e8,
+        ..SimulationConfig::default()
+    })
+    .unwrap();
+    sim.advance_to(4e8 + 0.01).unwrap();
+    assert!(sim.outputs().state.iter().all(|v| v.is_finite()));
+}

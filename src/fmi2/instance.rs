@@ -10,7 +10,7 @@ use super::variables::{
 };
 use super::{FmiError, LOG_CATEGORIES, Status, TIME_TOLERANCE, limits, snapshot};
 use crate::model::{Params, V_S, Variant};
-use crate::solver::{Outputs, Simulator};
+use crate::solver::{DelayGrid, Outputs, Simulator};
 use std::collections::HashMap;
 use std::path::PathBuf;
 
@@ -339,8 +339,17 @@ impl Instance {
     fn build_simulator(&self) -> Result<Simulator, FmiError> {
         let m = &self.model;
         limits::check_rates(&m.settings)?;
-        let mut sim = Simulator::new(m.settings.to_config(m.start_time)?)?;
-        limits::check_time_resolution("startTime", m.start_time, sim.grid().step)?;
+        let config = m.settings.to_config(m.start_time)?;
+        // Checked before `Simulator::new` (which refuses the same start
+        // times) for the FMU's message, which gives the limit in seconds.
+        let tau = if config.variant.has_control() {
+            config.params.tau
+        } else {
+            0.0
+        };
+        let step = DelayGrid::new(tau, config.max_internal_step)?.step;
+        limits::check_time_resolution("startTime", m.start_time, step)?;
+        let mut sim = Simulator::new(config)?;
         if m.settings.road_is_input() {
             sim.set_road_input(m.settings.x_g, m.input_slope)?;
         }

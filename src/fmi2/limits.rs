@@ -133,8 +133,9 @@ pub fn check_step_work(s: &Settings, grid_step: f64, h: f64) -> Result<(), FmiEr
 }
 
 /// Largest |time| in internal steps (2^42): beyond it, times no longer
-/// resolve the internal step well (and at 2^52 not at all).
-pub const MAX_TIME_IN_STEPS: f64 = 4_398_046_511_104.0;
+/// resolve the internal step well (and at 2^52 not at all). The solver
+/// refuses start times beyond it too.
+pub const MAX_TIME_IN_STEPS: f64 = crate::solver::Simulator::MAX_START_TIME_IN_STEPS;
 
 /// Refuses a time `t` (s) too large for the internal step `grid_step`.
 pub fn check_time_resolution(what: &str, t: f64, grid_step: f64) -> Result<(), FmiError> {

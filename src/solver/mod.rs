@@ -753,7 +753,16 @@ pub struct Simulator {
 }
 
 impl Simulator {
-    /// Validates the configuration and places the system at its initial state.
+    /// Largest |start time| in internal steps (2^42). Node times
+    /// `t_0 + k h` then resolve every step to 2^-10 h near the start; from
+    /// 2^53 steps on, `t_0 + h` can round to `t_0` and a step would no
+    /// longer advance time.
+    pub const MAX_START_TIME_IN_STEPS: f64 = 4_398_046_511_104.0;
+
+    /// Validates the configuration and places the system at its initial
+    /// state. Besides each value, it checks that the internal step `h`
+    /// resolves times near the start: `|start_time| <= 2^42 h`
+    /// ([`Self::MAX_START_TIME_IN_STEPS`]).
     pub fn new(config: SimulationConfig) -> Result<Simulator> {
         let plant = Plant::new(config.params, config.variant)?;
         if !config.start_time.is_finite() {
@@ -792,6 +801,13 @@ impl Simulator {
             0.0
         };
         let grid = DelayGrid::new(tau, config.max_internal_step)?;
+        if config.start_time.abs() > grid.step * Self::MAX_START_TIME_IN_STEPS {
+            return Err(Error::InvalidTime {
+                name: "start_time",
+                value: config.start_time,
+                reason: "|start_time| must be at most 2^42 internal steps (max_internal_step, or less to divide tau) so that node times resolve the step",
+            });
+        }
         let road = Road::new(&config.road, config.start_time)?;
         let mut initial = config.initial_state;
         if config.variant == Variant::Cs {
@@ -1133,26 +1149,20 @@ impl Simulator {
     }
 
     /// The largest grid index `j >= grid_index` whose node lies before
-    /// `t_end` or coincides with it.
+    /// `t_end` or coincides with it (at most `u64::MAX - 1`, so `j + 1`
+    /// exists). Node times never decrease with the index, so `j` is found
+    /// from the estimate `(t_end − t_0) / h` by
+    /// [`crate::monotone::last_index_where`] in a bounded number of
+    /// evaluations, even where many indices share one floating-point time.
     fn last_node_until(&self, t_end: f64) -> u64 {
         let reached = |j: u64| {
             let t = self.grid_time(j);
             t < t_end || self.coincide(t, t_end)
         };
         let k = self.grid_index;
-        let estimate = ((t_end - self.config.start_time) / self.grid.step).floor();
-        let mut j = if estimate > k as f64 {
-            estimate as u64
-        } else {
-            k
-        };
-        while j > k && !reached(j) {
-            j -= 1;
-        }
-        while reached(j + 1) {
-            j += 1;
-        }
-        j
+        // `as` saturates (and maps NaN to 0); the search clamps the guess.
+        let estimate = ((t_end - self.config.start_time) / self.grid.step).floor() as u64;
+        crate::monotone::last_index_where(k, u64::MAX - 1, estimate, reached)
     }
 
     /// `A [sin ω t_k, cos ω t_k]` of the harmonic road, evaluated directly.

@@ -236,6 +236,22 @@ impl Simulator {
 
     /// Rebuilds a simulator from [`Simulator::to_bytes`]; the result continues
     /// bit-identically.
+    ///
+    /// Besides the layout, the configuration (as [`Simulator::new`]) and
+    /// finite times and states, it checks what bounds the work of the next
+    /// [`Simulator::advance_to`] by the length of the interval it is asked
+    /// to cover, with the tolerance at which the solver takes two times as
+    /// the same (so that every state the simulator saves is accepted):
+    /// - `grid_index` k is below `u64::MAX` and step k has a positive
+    ///   length: `t_k < t_{k+1}`, with `t_k = t_0 + k h`;
+    /// - `committed_time` lies in step k: `t_k <= committed_time < t_{k+1}`,
+    ///   or it coincides with `t_k` (after an external road input changes,
+    ///   it may lie strictly inside the step);
+    /// - `current_time` is reachable from `committed_time` inside step k:
+    ///   `committed_time <= current_time <= t_{k+1}`, each bound up to the
+    ///   tolerance;
+    /// - the road generator is consistent with `committed_time` (see
+    ///   `Road::restore_dynamic_state`, with the horizon `t_{k+2}`).
     pub fn from_bytes(bytes: &[u8]) -> Result<Simulator> {
         let mut r = ByteReader::new(bytes);
         let config = read_config(&mut r)?;
@@ -275,24 +291,317 @@ impl Simulator {
         if r.u64()? == 1 {
             road.input = Some((r.f64()?, r.f64()?, r.f64()?));
         }
-        sim.road.restore_dynamic_state(&road)?;
         if !r.is_empty() {
             return Err(Error::InvalidState("trailing bytes".into()));
         }
-        let times = [sim.committed_time, sim.current_time];
         let values_finite = sim
             .committed_state
             .iter()
             .chain(sim.current_state.iter())
             .all(|v| v.is_finite());
-        if !values_finite
-            || times.iter().any(|t| !t.is_finite())
-            || sim.current_time < sim.committed_time
-        {
-            return Err(Error::InvalidState(
-                "non-finite or inconsistent time or state".into(),
-            ));
+        if !values_finite {
+            return Err(Error::InvalidState("non-finite state".into()));
         }
+        sim.check_times()?;
+        let horizon = sim.grid_time(sim.grid_index.saturating_add(2));
+        sim.road
+            .restore_dynamic_state(&road, sim.committed_time, horizon)?;
         Ok(sim)
+    }
+
+    /// The time checks of [`Simulator::from_bytes`] on `grid_index`,
+    /// `committed_time` and `current_time`.
+    fn check_times(&self) -> Result<()> {
+        let (k, committed, current) = (self.grid_index, self.committed_time, self.current_time);
+        for (name, t) in [("committed_time", committed), ("current_time", current)] {
+            if !t.is_finite() {
+                return Err(Error::InvalidState(format!("{name} {t} s is not finite")));
+            }
+        }
+        let node = self.grid_time(k);
+        let next = self.grid_time(k.saturating_add(1));
+        if k == u64::MAX || node >= next {
+            return Err(Error::InvalidState(format!(
+                "grid_index {k}: internal step {k} starts at {node} s and has no positive length"
+            )));
+        }
+        if !((committed >= node || self.coincide(committed, node)) && committed < next) {
+            return Err(Error::InvalidState(format!(
+                "committed_time {committed} s does not lie in internal step grid_index = {k}, \
+                 [{node} s, {next} s)"
+            )));
+        }
+        if !((current >= committed || self.coincide(current, committed))
+            && (current <= next || self.coincide(current, next)))
+        {
+            return Err(Error::InvalidState(format!(
+                "current_time {current} s does not lie between committed_time {committed} s \
+                 and the end of internal step grid_index = {k} at {next} s"
+            )));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::road::RandomRoad;
+
+    /// Offset of `grid_index` in [`Simulator::to_bytes`]: right after the
+    /// configuration. `committed_time` follows it, then the committed state
+    /// (6 values), then `current_time`.
+    fn grid_index_at(sim: &Simulator) -> usize {
+        let mut w = ByteWriter::default();
+        write_config(&mut w, &sim.config);
+        w.bytes.len()
+    }
+
+    fn committed_time_at(sim: &Simulator) -> usize {
+        grid_index_at(sim) + 8
+    }
+
+    fn current_time_at(sim: &Simulator) -> usize {
+        grid_index_at(sim) + 16 + 6 * 8
+    }
+
+    fn put(bytes: &mut [u8], at: usize, bits: u64) {
+        bytes[at..at + 8].copy_from_slice(&bits.to_le_bytes());
+    }
+
+    /// Asserts that `bytes` are refused with [`Error::InvalidState`] whose
+    /// message names every one of `words`.
+    fn refused(bytes: &[u8], words: &[&str]) {
+        match Simulator::from_bytes(bytes) {
+            Err(Error::InvalidState(message)) => {
+                for word in words {
+                    assert!(message.contains(word), "`{word}` not in: {message}");
+                }
+            }
+            Err(other) => panic!("expected an invalid state naming {words:?}, got {other}"),
+            Ok(_) => panic!("accepted a state that should name {words:?}"),
+        }
+    }
+
+    /// A simulator at 0.0623 s on the harmonic road: grid node 623.
+    fn running() -> Simulator {
+        let mut sim = Simulator::new(SimulationConfig::default()).unwrap();
+        sim.advance_to(0.0623).unwrap();
+        assert_eq!((sim.grid_index, sim.committed_time), (623, 0.0623));
+        sim
+    }
+
+    #[test]
+    fn grid_index_inconsistent_with_the_committed_time_is_refused() {
+        let sim = running();
+        let bytes = sim.to_bytes();
+        Simulator::from_bytes(&bytes).unwrap();
+        let k = sim.grid_index;
+        let at = grid_index_at(&sim);
+        for forged in [
+            0,
+            k - 1,
+            k + 1,
+            k + 1_000_000,
+            1 << 60,
+            u64::MAX - 1,
+            u64::MAX,
+        ] {
+            let mut bytes = bytes.clone();
+            put(&mut bytes, at, forged);
+            refused(&bytes, &["grid_index", &forged.to_string()]);
+        }
+    }
+
+    #[test]
+    fn times_moved_away_from_the_grid_index_are_refused() {
+        // The times moved to 1e6 s with the grid index left at node 623:
+        // accepting it would make the next step integrate ~1e10 steps, from
+        // node 623 to 1e6 s.
+        let sim = running();
+        let bytes = sim.to_bytes();
+        let mut forged = bytes.clone();
+        put(&mut forged, committed_time_at(&sim), 1e6f64.to_bits());
+        put(&mut forged, current_time_at(&sim), 1e6f64.to_bits());
+        refused(&forged, &["committed_time", "1000000", "grid_index"]);
+
+        let (h, k) = (sim.grid.step, sim.grid_index);
+        let next = sim.grid_time(k + 1);
+        for (time, words) in [
+            (
+                sim.committed_time - 0.5 * h,
+                ["current_time", "committed_time"],
+            ),
+            (next + 0.5 * h, ["current_time", "grid_index"]),
+            (sim.grid_time(k + 2), ["current_time", "grid_index"]),
+            (f64::NAN, ["current_time", "NaN"]),
+        ] {
+            let mut forged = bytes.clone();
+            put(&mut forged, current_time_at(&sim), time.to_bits());
+            refused(&forged, &words);
+        }
+        // The committed time one step early, or on the next node, with both
+        // times still ordered.
+        for time in [sim.grid_time(k - 1), next] {
+            let mut forged = bytes.clone();
+            put(&mut forged, committed_time_at(&sim), time.to_bits());
+            put(&mut forged, current_time_at(&sim), time.to_bits());
+            refused(&forged, &["committed_time", "grid_index"]);
+        }
+    }
+
+    #[test]
+    fn every_state_the_simulator_saves_is_accepted() {
+        // On a node, inside a step, a hair before and after a node (within
+        // the solver's tolerance, where the current time may lie just before
+        // the committed node), and after an external input changes inside a
+        // step or just before a node.
+        for road in [
+            RoadSpec::paper_harmonic(),
+            RoadSpec::Iso8608(RandomRoad::default()),
+            RoadSpec::PaperCompatible {
+                road: RandomRoad::default(),
+                sample_interval: 0.1,
+            },
+            RoadSpec::Input,
+        ] {
+            let mut sim = Simulator::new(SimulationConfig {
+                road: road.clone(),
+                ..SimulationConfig::default()
+            })
+            .unwrap();
+            let h = sim.grid.step;
+            let node = |sim: &Simulator, k: u64| sim.grid_time(k);
+            let stops = [
+                node(&sim, 100),
+                node(&sim, 250) + 0.3 * h,
+                node(&sim, 400) - 0.4e-9 * h,
+                node(&sim, 500) + 0.4e-9 * h,
+                node(&sim, 5000) + 0.7 * h,
+                node(&sim, 9000) - 0.4e-9 * h,
+            ];
+            for t in stops {
+                sim.advance_to(t).unwrap();
+                if sim.road.is_input() {
+                    sim.set_road_input(0.01 * t, 0.1).unwrap();
+                }
+                let bytes = sim.to_bytes();
+                let mut restored = Simulator::from_bytes(&bytes)
+                    .unwrap_or_else(|e| panic!("{road:?} at {t}: {e}"));
+                assert_eq!(restored.to_bytes(), bytes);
+                let mut ahead = sim.clone();
+                ahead.advance_to(t + 0.01).unwrap();
+                restored.advance_to(t + 0.01).unwrap();
+                assert_eq!(restored.to_bytes(), ahead.to_bytes(), "{road:?} at {t}");
+            }
+        }
+    }
+
+    /// The bytes of `sim` with its random road state replaced.
+    fn with_road(sim: &Simulator, first_node: u64, nodes: &[f64]) -> Vec<u8> {
+        let bytes = sim.to_bytes();
+        let saved = sim.road.dynamic_state();
+        // first_node, the node count, the nodes, the input tag.
+        let first_at = bytes.len() - 8 * (3 + saved.nodes.len());
+        let mut w = ByteWriter {
+            bytes: bytes[..first_at].to_vec(),
+        };
+        w.u64(first_node);
+        w.f64s(nodes);
+        w.u64(0);
+        w.bytes
+    }
+
+    #[test]
+    fn road_nodes_inconsistent_with_the_committed_time_are_refused() {
+        for road in [
+            RoadSpec::Iso8608(RandomRoad::default()),
+            RoadSpec::PaperCompatible {
+                road: RandomRoad::default(),
+                sample_interval: 0.01,
+            },
+        ] {
+            let mut sim = Simulator::new(SimulationConfig {
+                road,
+                ..SimulationConfig::default()
+            })
+            .unwrap();
+            sim.advance_to(0.5).unwrap();
+            let saved = sim.road.dynamic_state();
+            let (first, nodes) = (saved.first_node, saved.nodes);
+            assert!(first > 0);
+            assert_eq!(with_road(&sim, first, &nodes), sim.to_bytes());
+            Simulator::from_bytes(&with_road(&sim, first, &nodes)).unwrap();
+            // The node holding the committed time released.
+            refused(&with_road(&sim, first + 1, &nodes), &["first_node"]);
+            // From node 0, without the nodes up to the committed time: the
+            // next step would generate them all again.
+            refused(&with_road(&sim, 0, &nodes), &["first_node 0"]);
+            refused(&with_road(&sim, 0, &[0.0]), &["first_node 0", "1 nodes"]);
+            // Far too many nodes, and node indices that would overflow.
+            let mut many = nodes.clone();
+            many.resize(nodes.len() + 10_000, 0.0);
+            refused(
+                &with_road(&sim, first, &many),
+                &["first_node", "extends past"],
+            );
+            refused(&with_road(&sim, u64::MAX - 1, &nodes), &["first_node"]);
+            refused(&with_road(&sim, first, &[]), &["without nodes"]);
+        }
+    }
+
+    #[test]
+    fn road_input_after_the_committed_time_is_refused() {
+        let mut sim = Simulator::new(SimulationConfig {
+            road: RoadSpec::Input,
+            ..SimulationConfig::default()
+        })
+        .unwrap();
+        sim.advance_to(0.05).unwrap();
+        sim.set_road_input(0.01, 0.2).unwrap();
+        sim.advance_to(0.0712).unwrap();
+        let bytes = sim.to_bytes();
+        Simulator::from_bytes(&bytes).unwrap();
+        // The input's start time, value and slope are the last 24 bytes.
+        let start_at = bytes.len() - 24;
+        for (at, value) in [
+            (start_at, 0.08),
+            (start_at, f64::NAN),
+            (start_at + 8, f64::INFINITY),
+            (start_at + 16, f64::NAN),
+        ] {
+            let mut forged = bytes.clone();
+            put(&mut forged, at, value.to_bits());
+            refused(&forged, &["road input", "committed_time"]);
+        }
+    }
+
+    #[test]
+    fn last_node_until_is_bounded_where_node_times_do_not_resolve_steps() {
+        // States no simulator reaches (`Simulator::new` refuses such start
+        // times), built field by field: the search for the last node reached
+        // returns without scanning the nodes that share one floating-point
+        // time, and without overflowing the node index.
+        let mut sim = Simulator::new(SimulationConfig::default()).unwrap();
+        let k = u64::MAX - 10;
+        sim.grid_index = k;
+        sim.committed_time = sim.grid_time(k);
+        sim.current_time = sim.committed_time;
+        for t_end in [sim.committed_time, sim.committed_time * 1.5, f64::MAX] {
+            let j = sim.last_node_until(t_end);
+            assert!(j >= k && j < u64::MAX, "{j}");
+        }
+        let mut sim = Simulator::new(SimulationConfig::default()).unwrap();
+        sim.config.start_time = 1e22;
+        sim.committed_time = 1e22;
+        sim.current_time = 1e22;
+        let reached = |sim: &Simulator, j: u64| {
+            let t = sim.grid_time(j);
+            t <= 1e22 || sim.coincide(t, 1e22)
+        };
+        let j = sim.last_node_until(1e22);
+        // About 1.8e11 nodes coincide with 1e22 s.
+        assert!(j > 1 << 36, "{j}");
+        assert!(reached(&sim, j) && !reached(&sim, j + 1));
     }
 }

@@ -173,7 +173,7 @@ def test_no_call_hangs(lib, tmp_path, case):
 
 
 FORGED_GRID_INDEX = """
-import struct, sys
+import json, struct, sys
 sys.path.insert(0, {here!r})
 import fmi2
 lib = fmi2.load()
@@ -181,21 +181,23 @@ a = fmi2.Instance(lib)
 a.initialize(stop=None)
 assert a.step(0.0623) == fmi2.OK
 status, state = a.get_state()
-data = a.serialize(state).replace(struct.pack("<d", 0.0623), struct.pack("<d", 1e6))
+data = a.serialize(state)
+assert data.count(struct.pack("<d", 0.0623)) >= 2  # committed and current time (node 623)
+data = data.replace(struct.pack("<d", 0.0623), struct.pack("<d", 1e6))
 b = fmi2.Instance(lib)
 status, moved = b.deserialize(fmi2.reseal(data))
+message = b.log.last()[2] if status != fmi2.OK else ""
 if status == fmi2.OK:
     assert lib.fmi2SetFMUstate(b.c, moved) == fmi2.OK
     status = lib.fmi2DoStep(b.c, 1e6, 0.01, 1)
-print(status)
+print(json.dumps(dict(status=status, message=message)))
 """
 
 
-@pytest.mark.xfail(strict=True, reason="open: Simulator::from_bytes (src/solver/persist.rs) does not check that "
-                   "grid_index fits the committed time; a forged state then makes fmi2DoStep integrate ~1e10 steps")
 def test_forged_state_with_inconsistent_grid_index_does_not_hang(lib, tmp_path):
     """A CRC-valid state whose times are moved to 1e6 s but whose grid index
-    stays at node 623: it must be refused, or the step must return."""
+    stays at node 623 (the next step would integrate ~1e10 internal steps):
+    fmi2DeSerializeFMUstate refuses it, naming the field and the value."""
     script = tmp_path / "forged.py"
     script.write_text(FORGED_GRID_INDEX.format(here=str(Path(__file__).resolve().parent)))
     try:
@@ -204,3 +206,8 @@ def test_forged_state_with_inconsistent_grid_index_does_not_hang(lib, tmp_path):
     except subprocess.TimeoutExpired:
         pytest.fail("fmi2DoStep on the forged state did not return within 5 s")
     assert done.returncode == 0, done.stderr
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    assert result["status"] == ERROR, result
+    message = result["message"]
+    assert "invalid serialized FMU state" in message, message
+    assert "committed_time 1000000 s" in message and "grid_index = 623" in message, message
