@@ -1414,18 +1414,12 @@ impl Simulator {
             t < end && !self.coincide(end, t)
         };
         let estimate = ((end - self.config.start_time) / self.grid.step).floor();
-        let mut n = if estimate > k as f64 {
-            (estimate as u64).min(last)
+        let guess = if estimate > k as f64 {
+            estimate as u64
         } else {
             k
         };
-        while n > k && !inside(n) {
-            n -= 1;
-        }
-        while n < last && inside(n + 1) {
-            n += 1;
-        }
-        n
+        crate::monotone::last_index_where(k, last, guess, inside)
     }
 
     /// The road piece used over the whole step `[t, to]` if no breakpoint
