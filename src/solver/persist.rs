@@ -303,10 +303,31 @@ impl Simulator {
             return Err(Error::InvalidState("non-finite state".into()));
         }
         sim.check_times()?;
+        sim.check_rms()?;
         let horizon = sim.grid_time(sim.grid_index.saturating_add(2));
         sim.road
             .restore_dynamic_state(&road, sim.committed_time, horizon)?;
         Ok(sim)
+    }
+
+    /// The RMS accumulators of [`Simulator::from_bytes`]: one sample per
+    /// grid node after the start (`samples = grid_index`), and sums of
+    /// squares that are finite and not negative.
+    fn check_rms(&self) -> Result<()> {
+        let (samples, k) = (self.rms.samples, self.grid_index);
+        if samples != k {
+            return Err(Error::InvalidState(format!(
+                "rms samples {samples}: one per grid node was expected, grid_index = {k}"
+            )));
+        }
+        for (name, sum) in ["BA", "SDD", "TDD"].iter().zip(self.rms.sums_of_squares) {
+            if !(sum.is_finite() && sum >= 0.0) {
+                return Err(Error::InvalidState(format!(
+                    "rms sum of squares of {name} {sum} is not finite and >= 0"
+                )));
+            }
+        }
+        Ok(())
     }
 
     /// The time checks of [`Simulator::from_bytes`] on `grid_index`,
@@ -410,6 +431,30 @@ mod tests {
             let mut bytes = bytes.clone();
             put(&mut bytes, at, forged);
             refused(&bytes, &["grid_index", &forged.to_string()]);
+        }
+    }
+
+    #[test]
+    fn rms_accumulators_inconsistent_with_the_grid_index_are_refused() {
+        let sim = running();
+        let bytes = sim.to_bytes();
+        // After the history ring (its length, then 2 values per node) come
+        // the three sums of squares and the sample count.
+        let sums_at = current_time_at(&sim) + 8 + 6 * 8 + 8 + 16 * sim.history.len();
+        let samples_at = sums_at + 3 * 8;
+        assert_eq!(
+            bytes[samples_at..samples_at + 8],
+            sim.grid_index.to_le_bytes()
+        );
+        for forged in [0, 622, 624, u64::MAX] {
+            let mut bytes = bytes.clone();
+            put(&mut bytes, samples_at, forged);
+            refused(&bytes, &["rms samples", &forged.to_string()]);
+        }
+        for forged in [f64::NAN, f64::INFINITY, -1.0] {
+            let mut bytes = bytes.clone();
+            put(&mut bytes, sums_at + 8, forged.to_bits());
+            refused(&bytes, &["SDD", &forged.to_string()]);
         }
     }
 
