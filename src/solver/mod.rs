@@ -31,8 +31,9 @@
 //! every whole step the call reaches in one loop (see BENCHMARKS.md): the
 //! delayed input acts on the two history nodes through `Γ_u H`
 //! precomputed, the harmonic road phase is rotated from node to node
-//! (exact every `PHASE_ANCHOR` = 1024 nodes), and BA, SDD, TDD go straight into
-//! the RMS sums. Each node's state, phase and sums are functions of its
+//! (exact every `PHASE_ANCHOR` = 1024 nodes), a linear road piece gives
+//! `x_g` from the node index until the piece ends, and BA, SDD, TDD go
+//! straight into the RMS sums. Each node's state, phase and sums are functions of its
 //! index alone, so splits and `to_bytes`/`from_bytes` stay bit-identical
 //! (unit tests at the end of this file).
 
