@@ -1325,65 +1325,56 @@ impl Simulator {
                 },
             ) = covering
             {
-                // The steps whose end nodes lie inside this piece, in the
-                // hot loop (no road lookup, no breakpoint test per step).
-                let mut n = self.last_node_inside(k, last, end);
+                // The steps whose end nodes lie inside this piece, and the
+                // one after them that reaches its end, in the hot loop (no
+                // road lookup, no breakpoint test per step).
+                let mut inside = self.last_node_inside(k, last, end);
                 let before = DELAY && k < m;
                 if before {
-                    n = n.min(m);
+                    inside = inside.min(m);
                 }
-                if n > k {
-                    let mut hot = HotState {
-                        x,
-                        road: LinearPiece {
-                            start_time: self.config.start_time,
-                            step: self.grid.step,
-                            k,
-                            start,
-                            value,
-                            slope,
-                        },
+                let stop = inside.max(k + 1);
+                let mut hot = HotState {
+                    x,
+                    road: LinearPiece {
+                        start_time: self.config.start_time,
+                        step: self.grid.step,
                         k,
-                        slot,
-                        rms,
-                    };
-                    let segment = Segment {
-                        op: &op,
-                        history: &mut self.history,
-                        end: n,
-                        before_start,
-                    };
-                    let diverged = run_segment::<_, DELAY>(segment, &mut hot, before);
-                    (x, k, slot, rms) = (hot.x, hot.k, hot.slot, hot.rms);
-                    if let Some(x_next) = diverged {
-                        break self.check_divergence(self.grid_time(k + 1), &State::from(x_next));
-                    }
-                    op.count(&mut rms, &x, hot.road.displacement());
-                    self.road.release_before(self.grid_time(k));
-                    piece_at_node = Some(piece);
-                    continue;
+                        start,
+                        value,
+                        slope,
+                    },
+                    k,
+                    slot,
+                    rms,
+                };
+                let segment = Segment {
+                    op: &op,
+                    history: &mut self.history,
+                    end: stop,
+                    before_start,
+                };
+                let diverged = run_segment::<_, DELAY>(segment, &mut hot, before);
+                (x, k, slot, rms) = (hot.x, hot.k, hot.slot, hot.rms);
+                if let Some(x_next) = diverged {
+                    break self.check_divergence(self.grid_time(k + 1), &State::from(x_next));
                 }
+                let now = self.grid_time(k);
+                // `road.piece(now)` is this piece exactly when the node lies
+                // inside it.
+                let piece_now = if k == inside {
+                    piece
+                } else {
+                    self.road.piece(now)
+                };
+                op.count(&mut rms, &x, piece_now.value(now));
+                self.road.release_before(self.grid_time(k - 1));
+                piece_at_node = Some(piece_now);
+                continue;
             }
-            // One step: the last one of a piece, or one that a road
-            // breakpoint splits.
+            // A step that a road breakpoint splits.
             let next_slot = if slot + 1 == len { 0 } else { slot + 1 };
-            let x_next = match covering {
-                Some(piece) => {
-                    let mut input = combine2(&op.linear, &[piece.value(t), piece.slope(t)]);
-                    if DELAY {
-                        let nodes = if k < m {
-                            before_start
-                        } else {
-                            let [x0, v0] = self.history[slot];
-                            let [x1, v1] = self.history[next_slot];
-                            [x0, v0, x1, v1]
-                        };
-                        input = add6(input, combine4(&op.nodes, &nodes));
-                    }
-                    add6(combine6(&op.transition, &x), input)
-                }
-                None => self.integrate_within_step(k, t, State::from(x), to).into(),
-            };
+            let x_next: [f64; 6] = self.integrate_within_step(k, t, State::from(x), to).into();
             if (k + 1).is_multiple_of(PHASE_ANCHOR) {
                 self.road.release_before(t);
             }
