@@ -713,7 +713,7 @@ pub struct Outputs {
     pub objective: f64,
 }
 
-/// First time derivatives of the instantaneous outputs.
+/// First time derivatives of the outputs.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct OutputDerivatives {
     /// dX/dt (reported state).
@@ -724,6 +724,11 @@ pub struct OutputDerivatives {
     pub road_displacement: f64,
     /// du/dt.
     pub control_force: f64,
+    /// d/dt of the running RMS values: `(y² − RMS²) / (2 RMS (t − t_0))`
+    /// (0 at the start and where an RMS value is 0).
+    pub rms: RmsValues,
+    /// dJ/dt.
+    pub objective: f64,
 }
 
 /// Summary of a finished run.
@@ -1421,7 +1426,8 @@ impl Simulator {
                 if k != inside && self.coincide(end, now) {
                     // The node is a road breakpoint: x_g has a kink there,
                     // so the RMS run of nodes closes at it.
-                    self.close_run_at_node(k, now, &State::from(x), &mut rms, &piece, &piece_now);
+                    let after = self.piece_from(now);
+                    self.close_run_at_node(k, now, &State::from(x), &mut rms, &piece, &after);
                 }
                 self.road.release_before(self.grid_time(k - 1));
                 piece_at_node = Some(piece_now);
@@ -1598,7 +1604,24 @@ impl Simulator {
         let dx = self.solver_matrix * x + b * delayed + self.plant.e * road;
         let d2x = self.solver_matrix * dx + b * delayed_rate + self.plant.e * road_rate;
         let gain = self.config.params.effective_gain(self.config.variant);
+        let now = Performance::at(&self.plant, &x, road);
+        let rms = self.rms_now();
+        let duration = t - self.config.start_time;
+        let rate = |y: f64, value: f64| {
+            if duration > 0.0 && value > 0.0 {
+                (y * y - value * value) / (2.0 * value * duration)
+            } else {
+                0.0
+            }
+        };
+        let rms_rate = RmsValues {
+            body_acceleration: rate(now.body_acceleration, rms.body_acceleration),
+            suspension_deflection: rate(now.suspension_deflection, rms.suspension_deflection),
+            tire_deflection: rate(now.tire_deflection, rms.tire_deflection),
+        };
         OutputDerivatives {
+            rms: rms_rate,
+            objective: rms_rate.objective(&self.config.weights),
             state: self.plant.reported_state(&dx),
             performance: Performance {
                 body_acceleration: d2x[crate::model::V_S],
