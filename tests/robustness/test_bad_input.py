@@ -249,7 +249,7 @@ def test_status_kinds(initialized):
 # ------------------------------------------------------ value references
 
 
-@pytest.mark.parametrize("vr", [0, 48, 9999, 2**31, 2**32 - 1])
+@pytest.mark.parametrize("vr", [0, 49, 9999, 2**31, 2**32 - 1])
 def test_unknown_value_reference(init_mode, vr):
     status, _ = init_mode.get_real([vr])
     assert status == ERROR
