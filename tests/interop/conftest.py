@@ -53,6 +53,25 @@ def replay(fmu_file):
     return get
 
 
+@pytest.fixture(scope="session")
+def grid_reference(fmu_file, fmpy_reference):
+    """fmpy on its grid (k * h) with the outputs' rates, for a master's
+    times (which feed the road of the input-road experiment):
+    (times, rows, rates). The rows equal fmpy.simulate_fmu's for the
+    built-in roads (checked)."""
+
+    def get(name, master_times):
+        experiment = interop.EXPERIMENTS[name]
+        times, rows, rates = interop.grid_reference(fmu_file, experiment, master_times)
+        if experiment.source is None:
+            fmpy_times, reference = fmpy_reference(name)
+            np.testing.assert_array_equal(times, fmpy_times)
+            np.testing.assert_array_equal(rows, reference)
+        return times, rows, rates
+
+    return get
+
+
 def pytest_terminal_summary(terminalreporter):
     lines = interop.summary_lines()
     if lines:
