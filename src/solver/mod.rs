@@ -473,6 +473,13 @@ impl GridStep {
     }
 }
 
+/// The largest absolute row sum of `m`.
+fn infinity_norm(m: &Matrix6<f64>) -> f64 {
+    m.row_iter()
+        .map(|row| row.iter().map(|v| v.abs()).sum::<f64>())
+        .fold(0.0, f64::max)
+}
+
 /// Whether every state component is within its divergence bound (false
 /// for NaN), with one branch for the whole state.
 #[inline(always)]
@@ -749,6 +756,9 @@ pub struct Simulator {
     /// Plant matrix used by the solver (the plant's A, plus the folded
     /// feedback when the delay is not resolved on the grid).
     solver_matrix: Matrix6<f64>,
+    /// `‖solver_matrix‖_∞` (largest absolute row sum, 1/s): chooses the
+    /// order of the Taylor series near a node.
+    solver_matrix_norm: f64,
     grid: DelayGrid,
     full_step: StepOperator,
     /// `full_step` in the form of the whole-step loop.
@@ -768,6 +778,9 @@ pub struct Simulator {
     rms: RunningRms,
     /// The time integral of `y²` (see [`time_average`]).
     integral: SquareIntegral,
+    /// The outputs at the current time, once computed (cleared by every
+    /// change of the state, the time or a parameter).
+    outputs_cache: Option<Outputs>,
     /// Harmonic road phase `(k, A [sin ω t_k, cos ω t_k])` at the last grid
     /// node reached by the whole-step loop: a cache of a function of k alone
     /// (see [`PHASE_ANCHOR`]), so it is not part of the saved state.
@@ -841,6 +854,7 @@ impl Simulator {
         let start_time = config.start_time;
         let mut sim = Simulator {
             plant,
+            solver_matrix_norm: infinity_norm(&solver_matrix),
             solver_matrix,
             grid,
             full_step,
@@ -855,6 +869,7 @@ impl Simulator {
             history,
             rms: RunningRms::default(),
             integral: SquareIntegral::new(start_time, Default::default()),
+            outputs_cache: None,
             phase: None,
             config,
         };
@@ -1149,6 +1164,7 @@ impl Simulator {
     /// same work and gets the same RMS integrals as one that computes them
     /// exactly; its outputs differ only by the drift times their rates.
     pub fn advance_to(&mut self, t_end: f64) -> Result<()> {
+        self.outputs_cache = None;
         if !t_end.is_finite()
             || (t_end < self.current_time && !self.snaps(t_end, self.current_time))
         {
@@ -1519,6 +1535,7 @@ impl Simulator {
     /// time that snaps to the committed point (a time drift) sets it from
     /// that point instead.
     pub fn set_road_input(&mut self, value: f64, slope: f64) -> Result<()> {
+        self.outputs_cache = None;
         if !self.road.is_input() {
             return Err(Error::InvalidSetting {
                 name: "road",
@@ -1537,6 +1554,7 @@ impl Simulator {
 
     /// Changes the feedback gain g (tunable); the history is kept.
     pub fn set_gain(&mut self, g: f64) -> Result<()> {
+        self.outputs_cache = None;
         let params = Params {
             g,
             ..self.config.params
@@ -1546,6 +1564,7 @@ impl Simulator {
         let (matrix, step, grid_step) = Self::operators(&plant, &self.config, &self.grid)?;
         self.plant = plant;
         self.solver_matrix = matrix;
+        self.solver_matrix_norm = infinity_norm(&matrix);
         self.full_step = step;
         self.grid_step = grid_step;
         self.partial_steps.clear();
@@ -1554,6 +1573,7 @@ impl Simulator {
 
     /// Changes the weights of J (tunable).
     pub fn set_weights(&mut self, weights: Weights) {
+        self.outputs_cache = None;
         self.config.weights = weights;
     }
 
@@ -1577,12 +1597,15 @@ impl Simulator {
 
     /// All outputs at the current time.
     pub fn outputs(&mut self) -> Outputs {
+        if let Some(outputs) = self.outputs_cache {
+            return outputs;
+        }
         let t = self.current_time;
         let x = self.current_state;
         let road = self.road_piece_now().value(t);
         let (delayed, _) = self.delayed_tire_now();
         let rms = self.rms_now();
-        Outputs {
+        let outputs = Outputs {
             time: t,
             state: self.plant.reported_state(&x),
             performance: Performance::at(&self.plant, &x, road),
@@ -1590,7 +1613,9 @@ impl Simulator {
             control_force: self.config.params.effective_gain(self.config.variant) * delayed,
             rms,
             objective: rms.objective(&self.config.weights),
-        }
+        };
+        self.outputs_cache = Some(outputs);
+        outputs
     }
 
     /// Exact first time derivatives of the instantaneous outputs.
@@ -1605,7 +1630,7 @@ impl Simulator {
         let d2x = self.solver_matrix * dx + b * delayed_rate + self.plant.e * road_rate;
         let gain = self.config.params.effective_gain(self.config.variant);
         let now = Performance::at(&self.plant, &x, road);
-        let rms = self.rms_now();
+        let rms = self.outputs().rms;
         let duration = t - self.config.start_time;
         let rate = |y: f64, value: f64| {
             if duration > 0.0 && value > 0.0 {
