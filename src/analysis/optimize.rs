@@ -26,6 +26,13 @@ pub enum Target {
     Controller,
 }
 
+/// Default search range of the feedback gain g for [`Target::Controller`]
+/// (N/m).
+pub const CONTROLLER_GAIN_RANGE: [f64; 2] = [0.0, 20000.0];
+/// Default search range of the feedback delay tau for
+/// [`Target::Controller`] (s).
+pub const CONTROLLER_DELAY_RANGE: [f64; 2] = [0.0, 0.05];
+
 impl Target {
     /// Names of the optimised parameters, in order.
     pub fn parameter_names(self) -> [&'static str; 2] {
@@ -56,8 +63,8 @@ impl Target {
                 }
             }
             Target::Controller => Bounds {
-                lower: vec![0.0, 0.0],
-                upper: vec![20000.0, 0.05],
+                lower: vec![CONTROLLER_GAIN_RANGE[0], CONTROLLER_DELAY_RANGE[0]],
+                upper: vec![CONTROLLER_GAIN_RANGE[1], CONTROLLER_DELAY_RANGE[1]],
             },
         }
     }
