@@ -30,6 +30,11 @@ pub mod status_kind {
     pub const TERMINATED: i32 = 3;
 }
 
+/// Communication steps longer than this (s) with a held, changing `x_g`
+/// get one warning per instance (the default experiment's 1 ms stays
+/// silent).
+pub const HOLD_WARNING_STEP: f64 = 2e-3;
+
 /// Everything that makes up an FMU state (what `fmi2GetFMUstate` copies and
 /// `fmi2SerializeFMUstate` writes).
 #[derive(Debug, Clone)]
@@ -42,6 +47,14 @@ pub struct Model {
     pub input_slope: f64,
     /// `x_g` or its slope changed since they were last applied to the road.
     pub input_pending: bool,
+    /// The slope came from `fmi2SetRealInputDerivatives` (since `x_g` was
+    /// last set); it then takes precedence over `input_extrapolation`.
+    pub input_slope_given: bool,
+    /// `(t, x_g)` of the last value applied at a communication point: the
+    /// earlier of the two values that `input_extrapolation = 1` uses.
+    pub previous_input: Option<(f64, f64)>,
+    /// The hold warning of [`Instance::do_step`] was logged.
+    pub hold_warned: bool,
     /// Start time from `fmi2SetupExperiment` (s).
     pub start_time: f64,
     /// Stop time from `fmi2SetupExperiment`, if defined (s).
@@ -62,6 +75,9 @@ impl Model {
             settings: Settings::start_values(),
             input_slope: 0.0,
             input_pending: false,
+            input_slope_given: false,
+            previous_input: None,
+            hold_warned: false,
             start_time: super::DEFAULT_START_TIME,
             stop_time: None,
             last_successful_time: super::DEFAULT_START_TIME,
@@ -370,6 +386,7 @@ impl Instance {
         let grid = sim.grid();
         self.model.sim = Some(sim);
         self.model.input_pending = false;
+        self.model.previous_input = Some((self.model.start_time, self.model.settings.x_g));
         self.model.machine = MachineState::StepComplete;
         self.model.last_successful_time = self.model.start_time;
         self.model.terminate_requested = false;
@@ -592,6 +609,7 @@ impl Instance {
         match (var.name, self.model.sim.as_mut()) {
             ("x_g", _) => {
                 self.model.input_slope = 0.0;
+                self.model.input_slope_given = false;
                 self.model.input_pending = true;
             }
             ("g", Some(sim)) => sim.set_gain(value)?,
@@ -694,7 +712,12 @@ impl Instance {
             )));
         }
         let settings = self.model.settings;
-        let (slope, pending) = (self.model.input_slope, self.model.input_pending);
+        let pending = self.model.input_pending;
+        let slope = if settings.road_is_input() {
+            self.input_slope_for_step(now, h)?
+        } else {
+            0.0
+        };
         let Some(sim) = self.model.sim.as_mut() else {
             unreachable!("stepComplete has a simulator")
         };
@@ -702,6 +725,7 @@ impl Instance {
         limits::check_time_resolution("the step end", target, sim.grid().step)?;
         if pending && settings.road_is_input() {
             sim.set_road_input(settings.x_g, slope)?;
+            self.model.previous_input = Some((now, settings.x_g));
         }
         self.model.input_pending = false;
         match sim.advance_to(target) {
@@ -734,6 +758,47 @@ impl Instance {
                 Err(FmiError::error(format!("the simulation failed: {e}")))
             }
         }
+    }
+
+    /// The slope of `x_g` over the step that starts at `now` (road = 0):
+    /// the input derivative when the master set one; else, with
+    /// `input_extrapolation = 1` and a new value set, the slope through the
+    /// last two values set at communication points (the first step holds);
+    /// else 0 (held). Logs one warning per instance when a held input with
+    /// a changing value meets communication steps longer than
+    /// [`HOLD_WARNING_STEP`].
+    fn input_slope_for_step(&mut self, now: f64, h: f64) -> Result<f64, FmiError> {
+        let m = &self.model;
+        let x_g = m.settings.x_g;
+        let rate = match m.previous_input {
+            Some((t, value)) if now > t && m.input_pending => (x_g - value) / (now - t),
+            _ => 0.0,
+        };
+        if m.input_slope_given {
+            return Ok(m.input_slope);
+        }
+        if m.settings.input_extrapolation == 1 {
+            if !m.input_pending {
+                return Ok(m.input_slope);
+            }
+            limits::check_value("x_g derivative", rate).map_err(|e| {
+                FmiError::error(format!(
+                    "input_extrapolation = 1: the slope {rate} m/s through x_g = {x_g} m at {now} s and the previous value is refused: {}",
+                    e.message
+                ))
+            })?;
+            self.model.input_slope = rate;
+            return Ok(rate);
+        }
+        if h > HOLD_WARNING_STEP && rate != 0.0 && !m.hold_warned {
+            self.model.hold_warned = true;
+            self.warning(format!(
+                "fmi2DoStep: x_g is held over communication steps of {h} s (no input derivative, input_extrapolation = 0); at its current rate of change {rate:.4e} m/s the held value lags by about {:.3e} m on average ({:.3e} m at the step end). Set input_extrapolation = 1, call fmi2SetRealInputDerivatives, or use steps of at most 1 ms.",
+                0.5 * rate.abs() * h,
+                rate.abs() * h
+            ));
+        }
+        Ok(0.0)
     }
 
     /// `fmi2SetRealInputDerivatives`: order 1 of `x_g` sets the slope used
@@ -776,6 +841,7 @@ impl Instance {
         }
         if let Some(slope) = slope {
             self.model.input_slope = slope;
+            self.model.input_slope_given = true;
             self.model.input_pending = true;
         }
         if ignored.is_empty() {

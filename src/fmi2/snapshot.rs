@@ -3,7 +3,7 @@
 //! ```text
 //! offset  size  content
 //! 0       8     magic "TDVASSFS"
-//! 8       4     format version (u32 LE), currently 1
+//! 8       4     format version (u32 LE), currently 2
 //! 12      4     GUID length n (u32 LE)
 //! 16      n     GUID of the FMU that wrote the state (ASCII)
 //! 16+n    8     payload length (u64 LE)
@@ -13,7 +13,8 @@
 //!
 //! The payload is the FMU-level state ([`Model`]): machine state, every
 //! setting (by value reference, so the layout follows the variable table),
-//! input slope, start and stop time, last successful time, the terminate
+//! input slope and its origin, the previous input value (for
+//! `input_extrapolation`), the hold-warning flag, start and stop time, last successful time, the terminate
 //! flag, then [`Simulator::to_bytes`] (time, solver state, the delay
 //! history, the road generator, the RMS accumulators, the configuration).
 //! All numbers are little-endian; floats are stored as their bit patterns,
@@ -32,8 +33,10 @@ use crate::solver::Simulator;
 
 /// First bytes of every serialized state.
 pub const MAGIC: &[u8; 8] = b"TDVASSFS";
-/// Format version written (and the only one read).
-pub const FORMAT_VERSION: u32 = 1;
+/// Format version written (and the only one read). Version 2 added the
+/// time integral of the RMS outputs and the input extrapolation state;
+/// version 1 states are refused.
+pub const FORMAT_VERSION: u32 = 2;
 /// Longest GUID accepted in a header.
 const MAX_GUID_LEN: usize = 64;
 /// Most internal steps between the start and a restored state (2^52: node
@@ -172,6 +175,12 @@ fn encode_payload(model: &Model) -> Vec<u8> {
     }
     w.f64(model.input_slope);
     w.u8(model.input_pending as u8);
+    w.u8(model.input_slope_given as u8);
+    w.u8(model.previous_input.is_some() as u8);
+    let (previous_time, previous_value) = model.previous_input.unwrap_or((0.0, 0.0));
+    w.f64(previous_time);
+    w.f64(previous_value);
+    w.u8(model.hold_warned as u8);
     w.f64(model.start_time);
     w.u8(model.stop_time.is_some() as u8);
     w.f64(model.stop_time.unwrap_or(0.0));
@@ -254,6 +263,12 @@ fn decode_payload(bytes: &[u8]) -> Result<Model, FmiError> {
     let settings = decode_settings(&mut r)?;
     let input_slope = r.finite("the input slope")?;
     let input_pending = r.flag("input pending")?;
+    let input_slope_given = r.flag("input slope given")?;
+    let previous_defined = r.flag("previous input defined")?;
+    let previous_time = r.finite("the previous input time")?;
+    let previous_value = r.finite("the previous input value")?;
+    let previous_input = previous_defined.then_some((previous_time, previous_value));
+    let hold_warned = r.flag("hold warning logged")?;
     let start_time = r.finite("the start time")?;
     let stop_defined = r.flag("stop time defined")?;
     let stop = r.f64("the stop time")?;
@@ -317,6 +332,9 @@ fn decode_payload(bytes: &[u8]) -> Result<Model, FmiError> {
         settings,
         input_slope,
         input_pending,
+        input_slope_given,
+        previous_input,
+        hold_warned,
         start_time,
         stop_time,
         last_successful_time,
@@ -457,9 +475,11 @@ mod tests {
                 "{cut}: {e}"
             );
         }
-        let mut v2 = bytes.clone();
-        v2[8] = 2;
-        assert!(err(&v2).contains("format version 2"));
+        for version in [1, 3] {
+            let mut other = bytes.clone();
+            other[8] = version;
+            assert!(err(&other).contains(&format!("format version {version}")));
+        }
         assert!(
             deserialize(&bytes, "{00000000-0000-0000-0000-000000000000}")
                 .unwrap_err()

@@ -310,6 +310,9 @@ pub struct Settings {
     pub w_ba: f64,
     pub w_sdd: f64,
     pub w_tdd: f64,
+    /// `road = 0`: 0 holds `x_g` over a communication step, 1 extrapolates
+    /// it linearly from the last two values set.
+    pub input_extrapolation: i32,
     /// `[x_s, v_s, x_h, v_h, x_t, v_t]` at the start time.
     pub initial_state: [f64; 6],
     /// The input `x_g` (m).
@@ -343,6 +346,7 @@ impl Settings {
             w_ba: 0.0,
             w_sdd: 0.0,
             w_tdd: 0.0,
+            input_extrapolation: 0,
             initial_state: [0.0; 6],
             x_g: 0.0,
         };
@@ -499,8 +503,8 @@ impl OutputId {
         }
     }
 
-    /// The first time derivative. The running RMS values and J change only
-    /// at internal grid nodes (they are piecewise constant in time): 0.
+    /// The exact first time derivative (the running RMS values and J are
+    /// time averages, differentiable after the start).
     pub fn derivative(self, d: &OutputDerivatives) -> f64 {
         match self {
             OutputId::State(i) => d.state[i],
@@ -509,10 +513,10 @@ impl OutputId {
             OutputId::TireDeflection => d.performance.tire_deflection,
             OutputId::RoadDisplacement => d.road_displacement,
             OutputId::ControlForce => d.control_force,
-            OutputId::RmsBodyAcceleration
-            | OutputId::RmsSuspensionDeflection
-            | OutputId::RmsTireDeflection
-            | OutputId::Objective => 0.0,
+            OutputId::RmsBodyAcceleration => d.rms.body_acceleration,
+            OutputId::RmsSuspensionDeflection => d.rms.suspension_deflection,
+            OutputId::RmsTireDeflection => d.rms.tire_deflection,
+            OutputId::Objective => d.objective,
         }
     }
 
@@ -978,6 +982,16 @@ pub static VARIABLES: &[Variable] = &[
         "Weight z3 of RMS(TDD) in the objective J (Eq. 6, TDD in m; tunable)",
     ),
     parameter(
+        "input_extrapolation",
+        48,
+        Fixed,
+        Q::Dimensionless,
+        0.0,
+        Range::Integers(0, 1),
+        integer!(input_extrapolation),
+        "road = 0: 0 holds x_g over each communication step (FMI default), 1 extrapolates it linearly from the last two values set at communication points (the first step holds); input derivatives, when set, take precedence",
+    ),
+    parameter(
         "x_s_start",
         24,
         Fixed,
@@ -1173,7 +1187,7 @@ pub static VARIABLES: &[Variable] = &[
         42,
         Q::Acceleration,
         OutputId::RmsBodyAcceleration,
-        "Running RMS of BA from the start time to now, sampled on the internal grid",
+        "Running RMS of BA from the start time t0 to now, the time average sqrt(integral of BA^2 dt / (t - t0)): 0 at t0, continuous in t, independent of the internal grid",
         &[],
         &[],
     ),
@@ -1182,7 +1196,7 @@ pub static VARIABLES: &[Variable] = &[
         43,
         Q::Length,
         OutputId::RmsSuspensionDeflection,
-        "Running RMS of SDD from the start time to now, sampled on the internal grid",
+        "Running RMS of SDD from the start time t0 to now, the time average sqrt(integral of SDD^2 dt / (t - t0)): 0 at t0, continuous in t, independent of the internal grid",
         &[],
         &[],
     ),
@@ -1191,7 +1205,7 @@ pub static VARIABLES: &[Variable] = &[
         44,
         Q::Length,
         OutputId::RmsTireDeflection,
-        "Running RMS of TDD from the start time to now, sampled on the internal grid",
+        "Running RMS of TDD from the start time t0 to now, the time average sqrt(integral of TDD^2 dt / (t - t0)): 0 at t0, continuous in t, independent of the internal grid",
         &[],
         &[],
     )
@@ -1276,7 +1290,7 @@ mod tests {
 
     #[test]
     fn interface_of_the_spec_is_present() {
-        let spec: [(&str, Causality, VarType); 44] = {
+        let spec: [(&str, Causality, VarType); 45] = {
             use Causality::*;
             use VarType::*;
             [
@@ -1303,6 +1317,7 @@ mod tests {
                 ("w_ba", Parameter, Real),
                 ("w_sdd", Parameter, Real),
                 ("w_tdd", Parameter, Real),
+                ("input_extrapolation", Parameter, Integer),
                 ("x_g", Input, Real),
                 ("x_s", Output, Real),
                 ("x_h", Output, Real),

@@ -561,11 +561,16 @@ impl Road {
         self.piece(t).value(t)
     }
 
+    /// Checks an external input value and slope (finite).
+    pub fn check_input(value: f64, slope: f64) -> Result<()> {
+        finite("x_g", value)?;
+        finite("x_g derivative", slope)
+    }
+
     /// Sets the external input (only for [`RoadSpec::Input`]): from time
     /// `t` on, `x_g = value + slope (t' − t)`.
     pub fn set_input(&mut self, t: f64, value: f64, slope: f64) -> Result<()> {
-        finite("x_g", value)?;
-        finite("x_g derivative", slope)?;
+        Road::check_input(value, slope)?;
         match &mut self.kind {
             RoadKind::Input(piece) => {
                 *piece = RoadPiece::Linear {

@@ -39,6 +39,7 @@
 
 pub mod expm;
 mod persist;
+mod time_average;
 
 use crate::error::{Error, Result};
 use crate::metrics::{RmsValues, RunningRms, Weights};
@@ -46,12 +47,22 @@ use crate::model::{Params, Performance, Plant, State, V_T, Variant, X_S, X_T};
 use crate::road::{Road, RoadPiece, RoadSpec};
 use nalgebra::{Matrix2, Matrix4, Matrix6, SMatrix, Vector2, Vector4};
 use std::collections::HashMap;
+use time_average::SquareIntegral;
 
 /// Default upper bound of the internal step (s).
 pub const DEFAULT_MAX_INTERNAL_STEP: f64 = 1e-4;
 /// Most grid nodes of delay history kept (8 M nodes, 64 MiB); a delay
 /// needing more is refused.
 pub const MAX_HISTORY_NODES: u64 = 1 << 23;
+/// Rounding drift covered by the snap tolerance, in additions: a time
+/// accumulated as `t += step` over N steps is off by at most `N ε |t| / 2`,
+/// so `2^22 ε |t|` covers 2^22 steps with a factor 2 to spare (1.4e-8 s at
+/// t = 15 s).
+const SNAPPED_ADDITIONS: f64 = 4_194_304.0;
+/// The snap tolerance never exceeds this fraction of the internal step
+/// (2^-10: 1e-7 s at the default step, far below any time scale of the
+/// model or its roads).
+const SNAP_STEP_FRACTION: f64 = 1.0 / 1024.0;
 /// Delays below this (s) are folded into the plant as
 /// `x_t(t − tau) ≈ x_t(t) − tau v_t(t)` (error ≤ tau²/2 |d²x_t/dt²|, below
 /// 5e-15 |d²x_t/dt²|) instead of forcing a grid step of tau.
@@ -695,13 +706,14 @@ pub struct Outputs {
     pub road_displacement: f64,
     /// Control force `u = g x_t(t − tau)` (N).
     pub control_force: f64,
-    /// Running RMS values from the start to now, sampled on the grid.
+    /// Running RMS values from the start to now, as time averages
+    /// `sqrt((1/(t − t_0)) ∫_{t_0}^{t} y² ds)` (0 at the start).
     pub rms: RmsValues,
     /// J of Eq. (6) from the running RMS values.
     pub objective: f64,
 }
 
-/// First time derivatives of the instantaneous outputs.
+/// First time derivatives of the outputs.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct OutputDerivatives {
     /// dX/dt (reported state).
@@ -712,6 +724,11 @@ pub struct OutputDerivatives {
     pub road_displacement: f64,
     /// du/dt.
     pub control_force: f64,
+    /// d/dt of the running RMS values: `(y² − RMS²) / (2 RMS (t − t_0))`
+    /// (0 at the start and where an RMS value is 0).
+    pub rms: RmsValues,
+    /// dJ/dt.
+    pub objective: f64,
 }
 
 /// Summary of a finished run.
@@ -746,7 +763,11 @@ pub struct Simulator {
     current_state: State,
     /// (x_t, v_t) at grid nodes `grid_index − m ..= grid_index`, by `index % (m + 1)`.
     history: Vec<[f64; 2]>,
+    /// `Σ y²` of BA, SDD, TDD over the grid nodes of the open run (after
+    /// the anchor of `integral`, up to `grid_index`).
     rms: RunningRms,
+    /// The time integral of `y²` (see [`time_average`]).
+    integral: SquareIntegral,
     /// Harmonic road phase `(k, A [sin ω t_k, cos ω t_k])` at the last grid
     /// node reached by the whole-step loop: a cache of a function of k alone
     /// (see [`PHASE_ANCHOR`]), so it is not part of the saved state.
@@ -817,7 +838,8 @@ impl Simulator {
         }
         let (solver_matrix, full_step, grid_step) = Self::operators(&plant, &config, &grid)?;
         let history = vec![[initial[X_T], initial[V_T]]; grid.delay_steps as usize + 1];
-        Ok(Simulator {
+        let start_time = config.start_time;
+        let mut sim = Simulator {
             plant,
             solver_matrix,
             grid,
@@ -832,9 +854,14 @@ impl Simulator {
             current_state: initial,
             history,
             rms: RunningRms::default(),
+            integral: SquareIntegral::new(start_time, Default::default()),
             phase: None,
             config,
-        })
+        };
+        let piece = sim.piece_from(start_time);
+        sim.integral.anchor =
+            sim.squares_at(0, start_time, &initial, (start_time, initial), &piece);
+        Ok(sim)
     }
 
     fn operators(
@@ -918,6 +945,22 @@ impl Simulator {
 
     fn coincide(&self, a: f64, b: f64) -> bool {
         (a - b).abs() <= 1e-9 * self.grid.step + 8.0 * f64::EPSILON * a.abs().max(b.abs())
+    }
+
+    /// The snap tolerance at time `t` (s): `2^22 ε |t|` (see
+    /// [`SNAPPED_ADDITIONS`]), at most `h / 1024`, at least the
+    /// [`Self::coincide`] tolerance.
+    pub fn snap_tolerance(&self, t: f64) -> f64 {
+        let drift = SNAPPED_ADDITIONS * f64::EPSILON * t.abs();
+        let floor = 1e-9 * self.grid.step + 8.0 * f64::EPSILON * t.abs();
+        drift.min(self.grid.step * SNAP_STEP_FRACTION).max(floor)
+    }
+
+    /// Whether a requested time `a` and a grid time `b` differ only by
+    /// floating-point accumulation: then `b` is reached (committed) and
+    /// the outputs are evaluated at `a` itself from there.
+    fn snaps(&self, a: f64, b: f64) -> bool {
+        (a - b).abs() <= self.snap_tolerance(a.abs().max(b.abs()))
     }
 
     /// Delayed-input vector `[u, u', u'', u''']` at offset σ into grid step k.
@@ -1097,9 +1140,17 @@ impl Simulator {
     /// Advances to `t_end` (any length; any number of calls). On divergence
     /// the simulator stays at the last good grid node and returns
     /// [`Error::Diverged`].
+    ///
+    /// A `t_end` within the snap tolerance of a grid node
+    /// ([`Self::snap_tolerance`]) commits that node, as if it had been
+    /// asked for exactly; the state at `t_end` itself then comes from the
+    /// node by a short Taylor series. So a caller that accumulates its
+    /// communication times (`t += step`) commits the same nodes, does the
+    /// same work and gets the same RMS integrals as one that computes them
+    /// exactly; its outputs differ only by the drift times their rates.
     pub fn advance_to(&mut self, t_end: f64) -> Result<()> {
         if !t_end.is_finite()
-            || (t_end < self.current_time && !self.coincide(t_end, self.current_time))
+            || (t_end < self.current_time && !self.snaps(t_end, self.current_time))
         {
             return Err(Error::InvalidTime {
                 name: "t_end",
@@ -1110,47 +1161,51 @@ impl Simulator {
         loop {
             let k = self.grid_index;
             let next_node = self.grid_time(k + 1);
-            if next_node < t_end || self.coincide(next_node, t_end) {
+            if next_node < t_end || self.snaps(t_end, next_node) {
                 if self.committed_time == self.grid_time(k) {
                     // On a grid node: whole steps up to the last node the
                     // interval reaches, in one tight loop.
                     let last = self.last_node_until(t_end);
                     self.whole_steps(last)?;
                 } else {
-                    let x = self.integrate_within_step(
-                        k,
-                        self.committed_time,
-                        self.committed_state,
-                        next_node,
-                    );
+                    // From a point inside the step (where an external road
+                    // input changed) to its end node.
+                    let from = (self.committed_time, self.committed_state);
+                    let x = self.integrate_within_step(k, from.0, from.1, next_node);
                     self.check_divergence(next_node, &x)?;
-                    self.commit_node(k + 1, next_node, x);
+                    let anchor = self.integral.anchor;
+                    let step_integral = self.integral_within_step(k, from, anchor, next_node, &x);
+                    self.commit_node(k + 1, next_node, x, step_integral);
                 }
-                if self.coincide(self.committed_time, t_end) {
-                    self.current_time = t_end;
-                    return Ok(());
+                if self.snaps(t_end, self.committed_time) {
+                    return self.finish_near_committed(t_end);
                 }
             } else {
-                if self.coincide(self.committed_time, t_end) {
-                    self.current_state = self.committed_state;
-                } else {
-                    let x = self.integrate_within_step(
-                        k,
-                        self.committed_time,
-                        self.committed_state,
-                        t_end,
-                    );
-                    self.check_divergence(t_end, &x)?;
-                    self.current_state = x;
+                if self.snaps(t_end, self.committed_time) {
+                    return self.finish_near_committed(t_end);
                 }
+                let x =
+                    self.integrate_within_step(k, self.committed_time, self.committed_state, t_end);
+                self.check_divergence(t_end, &x)?;
+                self.current_state = x;
                 self.current_time = t_end;
                 return Ok(());
             }
         }
     }
 
+    /// Ends an advance at `t_end`, which snaps to the committed point: the
+    /// state there by [`Self::state_near_committed`].
+    fn finish_near_committed(&mut self, t_end: f64) -> Result<()> {
+        let x = self.state_near_committed(t_end - self.committed_time);
+        self.check_divergence(t_end, &x)?;
+        self.current_state = x;
+        self.current_time = t_end;
+        Ok(())
+    }
+
     /// The largest grid index `j >= grid_index` whose node lies before
-    /// `t_end` or coincides with it (at most `u64::MAX - 1`, so `j + 1`
+    /// `t_end` or snaps to it (at most `u64::MAX - 1`, so `j + 1`
     /// exists). Node times never decrease with the index, so `j` is found
     /// from the estimate `(t_end − t_0) / h` by
     /// [`crate::monotone::last_index_where`] in a bounded number of
@@ -1158,7 +1213,7 @@ impl Simulator {
     fn last_node_until(&self, t_end: f64) -> u64 {
         let reached = |j: u64| {
             let t = self.grid_time(j);
-            t < t_end || self.coincide(t, t_end)
+            t < t_end || self.snaps(t_end, t)
         };
         let k = self.grid_index;
         // `as` saturates (and maps NaN to 0); the search clamps the guess.
@@ -1368,26 +1423,38 @@ impl Simulator {
                     self.road.piece(now)
                 };
                 op.count(&mut rms, &x, piece_now.value(now));
+                if k != inside && self.coincide(end, now) {
+                    // The node is a road breakpoint: x_g has a kink there,
+                    // so the RMS run of nodes closes at it.
+                    let after = self.piece_from(now);
+                    self.close_run_at_node(k, now, &State::from(x), &mut rms, &piece, &after);
+                }
                 self.road.release_before(self.grid_time(k - 1));
                 piece_at_node = Some(piece_now);
                 continue;
             }
-            // A step that a road breakpoint splits.
+            // A step that a road breakpoint splits: the RMS run closes at
+            // its start, and the step is integrated piece by piece.
             let next_slot = if slot + 1 == len { 0 } else { slot + 1 };
-            let x_next: [f64; 6] = self.integrate_within_step(k, t, State::from(x), to).into();
+            let node = State::from(x);
+            let x_next: [f64; 6] = self.integrate_within_step(k, t, node, to).into();
             if (k + 1).is_multiple_of(PHASE_ANCHOR) {
                 self.road.release_before(t);
             }
             let piece_next = self.road.piece(to);
-            let road_next = piece_next.value(to);
             piece_at_node = Some(piece_next);
             if !within_bounds(&x_next)
                 && let Err(e) = self.check_divergence(to, &State::from(x_next))
             {
                 break Err(e);
             }
+            let piece_at_start = self.piece_from(t);
+            self.close_run_at_node(k, t, &node, &mut rms, &piece_at_start, &piece_at_start);
+            let anchor = self.integral.anchor;
+            let step_integral =
+                self.integral_within_step(k, (t, node), anchor, to, &State::from(x_next));
             self.history[slot] = [x_next[X_T], x_next[V_T]];
-            op.count(&mut rms, &x_next, road_next);
+            self.restart_run_after_step(k + 1, to, &State::from(x_next), step_integral);
             x = x_next;
             slot = next_slot;
             k += 1;
@@ -1433,23 +1500,25 @@ impl Simulator {
         }
     }
 
-    fn commit_node(&mut self, k: u64, time: f64, x: State) {
+    /// Commits grid node k (time, state x) reached from a point inside
+    /// step k − 1; `step_integral`: `∫ y²` from the committed point to it.
+    fn commit_node(&mut self, k: u64, time: f64, x: State, step_integral: [f64; 3]) {
         let len = self.history.len() as u64;
         self.history[(k % len) as usize] = [x[X_T], x[V_T]];
-        let road = self.road.value(time);
-        self.rms.add(&Performance::at(&self.plant, &x, road));
         self.grid_index = k;
         self.committed_time = time;
         self.committed_state = x;
         self.current_time = time;
         self.current_state = x;
+        self.restart_run_after_step(k, time, &x, step_integral);
         self.road.release_before(time);
     }
 
     /// Sets the external road input from the current time on (only with
-    /// `RoadSpec::Input`): `x_g(t) = value + slope (t − now)`.
+    /// `RoadSpec::Input`): `x_g(t) = value + slope (t − now)`. A current
+    /// time that snaps to the committed point (a time drift) sets it from
+    /// that point instead.
     pub fn set_road_input(&mut self, value: f64, slope: f64) -> Result<()> {
-        let now = self.current_time;
         if !self.road.is_input() {
             return Err(Error::InvalidSetting {
                 name: "road",
@@ -1457,9 +1526,12 @@ impl Simulator {
                 reason: "the input x_g is only used when road = 0",
             });
         }
-        self.road.set_input(now, value, slope)?;
-        self.committed_time = now;
-        self.committed_state = self.current_state;
+        // Checked before the RMS run is closed, so that a refused value
+        // changes nothing.
+        Road::check_input(value, slope)?;
+        let start = self.close_run_for_input();
+        self.road.set_input(start, value, slope)?;
+        self.reanchor_after_input();
         Ok(())
     }
 
@@ -1485,13 +1557,6 @@ impl Simulator {
         self.config.weights = weights;
     }
 
-    fn step_offset(&self) -> (u64, f64) {
-        (
-            self.grid_index,
-            self.current_time - self.grid_time(self.grid_index),
-        )
-    }
-
     fn road_piece_now(&mut self) -> RoadPiece {
         let t = self.current_time;
         let piece = self.road.piece(t);
@@ -1504,32 +1569,10 @@ impl Simulator {
 
     /// `[u, u']`: the delayed tire displacement and its rate now.
     fn delayed_tire_now(&mut self) -> (f64, f64) {
-        if self.grid.delay_inside_step() {
-            let (k, offset) = self.step_offset();
-            let (h, tau) = (self.grid.step, self.grid.inner_delay);
-            let p = if offset < tau {
-                self.delayed_input(k, h - tau + offset)
-            } else {
-                let (_, [end_x, end_v]) =
-                    self.inner_delay_next_node(k, self.committed_time, self.committed_state);
-                let [node_x, node_v] = self.history[(k % self.history.len() as u64) as usize];
-                hermite([node_x, node_v, end_x, end_v], h, offset - tau)
-            };
-            (p[0], p[1])
-        } else if self.grid.resolves_delay() {
-            let (k, offset) = self.step_offset();
-            let p = self.delayed_input(k, offset);
-            (p[0], p[1])
-        } else {
-            let tau = if self.config.variant.has_control() {
-                self.config.params.tau
-            } else {
-                0.0
-            };
-            let x = self.current_state;
-            let dx = self.solver_matrix * x;
-            (x[X_T] - tau * x[V_T], dx[X_T] - tau * dx[V_T])
-        }
+        let (k, t, x) = (self.grid_index, self.current_time, self.current_state);
+        let from = (self.committed_time, self.committed_state);
+        let p = self.delayed_vector_at(k, t, from, &x);
+        (p[0], p[1])
     }
 
     /// All outputs at the current time.
@@ -1538,7 +1581,7 @@ impl Simulator {
         let x = self.current_state;
         let road = self.road_piece_now().value(t);
         let (delayed, _) = self.delayed_tire_now();
-        let rms = self.rms.values();
+        let rms = self.rms_now();
         Outputs {
             time: t,
             state: self.plant.reported_state(&x),
@@ -1561,7 +1604,24 @@ impl Simulator {
         let dx = self.solver_matrix * x + b * delayed + self.plant.e * road;
         let d2x = self.solver_matrix * dx + b * delayed_rate + self.plant.e * road_rate;
         let gain = self.config.params.effective_gain(self.config.variant);
+        let now = Performance::at(&self.plant, &x, road);
+        let rms = self.rms_now();
+        let duration = t - self.config.start_time;
+        let rate = |y: f64, value: f64| {
+            if duration > 0.0 && value > 0.0 {
+                (y * y - value * value) / (2.0 * value * duration)
+            } else {
+                0.0
+            }
+        };
+        let rms_rate = RmsValues {
+            body_acceleration: rate(now.body_acceleration, rms.body_acceleration),
+            suspension_deflection: rate(now.suspension_deflection, rms.suspension_deflection),
+            tire_deflection: rate(now.tire_deflection, rms.tire_deflection),
+        };
         OutputDerivatives {
+            rms: rms_rate,
+            objective: rms_rate.objective(&self.config.weights),
             state: self.plant.reported_state(&dx),
             performance: Performance {
                 body_acceleration: d2x[crate::model::V_S],
@@ -1573,15 +1633,15 @@ impl Simulator {
         }
     }
 
-    /// RMS values so far.
-    pub fn rms(&self) -> RmsValues {
-        self.rms.values()
+    /// RMS values so far (time averages from the start to now).
+    pub fn rms(&mut self) -> RmsValues {
+        self.rms_now()
     }
 
     /// Runs from the current time for `duration` seconds and summarises.
     pub fn run_for(&mut self, duration: f64) -> Result<RunSummary> {
         self.advance_to(self.current_time + duration)?;
-        let rms = self.rms.values();
+        let rms = self.rms_now();
         Ok(RunSummary {
             rms,
             objective: rms.objective(&self.config.weights),
@@ -1724,13 +1784,11 @@ mod tests {
         let mut general = Simulator::new(cfg).unwrap();
         for k in 0..3000u64 {
             let to = general.grid_time(k + 1);
-            let x = general.integrate_within_step(
-                k,
-                general.committed_time,
-                general.committed_state,
-                to,
-            );
-            general.commit_node(k + 1, to, x);
+            let from = (general.committed_time, general.committed_state);
+            let x = general.integrate_within_step(k, from.0, from.1, to);
+            let anchor = general.integral.anchor;
+            let step_integral = general.integral_within_step(k, from, anchor, to, &x);
+            general.commit_node(k + 1, to, x, step_integral);
         }
         fast.advance_to(general.committed_time).unwrap();
         let scale = general.committed_state.amax();

@@ -218,6 +218,12 @@ impl Simulator {
         w.f64s(&flat);
         self.rms.sums_of_squares.iter().for_each(|&v| w.f64(v));
         w.u64(self.rms.samples);
+        let integral = &self.integral;
+        integral.closed.iter().for_each(|&v| w.f64(v));
+        w.u64(integral.anchor_index);
+        w.f64(integral.anchor_time);
+        integral.anchor.value.iter().for_each(|&v| w.f64(v));
+        integral.anchor.rate.iter().for_each(|&v| w.f64(v));
         let road = self.road.dynamic_state();
         w.u128(road.word_position);
         w.u64(road.first_node);
@@ -249,7 +255,7 @@ impl Simulator {
     ///   it may lie strictly inside the step);
     /// - `current_time` is reachable from `committed_time` inside step k:
     ///   `committed_time <= current_time <= t_{k+1}`, each bound up to the
-    ///   tolerance;
+    ///   snap tolerance ([`Simulator::snap_tolerance`]);
     /// - the road generator is consistent with `committed_time` (see
     ///   `Road::restore_dynamic_state`, with the horizon `t_{k+2}`).
     pub fn from_bytes(bytes: &[u8]) -> Result<Simulator> {
@@ -282,6 +288,17 @@ impl Simulator {
         }
         rms.samples = r.u64()?;
         sim.rms = rms;
+        for v in sim.integral.closed.iter_mut() {
+            *v = r.f64()?;
+        }
+        sim.integral.anchor_index = r.u64()?;
+        sim.integral.anchor_time = r.f64()?;
+        for v in sim.integral.anchor.value.iter_mut() {
+            *v = r.f64()?;
+        }
+        for v in sim.integral.anchor.rate.iter_mut() {
+            *v = r.f64()?;
+        }
         let mut road = RoadState {
             word_position: r.u128()?,
             first_node: r.u64()?,
@@ -311,13 +328,39 @@ impl Simulator {
     }
 
     /// The RMS accumulators of [`Simulator::from_bytes`]: one sample per
-    /// grid node after the start (`samples = grid_index`), and sums of
-    /// squares that are finite and not negative.
+    /// grid node of the open run, which starts at the anchor node
+    /// (`anchor_index + samples = grid_index`, the anchor on its node when
+    /// the run holds nodes, else at the committed point); sums of squares
+    /// that are finite and not negative; a finite closed integral and
+    /// anchor squares.
     fn check_rms(&self) -> Result<()> {
         let (samples, k) = (self.rms.samples, self.grid_index);
-        if samples != k {
+        let anchor = self.integral.anchor_index;
+        if anchor.checked_add(samples) != Some(k) {
             return Err(Error::InvalidState(format!(
-                "rms samples {samples}: one per grid node was expected, grid_index = {k}"
+                "rms samples {samples}: one per grid node after the anchor node {anchor} was expected, grid_index = {k}"
+            )));
+        }
+        let anchor_time = self.integral.anchor_time;
+        let expected = if samples > 0 {
+            self.grid_time(anchor)
+        } else {
+            self.committed_time
+        };
+        if anchor_time != expected {
+            return Err(Error::InvalidState(format!(
+                "rms anchor time {anchor_time} s: {expected} s was expected"
+            )));
+        }
+        let integral = &self.integral;
+        let values = integral
+            .closed
+            .iter()
+            .chain(&integral.anchor.value)
+            .chain(&integral.anchor.rate);
+        if let Some(bad) = values.copied().find(|v| !v.is_finite()) {
+            return Err(Error::InvalidState(format!(
+                "rms integral value {bad} is not finite"
             )));
         }
         for (name, sum) in ["BA", "SDD", "TDD"].iter().zip(self.rms.sums_of_squares) {
@@ -352,8 +395,8 @@ impl Simulator {
                  [{node} s, {next} s)"
             )));
         }
-        if !((current >= committed || self.coincide(current, committed))
-            && (current <= next || self.coincide(current, next)))
+        if !((current >= committed || self.snaps(current, committed))
+            && (current <= next || self.snaps(current, next)))
         {
             return Err(Error::InvalidState(format!(
                 "current_time {current} s does not lie between committed_time {committed} s \

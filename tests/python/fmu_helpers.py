@@ -4,6 +4,10 @@ Run as a script, this module continues a serialized FMU state in a fresh
 process (see ``test_serialized_state_continues_in_a_fresh_process``)::
 
     python fmu_helpers.py continue FMU_DIR STATE_FILE T_FROM T_TO STEP
+    python fmu_helpers.py continue-accumulated FMU_DIR STATE_FILE T_FROM STEPS STEP
+
+The second form steps like most masters do: `STEPS` steps of `STEP` from
+`T_FROM` with the time accumulated (`t += STEP`).
 """
 
 from __future__ import annotations
@@ -164,24 +168,38 @@ def grid(t_from: float, t_to: float, step: float) -> list[float]:
     return [t_from + k * step for k in range(1, n + 1)]
 
 
-def continue_in_this_process(fmu_dir, state_file, t_from, t_to, step):
-    """Worker: restore a serialized state in a new instance and continue."""
+def accumulated_times(t_from: float, steps: int, step: float) -> list[float]:
+    """`steps` communication points reached by `t += step` from `t_from`."""
+    times, t = [], t_from
+    for _ in range(steps):
+        t += step
+        times.append(t)
+    return times
+
+
+def continue_in_this_process(fmu_dir, state_file, t_from, times):
+    """Worker: restore a serialized state in a new instance and continue
+    through `times`."""
     md = read_model_description(fmu_dir)
     slave = Slave(fmu_dir, md, name="worker")
     state = slave.fmu.deSerializeFMUstate(Path(state_file).read_bytes())
     slave.fmu.setFMUstate(state)
     slave.fmu.freeFMUstate(state)
     slave.time = t_from
-    rows = slave.run(grid(t_from, t_to, step))
+    rows = slave.run(times)
     slave.fmu.terminate()
     slave.free()
     return [[v.hex() for v in row] for row in rows]
 
 
 if __name__ == "__main__":
-    if len(sys.argv) == 7 and sys.argv[1] == "continue":
-        _, _, fmu_dir, state_file, t_from, t_to, step = sys.argv
-        rows = continue_in_this_process(fmu_dir, state_file, float(t_from), float(t_to), float(step))
-        print(json.dumps(rows))
+    if len(sys.argv) == 7 and sys.argv[1] in ("continue", "continue-accumulated"):
+        _, mode, fmu_dir, state_file, t_from, until, step = sys.argv
+        t_from, step = float(t_from), float(step)
+        if mode == "continue":
+            times = grid(t_from, float(until), step)
+        else:
+            times = accumulated_times(t_from, int(until), step)
+        print(json.dumps(continue_in_this_process(fmu_dir, state_file, t_from, times)))
     else:
         sys.exit(__doc__)

@@ -249,7 +249,7 @@ def test_status_kinds(initialized):
 # ------------------------------------------------------ value references
 
 
-@pytest.mark.parametrize("vr", [0, 48, 9999, 2**31, 2**32 - 1])
+@pytest.mark.parametrize("vr", [0, 49, 9999, 2**31, 2**32 - 1])
 def test_unknown_value_reference(init_mode, vr):
     status, _ = init_mode.get_real([vr])
     assert status == ERROR
@@ -545,9 +545,11 @@ def test_deserialize_bit_flipped(serialized, position):
     refused_state(inst, bytes(flipped), "")
 
 
-def test_deserialize_wrong_version(serialized):
+@pytest.mark.parametrize("version", [1, 3])
+def test_deserialize_wrong_version(serialized, version):
+    # Version 1 states (before the RMS time integral) and unknown versions.
     inst, data = serialized
-    refused_state(inst, data[:8] + (2).to_bytes(4, "little") + data[12:], "format version 2 is not supported")
+    refused_state(inst, data[:8] + version.to_bytes(4, "little") + data[12:], f"format version {version} is not supported")
 
 
 def test_deserialize_other_guid(serialized):

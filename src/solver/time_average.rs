@@ -1,0 +1,611 @@
+//! Running RMS values as time averages (Eq. (6) with the mean taken over
+//! time): for y = BA, SDD, TDD,
+//! `RMS(t) = sqrt( (1 / (t − t_0)) ∫_{t_0}^{t} y(s)² ds )`,
+//! 0 at `t_0`, continuous in t, and independent of the internal grid.
+//!
+//! **How the integral of `f = y²` is kept.** Over a run of grid nodes
+//! `t_a, …, t_n` across which f and f' are continuous, the trapezoid rule
+//! with its Euler–Maclaurin end correction,
+//! `∫_{t_a}^{t_n} f = h (f_a/2 + f_{a+1} + … + f_{n−1} + f_n/2) − h²/12 (f'_n − f'_a) + O(h⁴)`,
+//! is fourth-order accurate: the next term, `h⁴/720 (f'''(t_n) − f'''(t_a))`,
+//! sums the jumps of f''' over the run, which are O(h) each. The whole-step
+//! loop keeps `Σ f_k` as it always did ([`RunningRms`]); the end terms are
+//! added when the integral is read. Where f or f' may jump, the run is
+//! closed: its integral moves into [`SquareIntegral::closed`] and a new run
+//! starts there. That happens at a road breakpoint that falls on a grid
+//! node (TDD has a kink there), and where an external road input changes.
+//! A step with a road breakpoint inside it, and the stretch from the last
+//! committed point to the current time, are integrated piece by piece
+//! (split at the breakpoints) with the corrected trapezoid of each piece,
+//! `∫_a^b f = (b − a)/2 (f_a + f_b) − (b − a)²/12 (f'_b − f'_a) + O((b − a)⁵)`,
+//! from the exact dense output at the piece ends. f' comes from the exact
+//! output derivatives, `d(y²)/dt = 2 y ẏ`.
+//!
+//! With a delay shorter than the step (`0 < tau < h`), the delayed input's
+//! second derivative jumps inside every step (at `t_k + tau`), so f''' does
+//! too and the rule is third order there: the extra error is below
+//! `h⁴ |Δf'''| / 384` per step.
+
+use super::{Simulator, hermite};
+use crate::metrics::{RmsValues, RunningRms};
+use crate::model::{State, V_S, V_T, X_S, X_T};
+use crate::road::RoadPiece;
+use nalgebra::Vector4;
+
+/// `y²` and `d(y²)/dt` of BA, SDD, TDD at one instant.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(crate) struct Squares {
+    /// `y²` (BA in (m/s²)², SDD and TDD in m²).
+    pub value: [f64; 3],
+    /// `d(y²)/dt = 2 y ẏ`.
+    pub rate: [f64; 3],
+}
+
+impl Squares {
+    /// From the outputs `y` and their rates `ẏ`.
+    fn of(y: [f64; 3], rate: [f64; 3]) -> Squares {
+        Squares {
+            value: std::array::from_fn(|i| y[i] * y[i]),
+            rate: std::array::from_fn(|i| 2.0 * y[i] * rate[i]),
+        }
+    }
+}
+
+/// `∫_a^b f` over one smooth piece of signed length `b − a` from the values
+/// and rates at its ends: `(b − a)/2 (f_a + f_b) − (b − a)²/12 (f'_b − f'_a)`
+/// (exact for cubics; the error is `(b − a)⁵/720 max |f''''|`).
+pub(crate) fn corrected_trapezoid(length: f64, a: &Squares, b: &Squares) -> [f64; 3] {
+    std::array::from_fn(|i| {
+        0.5 * length * (a.value[i] + b.value[i]) - length * length / 12.0 * (b.rate[i] - a.rate[i])
+    })
+}
+
+fn add3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|i| a[i] + b[i])
+}
+
+/// The closed part of `∫_{t_0} y² dt` and the anchor of the open run of
+/// grid nodes whose `Σ y²` the whole-step loop keeps.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct SquareIntegral {
+    /// `∫_{t_0}^{anchor_time} y² dt` for BA, SDD, TDD.
+    pub closed: [f64; 3],
+    /// Grid index of the step that holds the anchor (the anchor is node
+    /// `anchor_index` itself whenever the run holds nodes).
+    pub anchor_index: u64,
+    /// Time of the anchor (s).
+    pub anchor_time: f64,
+    /// `y²` and its rate at the anchor, taken from the right.
+    pub anchor: Squares,
+}
+
+impl SquareIntegral {
+    /// Starts at `t_0` with the squares there.
+    pub fn new(start_time: f64, at_start: Squares) -> SquareIntegral {
+        SquareIntegral {
+            closed: [0.0; 3],
+            anchor_index: 0,
+            anchor_time: start_time,
+            anchor: at_start,
+        }
+    }
+
+    /// `∫_{t_0}^{t_n} y²` where node `t_n` ends the run (`run` holds
+    /// `Σ f` over the nodes after the anchor up to n, `last` the squares at
+    /// `t_n` from the left). Without nodes in the run it is `closed`.
+    pub fn through_run(&self, h: f64, run: &RunningRms, last: &Squares) -> [f64; 3] {
+        if run.samples == 0 {
+            return self.closed;
+        }
+        std::array::from_fn(|i| {
+            let sum = 0.5 * self.anchor.value[i] + run.sums_of_squares[i] - 0.5 * last.value[i];
+            self.closed[i] + h * sum - h * h / 12.0 * (last.rate[i] - self.anchor.rate[i])
+        })
+    }
+}
+
+/// RMS values from `∫ y²` over a duration (0 for a zero duration; a
+/// rounding-negative integral counts as 0).
+pub(crate) fn rms_from_integral(integral: [f64; 3], duration: f64) -> RmsValues {
+    if duration <= 0.0 {
+        return RmsValues::default();
+    }
+    let rms = |i: usize| (integral[i].max(0.0) / duration).sqrt();
+    RmsValues {
+        body_acceleration: rms(0),
+        suspension_deflection: rms(1),
+        tire_deflection: rms(2),
+    }
+}
+
+impl Simulator {
+    /// The road piece in force from `t` on (the piece after a breakpoint
+    /// that `t` coincides with), the same choice as the step integration.
+    pub(super) fn piece_from(&mut self, t: f64) -> RoadPiece {
+        let piece = self.road.piece(t);
+        if piece.end() <= t || self.coincide(piece.end(), t) {
+            self.road.piece(piece.end().max(t))
+        } else {
+            piece
+        }
+    }
+
+    /// `[u, u', u'', u''']` of the delayed tire displacement at time `t` in
+    /// grid step k, state `x` there; `from` is a point of step k with its
+    /// state, from which the step's end node is found when the delay lies
+    /// inside the step. With the delay folded into the plant only `[u, u']`
+    /// are meaningful (`u = x_t − tau v_t`; the solver has no delayed input).
+    pub(super) fn delayed_vector_at(
+        &mut self,
+        k: u64,
+        t: f64,
+        from: (f64, State),
+        x: &State,
+    ) -> Vector4<f64> {
+        let offset = t - self.grid_time(k);
+        if self.grid.delay_inside_step() {
+            let (h, tau) = (self.grid.step, self.grid.inner_delay);
+            if offset < tau {
+                self.delayed_input(k, h - tau + offset)
+            } else {
+                let (_, [end_x, end_v]) = self.inner_delay_next_node(k, from.0, from.1);
+                let [node_x, node_v] = self.history[(k % self.history.len() as u64) as usize];
+                hermite([node_x, node_v, end_x, end_v], h, offset - tau)
+            }
+        } else if self.grid.resolves_delay() {
+            self.delayed_input(k, offset)
+        } else {
+            let tau = if self.config.variant.has_control() {
+                self.config.params.tau
+            } else {
+                0.0
+            };
+            let xg = self.piece_from(t).value(t);
+            let dx = self.solver_matrix * x + self.plant.e * xg;
+            Vector4::new(x[X_T] - tau * x[V_T], dx[X_T] - tau * dx[V_T], 0.0, 0.0)
+        }
+    }
+
+    /// `y²` and its rate at time `t` of step k with state `x`, the road
+    /// given by `piece` (which side of a breakpoint is the caller's choice).
+    pub(super) fn squares_at(
+        &mut self,
+        k: u64,
+        t: f64,
+        x: &State,
+        from: (f64, State),
+        piece: &RoadPiece,
+    ) -> Squares {
+        let p = self.delayed_vector_at(k, t, from, x);
+        let (road, road_rate) = (piece.value(t), piece.slope(t));
+        let b = self.solver_input_column();
+        let dx = self.solver_matrix * x + b * p[0] + self.plant.e * road;
+        let acceleration_rate =
+            (self.solver_matrix.row(V_S) * dx)[0] + b[V_S] * p[1] + self.plant.e[V_S] * road_rate;
+        let y = [
+            self.plant.body_acceleration(x),
+            x[X_S] - x[X_T],
+            x[X_T] - road,
+        ];
+        let rate = [acceleration_rate, dx[X_S] - dx[X_T], dx[X_T] - road_rate];
+        Squares::of(y, rate)
+    }
+
+    /// `∫ y²` over `[from.0, to]` inside grid step k (state `x_to` at
+    /// `to`), split at road breakpoints; `at_from`: the squares at the start
+    /// from the right. A `to` before the start (by a snapped time drift) is
+    /// one piece with a negative length.
+    pub(super) fn integral_within_step(
+        &mut self,
+        k: u64,
+        from: (f64, State),
+        at_from: Squares,
+        to: f64,
+        x_to: &State,
+    ) -> [f64; 3] {
+        let (mut start, mut at_start) = (from.0, at_from);
+        if to <= start {
+            let piece = self.road.piece(to);
+            let at_to = self.squares_at(k, to, x_to, from, &piece);
+            return corrected_trapezoid(to - start, &at_start, &at_to);
+        }
+        let mut total = [0.0; 3];
+        loop {
+            let piece = self.piece_from(start);
+            let end = if piece.end() < to && !self.coincide(piece.end(), to) {
+                piece.end()
+            } else {
+                to
+            };
+            let x_end = if end == to {
+                *x_to
+            } else {
+                self.integrate_within_step(k, from.0, from.1, end)
+            };
+            let at_end = self.squares_at(k, end, &x_end, from, &piece);
+            total = add3(total, corrected_trapezoid(end - start, &at_start, &at_end));
+            if end == to {
+                return total;
+            }
+            let next = self.piece_from(end);
+            at_start = self.squares_at(k, end, &x_end, from, &next);
+            start = end;
+        }
+    }
+
+    /// `∫_{t_0} y²` up to the committed point (the end of the open run).
+    fn integral_to_committed(&mut self) -> ([f64; 3], Squares) {
+        if self.rms.samples == 0 {
+            return (self.integral.closed, self.integral.anchor);
+        }
+        let (k, t, x) = (self.grid_index, self.committed_time, self.committed_state);
+        let piece = self.piece_from(t);
+        let at_node = self.squares_at(k, t, &x, (t, x), &piece);
+        (
+            self.integral
+                .through_run(self.grid.step, &self.rms, &at_node),
+            at_node,
+        )
+    }
+
+    /// `∫_{t_0}^{t} y² dt` at the current time t.
+    pub(super) fn square_integral_now(&mut self) -> [f64; 3] {
+        let (base, at_committed) = self.integral_to_committed();
+        let (tc, xc) = (self.committed_time, self.committed_state);
+        let (t, x) = (self.current_time, self.current_state);
+        if t == tc {
+            return base;
+        }
+        let k = self.grid_index;
+        add3(
+            base,
+            self.integral_within_step(k, (tc, xc), at_committed, t, &x),
+        )
+    }
+
+    /// The running RMS values at the current time.
+    pub(super) fn rms_now(&mut self) -> RmsValues {
+        let integral = self.square_integral_now();
+        rms_from_integral(integral, self.current_time - self.config.start_time)
+    }
+
+    /// Closes the open run at node k (time t, state x; `run`: its sums,
+    /// node k included) and starts a new one there: `left` and `right` are
+    /// the road pieces on either side of the node.
+    pub(super) fn close_run_at_node(
+        &mut self,
+        k: u64,
+        t: f64,
+        x: &State,
+        run: &mut RunningRms,
+        left: &RoadPiece,
+        right: &RoadPiece,
+    ) {
+        if run.samples > 0 {
+            let at_left = self.squares_at(k, t, x, (t, *x), left);
+            self.integral.closed = self.integral.through_run(self.grid.step, run, &at_left);
+        }
+        let at_right = self.squares_at(k, t, x, (t, *x), right);
+        self.integral.anchor_index = k;
+        self.integral.anchor_time = t;
+        self.integral.anchor = at_right;
+        *run = RunningRms::default();
+    }
+
+    /// Starts a new run at node k (time t, state x) after `step_integral`
+    /// over the step that ends there was added to the closed part (the
+    /// history must already hold node k).
+    pub(super) fn restart_run_after_step(
+        &mut self,
+        k: u64,
+        t: f64,
+        x: &State,
+        step_integral: [f64; 3],
+    ) {
+        self.integral.closed = add3(self.integral.closed, step_integral);
+        let piece = self.piece_from(t);
+        let at_node = self.squares_at(k, t, x, (t, *x), &piece);
+        self.integral.anchor_index = k;
+        self.integral.anchor_time = t;
+        self.integral.anchor = at_node;
+        self.rms = RunningRms::default();
+    }
+
+    /// Before the external road input changes at the current time: closes
+    /// the run there. Returns the time from which the new input applies:
+    /// the committed point when the current time snaps to it (a time drift
+    /// is not a different time), else the current time, which then becomes
+    /// the committed point.
+    pub(super) fn close_run_for_input(&mut self) -> f64 {
+        let (tc, t) = (self.committed_time, self.current_time);
+        if self.snaps(t, tc) {
+            let (closed, _) = self.integral_to_committed();
+            self.integral.closed = closed;
+        } else {
+            self.integral.closed = self.square_integral_now();
+            self.committed_time = t;
+            self.committed_state = self.current_state;
+        }
+        self.rms = RunningRms::default();
+        self.integral.anchor_index = self.grid_index;
+        self.integral.anchor_time = self.committed_time;
+        self.committed_time
+    }
+
+    /// After the external road input changed at the anchor: the anchor's
+    /// squares from the right, with the new input.
+    pub(super) fn reanchor_after_input(&mut self) {
+        let (k, t, x) = (self.grid_index, self.committed_time, self.committed_state);
+        let piece = self.piece_from(t);
+        self.integral.anchor = self.squares_at(k, t, &x, (t, x), &piece);
+    }
+
+    /// The state at `committed_time + delta` for a `delta` within the snap
+    /// tolerance, by the Taylor series of the exact solution to fourth
+    /// order: `X^{(j+1)} = A X^{(j)} + b u^{(j)} + e x_g^{(j)}` with the
+    /// delayed input's derivatives from its cubic interpolant and the road's
+    /// own. With `|delta| <= h / 1024` and `‖A‖ |delta| <= 1e-3` the
+    /// truncation error is below `(‖A‖ |delta|)⁵ / 120 ≈ 1e-17` relative.
+    /// Before a node (negative `delta`) the interpolant after the node is
+    /// used; the delayed input is C¹ there, so that costs
+    /// `delta² |Δu''| / 2`.
+    pub(super) fn state_near_committed(&mut self, delta: f64) -> State {
+        let (k, t, x) = (self.grid_index, self.committed_time, self.committed_state);
+        if delta == 0.0 {
+            return x;
+        }
+        let p = self.delayed_vector_at(k, t, (t, x), &x);
+        let piece = self.piece_from(t + delta);
+        let road = match piece {
+            RoadPiece::Harmonic {
+                amplitude,
+                angular_frequency: w,
+            } => {
+                let (sin, cos) = (w * t).sin_cos();
+                let a = amplitude;
+                [a * sin, a * w * cos, -a * w * w * sin, -a * w * w * w * cos]
+            }
+            RoadPiece::Linear { .. } => [piece.value(t), piece.slope(t), 0.0, 0.0],
+        };
+        let b = self.solver_input_column();
+        let (m, e) = (self.solver_matrix, self.plant.e);
+        let d1 = m * x + b * p[0] + e * road[0];
+        let d2 = m * d1 + b * p[1] + e * road[1];
+        let d3 = m * d2 + b * p[2] + e * road[2];
+        let d4 = m * d3 + b * p[3] + e * road[3];
+        x + (d1 + (d2 + (d3 + d4 * (delta / 4.0)) * (delta / 3.0)) * (delta / 2.0)) * delta
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{Params, Performance, Variant};
+    use crate::road::{RandomRoad, RoadSpec};
+    use crate::solver::{SimulationConfig, simulate};
+
+    /// Gauss–Legendre nodes on [0, 1] and weights (5 points: exact for
+    /// degree 9).
+    const GAUSS_LEGENDRE: [(f64, f64); 5] = [
+        (0.046_910_077_030_668_004, 0.118_463_442_528_094_54),
+        (0.230_765_344_947_158_45, 0.239_314_335_249_683_23),
+        (0.5, 0.284_444_444_444_444_44),
+        (0.769_234_655_052_841_6, 0.239_314_335_249_683_23),
+        (0.953_089_922_969_332, 0.118_463_442_528_094_54),
+    ];
+
+    /// `∫_{t_0}^{t_end} y²` by 5-point Gauss–Legendre on every grid step,
+    /// split at the road breakpoints inside it, from the dense output of a
+    /// separate simulator (an independent quadrature of the same solution).
+    fn reference_integral(cfg: &SimulationConfig, t_end: f64) -> [f64; 3] {
+        let mut probe = Simulator::new(cfg.clone()).unwrap();
+        let mut breaks = Simulator::new(cfg.clone()).unwrap();
+        let h = probe.grid.step;
+        let mut total = [0.0; 3];
+        let mut k = 0u64;
+        let mut a = cfg.start_time;
+        while a < t_end {
+            let b = probe.grid_time(k + 1).min(t_end);
+            let mut start = a;
+            while start < b {
+                let piece = breaks.piece_from(start);
+                let end = if piece.end() < b && !breaks.coincide(piece.end(), b) {
+                    piece.end()
+                } else {
+                    b
+                };
+                for (x, w) in GAUSS_LEGENDRE {
+                    let t = start + x * (end - start);
+                    probe.advance_to(t).unwrap();
+                    let y = Performance::at(&probe.plant, &probe.current_state, piece.value(t));
+                    let y = [
+                        y.body_acceleration,
+                        y.suspension_deflection,
+                        y.tire_deflection,
+                    ];
+                    for i in 0..3 {
+                        total[i] += w * (end - start) * y[i] * y[i];
+                    }
+                }
+                start = end;
+            }
+            assert!(b - a <= h * (1.0 + 1e-9));
+            a = b;
+            k += 1;
+        }
+        total
+    }
+
+    fn configs() -> Vec<(&'static str, SimulationConfig)> {
+        let base = SimulationConfig::default();
+        let iso = RoadSpec::Iso8608(RandomRoad {
+            seed: 7,
+            ..RandomRoad::default()
+        });
+        vec![
+            ("TDVASS harmonic", base.clone()),
+            (
+                "CS ISO 8608 C seed 7",
+                SimulationConfig {
+                    variant: Variant::Cs,
+                    road: iso.clone(),
+                    ..base.clone()
+                },
+            ),
+            (
+                "TDVASS paper road (kinks on grid nodes)",
+                SimulationConfig {
+                    params: Params::with_controller(2528.0, 1.28e-4),
+                    road: RoadSpec::PaperCompatible {
+                        road: RandomRoad::default(),
+                        sample_interval: 0.1,
+                    },
+                    ..base.clone()
+                },
+            ),
+            (
+                "TDVASS tau = 0.03, g = 20000, from a displaced state",
+                SimulationConfig {
+                    params: Params::with_controller(20000.0, 0.03),
+                    initial_state: State::new(0.01, 0.0, 0.0, 0.0, 0.002, 0.1),
+                    ..base.clone()
+                },
+            ),
+            (
+                "TDVASS delay inside the step, ISO road",
+                SimulationConfig {
+                    params: Params::with_controller(6000.0, 3.7e-5),
+                    road: iso,
+                    ..base
+                },
+            ),
+        ]
+    }
+
+    #[test]
+    fn time_average_matches_an_independent_quadrature() {
+        for (name, cfg) in configs() {
+            // An end time off the grid: the partial last step counts too.
+            let t_end = 1.234_567;
+            let mut sim = Simulator::new(cfg.clone()).unwrap();
+            sim.advance_to(t_end).unwrap();
+            let ours = sim.square_integral_now();
+            let reference = reference_integral(&cfg, t_end);
+            for i in 0..3 {
+                let error = (ours[i] - reference[i]).abs() / reference[i];
+                eprintln!("{name}, output {i}: relative difference {error:.1e}");
+                assert!(
+                    error < 1e-9,
+                    "{name}, output {i}: {} against {} ({error:e})",
+                    ours[i],
+                    reference[i]
+                );
+            }
+            let rms = sim.rms();
+            let expected = (reference[0] / t_end).sqrt();
+            assert!((rms.body_acceleration - expected).abs() < 1e-9 * expected);
+        }
+    }
+
+    #[test]
+    fn rms_is_zero_at_the_start_and_continuous_in_time() {
+        let mut sim = Simulator::new(SimulationConfig::default()).unwrap();
+        assert_eq!(sim.rms(), RmsValues::default());
+        sim.advance_to(0.5).unwrap();
+        let h = sim.grid.step;
+        // Across a grid node, from inside the step before to inside the next.
+        let node = sim.grid_time(sim.grid_index + 1);
+        let mut previous = None;
+        for offset in [-0.3, -1e-6, 0.0, 1e-6, 0.3] {
+            sim.advance_to(node + offset * h).unwrap();
+            let now = sim.rms().body_acceleration;
+            if let Some(before) = previous {
+                let change: f64 = now - before;
+                assert!(change.abs() < 1e-4 * now, "{offset}: {before} -> {now}");
+            }
+            previous = Some(now);
+        }
+    }
+
+    #[test]
+    fn objective_is_continuous_across_a_change_of_the_internal_grid() {
+        // tau = 2e-4 runs on h = 1e-4 (2 steps per delay); a hair more
+        // needs 3 steps per delay, h = 6.67e-5.
+        let at = |tau: f64| {
+            let cfg = SimulationConfig {
+                params: Params::with_controller(5386.0, tau),
+                ..SimulationConfig::default()
+            };
+            let steps = Simulator::new(cfg.clone()).unwrap().grid().delay_steps;
+            (simulate(cfg, 15.0).unwrap().objective, steps)
+        };
+        let (j_at, two) = at(2e-4);
+        let (j_after, three) = at(2e-4 * (1.0 + 1e-9));
+        assert_eq!((two, three), (2, 3));
+        assert!(
+            (j_at - j_after).abs() < 1e-9 * j_at,
+            "{j_at} against {j_after}"
+        );
+    }
+
+    #[test]
+    fn taylor_dense_output_near_a_node_matches_the_exact_step() {
+        for (name, cfg) in configs() {
+            let mut sim = Simulator::new(cfg).unwrap();
+            sim.advance_to(0.7).unwrap();
+            let k = sim.grid_index;
+            let (t, x) = (sim.committed_time, sim.committed_state);
+            assert_eq!(t, sim.grid_time(k));
+            let h = sim.grid.step;
+            for delta in [1e-13, 3e-11, h / 1024.0] {
+                let series = sim.state_near_committed(delta);
+                let exact = sim.integrate_within_step(k, t, x, t + delta);
+                let scale = exact.amax();
+                let error = (series - exact).amax();
+                assert!(
+                    error < 1e-13 * scale,
+                    "{name}, offset {delta}: {error:e} of {scale:e}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn accumulated_communication_times_commit_the_same_nodes() {
+        for (name, cfg) in configs() {
+            for step in [1e-3, 1e-3 / 3.0, 7.3e-3] {
+                let mut exact = Simulator::new(cfg.clone()).unwrap();
+                let mut drifting = Simulator::new(cfg.clone()).unwrap();
+                let mut t = 0.0;
+                let mut worst_drift: f64 = 0.0;
+                for i in 1..=(3.0 / step) as u64 {
+                    t += step;
+                    let t_exact = i as f64 * step;
+                    worst_drift = worst_drift.max((t - t_exact).abs());
+                    exact.advance_to(t_exact).unwrap();
+                    drifting.advance_to(t).unwrap();
+                    assert_eq!(
+                        exact.grid_index, drifting.grid_index,
+                        "{name}, step {step}, t = {t}"
+                    );
+                    let (a, b) = (exact.rms(), drifting.rms());
+                    let rates = exact.output_derivatives();
+                    for (u, v) in [
+                        (a.body_acceleration, b.body_acceleration),
+                        (a.suspension_deflection, b.suspension_deflection),
+                        (a.tire_deflection, b.tire_deflection),
+                    ] {
+                        assert!((u - v).abs() <= 1e-12 * u, "{name}, {step}, {t}: {u} {v}");
+                    }
+                    let drift = (t - t_exact).abs();
+                    let (x, y) = (exact.state(), drifting.state());
+                    for j in 0..6 {
+                        let allowed = 1e-12 * x.amax() + 2.0 * drift * rates.state[j].abs();
+                        assert!((x[j] - y[j]).abs() <= allowed, "{name}, {step}, {t}, {j}");
+                    }
+                }
+                assert!(worst_drift > 0.0 || step == 7.3e-3);
+            }
+        }
+    }
+}
