@@ -5,7 +5,9 @@ with bash (stopping at the first failing command, `tdvass` on the PATH from
 <target>/release), python blocks with this test's interpreter. A block may
 be left out only by an HTML comment right before it that says why:
 ``<!-- not run: REASON -->``. Files a block writes into the repository root
-are removed afterwards.
+are removed afterwards, and the built FMUs in <target>/fmu are restored if a
+block rebuilt them (the quick start builds the host platform only), so the
+tests after this one see what tests/run_all.sh built.
 
 Needs the FMU and the CLI built (tests/run_all.sh builds both before pytest).
 """
@@ -76,12 +78,16 @@ def test_block_runs(document, line, language, code, reason, tmp_path):
     script.write_text(code, encoding="utf-8")
     command = [sys.executable, str(script)] if language == "python" else ["bash", "-eo", "pipefail", str(script)]
     before = {p.name for p in ROOT.iterdir()}
+    built = {path: path.read_bytes() for path in (_target_dir() / "fmu").glob("*.fmu")}
     try:
         proc = subprocess.run(command, cwd=ROOT, env=env, capture_output=True, text=True, timeout=900)
     finally:
         for entry in ROOT.iterdir():
             if entry.name not in before and entry.name not in KEEP:
                 shutil.rmtree(entry) if entry.is_dir() else entry.unlink()
+        for path, content in built.items():
+            if not path.is_file() or path.read_bytes() != content:
+                path.write_bytes(content)
     assert proc.returncode == 0, (
         f"{document}:{line} ({language}) failed with status {proc.returncode}\n"
         f"--- block ---\n{code}\n--- stdout ---\n{proc.stdout[-3000:]}\n--- stderr ---\n{proc.stderr[-3000:]}"
