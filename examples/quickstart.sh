@@ -1,9 +1,18 @@
 #!/usr/bin/env bash
-# Builds target/fmu/tdvass.fmu and runs its default experiment (TDVASS on
+# Builds the command line tool (target/release/tdvass) and the FMU
+# (target/fmu/tdvass.fmu), then runs the FMU's default experiment (TDVASS on
 # the harmonic road, 15 s) through fmpy, printing the Table 2 TDVASS row.
+# Python: the small quick-start set (fmpy, numpy, matplotlib) in .venv.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
-python="$(tests/python_env.sh)"
-cargo run --quiet --release -p fmu-build
+python="$(tests/python_env.sh quickstart)"
+echo "== building the command line tool (target/release/tdvass)"
+cargo build --release -p tdvass --bin tdvass
+echo "== building the FMU (target/fmu/tdvass.fmu)"
+cargo run --release -p fmu-build
+echo "== the FMU's default experiment through fmpy"
 "$python" examples/default_experiment.py target/fmu/tdvass.fmu
+echo
+echo "Next: target/release/tdvass --help, the examples in examples/README.md (their"
+echo "Python: $python), and examples/plot_result.py to plot a run."

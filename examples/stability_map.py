@@ -26,6 +26,18 @@ PAPER_RH_G_MAX = 171870.8
 PAPER_DI_G_MAX = 24427.7
 
 
+def intervals_text(intervals, tau_max: float) -> str:
+    """Stable delay intervals as everywhere in tdvass: [0, b) from tau = 0,
+    (a, b) otherwise (the critical delays are not stable), b] at tau_max."""
+    if not intervals:
+        return "none"
+    parts = []
+    for a, b in intervals:
+        start = "[0" if a == 0 else f"({a:.4f}"
+        parts.append(f"{start}, {b:.4f}{']' if b >= tau_max else ')'}")
+    return " ∪ ".join(parts)
+
+
 def main() -> None:
     p = C.parser(__doc__.splitlines()[0])
     p.add_argument("--g-min", type=float, default=-200000.0)
@@ -76,10 +88,10 @@ def main() -> None:
     ax.contour(g / 1e3, tau, st, levels=[0.5], colors="k", linewidths=1.2)
     ax.axvline(-di_max / 1e3, color="0.2", ls=":", lw=1.2)
     ax.axvline(di_max / 1e3, color="0.2", ls=":", lw=1.2,
-               label=f"delay-independent stability |g| ≤ {di_max:.0f} N/m")
+               label=f"delay-independent stability |g| ≤ {di_max / 1e3:.2f} kN/m")
     if args.g_min <= rh_max <= args.g_max:
         ax.axvline(rh_max / 1e3, color="purple", ls="--", lw=1.2,
-                   label=f"Routh–Hurwitz limit at τ = 0: g < {rh_max:.0f} N/m")
+                   label=f"Routh–Hurwitz limit at τ = 0: g < {rh_max / 1e3:.2f} kN/m")
     for label, gg, tt, paper_stable, stable, _ in points:
         ax.plot(gg / 1e3, tt, marker="o" if stable else "X", ms=10, mfc="white" if stable else "k",
                 mec="k", mew=1.5, ls="none")
@@ -111,8 +123,8 @@ def main() -> None:
              f"{'delay-independent limit |g|, N/m':<44}{di_max:>12.2f}{PAPER_DI_G_MAX:>12.1f}",
              ""]
     for gg, paper in PAPER_INTERVALS.items():
-        ours = " U ".join(f"[{a:.4f}, {b:.4f})" for a, b in reports[gg]["stable_intervals"])
-        ref = " U ".join(f"[{a:.4f}, {b:.4f})" for a, b in paper)
+        ours = intervals_text(reports[gg]["stable_intervals"], args.tau_max)
+        ref = intervals_text(paper, args.tau_max)
         lines += [f"stable delays at g = {gg:+.0f} N/m:",
                   f"  tdvass: {ours}",
                   f"  paper (corrected, a union): {ref}"]

@@ -3,7 +3,9 @@
 //! Every subcommand prints a table, or one JSON object with `--json`.
 
 use crate::analysis::frf::{frequency_response, peaks_hz};
-use crate::analysis::optimize::{Problem, Target, optimize};
+use crate::analysis::optimize::{
+    CONTROLLER_DELAY_RANGE, CONTROLLER_GAIN_RANGE, Problem, Target, optimize,
+};
 use crate::analysis::pso::{Bounds, PsoSettings};
 use crate::analysis::spectrum::StableReport;
 use crate::analysis::stability::{StabilityReport, stability_map};
@@ -12,10 +14,28 @@ use crate::metrics::Weights;
 use crate::model::{Params, State, Variant};
 use crate::road::{RandomRoad, RoadClass, RoadSpec};
 use crate::solver::{DEFAULT_MAX_INTERNAL_STEP, SimulationConfig, Simulator};
-use clap::{Args, Parser, Subcommand};
+use clap::parser::ValueSource;
+use clap::{ArgMatches, Args, CommandFactory, FromArgMatches, Parser, Subcommand};
 use serde_json::json;
+use std::collections::BTreeSet;
 use std::fmt::Write as _;
-use std::io::Write as _;
+use std::io::{IsTerminal as _, Write as _};
+use std::time::{Duration, Instant};
+
+/// Wall time after which `simulate` reports its progress on standard error.
+const PROGRESS_AFTER: Duration = Duration::from_secs(2);
+/// Time between two progress lines when standard error is not a terminal.
+const PROGRESS_LINE_INTERVAL: Duration = Duration::from_secs(10);
+/// Simulated time between two progress checks of `simulate` without
+/// `--output` (s). Results do not depend on how a run is split.
+const PROGRESS_CHUNK: f64 = 1.0;
+/// Largest number of internal steps (duration / internal step) one
+/// `simulate` accepts: about 1e6 s of simulated time at the default
+/// internal step of 1e-4 s, a few minutes of wall time.
+pub const MAX_SIMULATE_STEPS: f64 = 1e10;
+
+/// Accepted `--road` values (case-insensitive), for error messages.
+const ROAD_NAMES: &str = "harmonic, iso8608 (alias iso), paper or file:PATH (any case)";
 
 /// Time-delay feedback controlled suspension with an annular
 /// vibration-absorbing structure (CS, PVASS, TDVASS).
@@ -71,7 +91,7 @@ struct ModelArgs {
     #[arg(long, default_value_t = 348.0)]
     c_h: f64,
     /// Feedback gain g (N/m).
-    #[arg(long, default_value_t = 5386.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 5386.0)]
     g: f64,
     /// Feedback delay tau (s).
     #[arg(long, default_value_t = 2e-4)]
@@ -95,10 +115,52 @@ impl ModelArgs {
     }
 }
 
+/// A `--road` value, read case-insensitively (the path of `file:PATH` is
+/// kept as typed).
+#[derive(Debug, Clone, PartialEq)]
+enum RoadName {
+    Harmonic,
+    Iso8608,
+    Paper,
+    File(String),
+}
+
+impl RoadName {
+    fn parse(text: &str) -> Result<RoadName> {
+        let trimmed = text.trim();
+        let lower = trimmed.to_ascii_lowercase();
+        Ok(match lower.as_str() {
+            "harmonic" => RoadName::Harmonic,
+            "iso8608" | "iso" => RoadName::Iso8608,
+            "paper" => RoadName::Paper,
+            _ if lower.starts_with("file:") => RoadName::File(trimmed["file:".len()..].to_string()),
+            _ => {
+                return Err(Error::UnknownName {
+                    what: "road",
+                    given: text.to_string(),
+                    expected: ROAD_NAMES,
+                });
+            }
+        })
+    }
+
+    /// The name a result records (`harmonic`, `iso8608`, `paper`, `file:PATH`).
+    fn canonical(&self) -> String {
+        match self {
+            RoadName::Harmonic => "harmonic".into(),
+            RoadName::Iso8608 => "iso8608".into(),
+            RoadName::Paper => "paper".into(),
+            RoadName::File(path) => format!("file:{path}"),
+        }
+    }
+}
+
 /// Road, solver and objective settings shared by `simulate` and `optimize`.
 #[derive(Debug, Clone, Args)]
 struct RunArgs {
-    /// harmonic, iso8608, paper (the paper-compatible random road) or file:PATH (CSV t,x_g).
+    /// harmonic, iso8608 (alias iso), paper (the paper-compatible random
+    /// road) or file:PATH (CSV rows t,x_g; the last value is held after the
+    /// last row). Any case.
     #[arg(long, default_value = "harmonic")]
     road: String,
     /// Harmonic amplitude (m).
@@ -107,7 +169,7 @@ struct RunArgs {
     /// Harmonic angular frequency (rad/s).
     #[arg(long, default_value_t = 5.0)]
     road_angular_frequency: f64,
-    /// ISO 8608 class, A..H or 1..8.
+    /// ISO 8608 class of the random roads, A..H (any case) or 1..8.
     #[arg(long, default_value = "C")]
     road_class: String,
     /// Vehicle speed u (m/s).
@@ -140,37 +202,36 @@ struct RunArgs {
 }
 
 impl RunArgs {
+    fn road_name(&self) -> Result<RoadName> {
+        RoadName::parse(&self.road)
+    }
+
+    fn road_class(&self) -> Result<RoadClass> {
+        match self.road_class.trim().parse::<i64>() {
+            Ok(code) => RoadClass::from_code(code),
+            Err(_) => self.road_class.parse::<RoadClass>(),
+        }
+    }
+
     fn road_spec(&self) -> Result<RoadSpec> {
-        let class = match self.road_class.parse::<i64>() {
-            Ok(code) => RoadClass::from_code(code)?,
-            Err(_) => self.road_class.parse::<RoadClass>()?,
-        };
+        let road = self.road_name()?;
         let random = RandomRoad {
-            class,
+            class: self.road_class()?,
             speed: self.vehicle_speed,
             cutoff_frequency: self.road_cutoff_frequency,
             seed: self.road_seed,
         };
-        let spec = match self.road.as_str() {
-            "harmonic" => RoadSpec::Harmonic {
+        let spec = match road {
+            RoadName::Harmonic => RoadSpec::Harmonic {
                 amplitude: self.road_amplitude,
                 angular_frequency: self.road_angular_frequency,
             },
-            "iso8608" | "iso" => RoadSpec::Iso8608(random),
-            "paper" => RoadSpec::PaperCompatible {
+            RoadName::Iso8608 => RoadSpec::Iso8608(random),
+            RoadName::Paper => RoadSpec::PaperCompatible {
                 road: random,
                 sample_interval: self.road_sample_interval,
             },
-            other => match other.strip_prefix("file:") {
-                Some(path) => RoadSpec::from_csv_file(path)?,
-                None => {
-                    return Err(Error::InvalidSetting {
-                        name: "road",
-                        value: -1,
-                        reason: "must be harmonic, iso8608, paper or file:PATH",
-                    });
-                }
-            },
+            RoadName::File(path) => RoadSpec::from_csv_file(&path)?,
         };
         spec.validate()?;
         Ok(spec)
@@ -194,11 +255,49 @@ impl RunArgs {
 
     /// A sentence saying which road a result used.
     fn road_note(&self) -> String {
-        match self.road.as_str() {
-            "paper" => "paper-compatible band-limited road (about 10x weaker than true ISO 8608; reproduces the paper's Table 3)".into(),
-            "iso8608" | "iso" => format!("ISO 8608 class {} road at {} m/s", self.road_class, self.vehicle_speed),
-            "harmonic" => format!("harmonic road {} sin({} t)", self.road_amplitude, self.road_angular_frequency),
-            other => format!("road from {other}"),
+        let class = self
+            .road_class()
+            .map_or_else(|_| self.road_class.clone(), |c| format!("{c:?}"));
+        match self.road_name() {
+            Ok(RoadName::Paper) => "paper-compatible band-limited road (about 10x weaker than true ISO 8608; reproduces the paper's Table 3)".into(),
+            Ok(RoadName::Iso8608) => format!("ISO 8608 class {class} road at {} m/s", self.vehicle_speed),
+            Ok(RoadName::Harmonic) => format!("harmonic road {} sin({} t)", self.road_amplitude, self.road_angular_frequency),
+            Ok(RoadName::File(path)) => format!("road from file:{path}"),
+            Err(_) => format!("road {}", self.road),
+        }
+    }
+
+    /// Every road, solver and objective setting of a run, by the FMU
+    /// parameter names (the road by its canonical name, the class as a
+    /// letter).
+    fn record(&self, value: &mut serde_json::Value) -> Result<()> {
+        value["road"] = self.road_name()?.canonical().into();
+        value["road_amplitude"] = self.road_amplitude.into();
+        value["road_angular_frequency"] = self.road_angular_frequency.into();
+        value["road_class"] = format!("{:?}", self.road_class()?).into();
+        value["vehicle_speed"] = self.vehicle_speed.into();
+        value["road_cutoff_frequency"] = self.road_cutoff_frequency.into();
+        value["road_seed"] = self.road_seed.into();
+        value["road_sample_interval"] = self.road_sample_interval.into();
+        value["max_internal_step"] = self.max_internal_step.into();
+        value["w_ba"] = self.w_ba.into();
+        value["w_sdd"] = self.w_sdd.into();
+        value["w_tdd"] = self.w_tdd.into();
+        value["duration"] = self.duration.into();
+        Ok(())
+    }
+
+    /// Warns (on standard error) when a run of `duration` seconds goes past
+    /// the last sample of a road file, whose value is then held.
+    fn warn_past_road_end(&self, spec: &RoadSpec) {
+        if let Some((last_time, last_value)) = spec.last_sample()
+            && self.duration > last_time
+        {
+            eprintln!(
+                "warning: the road file ends at t = {last_time} s; from there to {} s \
+                 its last value x_g = {last_value} m is held",
+                self.duration
+            );
         }
     }
 }
@@ -209,7 +308,7 @@ struct SimulateArgs {
     model: ModelArgs,
     #[command(flatten)]
     run: RunArgs,
-    /// cs, pvass or tdvass.
+    /// cs, pvass or tdvass (any case; or the codes 1, 2, 3).
     #[arg(long, default_value = "tdvass")]
     variant: String,
     /// Write the time histories to this CSV file.
@@ -239,7 +338,7 @@ struct StabilityArgs {
 struct StableArgs {
     #[command(flatten)]
     model: ModelArgs,
-    /// cs, pvass or tdvass.
+    /// cs, pvass or tdvass (any case; or the codes 1, 2, 3).
     #[arg(long, default_value = "tdvass")]
     variant: String,
     /// How many rightmost roots to list.
@@ -254,7 +353,7 @@ struct StableArgs {
 struct FrfArgs {
     #[command(flatten)]
     model: ModelArgs,
-    /// cs, pvass or tdvass.
+    /// cs, pvass or tdvass (any case; or the codes 1, 2, 3).
     #[arg(long, default_value = "tdvass")]
     variant: String,
     /// Lowest frequency (Hz).
@@ -276,7 +375,9 @@ struct FrfArgs {
 
 #[derive(Debug, Args)]
 struct OptimizeArgs {
-    /// absorber (k_h, c_h of PVASS) or controller (g, tau of TDVASS).
+    /// absorber (k_h, c_h of PVASS in (0, k_s) x (0, c_s)) or controller
+    /// (g, tau of TDVASS in [--g-min, --g-max] x [--tau-min, --tau-max]).
+    /// Any case.
     target: String,
     #[command(flatten)]
     model: ModelArgs,
@@ -291,15 +392,18 @@ struct OptimizeArgs {
     /// Seed of the swarm.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Controller bounds (N/m, s); absorber bounds are (0, k_s) x (0, c_s).
-    #[arg(long, allow_negative_numbers = true)]
-    g_min: Option<f64>,
-    #[arg(long, allow_negative_numbers = true)]
-    g_max: Option<f64>,
-    #[arg(long)]
-    tau_min: Option<f64>,
-    #[arg(long)]
-    tau_max: Option<f64>,
+    /// Controller only: lower bound of the gain g (N/m).
+    #[arg(long, default_value_t = CONTROLLER_GAIN_RANGE[0])]
+    g_min: f64,
+    /// Controller only: upper bound of the gain g (N/m).
+    #[arg(long, default_value_t = CONTROLLER_GAIN_RANGE[1])]
+    g_max: f64,
+    /// Controller only: lower bound of the delay tau (s, >= 0).
+    #[arg(long, default_value_t = CONTROLLER_DELAY_RANGE[0])]
+    tau_min: f64,
+    /// Controller only: upper bound of the delay tau (s).
+    #[arg(long, default_value_t = CONTROLLER_DELAY_RANGE[1])]
+    tau_max: f64,
     /// Print one JSON object.
     #[arg(long)]
     json: bool,
@@ -310,10 +414,10 @@ struct MapArgs {
     #[command(flatten)]
     model: ModelArgs,
     /// Smallest gain (N/m).
-    #[arg(long, default_value_t = -200000.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = -200000.0)]
     g_min: f64,
     /// Largest gain (N/m).
-    #[arg(long, default_value_t = 200000.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 200000.0)]
     g_max: f64,
     /// Gain samples.
     #[arg(long, default_value_t = 400)]
@@ -336,22 +440,183 @@ fn parse_variant(name: &str) -> Result<Variant> {
     name.parse()
 }
 
+fn parse_target(name: &str) -> Result<Target> {
+    match name.trim().to_ascii_lowercase().as_str() {
+        "absorber" => Ok(Target::Absorber),
+        "controller" => Ok(Target::Controller),
+        _ => Err(Error::UnknownName {
+            what: "optimisation target",
+            given: name.to_string(),
+            expected: "absorber or controller (any case)",
+        }),
+    }
+}
+
+fn io_error(action: &'static str, path: &str, error: &std::io::Error) -> Error {
+    Error::Io {
+        action,
+        path: path.to_string(),
+        reason: error.to_string(),
+    }
+}
+
 fn write_text(path: &str, text: &str) -> Result<()> {
-    std::fs::write(path, text).map_err(|e| Error::Numerical {
-        what: "writing output",
-        reason: format!("{path}: {e}"),
-    })
+    std::fs::write(path, text).map_err(|e| io_error("writing", path, &e))
+}
+
+/// The command line: the derived parser, with negative numbers accepted as
+/// the value of every flag (`--tau -1` reaches the model's own check).
+fn command() -> clap::Command {
+    Cli::command().mut_subcommands(|sub| sub.mut_args(|arg| arg.allow_negative_numbers(true)))
+}
+
+/// The flags given on the command line (argument ids such as `road_seed`).
+#[derive(Debug, Default)]
+struct GivenFlags(BTreeSet<String>);
+
+impl GivenFlags {
+    fn from_matches(matches: &ArgMatches) -> GivenFlags {
+        GivenFlags(
+            matches
+                .ids()
+                .filter(|id| matches.value_source(id.as_str()) == Some(ValueSource::CommandLine))
+                .map(|id| id.as_str().to_string())
+                .collect(),
+        )
+    }
+
+    /// A warning naming those of `ids` that were given, saying `why` they do
+    /// nothing; `None` when none of them was given.
+    fn unused(&self, ids: &[&str], why: &str) -> Option<String> {
+        let flags: Vec<String> = ids
+            .iter()
+            .filter(|id| self.0.contains(**id))
+            .map(|id| format!("--{}", id.replace('_', "-")))
+            .collect();
+        match flags.len() {
+            0 => None,
+            1 => Some(format!("warning: {} has no effect: {why}", flags[0])),
+            _ => Some(format!(
+                "warning: {} have no effect: {why}",
+                flags.join(", ")
+            )),
+        }
+    }
+}
+
+const HARMONIC_ROAD_FLAGS: [&str; 2] = ["road_amplitude", "road_angular_frequency"];
+const RANDOM_ROAD_FLAGS: [&str; 4] = [
+    "road_class",
+    "vehicle_speed",
+    "road_cutoff_frequency",
+    "road_seed",
+];
+const PAPER_ROAD_FLAGS: [&str; 1] = ["road_sample_interval"];
+
+fn variant_warnings(variant: &str, given: &GivenFlags, warnings: &mut Vec<String>) {
+    match parse_variant(variant) {
+        Ok(Variant::Cs) => warnings.extend(given.unused(
+            &["g", "tau", "m_h", "k_h", "c_h"],
+            "CS has neither the absorber (m_h, k_h, c_h) nor the feedback (g, tau)",
+        )),
+        Ok(Variant::Pvass) => warnings.extend(given.unused(
+            &["g", "tau"],
+            "the feedback u = g x_t(t - tau) acts in TDVASS only",
+        )),
+        Ok(Variant::Tdvass) | Err(_) => {}
+    }
+}
+
+fn road_warnings(run: &RunArgs, given: &GivenFlags, warnings: &mut Vec<String>) {
+    let random_and_paper: Vec<&str> = RANDOM_ROAD_FLAGS
+        .iter()
+        .chain(&PAPER_ROAD_FLAGS)
+        .copied()
+        .collect();
+    match run.road_name() {
+        Ok(RoadName::Harmonic) => warnings.extend(given.unused(
+            &random_and_paper,
+            "they set the random roads (--road iso8608 or paper)",
+        )),
+        Ok(RoadName::Iso8608) => {
+            warnings.extend(given.unused(&HARMONIC_ROAD_FLAGS, "harmonic road only"));
+            warnings.extend(given.unused(
+                &PAPER_ROAD_FLAGS,
+                "paper-compatible road (--road paper) only",
+            ));
+        }
+        Ok(RoadName::Paper) => {
+            warnings.extend(given.unused(&HARMONIC_ROAD_FLAGS, "harmonic road only"));
+        }
+        Ok(RoadName::File(_)) => {
+            let all: Vec<&str> = HARMONIC_ROAD_FLAGS
+                .iter()
+                .chain(&random_and_paper)
+                .copied()
+                .collect();
+            warnings.extend(given.unused(&all, "the road comes from the file"));
+        }
+        Err(_) => {}
+    }
+}
+
+/// Warnings about flags that the command line accepted but that do not
+/// apply to this run.
+fn warnings(command: &Command, given: &GivenFlags) -> Vec<String> {
+    let mut warnings = Vec::new();
+    match command {
+        Command::Simulate(a) => {
+            variant_warnings(&a.variant, given, &mut warnings);
+            road_warnings(&a.run, given, &mut warnings);
+            if a.output.is_none() {
+                warnings.extend(given.unused(&["output_interval"], "it needs --output"));
+            }
+        }
+        Command::Stability(_) => {
+            warnings.extend(given.unused(&["tau"], "stability scans tau from 0 to --tau-max"))
+        }
+        Command::Stable(a) => variant_warnings(&a.variant, given, &mut warnings),
+        Command::Frf(a) => variant_warnings(&a.variant, given, &mut warnings),
+        Command::Optimize(a) => {
+            road_warnings(&a.run, given, &mut warnings);
+            match parse_target(&a.target) {
+                Ok(Target::Absorber) => {
+                    warnings.extend(given.unused(
+                        &["g", "tau"],
+                        "the absorber is optimised as PVASS, without feedback",
+                    ));
+                    warnings.extend(
+                        given.unused(&["k_h", "c_h"], "the absorber optimisation searches them"),
+                    );
+                    warnings.extend(given.unused(
+                        &["g_min", "g_max", "tau_min", "tau_max"],
+                        "they bound the controller optimisation only",
+                    ));
+                }
+                Ok(Target::Controller) => warnings.extend(
+                    given.unused(&["g", "tau"], "the controller optimisation searches them"),
+                ),
+                Err(_) => {}
+            }
+        }
+        Command::Map(_) => warnings.extend(given.unused(
+            &["g", "tau"],
+            "the map scans g from --g-min to --g-max and tau from 0 to --tau-max",
+        )),
+    }
+    warnings
 }
 
 /// Runs the command line `args` (including the program name); returns what
-/// to print on standard output.
+/// to print on standard output. Warnings about flags that do not apply,
+/// and the progress of long runs, go to standard error.
 pub fn run<I, T>(args: I) -> std::result::Result<String, String>
 where
     I: IntoIterator<Item = T>,
     T: Into<std::ffi::OsString> + Clone,
 {
-    let cli = match Cli::try_parse_from(args) {
-        Ok(cli) => cli,
+    let matches = match command().try_get_matches_from(args) {
+        Ok(matches) => matches,
         Err(e)
             if matches!(
                 e.kind(),
@@ -362,101 +627,107 @@ where
         }
         Err(e) => return Err(e.to_string()),
     };
+    let cli = Cli::from_arg_matches(&matches).map_err(|e| e.to_string())?;
+    let given = matches
+        .subcommand()
+        .map(|(_, sub)| GivenFlags::from_matches(sub))
+        .unwrap_or_default();
+    for warning in warnings(&cli.command, &given) {
+        eprintln!("{warning}");
+    }
     execute(cli).map_err(|e| format!("error: {e}"))
+}
+
+/// Stable delay intervals in the notation used throughout: `[0, b)` for the
+/// interval that starts at tau = 0, `(a, b)` for the others (the critical
+/// delays themselves are not stable), `b]` when the interval reaches
+/// `tau_max` (stable up to the end of the scan), joined by ` ∪ `.
+pub fn format_stable_intervals(intervals: &[(f64, f64)], tau_max: f64) -> String {
+    if intervals.is_empty() {
+        return "none".into();
+    }
+    intervals
+        .iter()
+        .map(|&(from, to)| {
+            let open = if from == 0.0 { "[0" } else { "(" };
+            let from = if from == 0.0 {
+                String::new()
+            } else {
+                format!("{from:.4}")
+            };
+            let close = if to >= tau_max { "]" } else { ")" };
+            format!("{open}{from}, {to:.4}{close}")
+        })
+        .collect::<Vec<_>>()
+        .join(" ∪ ")
+}
+
+fn stability_command(a: StabilityArgs) -> Result<String> {
+    let report = StabilityReport::compute(&a.model.params(), a.model.g, a.tau_max)?;
+    if a.json {
+        return Ok(report.to_json().to_string());
+    }
+    let mut out = String::new();
+    let _ = writeln!(out, "g = {} N/m, tau up to {} s", a.model.g, a.tau_max);
+    let _ = writeln!(
+        out,
+        "Routh-Hurwitz (tau = 0): stable for g < {:.2} N/m",
+        report.routh_hurwitz_g_max
+    );
+    let _ = writeln!(
+        out,
+        "delay-independent stability: |g| <= {:.2} N/m",
+        report.delay_independent_g_max
+    );
+    for c in &report.crossings {
+        let delays = if c.critical_delays.is_empty() {
+            format!("none up to {} s", a.tau_max)
+        } else {
+            c.critical_delays
+                .iter()
+                .map(|d| format!("{d:.4}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let _ = writeln!(
+            out,
+            "crossing omega = {:.4} rad/s, direction {:+} ({}), critical delays (s): {delays}",
+            c.crossing.omega,
+            c.crossing.direction,
+            match c.crossing.direction {
+                1 => "destabilising",
+                -1 => "stabilising",
+                _ => "tangent",
+            },
+        );
+    }
+    let _ = writeln!(
+        out,
+        "stable delays (s): {}",
+        format_stable_intervals(&report.stable_intervals, a.tau_max)
+    );
+    Ok(out)
 }
 
 fn execute(cli: Cli) -> Result<String> {
     match cli.command {
         Command::Simulate(a) => simulate_command(a),
-        Command::Stability(a) => {
-            let report = StabilityReport::compute(&a.model.params(), a.model.g, a.tau_max)?;
-            if a.json {
-                return Ok(report.to_json().to_string());
-            }
-            let value = report.to_json();
-            let mut out = String::new();
-            let _ = writeln!(out, "g = {} N/m, tau up to {} s", a.model.g, a.tau_max);
-            let _ = writeln!(
-                out,
-                "Routh-Hurwitz (tau = 0): stable for g < {:.2} N/m",
-                value["routh_hurwitz_g_max"].as_f64().unwrap_or(f64::NAN)
-            );
-            let _ = writeln!(
-                out,
-                "delay-independent stability: |g| <= {:.2} N/m",
-                value["delay_independent_g_max"]
-                    .as_f64()
-                    .unwrap_or(f64::NAN)
-            );
-            for c in value["crossings"].as_array().into_iter().flatten() {
-                let delays: Vec<String> = c["critical_delays"]
-                    .as_array()
-                    .into_iter()
-                    .flatten()
-                    .filter_map(|d| d.as_f64())
-                    .map(|d| format!("{d:.4}"))
-                    .collect();
-                let _ = writeln!(
-                    out,
-                    "crossing omega = {:.4} rad/s, direction {:+} ({}), critical delays: {}",
-                    c["omega"].as_f64().unwrap_or(f64::NAN),
-                    c["direction"].as_i64().unwrap_or(0),
-                    if c["direction"].as_i64() == Some(1) {
-                        "destabilising"
-                    } else {
-                        "stabilising"
-                    },
-                    delays.join(", ")
-                );
-            }
-            let intervals: Vec<String> = value["stable_intervals"]
-                .as_array()
-                .into_iter()
-                .flatten()
-                .map(|i| {
-                    format!(
-                        "[{:.4}, {:.4})",
-                        i[0].as_f64().unwrap_or(f64::NAN),
-                        i[1].as_f64().unwrap_or(f64::NAN)
-                    )
-                })
-                .collect();
-            let _ = writeln!(
-                out,
-                "stable delays: {}",
-                if intervals.is_empty() {
-                    "none".into()
-                } else {
-                    intervals.join(" U ")
-                }
-            );
-            Ok(out)
-        }
+        Command::Stability(a) => stability_command(a),
         Command::Stable(a) => {
             let report =
                 StableReport::compute(&a.model.params(), parse_variant(&a.variant)?, a.roots)?;
             if a.json {
                 return Ok(report.to_json().to_string());
             }
-            let value = report.to_json();
             let mut out = format!(
                 "g = {} N/m, tau = {} s: {} (spectral abscissa {:.6} 1/s)\nrightmost roots:\n",
                 a.model.g,
                 a.model.tau,
-                if value["stable"].as_bool() == Some(true) {
-                    "stable"
-                } else {
-                    "UNSTABLE"
-                },
-                value["spectral_abscissa"].as_f64().unwrap_or(f64::NAN)
+                if report.stable { "stable" } else { "UNSTABLE" },
+                report.spectral_abscissa
             );
-            for r in value["rightmost_roots"].as_array().into_iter().flatten() {
-                let _ = writeln!(
-                    out,
-                    "  {:+.6} {:+.6} i",
-                    r[0].as_f64().unwrap_or(f64::NAN),
-                    r[1].as_f64().unwrap_or(f64::NAN)
-                );
+            for r in &report.rightmost_roots {
+                let _ = writeln!(out, "  {:+.6} {:+.6} i", r.re, r.im);
             }
             Ok(out)
         }
@@ -490,60 +761,136 @@ fn execute(cli: Cli) -> Result<String> {
             })
         }
         Command::Optimize(a) => optimize_command(a),
-        Command::Map(a) => {
-            let params = a.model.params();
-            let grid = |lo: f64, hi: f64, n: usize| -> Vec<f64> {
-                (0..n)
-                    .map(|i| {
-                        if n == 1 {
-                            lo
-                        } else {
-                            lo + (hi - lo) * i as f64 / (n - 1) as f64
-                        }
-                    })
-                    .collect()
-            };
-            let gains = grid(a.g_min, a.g_max, a.g_points.max(1));
-            let delays = grid(0.0, a.tau_max, a.tau_points.max(1));
-            let points = stability_map(&params, &gains, &delays)?;
-            let mut csv = String::from("g,tau,stable,spectral_abscissa\n");
-            for p in &points {
-                let _ = writeln!(
-                    csv,
-                    "{},{},{},{}",
-                    p.g,
-                    p.tau,
-                    u8::from(p.stable),
-                    p.spectral_abscissa
-                );
-            }
-            if let Some(path) = &a.output {
-                write_text(path, &csv)?;
-            }
-            if a.json {
-                let stable = points.iter().filter(|p| p.stable).count();
-                return Ok(
-                    json!({"points": points.len(), "stable_points": stable, "output": a.output})
-                        .to_string(),
-                );
-            }
-            Ok(if a.output.is_some() {
-                format!(
-                    "wrote {} points to {}\n",
-                    points.len(),
-                    a.output.unwrap_or_default()
-                )
-            } else {
-                csv
+        Command::Map(a) => map_command(a),
+    }
+}
+
+fn map_command(a: MapArgs) -> Result<String> {
+    let params = a.model.params();
+    let grid = |lo: f64, hi: f64, n: usize| -> Vec<f64> {
+        (0..n)
+            .map(|i| {
+                if n == 1 {
+                    lo
+                } else {
+                    lo + (hi - lo) * i as f64 / (n - 1) as f64
+                }
             })
+            .collect()
+    };
+    let gains = grid(a.g_min, a.g_max, a.g_points.max(1));
+    let delays = grid(0.0, a.tau_max, a.tau_points.max(1));
+    let points = stability_map(&params, &gains, &delays)?;
+    let mut csv = String::from("g,tau,stable,spectral_abscissa\n");
+    for p in &points {
+        let _ = writeln!(
+            csv,
+            "{},{},{},{}",
+            p.g,
+            p.tau,
+            u8::from(p.stable),
+            p.spectral_abscissa
+        );
+    }
+    if let Some(path) = &a.output {
+        write_text(path, &csv)?;
+    }
+    if a.json {
+        let stable = points.iter().filter(|p| p.stable).count();
+        return Ok(json!({
+            "points": points.len(),
+            "stable_points": stable,
+            "output": a.output,
+            "g_min": a.g_min,
+            "g_max": a.g_max,
+            "g_points": gains.len(),
+            "tau_max": a.tau_max,
+            "tau_points": delays.len(),
+        })
+        .to_string());
+    }
+    Ok(if a.output.is_some() {
+        format!(
+            "wrote {} points to {}\n",
+            points.len(),
+            a.output.unwrap_or_default()
+        )
+    } else {
+        csv
+    })
+}
+
+/// Reports a long simulation's progress on standard error: nothing during
+/// the first [`PROGRESS_AFTER`] of wall time, then a progress bar on a
+/// terminal, or otherwise one line every [`PROGRESS_LINE_INTERVAL`].
+struct SimulationProgress {
+    /// Simulated time of the whole run (s).
+    duration: f64,
+    started: Instant,
+    terminal: bool,
+    bar: Option<indicatif::ProgressBar>,
+    last_line: Option<Instant>,
+}
+
+impl SimulationProgress {
+    fn new(duration: f64) -> SimulationProgress {
+        SimulationProgress {
+            duration,
+            started: Instant::now(),
+            terminal: std::io::stderr().is_terminal(),
+            bar: None,
+            last_line: None,
+        }
+    }
+
+    /// The run has reached simulated time `time` (s).
+    fn update(&mut self, time: f64) {
+        let elapsed = self.started.elapsed();
+        if elapsed < PROGRESS_AFTER {
+            return;
+        }
+        let fraction = if self.duration > 0.0 {
+            (time / self.duration).clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
+        if self.terminal {
+            let bar = self.bar.get_or_insert_with(|| {
+                let bar = indicatif::ProgressBar::new(1000);
+                bar.set_style(
+                    indicatif::ProgressStyle::with_template(
+                        "{bar:40} {percent:>3} % simulated, {msg} [{elapsed_precise}, ETA {eta}]",
+                    )
+                    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+                );
+                bar
+            });
+            bar.set_position((fraction * 1000.0) as u64);
+            bar.set_message(format!("t = {time:.1} of {} s", self.duration));
+        } else if self
+            .last_line
+            .is_none_or(|last| last.elapsed() >= PROGRESS_LINE_INTERVAL)
+        {
+            eprintln!(
+                "simulate: t = {time:.1} of {} s ({:.0} %), {:.0} s elapsed",
+                self.duration,
+                100.0 * fraction,
+                elapsed.as_secs_f64()
+            );
+            self.last_line = Some(Instant::now());
+        }
+    }
+
+    fn finish(self) {
+        if let Some(bar) = self.bar {
+            bar.finish_and_clear();
         }
     }
 }
 
 fn simulate_command(a: SimulateArgs) -> Result<String> {
     let variant = parse_variant(&a.variant)?;
-    let config = a.run.config(a.model.params(), variant)?;
-    let mut sim = Simulator::new(config)?;
+    let params = a.model.params();
     let duration = a.run.duration;
     if !(duration.is_finite() && duration >= 0.0) {
         return Err(Error::InvalidParameter {
@@ -552,6 +899,20 @@ fn simulate_command(a: SimulateArgs) -> Result<String> {
             reason: "must be finite and >= 0",
         });
     }
+    let config = a.run.config(params, variant)?;
+    let road = config.road.clone();
+    let mut sim = Simulator::new(config)?;
+    if duration / a.run.max_internal_step > MAX_SIMULATE_STEPS {
+        return Err(Error::InvalidParameter {
+            name: "duration",
+            value: duration,
+            reason: "the run would need more than the limit of 1e10 internal steps \
+                     (duration / max_internal_step; 1e6 s at the default 1e-4 s step, \
+                     minutes of wall time): shorten it or raise --max-internal-step",
+        });
+    }
+    a.run.warn_past_road_end(&road);
+    let mut progress = SimulationProgress::new(duration);
     if let Some(path) = &a.output {
         if !(a.output_interval.is_finite() && a.output_interval > 0.0) {
             return Err(Error::InvalidParameter {
@@ -560,15 +921,20 @@ fn simulate_command(a: SimulateArgs) -> Result<String> {
                 reason: "must be finite and > 0",
             });
         }
-        let mut csv = String::from(
-            "time,x_s,v_s,x_h,v_h,x_t,v_t,body_acceleration,suspension_deflection,tire_deflection,road_displacement,control_force\n",
-        );
+        let file = std::fs::File::create(path).map_err(|e| io_error("creating", path, &e))?;
+        let mut csv = std::io::BufWriter::new(file);
+        let write_error = |e: std::io::Error| io_error("writing", path, &e);
+        writeln!(
+            csv,
+            "time,x_s,v_s,x_h,v_h,x_t,v_t,body_acceleration,suspension_deflection,tire_deflection,road_displacement,control_force"
+        )
+        .map_err(write_error)?;
         let rows = (duration / a.output_interval).floor() as u64;
         for i in 0..=rows {
             sim.advance_to((i as f64 * a.output_interval).min(duration))?;
             let o = sim.outputs();
             let s = o.state;
-            let _ = writeln!(
+            writeln!(
                 csv,
                 "{},{},{},{},{},{},{},{},{},{},{},{}",
                 o.time,
@@ -583,24 +949,35 @@ fn simulate_command(a: SimulateArgs) -> Result<String> {
                 o.performance.tire_deflection,
                 o.road_displacement,
                 o.control_force
-            );
+            )
+            .map_err(write_error)?;
+            progress.update(o.time);
         }
-        write_text(path, &csv)?;
+        csv.flush().map_err(write_error)?;
+    }
+    let mut time = sim.time();
+    while time < duration {
+        time = (time + PROGRESS_CHUNK).min(duration);
+        sim.advance_to(time)?;
+        progress.update(time);
     }
     sim.advance_to(duration)?;
+    progress.finish();
     let o = sim.outputs();
     if a.json {
-        return Ok(json!({
+        let mut value = json!({
             "variant": variant.name(),
-            "road": a.run.road,
             "road_note": a.run.road_note(),
-            "duration": duration,
             "rms_body_acceleration": o.rms.body_acceleration,
             "rms_suspension_deflection": o.rms.suspension_deflection,
             "rms_tire_deflection": o.rms.tire_deflection,
             "objective": o.objective,
-        })
-        .to_string());
+        });
+        for (name, parameter) in params.named_values() {
+            value[name] = parameter.into();
+        }
+        a.run.record(&mut value)?;
+        return Ok(value.to_string());
     }
     Ok(format!(
         "{} on the {}, {} s from rest\n  RMS body acceleration      {:.4} m/s^2\n  RMS suspension deflection  {:.4} m\n  RMS tire deflection        {:.4} mm\n  objective J                {:.6}\n",
@@ -614,32 +991,57 @@ fn simulate_command(a: SimulateArgs) -> Result<String> {
     ))
 }
 
-fn optimize_command(a: OptimizeArgs) -> Result<String> {
-    let target = match a.target.as_str() {
-        "absorber" => Target::Absorber,
-        "controller" => Target::Controller,
-        _ => {
-            return Err(Error::InvalidSetting {
-                name: "target",
-                value: -1,
-                reason: "must be absorber or controller",
+/// The controller's search box from `--g-min/--g-max/--tau-min/--tau-max`;
+/// an error names the flag at fault.
+fn controller_bounds(a: &OptimizeArgs) -> Result<Bounds> {
+    for (flag, value) in [
+        ("--g-min", a.g_min),
+        ("--g-max", a.g_max),
+        ("--tau-min", a.tau_min),
+        ("--tau-max", a.tau_max),
+    ] {
+        if !value.is_finite() {
+            return Err(Error::InvalidParameter {
+                name: flag,
+                value,
+                reason: "must be finite",
             });
         }
-    };
+    }
+    if a.tau_min < 0.0 {
+        return Err(Error::InvalidParameter {
+            name: "--tau-min",
+            value: a.tau_min,
+            reason: "a delay must be >= 0",
+        });
+    }
+    if a.g_max <= a.g_min {
+        return Err(Error::InvalidParameter {
+            name: "--g-max",
+            value: a.g_max,
+            reason: "must be greater than --g-min",
+        });
+    }
+    if a.tau_max <= a.tau_min {
+        return Err(Error::InvalidParameter {
+            name: "--tau-max",
+            value: a.tau_max,
+            reason: "must be greater than --tau-min",
+        });
+    }
+    Ok(Bounds {
+        lower: vec![a.g_min, a.tau_min],
+        upper: vec![a.g_max, a.tau_max],
+    })
+}
+
+fn optimize_command(a: OptimizeArgs) -> Result<String> {
+    let target = parse_target(&a.target)?;
     let base = a.run.config(a.model.params(), target.variant())?;
+    a.run.warn_past_road_end(&base.road);
     let mut problem = Problem::new(target, base, a.run.duration);
     if target == Target::Controller {
-        let d = problem.bounds.clone();
-        problem.bounds = Bounds {
-            lower: vec![
-                a.g_min.unwrap_or(d.lower[0]),
-                a.tau_min.unwrap_or(d.lower[1]),
-            ],
-            upper: vec![
-                a.g_max.unwrap_or(d.upper[0]),
-                a.tau_max.unwrap_or(d.upper[1]),
-            ],
-        };
+        problem.bounds = controller_bounds(&a)?;
     }
     let settings = PsoSettings {
         particles: a.particles,
@@ -666,7 +1068,14 @@ fn optimize_command(a: OptimizeArgs) -> Result<String> {
         return Ok(value.to_string());
     }
     let names = target.parameter_names();
-    let mut out = format!("{} optimisation on the {}\n", a.target, a.run.road_note());
+    let mut out = format!(
+        "{} optimisation on the {}\n",
+        match target {
+            Target::Absorber => "absorber",
+            Target::Controller => "controller",
+        },
+        a.run.road_note()
+    );
     let _ = writeln!(
         out,
         "  best: {} = {:.6}, {} = {:.6}, J = {:.6} ({} evaluations)",

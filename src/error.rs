@@ -37,6 +37,21 @@ pub enum Error {
         value: f64,
         bound: f64,
     },
+    /// A name (of a variant, a road, a road class, an optimisation target)
+    /// is not one of the accepted ones; `given` is the text as typed.
+    #[error("invalid {what} `{given}`: expected {expected}")]
+    UnknownName {
+        what: &'static str,
+        given: String,
+        expected: &'static str,
+    },
+    /// A file could not be written (or created).
+    #[error("I/O error {action} `{path}`: {reason}")]
+    Io {
+        action: &'static str,
+        path: String,
+        reason: String,
+    },
     /// A road file could not be read or parsed.
     #[error("road file `{path}`: {reason}")]
     RoadFile { path: String, reason: String },

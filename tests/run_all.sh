@@ -5,6 +5,29 @@
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
+# What the tests need besides Rust and Python 3 (the same list as .ci/run,
+# which installs it): checked up front, so that a missing package stops
+# here with the command that installs it rather than deep inside a phase.
+missing=()
+python3 -c "import venv, ensurepip" 2>/dev/null || missing+=(python3-venv)
+if command -v dpkg-query >/dev/null; then
+    for package in libtbb12 libclang-dev valgrind gcc g++; do
+        dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed" ||
+            missing+=("$package")
+    done
+else
+    echo "note: no dpkg-query; make sure libtbb12, libclang-dev, valgrind, gcc and g++ (or your system's equivalents) are installed" >&2
+fi
+if [ ${#missing[@]} -gt 0 ]; then
+    echo "tests/run_all.sh needs these Debian packages: ${missing[*]}" >&2
+    echo "install them with:  apt-get install -y --no-install-recommends ${missing[*]}" >&2
+    echo "(or run .ci/run, which installs them and then runs this script)" >&2
+    exit 1
+fi
+if ! cargo fmt --version >/dev/null 2>&1 || ! cargo clippy --version >/dev/null 2>&1; then
+    echo "tests/run_all.sh needs rustfmt and clippy: rustup component add rustfmt clippy" >&2
+    exit 1
+fi
 python="$(tests/python_env.sh)"
 echo "== cargo fmt --check"
 cargo fmt --all -- --check

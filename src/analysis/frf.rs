@@ -145,6 +145,24 @@ pub struct FrfPoint {
 
 /// Both gains on `points` log-spaced frequencies from `f_min_hz` to
 /// `f_max_hz` (Hz, both included).
+///
+/// The conventional suspension's body resonance lies near 1 Hz, and the
+/// TDVASS's static body gain is `1 − g/k_h`:
+///
+/// ```
+/// use tdvass::analysis::frf::{frequency_response, peaks_hz};
+/// use tdvass::{Params, Variant};
+///
+/// let params = Params::default(); // Table 1, g = 5386 N/m, tau = 2e-4 s
+/// let curve = frequency_response(&params, Variant::Cs, 0.1, 30.0, 500)?; // Hz
+/// let peaks = peaks_hz(&params, Variant::Cs, &curve)?;
+/// assert!((peaks.body_displacement[0] - 0.99).abs() < 0.01); // Hz
+///
+/// let low = frequency_response(&params, Variant::Tdvass, 1e-4, 1e-3, 2)?;
+/// let static_gain = 1.0 - params.g / params.k_h; // 0.164
+/// assert!((low[0].body_displacement - static_gain).abs() < 1e-3);
+/// # Ok::<(), tdvass::Error>(())
+/// ```
 pub fn frequency_response(
     params: &Params,
     variant: Variant,

@@ -26,6 +26,13 @@ pub enum Target {
     Controller,
 }
 
+/// Default search range of the feedback gain g for [`Target::Controller`]
+/// (N/m).
+pub const CONTROLLER_GAIN_RANGE: [f64; 2] = [0.0, 20000.0];
+/// Default search range of the feedback delay tau for
+/// [`Target::Controller`] (s).
+pub const CONTROLLER_DELAY_RANGE: [f64; 2] = [0.0, 0.05];
+
 impl Target {
     /// Names of the optimised parameters, in order.
     pub fn parameter_names(self) -> [&'static str; 2] {
@@ -56,8 +63,8 @@ impl Target {
                 }
             }
             Target::Controller => Bounds {
-                lower: vec![0.0, 0.0],
-                upper: vec![20000.0, 0.05],
+                lower: vec![CONTROLLER_GAIN_RANGE[0], CONTROLLER_DELAY_RANGE[0]],
+                upper: vec![CONTROLLER_GAIN_RANGE[1], CONTROLLER_DELAY_RANGE[1]],
             },
         }
     }
@@ -206,6 +213,24 @@ impl Report {
 }
 
 /// Runs the swarm on `problem` and scores the paper's point(s).
+///
+/// A small controller search (8 particles, 4 iterations, 2 s runs) on the
+/// harmonic road; J at the paper's (g1, tau1) comes with it:
+///
+/// ```
+/// use tdvass::analysis::optimize::{Problem, Target, optimize};
+/// use tdvass::analysis::pso::PsoSettings;
+/// use tdvass::solver::SimulationConfig;
+///
+/// let problem = Problem::new(Target::Controller, SimulationConfig::default(), 2.0); // 2 s runs
+/// let settings = PsoSettings { particles: 8, iterations: 4, ..PsoSettings::default() };
+/// let report = optimize(&problem, &settings, None)?;
+/// let paper_j = report.paper[0].objective.expect("(g1, tau1) is stable");
+/// assert!(report.swarm.best_value <= paper_j + 0.05);
+/// let [g, tau] = [report.swarm.best_position[0], report.swarm.best_position[1]];
+/// assert!((0.0..=20000.0).contains(&g) && (0.0..=0.05).contains(&tau)); // N/m, s
+/// # Ok::<(), tdvass::Error>(())
+/// ```
 pub fn optimize(
     problem: &Problem,
     settings: &PsoSettings,

@@ -280,6 +280,23 @@ where
 /// [`Error::InvalidParameter`] / [`Error::InvalidSetting`] for invalid
 /// `bounds` or `settings`, and [`Error::Numerical`] if no evaluated candidate
 /// was feasible.
+///
+/// # Example
+///
+/// A small swarm on a bowl with its minimum at (1, −2):
+///
+/// ```
+/// use tdvass::analysis::pso::{Bounds, PsoSettings, pso_minimize};
+///
+/// let bowl = |x: &[f64]| Some((x[0] - 1.0).powi(2) + (x[1] + 2.0).powi(2));
+/// let bounds = Bounds::new(vec![-5.0, -5.0], vec![5.0, 5.0])?;
+/// let settings = PsoSettings { particles: 20, iterations: 60, seed: 7, ..PsoSettings::default() };
+/// let result = pso_minimize(bowl, &bounds, &settings, None)?;
+/// assert!((result.best_position[0] - 1.0).abs() < 1e-2);
+/// assert!((result.best_position[1] + 2.0).abs() < 1e-2);
+/// assert_eq!(result.evaluations, 20 * 61);
+/// # Ok::<(), tdvass::Error>(())
+/// ```
 pub fn pso_minimize<F>(
     objective: F,
     bounds: &Bounds,

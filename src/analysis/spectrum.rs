@@ -420,6 +420,19 @@ pub fn rightmost_roots(
 /// Real part (1/s) of the rightmost characteristic root of `variant` at the
 /// gain and delay of `params`; the system is asymptotically stable iff it
 /// is negative.
+///
+/// The paper's verification points A1* (stable) and A2* (unstable):
+///
+/// ```
+/// use tdvass::analysis::spectrum::spectral_abscissa;
+/// use tdvass::{Params, Variant};
+///
+/// let a1 = spectral_abscissa(&Params::with_controller(40000.0, 0.03), Variant::Tdvass)?; // N/m, s
+/// let a2 = spectral_abscissa(&Params::with_controller(-40000.0, 0.11), Variant::Tdvass)?;
+/// assert!((a1 - (-0.457)).abs() < 5e-4); // 1/s: decays like e^(-0.457 t)
+/// assert!((a2 - 1.311).abs() < 5e-4); // 1/s: grows
+/// # Ok::<(), tdvass::Error>(())
+/// ```
 pub fn spectral_abscissa(params: &Params, variant: Variant) -> Result<f64> {
     CharacteristicRootSolver::new(params, variant)?.spectral_abscissa(params.tau)
 }

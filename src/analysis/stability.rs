@@ -702,6 +702,24 @@ pub struct StabilityReport {
 impl StabilityReport {
     /// Runs the analyses of section 3 for `gain` (N/m) up to `tau_max` (s);
     /// the other parameters come from `params` (its g and tau are ignored).
+    ///
+    /// Section 3 at g = 50000 N/m with the Table 1 parameters:
+    ///
+    /// ```
+    /// use tdvass::Params;
+    /// use tdvass::analysis::stability::StabilityReport;
+    ///
+    /// let report = StabilityReport::compute(&Params::default(), 50000.0, 0.5)?; // N/m, s
+    /// assert!((report.routh_hurwitz_g_max - 171870.87).abs() < 0.01); // N/m
+    /// let omegas: Vec<f64> = report.crossings.iter().map(|c| c.crossing.omega).collect();
+    /// assert!((omegas[0] - 62.3487).abs() < 1e-4 && (omegas[1] - 75.1147).abs() < 1e-4); // rad/s
+    /// // Stable for tau in [0, 0.0502) ∪ (0.0945, 0.1338) ∪ ... (s)
+    /// let (from, to) = report.stable_intervals[0];
+    /// assert_eq!(from, 0.0);
+    /// assert!((to - 0.0502).abs() < 1e-4);
+    /// assert!((report.stable_intervals[1].0 - 0.0945).abs() < 1e-4);
+    /// # Ok::<(), tdvass::Error>(())
+    /// ```
     pub fn compute(params: &Params, gain: f64, tau_max: f64) -> Result<StabilityReport> {
         check_tau_max(tau_max)?;
         let crossings = crossings(params, gain)?

@@ -101,10 +101,10 @@ impl std::str::FromStr for Variant {
             "cs" | "1" => Ok(Variant::Cs),
             "pvass" | "2" => Ok(Variant::Pvass),
             "tdvass" | "3" => Ok(Variant::Tdvass),
-            _ => Err(Error::InvalidSetting {
-                name: "variant",
-                value: -1,
-                reason: "must be cs, pvass or tdvass",
+            _ => Err(Error::UnknownName {
+                what: "variant",
+                given: s.to_string(),
+                expected: "cs, pvass or tdvass (or their codes 1, 2, 3; any case)",
             }),
         }
     }

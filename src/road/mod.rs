@@ -95,10 +95,10 @@ impl std::str::FromStr for RoadClass {
             .iter()
             .find(|k| format!("{k:?}") == c)
             .copied()
-            .ok_or(Error::InvalidSetting {
-                name: "road_class",
-                value: -1,
-                reason: "must be a letter A..H",
+            .ok_or_else(|| Error::UnknownName {
+                what: "road class",
+                given: s.to_string(),
+                expected: "an ISO 8608 class A..H (any case)",
             })
     }
 }
@@ -202,6 +202,16 @@ impl RoadSpec {
                 positive("road_sample_interval", *sample_interval)
             }
             RoadSpec::Samples(samples) => validate_samples(samples),
+        }
+    }
+
+    /// The last sample of a sampled road: (t in s, x_g in m). A sampled road
+    /// holds this value after `t` (and its first value before its first
+    /// sample). `None` for the other roads, which never end.
+    pub fn last_sample(&self) -> Option<(f64, f64)> {
+        match self {
+            RoadSpec::Samples(samples) => samples.last().copied(),
+            _ => None,
         }
     }
 
@@ -721,6 +731,16 @@ fn sample_piece(samples: &[(f64, f64)], t: f64) -> RoadPiece {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_sampled_road_reports_its_last_sample_and_holds_it() {
+        let spec = RoadSpec::Samples(Arc::new(vec![(0.0, 0.0), (1.0, 0.02), (2.5, -0.01)]));
+        assert_eq!(spec.last_sample(), Some((2.5, -0.01)));
+        let mut road = Road::new(&spec, 0.0).unwrap();
+        assert_eq!(road.value(2.5), -0.01);
+        assert_eq!(road.value(40.0), -0.01);
+        assert_eq!(RoadSpec::paper_harmonic().last_sample(), None);
+    }
 
     #[test]
     fn class_roughness_follows_iso8608() {

@@ -34,6 +34,7 @@ PICTURES = {
     "frequency_response.py": ["frequency_response.png"],
     "pso.py": ["pso.png"],
     "sweep_dask.py": ["sweep_dask.png"],
+    "plot_result.py": ["plot_result.png"],
 }
 # examples that are not `--quick --out` scripts
 NOT_SCRIPTS = {"default_experiment.py"}
@@ -128,6 +129,8 @@ def _stability_verification(out: Path, text: str) -> None:
 def _stability_map(out: Path, text: str) -> None:
     assert "all six verdicts agree with the paper: yes" in text, text
     assert "171870.87" in text and "24427.66" in text, text
+    # one notation for the stable delay intervals, as in the READMEs and the CLI
+    assert "tdvass: [0, 0.0502) ∪ (0.0945, 0.1338) ∪ (0.1953, 0.2175) ∪ (0.2961, 0.3011)" in text, text
 
 
 def _frequency_response(out: Path, text: str) -> None:
@@ -137,6 +140,14 @@ def _frequency_response(out: Path, text: str) -> None:
 
 def _pso(out: Path, text: str) -> None:
     assert text.count("PSO optimum:") == 3, text
+
+
+def _plot_result(out: Path, text: str) -> None:
+    # a 2 s run of the default experiment: the body acceleration is of the order of 0.1..1 m/s^2
+    rows = {line.split()[0]: line.split()[1:] for line in text.splitlines()[2:]}
+    assert set(rows) == {"body_acceleration", "suspension_deflection", "tire_deflection", "road_displacement"}, text
+    assert 0.05 < float(rows["body_acceleration"][3]) < 2.0, text
+    assert abs(float(rows["road_displacement"][2]) - 0.05) < 1e-3, text
 
 
 def _sweep_dask(out: Path, text: str) -> None:
@@ -153,4 +164,5 @@ CHECKS = {
     "frequency_response.py": _frequency_response,
     "pso.py": _pso,
     "sweep_dask.py": _sweep_dask,
+    "plot_result.py": _plot_result,
 }

@@ -1,0 +1,463 @@
+//! The `tdvass` command line as a user meets it: the built binary, its exit
+//! status, standard output and standard error.
+
+use serde_json::Value;
+use std::path::PathBuf;
+use std::process::Command;
+
+/// What one run of the binary gave.
+struct Outcome {
+    success: bool,
+    stdout: String,
+    stderr: String,
+}
+
+fn tdvass(args: &[&str]) -> Outcome {
+    let output = Command::new(env!("CARGO_BIN_EXE_tdvass"))
+        .args(args)
+        .output()
+        .expect("the tdvass binary runs");
+    Outcome {
+        success: output.status.success(),
+        stdout: String::from_utf8_lossy(&output.stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&output.stderr).into_owned(),
+    }
+}
+
+/// Runs a command that must succeed and print one JSON object.
+fn tdvass_json(args: &[&str]) -> Value {
+    let mut all = args.to_vec();
+    all.push("--json");
+    let run = tdvass(&all);
+    assert!(run.success, "{args:?} failed: {}", run.stderr);
+    serde_json::from_str(&run.stdout).unwrap_or_else(|e| panic!("{args:?}: {e}: {}", run.stdout))
+}
+
+/// Runs a command that must fail; returns its standard error.
+fn failure(args: &[&str]) -> String {
+    let run = tdvass(args);
+    assert!(!run.success, "{args:?} succeeded: {}", run.stdout);
+    run.stderr
+}
+
+/// A file name in the temporary directory, unique to this test process.
+fn temporary(name: &str) -> PathBuf {
+    std::env::temp_dir().join(format!("tdvass-cli-{}-{name}", std::process::id()))
+}
+
+/// The "Command line" section of README.md.
+fn readme_command_line_section() -> String {
+    let readme =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/README.md")).unwrap();
+    let start = readme
+        .find("\n## Command line")
+        .expect("README.md has a Command line section");
+    let rest = &readme[start + 1..];
+    let end = rest.find("\n## ").unwrap_or(rest.len());
+    rest[..end].to_string()
+}
+
+#[test]
+fn negative_numbers_reach_the_model_checks() {
+    let cases: [(&[&str], &str); 5] = [
+        (&["simulate", "--tau", "-1"], "`tau`"),
+        (&["simulate", "--m-s", "-345"], "`m_s`"),
+        (&["simulate", "--duration", "-5"], "`duration`"),
+        (&["stability", "--tau-max", "-1"], "`tau_max`"),
+        (&["frf", "--f-min", "-0.5"], "`f_min`"),
+    ];
+    for (args, parameter) in cases {
+        let stderr = failure(args);
+        assert!(
+            !stderr.contains("unexpected argument"),
+            "{args:?}: {stderr}"
+        );
+        assert!(
+            stderr.contains(parameter) && stderr.contains(args[2]),
+            "{args:?} should name {parameter} and its value: {stderr}"
+        );
+    }
+    // Negative values that are admissible run.
+    let run = tdvass(&["stable", "--g", "-40000", "--tau", "0.25", "--json"]);
+    assert!(run.success, "{}", run.stderr);
+    let run = tdvass(&[
+        "map",
+        "--g-min",
+        "-1000",
+        "--g-max",
+        "-10",
+        "--g-points",
+        "2",
+        "--tau-points",
+        "2",
+        "--json",
+    ]);
+    assert!(run.success, "{}", run.stderr);
+}
+
+#[test]
+fn a_bad_name_is_echoed_with_the_valid_ones() {
+    let cases: [(&[&str], &str, &[&str]); 4] = [
+        (
+            &["simulate", "--road", "bumpy"],
+            "`bumpy`",
+            &["harmonic", "iso8608", "paper", "file:PATH"],
+        ),
+        (
+            &["simulate", "--variant", "foo"],
+            "`foo`",
+            &["cs", "pvass", "tdvass"],
+        ),
+        (
+            &["simulate", "--road", "iso8608", "--road-class", "Z"],
+            "`Z`",
+            &["A..H"],
+        ),
+        (&["optimize", "foo"], "`foo`", &["absorber", "controller"]),
+    ];
+    for (args, echo, valid) in cases {
+        let stderr = failure(args);
+        assert!(stderr.contains(echo), "{args:?}: {stderr}");
+        assert!(!stderr.contains("-1 for"), "{args:?}: {stderr}");
+        for name in valid {
+            assert!(
+                stderr.contains(name),
+                "{args:?} should list {name}: {stderr}"
+            );
+        }
+    }
+}
+
+#[test]
+fn names_are_matched_whatever_their_case() {
+    let short = ["--duration", "0.5"];
+    let reference = tdvass_json(&[&["simulate", "--road", "iso8608"][..], &short].concat());
+    for spelling in ["ISO8608", "Iso8608", "iso", "ISO"] {
+        let other = tdvass_json(&[&["simulate", "--road", spelling][..], &short].concat());
+        assert_eq!(
+            other["rms_body_acceleration"], reference["rms_body_acceleration"],
+            "--road {spelling}"
+        );
+        assert_eq!(other["road"], "iso8608", "--road {spelling}");
+    }
+    let reference = tdvass_json(&[&["simulate", "--variant", "pvass"][..], &short].concat());
+    let upper = tdvass_json(&[&["simulate", "--variant", "PVASS"][..], &short].concat());
+    assert_eq!(upper["variant"], "pvass");
+    assert_eq!(upper["objective"], reference["objective"]);
+    let lower = tdvass_json(
+        &[
+            &["simulate", "--road", "Paper", "--road-class", "d"][..],
+            &short,
+        ]
+        .concat(),
+    );
+    let upper = tdvass_json(
+        &[
+            &["simulate", "--road", "paper", "--road-class", "D"][..],
+            &short,
+        ]
+        .concat(),
+    );
+    assert_eq!(lower["objective"], upper["objective"]);
+    assert_eq!(lower["road_class"], "D");
+    let run = tdvass(&[
+        "optimize",
+        "Controller",
+        "--particles",
+        "2",
+        "--iterations",
+        "1",
+        "--duration",
+        "0.2",
+        "--json",
+    ]);
+    assert!(run.success, "{}", run.stderr);
+}
+
+#[test]
+fn io_errors_are_labelled_as_io() {
+    let missing = "/nonexistent-directory-of-tdvass/o.csv";
+    let cases: [&[&str]; 3] = [
+        &["simulate", "--duration", "0.1", "--output", missing],
+        &["frf", "--points", "3", "--output", missing],
+        &[
+            "map",
+            "--g-points",
+            "2",
+            "--tau-points",
+            "2",
+            "--output",
+            missing,
+        ],
+    ];
+    for args in cases {
+        let stderr = failure(args);
+        assert!(stderr.contains("I/O error"), "{args:?}: {stderr}");
+        assert!(stderr.contains(missing), "{args:?}: {stderr}");
+        assert!(!stderr.contains("numerical"), "{args:?}: {stderr}");
+    }
+}
+
+#[test]
+fn a_flag_that_does_not_apply_warns() {
+    let warns = |args: &[&str], flag: &str| {
+        let run = tdvass(args);
+        assert!(run.success, "{args:?}: {}", run.stderr);
+        run.stderr
+            .lines()
+            .any(|l| l.starts_with("warning:") && l.contains(flag))
+    };
+    assert!(warns(
+        &["simulate", "--variant", "cs", "--g", "2528"],
+        "--g"
+    ));
+    assert!(warns(
+        &["simulate", "--variant", "pvass", "--tau", "0.01"],
+        "--tau"
+    ));
+    assert!(warns(
+        &["simulate", "--variant", "cs", "--k-h", "5000"],
+        "--k-h"
+    ));
+    assert!(!warns(
+        &["simulate", "--variant", "tdvass", "--g", "2528"],
+        "--g"
+    ));
+    assert!(!warns(&["simulate", "--variant", "cs"], "--g"));
+    assert!(warns(&["simulate", "--road-seed", "3"], "--road-seed"));
+    assert!(!warns(
+        &["simulate", "--road", "paper", "--road-seed", "3"],
+        "--road-seed"
+    ));
+    assert!(warns(
+        &[
+            "simulate",
+            "--road",
+            "iso8608",
+            "--road-sample-interval",
+            "0.2"
+        ],
+        "--road-sample-interval"
+    ));
+    assert!(warns(
+        &["simulate", "--output-interval", "0.01"],
+        "--output-interval"
+    ));
+    assert!(warns(
+        &["stability", "--g", "50000", "--tau", "0.1"],
+        "--tau"
+    ));
+    assert!(warns(
+        &["frf", "--variant", "cs", "--g", "100", "--points", "3"],
+        "--g"
+    ));
+}
+
+#[test]
+fn simulate_json_records_every_parameter_of_the_run() {
+    let value = tdvass_json(&[
+        "simulate",
+        "--variant",
+        "TDVASS",
+        "--road",
+        "iso",
+        "--road-class",
+        "b",
+        "--road-seed",
+        "9",
+        "--vehicle-speed",
+        "15",
+        "--g",
+        "1234.5",
+        "--tau",
+        "0.001",
+        "--k-h",
+        "6000",
+        "--duration",
+        "0.5",
+    ]);
+    let expected = [
+        ("variant", Value::from("tdvass")),
+        ("road", Value::from("iso8608")),
+        ("road_class", Value::from("B")),
+        ("road_seed", Value::from(9)),
+        ("vehicle_speed", Value::from(15.0)),
+        ("g", Value::from(1234.5)),
+        ("tau", Value::from(0.001)),
+        ("k_h", Value::from(6000.0)),
+        ("m_s", Value::from(345.0)),
+        ("duration", Value::from(0.5)),
+        ("max_internal_step", Value::from(1e-4)),
+    ];
+    for (key, value_expected) in expected {
+        assert_eq!(value[key], value_expected, "key {key}");
+    }
+    for key in [
+        "rms_body_acceleration",
+        "rms_suspension_deflection",
+        "rms_tire_deflection",
+        "objective",
+        "road_note",
+        "road_amplitude",
+        "road_angular_frequency",
+        "road_cutoff_frequency",
+        "road_sample_interval",
+        "w_ba",
+        "w_sdd",
+        "w_tdd",
+    ] {
+        assert!(!value[key].is_null(), "key {key} missing: {value}");
+    }
+}
+
+#[test]
+fn optimize_help_documents_every_bound_and_a_bad_bound_names_its_flag() {
+    let run = tdvass(&["optimize", "--help"]);
+    assert!(run.success);
+    for (flag, default) in [
+        ("--g-min", "[default: 0]"),
+        ("--g-max", "[default: 20000]"),
+        ("--tau-min", "[default: 0]"),
+        ("--tau-max", "[default: 0.05]"),
+    ] {
+        let mut lines = run
+            .stdout
+            .lines()
+            .skip_while(|l| !l.trim_start().starts_with(flag));
+        assert!(lines.next().is_some(), "{flag} missing from the help");
+        let text = lines.next().unwrap_or_default();
+        assert!(
+            text.contains("bound") && text.contains(default),
+            "{flag}: `{text}`"
+        );
+    }
+    let cases: [(&[&str], &str); 3] = [
+        (&["optimize", "controller", "--g-max", "-5"], "`--g-max`"),
+        (
+            &["optimize", "controller", "--tau-min", "-0.1"],
+            "`--tau-min`",
+        ),
+        (
+            &[
+                "optimize",
+                "controller",
+                "--tau-min",
+                "0.1",
+                "--tau-max",
+                "0.05",
+            ],
+            "`--tau-max`",
+        ),
+    ];
+    for (args, flag) in cases {
+        let stderr = failure(args);
+        assert!(stderr.contains(flag), "{args:?}: {stderr}");
+        assert!(!stderr.contains("bounds."), "{args:?}: {stderr}");
+    }
+}
+
+#[test]
+fn a_long_simulation_reports_progress_and_an_endless_one_is_refused() {
+    // About 4e8 internal steps: several seconds of wall time.
+    let run = tdvass(&[
+        "simulate",
+        "--duration",
+        "4000",
+        "--max-internal-step",
+        "1e-5",
+    ]);
+    assert!(run.success, "{}", run.stderr);
+    assert!(
+        run.stderr.contains("simulate: t = ") && run.stderr.contains(" of 4000 s"),
+        "no progress on standard error: {}",
+        run.stderr
+    );
+    // A short one stays silent.
+    let run = tdvass(&["simulate", "--duration", "1"]);
+    assert!(run.success && run.stderr.is_empty(), "{}", run.stderr);
+    let stderr = failure(&["simulate", "--duration", "1e9"]);
+    assert!(
+        stderr.contains("`duration`") && stderr.contains("1e10 internal steps"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn map_and_simulate_json_keys_are_documented_in_the_readme() {
+    let readme = readme_command_line_section();
+    let map = tdvass_json(&["map", "--g-points", "2", "--tau-points", "2"]);
+    let simulate = tdvass_json(&["simulate", "--duration", "0.1"]);
+    for value in [map, simulate] {
+        for key in value.as_object().unwrap().keys() {
+            assert!(
+                readme.contains(&format!("`{key}`")),
+                "JSON key `{key}` is not documented in the Command line section of README.md"
+            );
+        }
+    }
+}
+
+#[test]
+fn stability_lists_no_empty_delay_line_and_one_interval_notation() {
+    let run = tdvass(&["stability", "--g", "200000"]);
+    assert!(run.success, "{}", run.stderr);
+    for line in run.stdout.lines() {
+        assert!(
+            !line.trim_end().ends_with(':'),
+            "a line ends without its values: `{line}`"
+        );
+    }
+    for g in ["50000", "-50000", "200000"] {
+        let table = tdvass(&["stability", "--g", g]).stdout;
+        let json = tdvass_json(&["stability", "--g", g]);
+        let expected: Vec<String> = json["stable_intervals"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|i| {
+                let (from, to) = (i[0].as_f64().unwrap(), i[1].as_f64().unwrap());
+                if from == 0.0 {
+                    format!("[0, {to:.4})")
+                } else {
+                    format!("({from:.4}, {to:.4})")
+                }
+            })
+            .collect();
+        let line = table
+            .lines()
+            .find(|l| l.starts_with("stable delays"))
+            .unwrap();
+        assert!(
+            line.ends_with(&expected.join(" ∪ ")),
+            "g = {g}: `{line}`, expected {expected:?}"
+        );
+    }
+}
+
+#[test]
+fn a_csv_road_warns_past_its_last_sample_and_accepts_the_documented_formats() {
+    let path = temporary("road.csv");
+    // A header, a comment, semicolons, a tab, spaces and an extra numeric
+    // column.
+    std::fs::write(
+        &path,
+        "time;x_g;speed\n# measured\n0;0;20\n0.5\t0.01\t20\n1.0 , 0.02 , 20\n2.0;0.0;20\n",
+    )
+    .unwrap();
+    let road = format!("file:{}", path.display());
+    let past = tdvass(&["simulate", "--road", &road, "--duration", "3", "--json"]);
+    let within = tdvass(&["simulate", "--road", &road, "--duration", "1.5", "--json"]);
+    std::fs::remove_file(&path).unwrap();
+    assert!(past.success, "{}", past.stderr);
+    assert!(
+        past.stderr
+            .contains("warning: the road file ends at t = 2 s"),
+        "{}",
+        past.stderr
+    );
+    assert!(
+        within.success && within.stderr.is_empty(),
+        "{}",
+        within.stderr
+    );
+}
