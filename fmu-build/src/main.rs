@@ -164,7 +164,13 @@ impl Platform {
 /// [`std::env::consts`] names them, `Err` when FMI 2.0 names no platform for it.
 fn host_platform(os: &str, arch: &str) -> Result<Platform> {
     let (fmi2_folder, label, prefix, extension, format) = match (os, arch) {
-        ("linux", "x86_64") => ("linux64", "Linux x86-64", "lib", "so", BinaryFormat::ElfX86_64),
+        ("linux", "x86_64") => (
+            "linux64",
+            "Linux x86-64",
+            "lib",
+            "so",
+            BinaryFormat::ElfX86_64,
+        ),
         ("linux", "x86") => ("linux32", "Linux x86", "lib", "so", BinaryFormat::ElfX86),
         ("windows", "x86_64") => ("win64", "Windows x86-64", "", "dll", BinaryFormat::PeX86_64),
         ("windows", "x86") => ("win32", "Windows x86", "", "dll", BinaryFormat::PeX86),
@@ -281,10 +287,10 @@ fn missing_requirements(root: &Path, platforms: &[Platform]) -> Vec<String> {
     let mut missing = Vec::new();
     let mut targets = Vec::new();
     for platform in platforms {
-        if let Some(triple) = platform.cross_target {
-            if !rust_target_installed(root, triple) {
-                targets.push(triple);
-            }
+        if let Some(triple) = platform.cross_target
+            && !rust_target_installed(root, triple)
+        {
+            targets.push(triple);
         }
         for requirement in platform.requirements {
             if !file_available(requirement.file) {
@@ -581,11 +587,31 @@ mod tests {
     #[test]
     fn host_platforms_use_the_fmi2_folder_and_library_name_of_the_host() {
         let cases = [
-            ("linux", "x86_64", "binaries/linux64/tdvass.so", "libtdvass.so"),
-            ("windows", "x86_64", "binaries/win64/tdvass.dll", "tdvass.dll"),
+            (
+                "linux",
+                "x86_64",
+                "binaries/linux64/tdvass.so",
+                "libtdvass.so",
+            ),
+            (
+                "windows",
+                "x86_64",
+                "binaries/win64/tdvass.dll",
+                "tdvass.dll",
+            ),
             ("windows", "x86", "binaries/win32/tdvass.dll", "tdvass.dll"),
-            ("macos", "aarch64", "binaries/darwin64/tdvass.dylib", "libtdvass.dylib"),
-            ("macos", "x86_64", "binaries/darwin64/tdvass.dylib", "libtdvass.dylib"),
+            (
+                "macos",
+                "aarch64",
+                "binaries/darwin64/tdvass.dylib",
+                "libtdvass.dylib",
+            ),
+            (
+                "macos",
+                "x86_64",
+                "binaries/darwin64/tdvass.dylib",
+                "libtdvass.dylib",
+            ),
         ];
         for (os, arch, entry, built) in cases {
             let platform = host_platform(os, arch).unwrap();
@@ -597,10 +623,14 @@ mod tests {
             );
         }
         let error = host_platform("linux", "aarch64").unwrap_err();
-        assert!(error.contains("no platform folder for aarch64 linux"), "{error}");
+        assert!(
+            error.contains("no platform folder for aarch64 linux"),
+            "{error}"
+        );
     }
 
     #[test]
+    #[cfg(all(target_os = "linux", target_arch = "x86_64"))]
     fn all_platforms_pack_linux64_and_win64_and_build_aarch64() {
         let platforms = all_platforms().unwrap();
         let entries: Vec<Option<String>> = platforms.iter().map(Platform::fmu_entry).collect();
@@ -620,6 +650,7 @@ mod tests {
 
     /// The linkers that fmu-build looks for are the ones cargo is told to use.
     #[test]
+    #[cfg(all(target_os = "linux", target_arch = "x86_64"))]
     fn cross_linkers_match_the_cargo_configuration() {
         let config = fs::read_to_string(workspace_root().join(".cargo/config.toml")).unwrap();
         for platform in all_platforms().unwrap() {
