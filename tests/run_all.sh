@@ -14,13 +14,15 @@ echo "== cargo test"
 cargo test --workspace --release
 echo "== fmu-build (the checked-in modelDescription must be current, then build the FMU)"
 cargo run --release -p fmu-build -- --check
-cargo run --release -p fmu-build
+cargo run --release -p fmu-build -- --all-platforms
 echo "== pytest (fmpy suite and examples)"
 cargo build --release --bin tdvass
 "$python" -m pytest tests/python -q
 "$python" benches/peers.py --smoke  # peers of BENCHMARKS.md: smoke size, no timing claims
 echo "== robustness suite against the built FMU (bad input, state table, divergence, hangs, valgrind, threads)"
 "$python" -m pytest tests/robustness -q
+echo "== platforms (the same harness on linux64 natively, win64 under wine, aarch64 under qemu)"
+"$python" -m pytest tests/platforms -q
 echo "== fuzzing smoke run (libFuzzer on stable, ${TDVASS_FUZZ_SECONDS:=60} s per target, both at once)"
 bash fuzz/run.sh build
 logs="$(mktemp -d)"
