@@ -100,6 +100,13 @@ def test_shipped_libraries_carry_no_debug_info(platforms):
                           platforms["aarch64"].library) == []
 
 
+def test_windows_dll_carries_no_symbol_table(platforms):
+    """Stripped (.cargo/config.toml); the exported functions remain."""
+    text = objdump("x86_64-w64-mingw32-objdump", "binutils-mingw-w64-x86-64", "-t",
+                   str(platforms["win64"].library))
+    assert "no symbols" in text
+
+
 def fmpy(*args) -> str:
     fmpy_script = Path(sys.executable).parent / "fmpy"
     result = subprocess.run([str(fmpy_script), *args], capture_output=True, text=True, timeout=120)
