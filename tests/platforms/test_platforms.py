@@ -75,7 +75,7 @@ def test_serialize_free_deserialize_continues_the_run(results, platform):
     continued = run.table("roundtrip.csv")
     assert continued[1] and continued[1][0][0] == pytest.approx(SAVE_AT + 1e-3)
     compare(platform, "roundtrip.csv", after_save(results("linux64").table("default.csv")), continued)
-    compare(platform, "roundtrip-own", after_save(run.table("default.csv")), continued)
+    compare(platform, "roundtrip/own", after_save(run.table("default.csv")), continued)
 
 
 @pytest.mark.parametrize("platform", ALL_PLATFORMS)
