@@ -75,12 +75,12 @@ impl BinaryFormat {
     fn of(bytes: &[u8]) -> Option<BinaryFormat> {
         let u16_le = |at: usize| {
             bytes
-                .get(at..at + 2)
+                .get(at..at.checked_add(2)?)
                 .map(|b| u16::from_le_bytes([b[0], b[1]]))
         };
         let u32_le = |at: usize| {
             bytes
-                .get(at..at + 4)
+                .get(at..at.checked_add(4)?)
                 .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
         };
         if bytes.starts_with(b"\x7fELF") {
@@ -95,10 +95,11 @@ impl BinaryFormat {
         if bytes.starts_with(b"MZ") {
             // e_lfanew points to "PE\0\0", followed by the COFF machine.
             let pe = usize::try_from(u32_le(0x3c)?).ok()?;
-            if bytes.get(pe..pe + 4)? != b"PE\0\0" {
+            let coff = pe.checked_add(4)?;
+            if bytes.get(pe..coff)? != b"PE\0\0" {
                 return None;
             }
-            return match u16_le(pe + 4)? {
+            return match u16_le(coff)? {
                 0x8664 => Some(BinaryFormat::PeX86_64),
                 0x014c => Some(BinaryFormat::PeX86),
                 _ => None,
@@ -709,6 +710,8 @@ mod tests {
         pe[0x84..0x86].copy_from_slice(&0x8664u16.to_le_bytes());
         assert_eq!(BinaryFormat::of(&pe), Some(BinaryFormat::PeX86_64));
         pe[0x80] = b'X';
+        assert_eq!(BinaryFormat::of(&pe), None);
+        pe[0x3c..0x40].copy_from_slice(&u32::MAX.to_le_bytes()); // past the end
         assert_eq!(BinaryFormat::of(&pe), None);
         assert_eq!(
             BinaryFormat::of(&0xfeed_facfu32.to_le_bytes()),
