@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Every test of the project: formatting, lints, Rust unit and integration
-# tests, the FMU build and its freshness check, the fmpy suite and the
-# cross-master interoperability tests.
+# tests, the FMU build (every platform) and its freshness check, the fmpy
+# suite, robustness, the platform harness, fuzzing and the cross-master
+# interoperability tests.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
@@ -11,12 +12,13 @@ cd "$root"
 missing=()
 python3 -c "import venv, ensurepip" 2>/dev/null || missing+=(python3-venv)
 if command -v dpkg-query >/dev/null; then
-    for package in libtbb12 libclang-dev valgrind gcc g++; do
+    for package in libtbb12 libclang-dev valgrind gcc g++ \
+        gcc-mingw-w64-x86-64 gcc-aarch64-linux-gnu libc6-dev-arm64-cross wine64 qemu-user; do
         dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed" ||
             missing+=("$package")
     done
 else
-    echo "note: no dpkg-query; make sure libtbb12, libclang-dev, valgrind, gcc and g++ (or your system's equivalents) are installed" >&2
+    echo "note: no dpkg-query; make sure libtbb12, libclang-dev, valgrind, gcc, g++, the MinGW-w64 and aarch64 cross compilers, wine64 and qemu-user (or your system's equivalents) are installed" >&2
 fi
 if [ ${#missing[@]} -gt 0 ]; then
     echo "tests/run_all.sh needs these Debian packages: ${missing[*]}" >&2
@@ -28,6 +30,12 @@ if ! cargo fmt --version >/dev/null 2>&1 || ! cargo clippy --version >/dev/null 
     echo "tests/run_all.sh needs rustfmt and clippy: rustup component add rustfmt clippy" >&2
     exit 1
 fi
+for target in x86_64-pc-windows-gnu aarch64-unknown-linux-gnu; do
+    if ! rustup target list --installed 2>/dev/null | grep -qx "$target"; then
+        echo "tests/run_all.sh needs the Rust target $target: rustup target add $target" >&2
+        exit 1
+    fi
+done
 python="$(tests/python_env.sh)"
 echo "== cargo fmt --check"
 cargo fmt --all -- --check
@@ -37,13 +45,15 @@ echo "== cargo test"
 cargo test --workspace --release
 echo "== fmu-build (the checked-in modelDescription must be current, then build the FMU)"
 cargo run --release -p fmu-build -- --check
-cargo run --release -p fmu-build
+cargo run --release -p fmu-build -- --all-platforms
 echo "== pytest (fmpy suite and examples)"
 cargo build --release --bin tdvass
 "$python" -m pytest tests/python -q
 "$python" benches/peers.py --smoke  # peers of BENCHMARKS.md: smoke size, no timing claims
 echo "== robustness suite against the built FMU (bad input, state table, divergence, hangs, valgrind, threads)"
 "$python" -m pytest tests/robustness -q
+echo "== platforms (the same harness on linux64 natively, win64 under wine, aarch64 under qemu)"
+"$python" -m pytest tests/platforms -q
 echo "== fuzzing smoke run (libFuzzer on stable, ${TDVASS_FUZZ_SECONDS:=60} s per target, both at once)"
 bash fuzz/run.sh build
 logs="$(mktemp -d)"

@@ -2,9 +2,22 @@
 //! `modelDescription/modelDescription.xml`.
 //!
 //! ```text
-//! cargo run --release -p fmu-build            # build the FMU, refresh the copy
-//! cargo run --release -p fmu-build -- --check # fail if the checked-in copy is stale
+//! cargo run --release -p fmu-build                   # the host platform only
+//! cargo run --release -p fmu-build -- --all-platforms # linux64 + win64, and aarch64 Linux
+//! cargo run --release -p fmu-build -- --check        # fail if the checked-in copy is stale
 //! ```
+//!
+//! Without a flag the FMU carries the library of the host (Linux x86-64:
+//! `binaries/linux64/tdvass.so`, Windows x86-64: `binaries/win64/tdvass.dll`,
+//! macOS: `binaries/darwin64/tdvass.dylib`), built with the host's own
+//! toolchain. `--all-platforms` works on a Linux x86-64 host: it cross-builds
+//! the library for Windows x86-64 and Linux aarch64 (linkers set in
+//! `.cargo/config.toml`) and packs linux64 and win64. FMI 2.0 names no
+//! aarch64 platform, so that library stays in
+//! `target/aarch64-unknown-linux-gnu/release/` (tests run it; an FMI 3.0 FMU
+//! would carry it as `aarch64-linux`). A missing Rust target or cross
+//! toolchain stops the build before anything is compiled or packed, naming
+//! the `rustup target add` command or the Debian package that provides it.
 //!
 //! The description and documentation come from the library
 //! ([`tdvass::fmi2::description`]), generated from the variable table.
@@ -40,27 +53,304 @@ fn target_dir(root: &Path) -> PathBuf {
         .unwrap_or_else(|| root.join("target"))
 }
 
-fn build_library(root: &Path) -> Result<PathBuf> {
+/// Machine code of a built library, read from its file header.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum BinaryFormat {
+    /// ELF shared object for x86-64.
+    ElfX86_64,
+    /// ELF shared object for 32-bit x86.
+    ElfX86,
+    /// ELF shared object for AArch64.
+    ElfAarch64,
+    /// PE (Windows) DLL for x86-64.
+    PeX86_64,
+    /// PE (Windows) DLL for 32-bit x86.
+    PeX86,
+    /// Mach-O dynamic library (64-bit, or universal).
+    MachO,
+}
+
+impl BinaryFormat {
+    /// The format of `bytes`, `None` when it is none of the above.
+    fn of(bytes: &[u8]) -> Option<BinaryFormat> {
+        let u16_le = |at: usize| {
+            bytes
+                .get(at..at.checked_add(2)?)
+                .map(|b| u16::from_le_bytes([b[0], b[1]]))
+        };
+        let u32_le = |at: usize| {
+            bytes
+                .get(at..at.checked_add(4)?)
+                .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        };
+        if bytes.starts_with(b"\x7fELF") {
+            // e_machine, little-endian ELF.
+            return match u16_le(18)? {
+                62 => Some(BinaryFormat::ElfX86_64),
+                3 => Some(BinaryFormat::ElfX86),
+                183 => Some(BinaryFormat::ElfAarch64),
+                _ => None,
+            };
+        }
+        if bytes.starts_with(b"MZ") {
+            // e_lfanew points to "PE\0\0", followed by the COFF machine.
+            let pe = usize::try_from(u32_le(0x3c)?).ok()?;
+            let coff = pe.checked_add(4)?;
+            if bytes.get(pe..coff)? != b"PE\0\0" {
+                return None;
+            }
+            return match u16_le(coff)? {
+                0x8664 => Some(BinaryFormat::PeX86_64),
+                0x014c => Some(BinaryFormat::PeX86),
+                _ => None,
+            };
+        }
+        match u32_le(0)? {
+            0xfeed_facf | 0xbeba_feca => Some(BinaryFormat::MachO),
+            _ => None,
+        }
+    }
+}
+
+/// What a platform build needs beyond the host's Rust toolchain.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Requirement {
+    /// An executable that must be on `PATH`, or an absolute path of a file
+    /// that must exist.
+    file: &'static str,
+    /// The Debian package that installs it.
+    debian_package: &'static str,
+}
+
+/// One platform of the shared library.
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct Platform {
+    /// FMI 2.0 platform folder (`binaries/<name>/` in the FMU); `None` when
+    /// FMI 2.0 has no name for the platform (built and tested, not packed).
+    fmi2_folder: Option<&'static str>,
+    /// Human-readable name, for messages.
+    label: &'static str,
+    /// Rust target triple of a cross build; `None` builds for the host into
+    /// `target/release/`.
+    cross_target: Option<&'static str>,
+    /// The file name cargo gives the library (`libtdvass.so`, `tdvass.dll`).
+    built_file: String,
+    /// The extension of the library inside the FMU (`so`, `dll`, `dylib`).
+    extension: &'static str,
+    /// The machine code the built file must contain.
+    format: BinaryFormat,
+    /// Linkers and C libraries of a cross build (as `.cargo/config.toml`
+    /// names them).
+    requirements: &'static [Requirement],
+}
+
+impl Platform {
+    /// The library's path inside the FMU, `None` if it is not packed.
+    fn fmu_entry(&self) -> Option<String> {
+        self.fmi2_folder
+            .map(|folder| format!("binaries/{folder}/{MODEL_IDENTIFIER}.{}", self.extension))
+    }
+
+    /// Where cargo writes the library.
+    fn built_path(&self, target: &Path) -> PathBuf {
+        match self.cross_target {
+            Some(triple) => target.join(triple).join("release"),
+            None => target.join("release"),
+        }
+        .join(&self.built_file)
+    }
+}
+
+/// The host platform for an operating system and architecture as
+/// [`std::env::consts`] names them, `Err` when FMI 2.0 names no platform for it.
+fn host_platform(os: &str, arch: &str) -> Result<Platform> {
+    let (fmi2_folder, label, prefix, extension, format) = match (os, arch) {
+        ("linux", "x86_64") => (
+            "linux64",
+            "Linux x86-64",
+            "lib",
+            "so",
+            BinaryFormat::ElfX86_64,
+        ),
+        ("linux", "x86") => ("linux32", "Linux x86", "lib", "so", BinaryFormat::ElfX86),
+        ("windows", "x86_64") => ("win64", "Windows x86-64", "", "dll", BinaryFormat::PeX86_64),
+        ("windows", "x86") => ("win32", "Windows x86", "", "dll", BinaryFormat::PeX86),
+        // FMI 2.0 has one macOS folder; importers use it for Apple silicon too.
+        ("macos", "x86_64" | "aarch64") => {
+            ("darwin64", "macOS", "lib", "dylib", BinaryFormat::MachO)
+        }
+        _ => {
+            return Err(format!(
+                "FMI 2.0 defines no platform folder for {arch} {os}; build on Linux, \
+                 Windows or macOS (x86-64, or Apple silicon)"
+            ));
+        }
+    };
+    Ok(Platform {
+        fmi2_folder: Some(fmi2_folder),
+        label,
+        cross_target: None,
+        built_file: format!("{prefix}{MODEL_IDENTIFIER}.{extension}"),
+        extension,
+        format,
+        requirements: &[],
+    })
+}
+
+/// The Windows x86-64 cross build (MinGW-w64).
+const WINDOWS_TARGET: &str = "x86_64-pc-windows-gnu";
+/// The Linux aarch64 cross build.
+const AARCH64_TARGET: &str = "aarch64-unknown-linux-gnu";
+
+/// Every platform of `--all-platforms`, from a Linux x86-64 host: linux64
+/// (host), win64 and aarch64 Linux (cross).
+fn all_platforms() -> Result<Vec<Platform>> {
+    let host = host_platform(std::env::consts::OS, std::env::consts::ARCH)?;
+    if host.fmi2_folder != Some("linux64") {
+        return Err(format!(
+            "--all-platforms cross-builds from a Linux x86-64 host with Debian's toolchains; \
+             on {} run `cargo run --release -p fmu-build` for an FMU of this host",
+            host.label
+        ));
+    }
+    Ok(vec![
+        host,
+        Platform {
+            fmi2_folder: Some("win64"),
+            label: "Windows x86-64",
+            cross_target: Some(WINDOWS_TARGET),
+            built_file: format!("{MODEL_IDENTIFIER}.dll"),
+            extension: "dll",
+            format: BinaryFormat::PeX86_64,
+            requirements: &[Requirement {
+                file: "x86_64-w64-mingw32-gcc",
+                debian_package: "gcc-mingw-w64-x86-64",
+            }],
+        },
+        Platform {
+            fmi2_folder: None,
+            label: "Linux aarch64",
+            cross_target: Some(AARCH64_TARGET),
+            built_file: format!("lib{MODEL_IDENTIFIER}.so"),
+            extension: "so",
+            format: BinaryFormat::ElfAarch64,
+            requirements: &[
+                Requirement {
+                    file: "aarch64-linux-gnu-gcc",
+                    debian_package: "gcc-aarch64-linux-gnu",
+                },
+                Requirement {
+                    file: "/usr/aarch64-linux-gnu/lib/libc.so",
+                    debian_package: "libc6-dev-arm64-cross",
+                },
+            ],
+        },
+    ])
+}
+
+/// Whether `file` is an existing absolute path or an executable on `PATH`.
+fn file_available(file: &str) -> bool {
+    let path = Path::new(file);
+    if path.is_absolute() {
+        return path.is_file();
+    }
+    std::env::var_os("PATH")
+        .map(|paths| std::env::split_paths(&paths).any(|dir| dir.join(file).is_file()))
+        .unwrap_or(false)
+}
+
+/// Whether the Rust standard library for `triple` is installed (its
+/// `target-libdir` holds a `libstd`).
+fn rust_target_installed(root: &Path, triple: &str) -> bool {
+    let output = Command::new("rustc")
+        .args(["--print", "target-libdir", "--target", triple])
+        .current_dir(root)
+        .output();
+    let Ok(output) = output else {
+        return false;
+    };
+    if !output.status.success() {
+        return false;
+    }
+    let dir = PathBuf::from(String::from_utf8_lossy(&output.stdout).trim());
+    fs::read_dir(dir)
+        .map(|entries| {
+            entries
+                .flatten()
+                .any(|e| e.file_name().to_string_lossy().starts_with("libstd-"))
+        })
+        .unwrap_or(false)
+}
+
+/// Every missing Rust target and cross toolchain, as instructions to install
+/// them; empty when everything is there.
+fn missing_requirements(root: &Path, platforms: &[Platform]) -> Vec<String> {
+    let mut missing = Vec::new();
+    let mut targets = Vec::new();
+    for platform in platforms {
+        if let Some(triple) = platform.cross_target
+            && !rust_target_installed(root, triple)
+        {
+            targets.push(triple);
+        }
+        for requirement in platform.requirements {
+            if !file_available(requirement.file) {
+                missing.push(format!(
+                    "{} for {} (Debian: `apt-get install {}`)",
+                    requirement.file, platform.label, requirement.debian_package
+                ));
+            }
+        }
+    }
+    if !targets.is_empty() {
+        missing.insert(
+            0,
+            format!(
+                "the Rust standard library for {} (`rustup target add {}`)",
+                targets.join(", "),
+                targets.join(" ")
+            ),
+        );
+    }
+    missing
+}
+
+/// Builds the library for `platform` (release, library only) and returns its
+/// bytes, checked to be machine code of that platform.
+fn build_library(root: &Path, platform: &Platform) -> Result<Vec<u8>> {
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
-    eprintln!("fmu-build: cargo build --release -p tdvass --lib");
+    let mut args = vec!["build", "--release", "-p", "tdvass", "--lib"];
+    if let Some(triple) = platform.cross_target {
+        args.extend(["--target", triple]);
+    }
+    eprintln!("fmu-build: {} cargo {}", platform.label, args.join(" "));
     let status = Command::new(&cargo)
-        .args(["build", "--release", "-p", "tdvass", "--lib"])
+        .args(&args)
         .current_dir(root)
         .status()
         .map_err(|e| format!("cannot run {}: {e}", cargo.to_string_lossy()))?;
     if !status.success() {
-        return Err(format!("cargo build of the library failed ({status})"));
-    }
-    let library = target_dir(root)
-        .join("release")
-        .join(format!("lib{MODEL_IDENTIFIER}.so"));
-    if !library.is_file() {
         return Err(format!(
-            "the shared library {} was not built",
-            library.display()
+            "cargo build of the library for {} failed ({status})",
+            platform.label
         ));
     }
-    Ok(library)
+    let library = platform.built_path(&target_dir(root));
+    let bytes = fs::read(&library).map_err(|e| {
+        format!(
+            "the shared library {} was not built: {e}",
+            library.display()
+        )
+    })?;
+    match BinaryFormat::of(&bytes) {
+        Some(format) if format == platform.format => Ok(bytes),
+        other => Err(format!(
+            "{} is {other:?}, expected {:?} for {}",
+            library.display(),
+            platform.format,
+            platform.label
+        )),
+    }
 }
 
 fn write_fmu(path: &Path, entries: &[(&str, &[u8], u32)]) -> Result<()> {
@@ -172,23 +462,52 @@ fn check_only(root: &Path, description: &str) -> Result<()> {
     Ok(())
 }
 
-fn build(root: &Path, description: &str) -> Result<()> {
-    let library = build_library(root)?;
-    let binary =
-        fs::read(&library).map_err(|e| format!("cannot read {}: {e}", library.display()))?;
+fn build(root: &Path, description: &str, platforms: &[Platform]) -> Result<()> {
+    let missing = missing_requirements(root, platforms);
+    if !missing.is_empty() {
+        return Err(format!(
+            "nothing was built or packed; missing: {}",
+            missing.join("; ")
+        ));
+    }
+    // Every platform is built before anything is packed: a failed build
+    // leaves no FMU with some of its platforms.
+    let mut binaries = Vec::new();
+    for platform in platforms {
+        let bytes = build_library(root, platform)?;
+        let location = platform.built_path(&target_dir(root));
+        match platform.fmu_entry() {
+            Some(entry) => binaries.push((entry, bytes)),
+            None => eprintln!(
+                "fmu-build: {} library (not in the FMI 2.0 FMU): {}",
+                platform.label,
+                location.display()
+            ),
+        }
+    }
     let documentation = documentation_html();
-    let binary_name = format!("binaries/linux64/{MODEL_IDENTIFIER}.so");
-    let entries: [(&str, &[u8], u32); 3] = [
-        ("modelDescription.xml", description.as_bytes(), 0o644),
-        (binary_name.as_str(), &binary, 0o755),
-        ("documentation/index.html", documentation.as_bytes(), 0o644),
-    ];
+    let mut entries: Vec<(&str, &[u8], u32)> =
+        vec![("modelDescription.xml", description.as_bytes(), 0o644)];
+    for (name, bytes) in &binaries {
+        entries.push((name.as_str(), bytes, 0o755));
+    }
+    entries.push(("documentation/index.html", documentation.as_bytes(), 0o644));
     let out_dir = target_dir(root).join("fmu");
     fs::create_dir_all(&out_dir)
         .map_err(|e| format!("cannot create {}: {e}", out_dir.display()))?;
     let fmu = out_dir.join(format!("{MODEL_IDENTIFIER}.fmu"));
-    write_fmu(&fmu, &entries)?;
-    check_fmu(&fmu, &entries)?;
+    // Written beside, checked, then renamed: an interrupted run never leaves
+    // a truncated FMU under the final name.
+    let partial = out_dir.join(format!("{MODEL_IDENTIFIER}.fmu.partial"));
+    write_fmu(&partial, &entries)?;
+    check_fmu(&partial, &entries)?;
+    fs::rename(&partial, &fmu).map_err(|e| {
+        format!(
+            "cannot rename {} to {}: {e}",
+            partial.display(),
+            fmu.display()
+        )
+    })?;
     let mut refreshed = Vec::new();
     for copy in checked_in(root, description)? {
         if copy.current.as_deref() != Some(copy.expected.as_str()) {
@@ -203,9 +522,14 @@ fn build(root: &Path, description: &str) -> Result<()> {
         }
     }
     eprintln!(
-        "fmu-build: wrote {} ({} bytes; GUID {}); refreshed: {}",
+        "fmu-build: wrote {} ({} bytes; {}; GUID {}); refreshed: {}",
         fmu.display(),
         fs::metadata(&fmu).map(|m| m.len()).unwrap_or(0),
+        binaries
+            .iter()
+            .map(|(name, _)| name.as_str())
+            .collect::<Vec<_>>()
+            .join(", "),
         guid(),
         if refreshed.is_empty() {
             "nothing".to_string()
@@ -216,22 +540,37 @@ fn build(root: &Path, description: &str) -> Result<()> {
     Ok(())
 }
 
+/// What the command line asks for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Mode {
+    /// Build the FMU for the host platform.
+    Host,
+    /// Build every platform (linux64, win64, aarch64 Linux).
+    AllPlatforms,
+    /// Only check the checked-in copies.
+    Check,
+}
+
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let check = match args.as_slice() {
-        [] => false,
-        [flag] if flag == "--check" => true,
+    let mode = match args.as_slice() {
+        [] => Mode::Host,
+        [flag] if flag == "--check" => Mode::Check,
+        [flag] if flag == "--all-platforms" => Mode::AllPlatforms,
         _ => {
-            eprintln!("usage: fmu-build [--check]");
+            eprintln!("usage: fmu-build [--check | --all-platforms]");
             return ExitCode::from(2);
         }
     };
     let root = workspace_root();
     let description = model_description_xml();
-    let result = if check {
-        check_only(&root, &description)
-    } else {
-        build(&root, &description)
+    let result = match mode {
+        Mode::Check => check_only(&root, &description),
+        Mode::Host => host_platform(std::env::consts::OS, std::env::consts::ARCH)
+            .and_then(|host| build(&root, &description, &[host])),
+        Mode::AllPlatforms => {
+            all_platforms().and_then(|platforms| build(&root, &description, &platforms))
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -239,5 +578,146 @@ fn main() -> ExitCode {
             eprintln!("fmu-build: error: {message}");
             ExitCode::FAILURE
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn host_platforms_use_the_fmi2_folder_and_library_name_of_the_host() {
+        let cases = [
+            (
+                "linux",
+                "x86_64",
+                "binaries/linux64/tdvass.so",
+                "libtdvass.so",
+            ),
+            (
+                "windows",
+                "x86_64",
+                "binaries/win64/tdvass.dll",
+                "tdvass.dll",
+            ),
+            ("windows", "x86", "binaries/win32/tdvass.dll", "tdvass.dll"),
+            (
+                "macos",
+                "aarch64",
+                "binaries/darwin64/tdvass.dylib",
+                "libtdvass.dylib",
+            ),
+            (
+                "macos",
+                "x86_64",
+                "binaries/darwin64/tdvass.dylib",
+                "libtdvass.dylib",
+            ),
+        ];
+        for (os, arch, entry, built) in cases {
+            let platform = host_platform(os, arch).unwrap();
+            assert_eq!(platform.fmu_entry().as_deref(), Some(entry), "{os} {arch}");
+            assert_eq!(platform.built_file, built, "{os} {arch}");
+            assert_eq!(
+                platform.built_path(Path::new("t")),
+                Path::new("t/release").join(built)
+            );
+        }
+        let error = host_platform("linux", "aarch64").unwrap_err();
+        assert!(
+            error.contains("no platform folder for aarch64 linux"),
+            "{error}"
+        );
+    }
+
+    #[test]
+    #[cfg(all(target_os = "linux", target_arch = "x86_64"))]
+    fn all_platforms_pack_linux64_and_win64_and_build_aarch64() {
+        let platforms = all_platforms().unwrap();
+        let entries: Vec<Option<String>> = platforms.iter().map(Platform::fmu_entry).collect();
+        assert_eq!(
+            entries,
+            [
+                Some("binaries/linux64/tdvass.so".to_string()),
+                Some("binaries/win64/tdvass.dll".to_string()),
+                None,
+            ]
+        );
+        assert_eq!(
+            platforms[2].built_path(Path::new("t")),
+            Path::new("t/aarch64-unknown-linux-gnu/release/libtdvass.so")
+        );
+    }
+
+    /// The linkers that fmu-build looks for are the ones cargo is told to use.
+    #[test]
+    #[cfg(all(target_os = "linux", target_arch = "x86_64"))]
+    fn cross_linkers_match_the_cargo_configuration() {
+        let config = fs::read_to_string(workspace_root().join(".cargo/config.toml")).unwrap();
+        for platform in all_platforms().unwrap() {
+            let Some(triple) = platform.cross_target else {
+                continue;
+            };
+            let section = config
+                .split("\n[")
+                .find(|s| s.starts_with(&format!("target.{triple}]")))
+                .unwrap_or_else(|| panic!("no [target.{triple}] in .cargo/config.toml"));
+            let linker = platform.requirements[0].file;
+            assert!(
+                section.contains(&format!("linker = \"{linker}\"")),
+                "[target.{triple}] must set linker = \"{linker}\""
+            );
+        }
+    }
+
+    #[test]
+    fn missing_targets_and_toolchains_are_named_with_their_install_command() {
+        let platform = Platform {
+            fmi2_folder: Some("win64"),
+            label: "Windows x86-64",
+            cross_target: Some("x86_64-unknown-none-such"),
+            built_file: "tdvass.dll".to_string(),
+            extension: "dll",
+            format: BinaryFormat::PeX86_64,
+            requirements: &[Requirement {
+                file: "no-such-linker-gcc",
+                debian_package: "gcc-no-such",
+            }],
+        };
+        let missing = missing_requirements(&workspace_root(), &[platform]);
+        assert_eq!(missing.len(), 2, "{missing:?}");
+        assert!(missing[0].contains("`rustup target add x86_64-unknown-none-such`"));
+        assert!(missing[1].contains("`apt-get install gcc-no-such`"));
+        // The host needs nothing beyond its own toolchain.
+        let host = host_platform(std::env::consts::OS, std::env::consts::ARCH).unwrap();
+        assert!(missing_requirements(&workspace_root(), &[host]).is_empty());
+    }
+
+    #[test]
+    fn binary_formats_are_read_from_the_headers() {
+        let mut elf = vec![0u8; 64];
+        elf[..4].copy_from_slice(b"\x7fELF");
+        elf[18] = 62;
+        assert_eq!(BinaryFormat::of(&elf), Some(BinaryFormat::ElfX86_64));
+        elf[18] = 183;
+        assert_eq!(BinaryFormat::of(&elf), Some(BinaryFormat::ElfAarch64));
+        elf[18] = 40; // 32-bit ARM: not a platform of the FMU
+        assert_eq!(BinaryFormat::of(&elf), None);
+        let mut pe = vec![0u8; 0x100];
+        pe[..2].copy_from_slice(b"MZ");
+        pe[0x3c] = 0x80;
+        pe[0x80..0x84].copy_from_slice(b"PE\0\0");
+        pe[0x84..0x86].copy_from_slice(&0x8664u16.to_le_bytes());
+        assert_eq!(BinaryFormat::of(&pe), Some(BinaryFormat::PeX86_64));
+        pe[0x80] = b'X';
+        assert_eq!(BinaryFormat::of(&pe), None);
+        pe[0x3c..0x40].copy_from_slice(&u32::MAX.to_le_bytes()); // past the end
+        assert_eq!(BinaryFormat::of(&pe), None);
+        assert_eq!(
+            BinaryFormat::of(&0xfeed_facfu32.to_le_bytes()),
+            Some(BinaryFormat::MachO)
+        );
+        assert_eq!(BinaryFormat::of(b"MZ"), None);
+        assert_eq!(BinaryFormat::of(b""), None);
     }
 }

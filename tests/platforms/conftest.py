@@ -1,0 +1,233 @@
+"""Fixtures of the cross-platform tests: the FMU's binaries for each platform,
+the C harness (harness.c) compiled for each platform, and its results.
+
+Platforms and how the harness runs there:
+  linux64  binaries/linux64/tdvass.so of the FMU, natively
+  win64    binaries/win64/tdvass.dll of the FMU, under wine
+           (/usr/lib/wine/wine64, a private WINEPREFIX in target/platforms)
+  aarch64  target/aarch64-unknown-linux-gnu/release/libtdvass.so (FMI 2.0
+           has no aarch64 platform folder, so it is not in the FMU), under
+           qemu-user (`qemu-aarch64 -L /usr/aarch64-linux-gnu`)
+
+Build everything first with `cargo run --release -p fmu-build -- --all-platforms`.
+"""
+
+import os
+import re
+import shutil
+import subprocess
+import xml.etree.ElementTree as ET
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent.parent
+WINE = Path("/usr/lib/wine/wine64")
+AARCH64_SYSROOT = Path("/usr/aarch64-linux-gnu")
+# The harness's limit of a run (the slowest, under qemu, takes seconds).
+RUN_TIMEOUT_S = 600
+
+# Value references the harness sets by number (harness.c), by name.
+HARNESS_VARIABLES = {
+    "variant": 1, "g": 10, "tau": 11, "road": 12, "road_class": 15, "road_seed": 18, "x_s": 31,
+}
+
+# Largest relative difference to the linux64 run that the tests accept.
+RELATIVE_TOLERANCE = 1e-12
+
+# platform -> {"file": [max relative difference, values compared]} for the
+# summary at the end of the run.
+OBSERVED: dict[str, dict[str, list[float]]] = {}
+
+
+def target_dir() -> Path:
+    override = os.environ.get("CARGO_TARGET_DIR")
+    if not override:
+        return ROOT / "target"
+    path = Path(override)
+    return path if path.is_absolute() else ROOT / path
+
+
+WORK = target_dir() / "platforms"
+FMU = target_dir() / "fmu" / "tdvass.fmu"
+BUILD_HINT = "build it with `cargo run --release -p fmu-build -- --all-platforms`"
+
+
+def require_tool(path: str, package: str) -> str:
+    found = shutil.which(path) if "/" not in path else (path if Path(path).exists() else None)
+    if not found:
+        pytest.fail(f"{path} not found: install the Debian package {package}")
+    return found
+
+
+def run(command: list[str], **kwargs) -> subprocess.CompletedProcess:
+    result = subprocess.run(command, capture_output=True, text=True, timeout=RUN_TIMEOUT_S, **kwargs)
+    if result.returncode != 0:
+        pytest.fail(f"{' '.join(map(str, command))} exited with {result.returncode}:\n"
+                    f"{result.stdout}\n{result.stderr}")
+    return result
+
+
+@dataclass
+class Description:
+    guid: str
+    outputs: list[int]  # value references of the Real outputs
+    variables: dict[str, int]  # name -> value reference
+
+
+@pytest.fixture(scope="session")
+def fmu() -> zipfile.ZipFile:
+    if not FMU.is_file():
+        pytest.fail(f"{FMU} not found; {BUILD_HINT}")
+    return zipfile.ZipFile(FMU)
+
+
+@pytest.fixture(scope="session")
+def description(fmu) -> Description:
+    root = ET.fromstring(fmu.read("modelDescription.xml"))
+    variables, outputs = {}, []
+    for variable in root.iter("ScalarVariable"):
+        vr = int(variable.get("valueReference"))
+        variables[variable.get("name")] = vr
+        if variable.get("causality") == "output" and variable.find("Real") is not None:
+            outputs.append(vr)
+    for name, vr in HARNESS_VARIABLES.items():
+        assert variables.get(name) == vr, f"harness.c sets `{name}` as value reference {vr}"
+    assert outputs, "the description declares no Real output"
+    return Description(root.get("guid"), outputs, variables)
+
+
+@dataclass
+class Platform:
+    name: str
+    compiler: list[str]  # compiles harness.c: compiler and flags
+    compiler_package: str
+    library: Path
+    runner: list[str]  # prefix of the command that runs the harness
+    executable: str  # the harness's file name
+
+    @property
+    def dir(self) -> Path:
+        return WORK / self.name
+
+    def host_path(self, path: Path) -> str:
+        """`path` as the harness sees it (wine maps / to drive Z:)."""
+        if self.name == "win64":
+            return "Z:" + str(path).replace("/", "\\")
+        return str(path)
+
+
+def extracted(fmu: zipfile.ZipFile, entry: str, name: str) -> Path:
+    if entry not in fmu.namelist():
+        pytest.fail(f"{FMU} has no {entry}; {BUILD_HINT}")
+    path = WORK / "binaries" / name
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_bytes(fmu.read(entry))
+    return path
+
+
+def wine_environment() -> dict[str, str]:
+    """Quiet, self-contained wine: a private prefix under target/."""
+    return dict(
+        os.environ,
+        WINEPREFIX=str(WORK / "wineprefix"),
+        WINEDEBUG="-all",
+        WINEDLLOVERRIDES="mscoree,mshtml=",  # no Mono/Gecko installers
+    )
+
+
+@pytest.fixture(scope="session")
+def platforms(fmu) -> dict[str, Platform]:
+    aarch64_library = target_dir() / "aarch64-unknown-linux-gnu" / "release" / "libtdvass.so"
+    if not aarch64_library.is_file():
+        pytest.fail(f"{aarch64_library} not found; {BUILD_HINT}")
+    return {
+        "linux64": Platform("linux64", ["gcc", "-ldl"], "gcc",
+                            extracted(fmu, "binaries/linux64/tdvass.so", "linux64/tdvass.so"),
+                            [], "harness"),
+        "win64": Platform("win64", ["x86_64-w64-mingw32-gcc", "-static"], "gcc-mingw-w64-x86-64",
+                          extracted(fmu, "binaries/win64/tdvass.dll", "win64/tdvass.dll"),
+                          [require_tool(str(WINE), "wine64")], "harness.exe"),
+        "aarch64": Platform("aarch64", ["aarch64-linux-gnu-gcc", "-ldl"], "gcc-aarch64-linux-gnu",
+                            aarch64_library,
+                            [require_tool("qemu-aarch64", "qemu-user"), "-L", str(AARCH64_SYSROOT)],
+                            "harness"),
+    }
+
+
+def build_harness(platform: Platform) -> Path:
+    platform.dir.mkdir(parents=True, exist_ok=True)
+    compiler = require_tool(platform.compiler[0], platform.compiler_package)
+    executable = platform.dir / platform.executable
+    run([compiler, "-O2", "-std=c11", "-Wall", "-Wextra", "-Werror", "-o", str(executable),
+         str(HERE / "harness.c"), *platform.compiler[1:]])
+    if platform.name == "win64":
+        # The stand-in for bcryptprimitives.dll, which Debian's wine lacks
+        # (see bcryptprimitives_shim.c): beside the harness, never in the FMU.
+        run([compiler, "-O2", "-shared", "-o", str(platform.dir / "bcryptprimitives.dll"),
+             str(HERE / "bcryptprimitives_shim.c"), "-ladvapi32"])
+    return executable
+
+
+class Results:
+    """The files one harness run wrote."""
+
+    def __init__(self, platform: str, directory: Path):
+        self.platform = platform
+        self.dir = directory
+
+    def table(self, name: str) -> tuple[list[str], list[list[float]]]:
+        lines = (self.dir / name).read_text().splitlines()
+        return lines[0].split(","), [[float(x) for x in line.split(",")] for line in lines[1:]]
+
+    def state(self) -> bytes:
+        return (self.dir / "state.bin").read_bytes()
+
+    def bad_input(self) -> dict[str, tuple[str, str]]:
+        import csv
+
+        with open(self.dir / "bad_input.csv", newline="") as f:
+            return {row["case"]: (row["result"], row["message"]) for row in csv.DictReader(f)}
+
+
+_results: dict[str, Results] = {}
+
+
+@pytest.fixture(scope="session")
+def results(platforms, description):
+    """results(platform) -> Results; the linux64 run comes first (the others
+    restore its state), each platform runs once per session."""
+
+    def get(name: str) -> Results:
+        if name in _results:
+            return _results[name]
+        platform = platforms[name]
+        linux64_state = get("linux64").dir / "state.bin" if name != "linux64" else None
+        executable = build_harness(platform)
+        out = platform.dir / "out"
+        shutil.rmtree(out, ignore_errors=True)
+        out.mkdir(parents=True)
+        state_in = linux64_state or out / "state.bin"  # linux64 restores its own
+        command = [*platform.runner, str(executable), platform.host_path(platform.library),
+                   description.guid, ",".join(map(str, description.outputs)),
+                   platform.host_path(out), platform.host_path(state_in)]
+        env = wine_environment() if name == "win64" else None
+        result = run(command, env=env, cwd=platform.dir)
+        assert re.search(r"^harness: \d+ outputs x 15000 steps", result.stdout, re.M), result.stdout
+        _results[name] = Results(name, out)
+        return _results[name]
+
+    return get
+
+
+def pytest_terminal_summary(terminalreporter):
+    if not OBSERVED:
+        return
+    terminalreporter.section("largest relative difference to the native linux64 run")
+    for platform, files in sorted(OBSERVED.items()):
+        for file, (difference, count) in sorted(files.items()):
+            verdict = "bit-identical" if difference == 0.0 else f"max {difference:.3g}"
+            terminalreporter.write_line(f"{platform:8} {file:14} {int(count):>8} values  {verdict}")

@@ -1,0 +1,450 @@
+/*
+ * Platform-neutral harness of the tdvass FMI 2.0 library: the same source is
+ * compiled natively for Linux x86-64, with MinGW-w64 for Windows x86-64 (run
+ * under wine) and with the aarch64 GNU toolchain (run under qemu-user). It
+ * loads one platform's library and writes what it computed as files, which
+ * the tests (test_platforms.py) compare with the native Linux x86-64 run.
+ *
+ *   harness LIB GUID OUTPUT_VRS OUT_DIR STATE_IN
+ *
+ *   LIB         the library (binaries/<platform>/tdvass.so or .dll)
+ *   GUID        the FMU's GUID (modelDescription.xml)
+ *   OUTPUT_VRS  comma-separated value references of the outputs to record
+ *   OUT_DIR     folder of the result files (must exist)
+ *   STATE_IN    a serialized FMU state written by another run (state.bin of
+ *               the linux64 run): restored and continued
+ *
+ * Result files (CSV: header line, then one line per communication point with
+ * time in s and the outputs in SI units, each printed with 17 significant
+ * digits, which round-trips an IEEE double exactly):
+ *   default.csv       the default experiment (TDVASS, harmonic road,
+ *                     0..15 s, 1 ms communication steps), from t = 0
+ *   iso_c_cs.csv      CS on the ISO 8608 class C road, seed 7, same grid
+ *   roundtrip.csv     default experiment to 5 s, serialize, free the
+ *                     instance, deserialize into a new instance, continue
+ *                     to 15 s (rows after 5 s)
+ *   state.bin         the serialized state at 5 s of that run
+ *   restored.csv      STATE_IN deserialized into a new instance, continued
+ *                     from 5 s to 15 s
+ *   bad_input.csv     case,result,message: each refused call, its status
+ *                     (0 OK .. 4 Fatal, or NULL/instance for fmi2Instantiate)
+ *                     and the last message logged for it
+ *
+ * Exit code 0 when every file was written; 1 (message on stderr) when a call
+ * of the good experiments did not return fmi2OK. Bad input is judged by the
+ * tests, not here: the harness records what it observed.
+ */
+#define __USE_MINGW_ANSI_STDIO 1 /* C99 printf on Windows: exact %.17g */
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#ifdef _WIN32
+#include <windows.h>
+#else
+#include <dlfcn.h>
+#endif
+
+typedef void *fmi2Component;
+typedef void *fmi2FMUstate;
+typedef unsigned int fmi2ValueReference;
+typedef double fmi2Real;
+typedef int fmi2Integer;
+typedef int fmi2Boolean;
+typedef char fmi2Byte;
+typedef const char *fmi2String;
+typedef int fmi2Status;
+enum { fmi2OK, fmi2Warning, fmi2Discard, fmi2Error, fmi2Fatal };
+enum { fmi2ModelExchange, fmi2CoSimulation };
+
+typedef struct {
+    void (*logger)(void *, fmi2String, fmi2Status, fmi2String, fmi2String, ...);
+    void *(*allocateMemory)(size_t, size_t);
+    void (*freeMemory)(void *);
+    void (*stepFinished)(void *, fmi2Status);
+    void *componentEnvironment;
+} fmi2CallbackFunctions;
+
+static struct {
+    fmi2Component (*Instantiate)(fmi2String, int, fmi2String, fmi2String,
+                                 const fmi2CallbackFunctions *, fmi2Boolean, fmi2Boolean);
+    void (*FreeInstance)(fmi2Component);
+    fmi2Status (*SetupExperiment)(fmi2Component, fmi2Boolean, fmi2Real, fmi2Real, fmi2Boolean,
+                                  fmi2Real);
+    fmi2Status (*EnterInitializationMode)(fmi2Component);
+    fmi2Status (*ExitInitializationMode)(fmi2Component);
+    fmi2Status (*Terminate)(fmi2Component);
+    fmi2Status (*GetReal)(fmi2Component, const fmi2ValueReference *, size_t, fmi2Real *);
+    fmi2Status (*SetReal)(fmi2Component, const fmi2ValueReference *, size_t, const fmi2Real *);
+    fmi2Status (*SetInteger)(fmi2Component, const fmi2ValueReference *, size_t,
+                             const fmi2Integer *);
+    fmi2Status (*GetFMUstate)(fmi2Component, fmi2FMUstate *);
+    fmi2Status (*SetFMUstate)(fmi2Component, fmi2FMUstate);
+    fmi2Status (*FreeFMUstate)(fmi2Component, fmi2FMUstate *);
+    fmi2Status (*SerializedFMUstateSize)(fmi2Component, fmi2FMUstate, size_t *);
+    fmi2Status (*SerializeFMUstate)(fmi2Component, fmi2FMUstate, fmi2Byte *, size_t);
+    fmi2Status (*DeSerializeFMUstate)(fmi2Component, const fmi2Byte *, size_t, fmi2FMUstate *);
+    fmi2Status (*DoStep)(fmi2Component, fmi2Real, fmi2Real, fmi2Boolean);
+} fmi;
+
+/* Value references of the inputs the harness sets (modelDescription.xml;
+ * the tests check these names against the description). */
+enum {
+    VR_VARIANT = 1,
+    VR_G = 10,
+    VR_TAU = 11,
+    VR_ROAD = 12,
+    VR_ROAD_CLASS = 15,
+    VR_ROAD_SEED = 18,
+    VR_X_S = 31,
+    VR_UNKNOWN = 9999
+};
+enum { VARIANT_CS = 1, ROAD_ISO8608 = 2, ROAD_CLASS_C = 3 };
+
+#define STEP 1e-3          /* communication step, s */
+#define STEPS 15000        /* 15 s, the DefaultExperiment */
+#define SAVE_AT_STEP 5000  /* the state is saved at 5 s */
+#define MAX_OUTPUTS 64
+
+static const char *guid;
+static fmi2ValueReference outputs[MAX_OUTPUTS];
+static size_t n_outputs;
+static char last_message[1024];
+
+/* The FMU's messages are format strings (FMI 2.0); keep the last one. */
+static void logger(void *env, fmi2String name, fmi2Status status, fmi2String category,
+                   fmi2String message, ...) {
+    (void)env;
+    (void)name;
+    (void)status;
+    (void)category;
+    va_list args;
+    va_start(args, message);
+    vsnprintf(last_message, sizeof last_message, message, args);
+    va_end(args);
+}
+
+static const fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
+
+static void fail(const char *what, int line) {
+    fprintf(stderr, "harness.c:%d: %s (last message: %s)\n", line, what, last_message);
+    exit(1);
+}
+
+#define REQUIRE_OK(expr)                                              \
+    do {                                                              \
+        if ((expr) != fmi2OK) fail(#expr " did not return fmi2OK", __LINE__); \
+    } while (0)
+
+static void *symbol(void *library, const char *name) {
+#ifdef _WIN32
+    void *address = (void *)GetProcAddress((HMODULE)library, name);
+#else
+    void *address = dlsym(library, name);
+#endif
+    if (!address) {
+        fprintf(stderr, "the library does not export %s\n", name);
+        exit(2);
+    }
+    return address;
+}
+
+static void load(const char *path) {
+#ifdef _WIN32
+    /* Dependencies are looked up in the DLL's own folder, then as usual. */
+    void *library = (void *)LoadLibraryExA(path, NULL, LOAD_WITH_ALTERED_SEARCH_PATH);
+    if (!library) {
+        fprintf(stderr, "LoadLibraryEx %s failed: error %lu\n", path, GetLastError());
+        exit(2);
+    }
+#else
+    void *library = dlopen(path, RTLD_NOW | RTLD_LOCAL);
+    if (!library) {
+        fprintf(stderr, "dlopen: %s\n", dlerror());
+        exit(2);
+    }
+#endif
+    /* Function pointers from data pointers: the loaders return them so. */
+#define SYM(field, name) memcpy(&fmi.field, &(void *){symbol(library, name)}, sizeof(void *))
+    SYM(Instantiate, "fmi2Instantiate");
+    SYM(FreeInstance, "fmi2FreeInstance");
+    SYM(SetupExperiment, "fmi2SetupExperiment");
+    SYM(EnterInitializationMode, "fmi2EnterInitializationMode");
+    SYM(ExitInitializationMode, "fmi2ExitInitializationMode");
+    SYM(Terminate, "fmi2Terminate");
+    SYM(GetReal, "fmi2GetReal");
+    SYM(SetReal, "fmi2SetReal");
+    SYM(SetInteger, "fmi2SetInteger");
+    SYM(GetFMUstate, "fmi2GetFMUstate");
+    SYM(SetFMUstate, "fmi2SetFMUstate");
+    SYM(FreeFMUstate, "fmi2FreeFMUstate");
+    SYM(SerializedFMUstateSize, "fmi2SerializedFMUstateSize");
+    SYM(SerializeFMUstate, "fmi2SerializeFMUstate");
+    SYM(DeSerializeFMUstate, "fmi2DeSerializeFMUstate");
+    SYM(DoStep, "fmi2DoStep");
+#undef SYM
+}
+
+static FILE *open_file(const char *dir, const char *name, const char *mode) {
+    char path[4096];
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    FILE *file = fopen(path, mode);
+    if (!file) {
+        fprintf(stderr, "cannot open %s\n", path);
+        exit(2);
+    }
+    return file;
+}
+
+/* ------------------------------------------------------- good experiments */
+
+/* Integer parameters set before initialization. */
+typedef struct {
+    size_t count;
+    fmi2ValueReference vrs[4];
+    fmi2Integer values[4];
+} Integers;
+
+static fmi2Component initialized(const char *name, const Integers *integers) {
+    fmi2Component c = fmi.Instantiate(name, fmi2CoSimulation, guid, NULL, &callbacks, 0, 0);
+    if (!c) fail("fmi2Instantiate returned NULL", __LINE__);
+    if (integers->count) REQUIRE_OK(fmi.SetInteger(c, integers->vrs, integers->count, integers->values));
+    REQUIRE_OK(fmi.SetupExperiment(c, 0, 0.0, 0.0, 1, STEPS * STEP));
+    REQUIRE_OK(fmi.EnterInitializationMode(c));
+    REQUIRE_OK(fmi.ExitInitializationMode(c));
+    return c;
+}
+
+static void write_header(FILE *csv) {
+    fprintf(csv, "time");
+    for (size_t i = 0; i < n_outputs; i++) fprintf(csv, ",%u", outputs[i]);
+    fprintf(csv, "\n");
+}
+
+static void write_row(FILE *csv, fmi2Component c, double time) {
+    fmi2Real values[MAX_OUTPUTS];
+    REQUIRE_OK(fmi.GetReal(c, outputs, n_outputs, values));
+    fprintf(csv, "%.17g", time);
+    for (size_t i = 0; i < n_outputs; i++) fprintf(csv, ",%.17g", values[i]);
+    fprintf(csv, "\n");
+}
+
+/* Communication steps `from` .. `to - 1`, a row after each (when csv). */
+static void run_steps(fmi2Component c, FILE *csv, int from, int to) {
+    for (int k = from; k < to; k++) {
+        REQUIRE_OK(fmi.DoStep(c, k * STEP, STEP, 1));
+        if (csv) write_row(csv, c, (k + 1) * STEP);
+    }
+}
+
+static void finish(fmi2Component c) {
+    REQUIRE_OK(fmi.Terminate(c));
+    fmi.FreeInstance(c);
+}
+
+static void experiment(const char *dir, const char *file, const Integers *integers) {
+    FILE *csv = open_file(dir, file, "wb");
+    write_header(csv);
+    fmi2Component c = initialized(file, integers);
+    write_row(csv, c, 0.0);
+    run_steps(c, csv, 0, STEPS);
+    finish(c);
+    fclose(csv);
+}
+
+/* Deserializes `bytes` into a new, initialized instance and continues it
+ * from SAVE_AT_STEP to the end. */
+static void continue_from(const char *dir, const char *file, const fmi2Byte *bytes, size_t size) {
+    static const Integers defaults = {0, {0}, {0}};
+    fmi2Component c = initialized(file, &defaults);
+    fmi2FMUstate state = NULL;
+    REQUIRE_OK(fmi.DeSerializeFMUstate(c, bytes, size, &state));
+    REQUIRE_OK(fmi.SetFMUstate(c, state));
+    REQUIRE_OK(fmi.FreeFMUstate(c, &state));
+    FILE *csv = open_file(dir, file, "wb");
+    write_header(csv);
+    run_steps(c, csv, SAVE_AT_STEP, STEPS);
+    fclose(csv);
+    finish(c);
+}
+
+/* The serialized state of the default experiment at SAVE_AT_STEP; the
+ * instance that wrote it is freed before returning. */
+static fmi2Byte *saved_state(size_t *size) {
+    static const Integers defaults = {0, {0}, {0}};
+    fmi2Component c = initialized("save", &defaults);
+    run_steps(c, NULL, 0, SAVE_AT_STEP);
+    fmi2FMUstate state = NULL;
+    REQUIRE_OK(fmi.GetFMUstate(c, &state));
+    REQUIRE_OK(fmi.SerializedFMUstateSize(c, state, size));
+    fmi2Byte *bytes = malloc(*size);
+    if (!bytes) fail("out of memory", __LINE__);
+    REQUIRE_OK(fmi.SerializeFMUstate(c, state, bytes, *size));
+    REQUIRE_OK(fmi.FreeFMUstate(c, &state));
+    finish(c);
+    return bytes;
+}
+
+static fmi2Byte *read_file(const char *path, size_t *size) {
+    FILE *file = fopen(path, "rb");
+    if (!file) {
+        fprintf(stderr, "cannot open %s\n", path);
+        exit(2);
+    }
+    size_t capacity = 1 << 16;
+    fmi2Byte *bytes = malloc(capacity);
+    *size = 0;
+    size_t n;
+    while (bytes && (n = fread(bytes + *size, 1, capacity - *size, file)) > 0) {
+        *size += n;
+        if (*size == capacity) bytes = realloc(bytes, capacity *= 2);
+    }
+    if (!bytes) fail("out of memory", __LINE__);
+    fclose(file);
+    return bytes;
+}
+
+/* -------------------------------------------------------------- bad input */
+
+static FILE *bad_csv;
+
+/* One refused call: its name, the status and the message logged for it. */
+static void record(const char *name, const char *result) {
+    fprintf(bad_csv, "%s,%s,\"", name, result);
+    for (const char *p = last_message; *p; p++) {
+        if (*p == '"') fputc('"', bad_csv);
+        if (*p != '\n' && *p != '\r') fputc(*p, bad_csv);
+    }
+    fprintf(bad_csv, "\"\n");
+    last_message[0] = '\0';
+}
+
+static void record_status(const char *name, fmi2Status status) {
+    char text[16];
+    snprintf(text, sizeof text, "%d", status);
+    record(name, text);
+}
+
+static void record_instance(const char *name, fmi2Component c) {
+    record(name, c ? "instance" : "NULL");
+    if (c) fmi.FreeInstance(c);
+}
+
+static void bad_input(const char *dir, const fmi2Byte *state, size_t state_size) {
+    bad_csv = open_file(dir, "bad_input.csv", "wb");
+    fprintf(bad_csv, "case,result,message\n");
+    fmi2Real value = 0.0;
+    fmi2ValueReference vr_unknown = VR_UNKNOWN, vr_tau = VR_TAU, vr_g = VR_G, vr_x_s = VR_X_S;
+
+    last_message[0] = '\0';
+    record_status("null_instance_do_step", fmi.DoStep(NULL, 0.0, STEP, 1));
+    record_status("null_instance_get_real", fmi.GetReal(NULL, &vr_x_s, 1, &value));
+    record_instance("wrong_guid",
+                    fmi.Instantiate("bad", fmi2CoSimulation,
+                                    "{00000000-0000-0000-0000-000000000000}", NULL, &callbacks,
+                                    0, 0));
+    record_instance("model_exchange",
+                    fmi.Instantiate("bad", fmi2ModelExchange, guid, NULL, &callbacks, 0, 0));
+
+    fmi2Component c = fmi.Instantiate("bad", fmi2CoSimulation, guid, NULL, &callbacks, 0, 0);
+    if (!c) fail("fmi2Instantiate returned NULL", __LINE__);
+    record_status("do_step_before_initialization", fmi.DoStep(c, 0.0, STEP, 1));
+    REQUIRE_OK(fmi.SetupExperiment(c, 0, 0.0, 0.0, 1, STEPS * STEP));
+    REQUIRE_OK(fmi.EnterInitializationMode(c));
+    record_status("unknown_value_reference_get", fmi.GetReal(c, &vr_unknown, 1, &value));
+    value = 1.0;
+    record_status("unknown_value_reference_set", fmi.SetReal(c, &vr_unknown, 1, &value));
+    value = strtod("nan", NULL);
+    record_status("nan_parameter", fmi.SetReal(c, &vr_g, 1, &value));
+    value = -2e-4;
+    record_status("negative_tau", fmi.SetReal(c, &vr_tau, 1, &value));
+    value = 1.0;
+    record_status("set_output", fmi.SetReal(c, &vr_x_s, 1, &value));
+    value = 1e4;
+    REQUIRE_OK(fmi.SetReal(c, &vr_tau, 1, &value));
+    record_status("delay_too_long_at_initialization", fmi.ExitInitializationMode(c));
+    value = 2e-4;
+    REQUIRE_OK(fmi.SetReal(c, &vr_tau, 1, &value));
+    REQUIRE_OK(fmi.ExitInitializationMode(c));
+
+    record_status("negative_step_size", fmi.DoStep(c, 0.0, -STEP, 1));
+    record_status("null_state_pointer", fmi.GetFMUstate(c, NULL));
+    fmi2FMUstate restored = NULL;
+    record_status("truncated_state", fmi.DeSerializeFMUstate(c, state, state_size / 2, &restored));
+    fmi2Byte *flipped = malloc(state_size);
+    if (!flipped) fail("out of memory", __LINE__);
+    memcpy(flipped, state, state_size);
+    flipped[state_size / 2] ^= 0x04;
+    record_status("bit_flipped_state", fmi.DeSerializeFMUstate(c, flipped, state_size, &restored));
+    free(flipped);
+    fmi2FMUstate own = NULL;
+    REQUIRE_OK(fmi.GetFMUstate(c, &own));
+    fmi2Byte small[8] = {0};
+    record_status("serialize_buffer_too_small", fmi.SerializeFMUstate(c, own, small, sizeof small));
+    REQUIRE_OK(fmi.FreeFMUstate(c, &own));
+    if (restored) fail("a refused state was returned", __LINE__);
+
+    /* After every refusal the instance still simulates. */
+    fmi2Status status = fmi.DoStep(c, 0.0, 10 * STEP, 1);
+    if (status == fmi2OK) status = fmi.GetReal(c, &vr_x_s, 1, &value);
+    if (status == fmi2OK && !(value == value)) status = fmi2Error; /* a NaN output */
+    record_status("simulates_after_refusals", status);
+    finish(c);
+    fclose(bad_csv);
+}
+
+/* ------------------------------------------------------------------- main */
+
+static void parse_outputs(const char *list) {
+    const char *p = list;
+    while (*p) {
+        char *end;
+        unsigned long vr = strtoul(p, &end, 10);
+        if (end == p || n_outputs == MAX_OUTPUTS) {
+            fprintf(stderr, "bad OUTPUT_VRS `%s`\n", list);
+            exit(2);
+        }
+        outputs[n_outputs++] = (fmi2ValueReference)vr;
+        p = *end == ',' ? end + 1 : end;
+    }
+    if (n_outputs == 0) {
+        fprintf(stderr, "OUTPUT_VRS is empty\n");
+        exit(2);
+    }
+}
+
+int main(int argc, char **argv) {
+    if (argc != 6) {
+        fprintf(stderr, "usage: %s LIB GUID OUTPUT_VRS OUT_DIR STATE_IN\n", argv[0]);
+        return 2;
+    }
+    load(argv[1]);
+    guid = argv[2];
+    parse_outputs(argv[3]);
+    const char *dir = argv[4];
+
+    static const Integers defaults = {0, {0}, {0}};
+    experiment(dir, "default.csv", &defaults);
+    static const Integers iso_c_cs = {
+        4, {VR_VARIANT, VR_ROAD, VR_ROAD_CLASS, VR_ROAD_SEED}, {VARIANT_CS, ROAD_ISO8608, ROAD_CLASS_C, 7}};
+    experiment(dir, "iso_c_cs.csv", &iso_c_cs);
+
+    size_t size = 0;
+    fmi2Byte *state = saved_state(&size);
+    FILE *file = open_file(dir, "state.bin", "wb");
+    if (fwrite(state, 1, size, file) != size) fail("cannot write state.bin", __LINE__);
+    fclose(file);
+    continue_from(dir, "roundtrip.csv", state, size);
+
+    size_t foreign_size = 0;
+    fmi2Byte *foreign = read_file(argv[5], &foreign_size);
+    continue_from(dir, "restored.csv", foreign, foreign_size);
+    free(foreign);
+
+    bad_input(dir, state, size);
+    free(state);
+    printf("harness: %zu outputs x %d steps, state of %zu bytes, results in %s\n", n_outputs,
+           STEPS, size, dir);
+    return 0;
+}
