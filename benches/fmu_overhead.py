@@ -10,6 +10,10 @@ Loops, each over the same number of communication points (15 000):
                      no simulation (copies 15 outputs)
   simulate_fmu       fmpy's one-call driver (output_interval 1 ms), for
                      reference
+  doStep + getReal(3), t = k h / t += h
+                     a typical script: one step, then three outputs, with
+                     the communication time computed or accumulated (the
+                     two must cost about the same)
 
 Per communication step the FMU advances 10 internal steps of 1e-4 s.
 
@@ -54,7 +58,7 @@ def new_slave(md, unzipdir):
     return slave
 
 
-def run_loop(md, unzipdir, refs, n, dt, step, read):
+def run_loop(md, unzipdir, refs, n, dt, step, read, accumulate=False):
     slave = new_slave(md, unzipdir)
     last = None
     start = time.perf_counter()
@@ -62,7 +66,7 @@ def run_loop(md, unzipdir, refs, n, dt, step, read):
     for i in range(n):
         if step:
             slave.doStep(currentCommunicationPoint=t, communicationStepSize=dt)
-            t = (i + 1) * dt
+            t = t + dt if accumulate else (i + 1) * dt
         if read:
             last = slave.getReal(refs)
     seconds = time.perf_counter() - start
@@ -86,18 +90,21 @@ def main():
           f"median of {args.repeats} runs")
     with tempfile.TemporaryDirectory() as tmp:
         unzipdir = extract(args.fmu, unzipdir=tmp)
+        three = [vr[name] for name in ("body_acceleration", "rms_body_acceleration", "objective")]
         loops = {
-            "doStep + getReal": (True, True),
-            "doStep only": (True, False),
-            "getReal only (baseline)": (False, True),
+            "doStep + getReal": (True, True, refs, False),
+            "doStep only": (True, False, refs, False),
+            "getReal only (baseline)": (False, True, refs, False),
+            "doStep + getReal(3), t=kh": (True, True, three, False),
+            "doStep + getReal(3), t+=h": (True, True, three, True),
         }
         times = {name: [] for name in loops}
         outputs = None
         for _ in range(args.repeats):
-            for name, (step, read) in loops.items():
-                seconds, last = run_loop(md, unzipdir, refs, n, args.step, step, read)
+            for name, (step, read, which, accumulate) in loops.items():
+                seconds, last = run_loop(md, unzipdir, which, n, args.step, step, read, accumulate)
                 times[name].append(seconds)
-                if step and read:
+                if step and read and which is refs:
                     outputs = last
         fmpy_times = []
         for _ in range(max(1, args.repeats // 2)):
@@ -110,6 +117,8 @@ def main():
         print(f"  {name:26s} {seconds * 1e3:9.1f} ms total  {seconds / n * 1e6:7.2f} us/step")
     share = medians["doStep + getReal"] - medians["getReal only (baseline)"]
     print(f"  {'FMU share (difference)':26s} {share * 1e3:9.1f} ms total  {share / n * 1e6:7.2f} us/step")
+    ratio = medians["doStep + getReal(3), t+=h"] / medians["doStep + getReal(3), t=kh"]
+    print(f"  {'accumulated / exact times':26s} {ratio:9.3f}")
     seconds = statistics.median(fmpy_times)
     print(f"  {'fmpy simulate_fmu':26s} {seconds * 1e3:9.1f} ms total  {seconds / n * 1e6:7.2f} us/step")
     rms = dict(zip(OUTPUTS, outputs))

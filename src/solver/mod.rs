@@ -1190,8 +1190,9 @@ impl Simulator {
                     let x = self.integrate_within_step(k, from.0, from.1, next_node);
                     self.check_divergence(next_node, &x)?;
                     let anchor = self.integral.anchor;
-                    let step_integral = self.integral_within_step(k, from, anchor, next_node, &x);
-                    self.commit_node(k + 1, next_node, x, step_integral);
+                    let (step_integral, at_end, last_piece) =
+                        self.integral_within_step(k, from, anchor, next_node, &x);
+                    self.commit_node(k + 1, next_node, x, step_integral, (at_end, last_piece));
                 }
                 if self.snaps(t_end, self.committed_time) {
                     return self.finish_near_committed(t_end);
@@ -1453,7 +1454,12 @@ impl Simulator {
             // its start, and the step is integrated piece by piece.
             let next_slot = if slot + 1 == len { 0 } else { slot + 1 };
             let node = State::from(x);
-            let x_next: [f64; 6] = self.integrate_within_step(k, t, node, to).into();
+            let piece_at_start = self.piece_from(t);
+            self.close_run_at_node(k, t, &node, &mut rms, &piece_at_start, &piece_at_start);
+            let anchor = self.integral.anchor;
+            let (x_end, step_integral, at_end, last_piece) =
+                self.integrate_split_step(k, t, node, anchor, to);
+            let x_next: [f64; 6] = x_end.into();
             if (k + 1).is_multiple_of(PHASE_ANCHOR) {
                 self.road.release_before(t);
             }
@@ -1464,13 +1470,8 @@ impl Simulator {
             {
                 break Err(e);
             }
-            let piece_at_start = self.piece_from(t);
-            self.close_run_at_node(k, t, &node, &mut rms, &piece_at_start, &piece_at_start);
-            let anchor = self.integral.anchor;
-            let step_integral =
-                self.integral_within_step(k, (t, node), anchor, to, &State::from(x_next));
             self.history[slot] = [x_next[X_T], x_next[V_T]];
-            self.restart_run_after_step(k + 1, to, &State::from(x_next), step_integral);
+            self.restart_run_after_step(k + 1, to, &x_end, step_integral, (at_end, last_piece));
             x = x_next;
             slot = next_slot;
             k += 1;
@@ -1518,7 +1519,14 @@ impl Simulator {
 
     /// Commits grid node k (time, state x) reached from a point inside
     /// step k − 1; `step_integral`: `∫ y²` from the committed point to it.
-    fn commit_node(&mut self, k: u64, time: f64, x: State, step_integral: [f64; 3]) {
+    fn commit_node(
+        &mut self,
+        k: u64,
+        time: f64,
+        x: State,
+        step_integral: [f64; 3],
+        arrival: (time_average::Squares, RoadPiece),
+    ) {
         let len = self.history.len() as u64;
         self.history[(k % len) as usize] = [x[X_T], x[V_T]];
         self.grid_index = k;
@@ -1526,7 +1534,7 @@ impl Simulator {
         self.committed_state = x;
         self.current_time = time;
         self.current_state = x;
-        self.restart_run_after_step(k, time, &x, step_integral);
+        self.restart_run_after_step(k, time, &x, step_integral, arrival);
         self.road.release_before(time);
     }
 
@@ -1812,8 +1820,9 @@ mod tests {
             let from = (general.committed_time, general.committed_state);
             let x = general.integrate_within_step(k, from.0, from.1, to);
             let anchor = general.integral.anchor;
-            let step_integral = general.integral_within_step(k, from, anchor, to, &x);
-            general.commit_node(k + 1, to, x, step_integral);
+            let (step_integral, at_end, piece) =
+                general.integral_within_step(k, from, anchor, to, &x);
+            general.commit_node(k + 1, to, x, step_integral, (at_end, piece));
         }
         fast.advance_to(general.committed_time).unwrap();
         let scale = general.committed_state.amax();

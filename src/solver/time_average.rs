@@ -192,9 +192,10 @@ impl Simulator {
     }
 
     /// `∫ y²` over `[from.0, to]` inside grid step k (state `x_to` at
-    /// `to`), split at road breakpoints; `at_from`: the squares at the start
-    /// from the right. A `to` before the start (by a snapped time drift) is
-    /// one piece with a negative length.
+    /// `to`), split at road breakpoints, and the squares at `to` from the
+    /// left with the road piece they used; `at_from`: the squares at the
+    /// start from the right. A `to` before the start (by a snapped time
+    /// drift) is one piece with a negative length.
     pub(super) fn integral_within_step(
         &mut self,
         k: u64,
@@ -202,12 +203,16 @@ impl Simulator {
         at_from: Squares,
         to: f64,
         x_to: &State,
-    ) -> [f64; 3] {
+    ) -> ([f64; 3], Squares, RoadPiece) {
         let (mut start, mut at_start) = (from.0, at_from);
         if to <= start {
             let piece = self.road.piece(to);
             let at_to = self.squares_at(k, to, x_to, from, &piece);
-            return corrected_trapezoid(to - start, &at_start, &at_to);
+            return (
+                corrected_trapezoid(to - start, &at_start, &at_to),
+                at_to,
+                piece,
+            );
         }
         let mut total = [0.0; 3];
         loop {
@@ -225,12 +230,78 @@ impl Simulator {
             let at_end = self.squares_at(k, end, &x_end, from, &piece);
             total = add3(total, corrected_trapezoid(end - start, &at_start, &at_end));
             if end == to {
-                return total;
+                return (total, at_end, piece);
             }
             let next = self.piece_from(end);
             at_start = self.squares_at(k, end, &x_end, from, &next);
             start = end;
         }
+    }
+
+    /// Grid step k from node `t` (state x, squares `at_start` from the
+    /// right) to node `to`, split inside by road breakpoints: the end
+    /// state, `∫ y²` over the step piece by piece, and the squares at `to`
+    /// from the left with the last piece. The pieces are integrated one
+    /// after the other, each from the state the one before reached (the
+    /// same operations as one [`Self::integrate_within_step`] over the
+    /// step, so the end state is the same to the bit).
+    pub(super) fn integrate_split_step(
+        &mut self,
+        k: u64,
+        t: f64,
+        x: State,
+        at_start: Squares,
+        to: f64,
+    ) -> (State, [f64; 3], Squares, RoadPiece) {
+        if self.grid.delay_inside_step() {
+            // The end node enters the delayed input of the whole step.
+            let x_to = self.integrate_within_step(k, t, x, to);
+            let (integral, at_end, piece) =
+                self.integral_within_step(k, (t, x), at_start, to, &x_to);
+            return (x_to, integral, at_end, piece);
+        }
+        let mut total = [0.0; 3];
+        let (mut start, mut x_start, mut at) = (t, x, at_start);
+        loop {
+            let piece = self.piece_from(start);
+            let end = if piece.end() < to && !self.coincide(piece.end(), to) {
+                piece.end()
+            } else {
+                to
+            };
+            let x_end = self.integrate_within_step(k, start, x_start, end);
+            let at_end = self.squares_at(k, end, &x_end, (start, x_start), &piece);
+            total = add3(total, corrected_trapezoid(end - start, &at, &at_end));
+            if end == to {
+                return (x_end, total, at_end, piece);
+            }
+            let next = self.piece_from(end);
+            at = self.across_breakpoint(at_end, end, &x_end, &piece, &next);
+            (start, x_start) = (end, x_end);
+        }
+    }
+
+    /// The squares at a road breakpoint `t` (state x) on the side of the
+    /// piece `after`, from those on the side of `before`: x_g is continuous
+    /// there, so only the rates move, by the jump of the road slope
+    /// (`d TDD/dt` by its negative, `d BA/dt` through `e`).
+    fn across_breakpoint(
+        &self,
+        before_side: Squares,
+        t: f64,
+        x: &State,
+        before: &RoadPiece,
+        after: &RoadPiece,
+    ) -> Squares {
+        let jump = after.slope(t) - before.slope(t);
+        let mut squares = before_side;
+        let tire = x[X_T] - after.value(t);
+        squares.rate[2] -= 2.0 * tire * jump;
+        let acceleration_gain = self.plant.e[V_S];
+        if acceleration_gain != 0.0 {
+            squares.rate[0] += 2.0 * self.plant.body_acceleration(x) * acceleration_gain * jump;
+        }
+        squares
     }
 
     /// `∫_{t_0} y²` up to the committed point (the end of the open run).
@@ -268,7 +339,8 @@ impl Simulator {
         let k = self.grid_index;
         add3(
             base,
-            self.integral_within_step(k, (tc, xc), at_committed, t, &x),
+            self.integral_within_step(k, (tc, xc), at_committed, t, &x)
+                .0,
         )
     }
 
@@ -290,11 +362,18 @@ impl Simulator {
         left: &RoadPiece,
         right: &RoadPiece,
     ) {
-        if run.samples > 0 {
-            let at_left = self.squares_at(k, t, x, (t, *x), left);
+        let at_left = if run.samples > 0 || left == right {
+            Some(self.squares_at(k, t, x, (t, *x), left))
+        } else {
+            None
+        };
+        if let (true, Some(at_left)) = (run.samples > 0, at_left) {
             self.integral.closed = self.integral.through_run(self.grid.step, run, &at_left);
         }
-        let at_right = self.squares_at(k, t, x, (t, *x), right);
+        let at_right = match at_left {
+            Some(at) if left == right => at,
+            _ => self.squares_at(k, t, x, (t, *x), right),
+        };
         self.integral.anchor_index = k;
         self.integral.anchor_time = t;
         self.integral.anchor = at_right;
@@ -303,17 +382,24 @@ impl Simulator {
 
     /// Starts a new run at node k (time t, state x) after `step_integral`
     /// over the step that ends there was added to the closed part (the
-    /// history must already hold node k).
+    /// history must already hold node k). `arrival`: the squares at the
+    /// node from the left and the road piece they used, which serve from
+    /// the right too when the node is not a road breakpoint.
     pub(super) fn restart_run_after_step(
         &mut self,
         k: u64,
         t: f64,
         x: &State,
         step_integral: [f64; 3],
+        arrival: (Squares, RoadPiece),
     ) {
         self.integral.closed = add3(self.integral.closed, step_integral);
         let piece = self.piece_from(t);
-        let at_node = self.squares_at(k, t, x, (t, *x), &piece);
+        let at_node = if piece == arrival.1 {
+            arrival.0
+        } else {
+            self.squares_at(k, t, x, (t, *x), &piece)
+        };
         self.integral.anchor_index = k;
         self.integral.anchor_time = t;
         self.integral.anchor = at_node;
