@@ -13,7 +13,7 @@
 //!
 //! The payload is the FMU-level state ([`Model`]): machine state, every
 //! setting (by value reference, so the layout follows the variable table),
-//! input slope and its origin, the previous input value (for
+//! input slope and its origin, the last two input values (for
 //! `input_extrapolation`), the hold-warning flag, start and stop time, last successful time, the terminate
 //! flag, then [`Simulator::to_bytes`] (time, solver state, the delay
 //! history, the road generator, the RMS accumulators, the configuration).
@@ -176,10 +176,12 @@ fn encode_payload(model: &Model) -> Vec<u8> {
     w.f64(model.input_slope);
     w.u8(model.input_pending as u8);
     w.u8(model.input_slope_given as u8);
-    w.u8(model.previous_input.is_some() as u8);
-    let (previous_time, previous_value) = model.previous_input.unwrap_or((0.0, 0.0));
-    w.f64(previous_time);
-    w.f64(previous_value);
+    for input in [model.previous_input, model.earlier_input] {
+        w.u8(input.is_some() as u8);
+        let (time, value) = input.unwrap_or((0.0, 0.0));
+        w.f64(time);
+        w.f64(value);
+    }
     w.u8(model.hold_warned as u8);
     w.f64(model.start_time);
     w.u8(model.stop_time.is_some() as u8);
@@ -264,10 +266,14 @@ fn decode_payload(bytes: &[u8]) -> Result<Model, FmiError> {
     let input_slope = r.finite("the input slope")?;
     let input_pending = r.flag("input pending")?;
     let input_slope_given = r.flag("input slope given")?;
-    let previous_defined = r.flag("previous input defined")?;
-    let previous_time = r.finite("the previous input time")?;
-    let previous_value = r.finite("the previous input value")?;
-    let previous_input = previous_defined.then_some((previous_time, previous_value));
+    let mut inputs = [None; 2];
+    for input in inputs.iter_mut() {
+        let defined = r.flag("input value defined")?;
+        let time = r.finite("an input time")?;
+        let value = r.finite("an input value")?;
+        *input = defined.then_some((time, value));
+    }
+    let [previous_input, earlier_input] = inputs;
     let hold_warned = r.flag("hold warning logged")?;
     let start_time = r.finite("the start time")?;
     let stop_defined = r.flag("stop time defined")?;
@@ -334,6 +340,7 @@ fn decode_payload(bytes: &[u8]) -> Result<Model, FmiError> {
         input_pending,
         input_slope_given,
         previous_input,
+        earlier_input,
         hold_warned,
         start_time,
         stop_time,

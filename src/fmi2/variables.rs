@@ -311,7 +311,7 @@ pub struct Settings {
     pub w_sdd: f64,
     pub w_tdd: f64,
     /// `road = 0`: 0 holds `x_g` over a communication step, 1 extrapolates
-    /// it linearly from the last two values set.
+    /// it linearly from the last two values set, 2 from the last three.
     pub input_extrapolation: i32,
     /// `[x_s, v_s, x_h, v_h, x_t, v_t]` at the start time.
     pub initial_state: [f64; 6],
@@ -987,9 +987,9 @@ pub static VARIABLES: &[Variable] = &[
         Fixed,
         Q::Dimensionless,
         0.0,
-        Range::Integers(0, 1),
+        Range::Integers(0, 2),
         integer!(input_extrapolation),
-        "road = 0: 0 holds x_g over each communication step (FMI default), 1 extrapolates it linearly from the last two values set at communication points (the first step holds); input derivatives, when set, take precedence",
+        "road = 0: 0 holds x_g over each communication step (FMI default), 1 extrapolates it linearly from the last two values set at communication points, 2 along the line closest over the step to the parabola through the last three (the first step holds); input derivatives, when set, take precedence",
     ),
     parameter(
         "x_s_start",
