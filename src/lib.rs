@@ -66,6 +66,8 @@
 //!
 //! Each has a short example in its documentation.
 
+#![deny(unsafe_code)]
+
 pub mod analysis;
 pub mod cli;
 pub mod error;

@@ -19,6 +19,9 @@
 //! instance must not be used from two threads at the same time (FMI 2.0
 //! allows that restriction); distinct instances are independent (no global
 //! mutable state).
+// The only module besides the solver's whole-step loop (`solver::kernel`)
+// that may use `unsafe` (the crate denies it elsewhere).
+#![allow(unsafe_code)]
 #![allow(non_camel_case_types, non_snake_case, clippy::missing_safety_doc)]
 
 use super::instance::{FMI2_COSIMULATION, Instance, InstantiateRequest, LogSink};

@@ -1,0 +1,320 @@
+//! The whole-step loop (the hot path of [`super::Simulator::advance_to`])
+//! and its AVX2 build. All the solver's `unsafe` is here: unchecked reads
+//! and writes of the delay history ring, whose indices the loop keeps below
+//! the ring's length, and the calls of functions compiled for AVX2, made
+//! only after a run-time check that the CPU has it.
+#![allow(unsafe_code)]
+
+use super::operators::{GridStep, add6, combine2, combine4, combine6};
+use super::{DIVERGENCE_BOUNDS, Simulator};
+use crate::error::Result;
+use crate::metrics::RunningRms;
+use crate::model::{V_T, X_T};
+
+/// Whether every state component is within its divergence bound (false
+/// for NaN), with one branch for the whole state.
+#[inline(always)]
+pub(super) fn within_bounds(x: &[f64; 6]) -> bool {
+    let b = DIVERGENCE_BOUNDS;
+    (x[0].abs() <= b[0])
+        & (x[1].abs() <= b[1])
+        & (x[2].abs() <= b[2])
+        & (x[3].abs() <= b[3])
+        & (x[4].abs() <= b[4])
+        & (x[5].abs() <= b[5])
+}
+
+/// The road as the whole-step loop carries it from grid node to grid node.
+pub(super) trait NodeRoad: Copy {
+    /// The road's part of the step that leaves the current node.
+    fn input(&self, op: &GridStep) -> [f64; 6];
+    /// `x_g` at the current node (m).
+    fn displacement(&self) -> f64;
+    /// Moves to the next node.
+    fn advance(&mut self, op: &GridStep);
+}
+
+/// The harmonic road's phase `A [sin ω t_k, cos ω t_k]` at node k, rotated
+/// exactly from node to node (see [`PHASE_ANCHOR`]).
+#[derive(Clone, Copy)]
+pub(super) struct HarmonicPhase(pub(super) [f64; 2]);
+
+impl NodeRoad for HarmonicPhase {
+    #[inline(always)]
+    fn input(&self, op: &GridStep) -> [f64; 6] {
+        combine2(&op.harmonic, &self.0)
+    }
+    #[inline(always)]
+    fn displacement(&self) -> f64 {
+        self.0[0]
+    }
+    #[inline(always)]
+    fn advance(&mut self, op: &GridStep) {
+        self.0 = op.rotate(self.0);
+    }
+}
+
+/// One linear road piece `x_g = value + slope (t − start)` at grid node
+/// `t_k = t_0 + k h`, evaluated as [`RoadPiece::value`] does.
+#[derive(Clone, Copy)]
+pub(super) struct LinearPiece {
+    pub(super) start_time: f64,
+    pub(super) step: f64,
+    pub(super) k: u64,
+    pub(super) start: f64,
+    pub(super) value: f64,
+    pub(super) slope: f64,
+}
+
+impl LinearPiece {
+    #[inline(always)]
+    pub(super) fn value_now(&self) -> f64 {
+        let t = self.start_time + self.k as f64 * self.step;
+        self.value + self.slope * (t - self.start)
+    }
+}
+
+impl NodeRoad for LinearPiece {
+    #[inline(always)]
+    fn input(&self, op: &GridStep) -> [f64; 6] {
+        combine2(&op.linear, &[self.value_now(), self.slope])
+    }
+    #[inline(always)]
+    fn displacement(&self) -> f64 {
+        self.value_now()
+    }
+    #[inline(always)]
+    fn advance(&mut self, _: &GridStep) {
+        self.k += 1;
+    }
+}
+
+/// What the whole-step loop carries from node to node.
+#[derive(Clone, Copy)]
+pub(super) struct HotState<R> {
+    pub(super) x: [f64; 6],
+    pub(super) road: R,
+    pub(super) k: u64,
+    /// Ring slot of node k + 1 (it holds node k − m until overwritten).
+    pub(super) slot: usize,
+    pub(super) rms: RunningRms,
+}
+
+/// One run of the whole-step loop, within which neither a phase anchor
+/// (harmonic road), a road breakpoint (linear roads) nor the start of the
+/// history is crossed.
+pub(super) struct Segment<'a> {
+    pub(super) op: &'a GridStep,
+    pub(super) history: &'a mut [[f64; 2]],
+    /// The node the segment stops at.
+    pub(super) end: u64,
+    /// The nodes `[x, 0, x, 0]` of the constant history before the start.
+    pub(super) before_start: [f64; 4],
+}
+
+/// The hot loop: `X_{k+1} = Φ X_k + Γ_uH n_k + road_k`, the road moved on,
+/// the new node stored in the history. The BA, SDD, TDD of every node
+/// after the first are added to the RMS sums, except the last one's, which
+/// the caller adds (on the harmonic road its phase is exact at an anchor).
+/// Stops at `end` or before a state out of bounds, which it returns.
+/// `DELAY`: the delay is resolved on the grid; `BEFORE`: all the delayed
+/// nodes lie before the start.
+#[inline(always)]
+pub(super) fn segment<R: NodeRoad, const DELAY: bool, const BEFORE: bool>(
+    seg: Segment,
+    hot: &mut HotState<R>,
+) -> Option<[f64; 6]> {
+    let op = seg.op;
+    let history = seg.history;
+    let len = history.len();
+    assert!(hot.slot < len);
+    let HotState {
+        mut x,
+        mut road,
+        mut k,
+        mut slot,
+        mut rms,
+    } = *hot;
+    let mut diverged = None;
+    // Node k, where the segment starts, was counted in the RMS sums already;
+    // each later node is counted in the step that leaves it.
+    let mut count = false;
+    while k < seg.end {
+        let next_slot = if slot + 1 == len { 0 } else { slot + 1 };
+        let mut input = road.input(op);
+        if DELAY {
+            let nodes = if BEFORE {
+                seg.before_start
+            } else {
+                debug_assert!(slot < len && next_slot < len);
+                // SAFETY: both slots are < len (the ring's length): slot
+                // starts below len and next_slot wraps to 0 at len.
+                let ([x0, v0], [x1, v1]) = unsafe {
+                    (
+                        *history.get_unchecked(slot),
+                        *history.get_unchecked(next_slot),
+                    )
+                };
+                [x0, v0, x1, v1]
+            };
+            input = add6(combine4(&op.nodes, &nodes), input);
+        }
+        let x_next = add6(combine6(&op.transition, &x), input);
+        if count {
+            op.count(&mut rms, &x, road.displacement());
+        }
+        count = true;
+        if !within_bounds(&x_next) {
+            diverged = Some(x_next);
+            break;
+        }
+        road.advance(op);
+        // SAFETY: slot < len, as above.
+        unsafe { *history.get_unchecked_mut(slot) = [x_next[X_T], x_next[V_T]] };
+        x = x_next;
+        slot = next_slot;
+        k += 1;
+    }
+    *hot = HotState {
+        x,
+        road,
+        k,
+        slot,
+        rms,
+    };
+    diverged
+}
+
+/// [`segment`] compiled for AVX2 (the same operations in the same order,
+/// without FMA, so the results are bit-identical).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+pub(super) fn segment_avx2<R: NodeRoad, const DELAY: bool, const BEFORE: bool>(
+    seg: Segment,
+    hot: &mut HotState<R>,
+) -> Option<[f64; 6]> {
+    segment::<R, DELAY, BEFORE>(seg, hot)
+}
+
+/// Runs [`segment`] with the widest vector unit available.
+pub(super) fn run_segment<R: NodeRoad, const DELAY: bool>(
+    seg: Segment,
+    hot: &mut HotState<R>,
+    before: bool,
+) -> Option<[f64; 6]> {
+    #[cfg(target_arch = "x86_64")]
+    if wide_vectors() {
+        // SAFETY: the CPU supports AVX2 (checked at run time).
+        return unsafe {
+            match (DELAY, before) {
+                (true, true) => segment_avx2::<R, true, true>(seg, hot),
+                (true, false) => segment_avx2::<R, true, false>(seg, hot),
+                _ => segment_avx2::<R, false, false>(seg, hot),
+            }
+        };
+    }
+    match (DELAY, before) {
+        (true, true) => segment::<R, true, true>(seg, hot),
+        (true, false) => segment::<R, true, false>(seg, hot),
+        _ => segment::<R, false, false>(seg, hot),
+    }
+}
+
+/// Whether the AVX2 loop is used: the CPU has it and `TDVASS_NO_AVX2` is
+/// not set (to compare the two loops).
+#[cfg(target_arch = "x86_64")]
+pub(super) fn wide_vectors() -> bool {
+    use std::sync::OnceLock;
+    static WIDE: OnceLock<bool> = OnceLock::new();
+    *WIDE.get_or_init(|| {
+        std::arch::is_x86_feature_detected!("avx2") && std::env::var_os("TDVASS_NO_AVX2").is_none()
+    })
+}
+
+impl Simulator {
+    /// [`Self::whole_steps`] on piecewise-linear roads: a step that a road
+    /// breakpoint splits goes through [`Self::integrate_within_step`].
+    pub(super) fn whole_steps_with<const DELAY: bool>(&mut self, last: u64) -> Result<()> {
+        #[cfg(target_arch = "x86_64")]
+        if wide_vectors() {
+            // SAFETY: the CPU supports AVX2 (checked at run time).
+            return unsafe { self.whole_steps_with_avx2::<DELAY>(last) };
+        }
+        self.whole_steps_with_body::<DELAY>(last)
+    }
+
+    /// [`Self::whole_steps_with`] compiled for AVX2 (bit-identical).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn whole_steps_with_avx2<const DELAY: bool>(&mut self, last: u64) -> Result<()> {
+        self.whole_steps_with_body::<DELAY>(last)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::solver::SimulationConfig;
+
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn avx2_loop_is_bit_identical_to_the_baseline_loop() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        /// Runs 1000 steps from `sim`'s node with the baseline and the AVX2
+        /// loop; returns the bits of state, RMS sums and history of each.
+        fn both<R: NodeRoad>(sim: &Simulator, road: R) -> Vec<Vec<u64>> {
+            let start = HotState {
+                x: sim.committed_state.into(),
+                road,
+                k: sim.grid_index,
+                slot: ((sim.grid_index + 1) % sim.history.len() as u64) as usize,
+                rms: sim.rms,
+            };
+            let mut results = Vec::new();
+            for wide in [false, true] {
+                let mut history = sim.history.clone();
+                let mut hot = HotState { ..start };
+                let seg = Segment {
+                    op: &sim.grid_step,
+                    history: &mut history,
+                    end: sim.grid_index + 1000,
+                    before_start: [0.0; 4],
+                };
+                if wide {
+                    // SAFETY: AVX2 was detected by the caller.
+                    unsafe { segment_avx2::<_, true, false>(seg, &mut hot) };
+                } else {
+                    segment::<_, true, false>(seg, &mut hot);
+                }
+                let mut v: Vec<u64> = hot.x.iter().map(|v| v.to_bits()).collect();
+                v.extend(hot.rms.sums_of_squares.map(f64::to_bits));
+                v.push(hot.road.displacement().to_bits());
+                v.extend(history.iter().flatten().map(|v| v.to_bits()));
+                results.push(v);
+            }
+            results
+        }
+        let mut sim = Simulator::new(SimulationConfig::default()).unwrap();
+        sim.advance_to(0.01).unwrap();
+        let phase = HarmonicPhase(sim.harmonic_phase(sim.grid_index));
+        let [baseline, wide] = &both(&sim, phase)[..] else {
+            unreachable!()
+        };
+        assert_eq!(baseline, wide);
+        // A linear piece (a ramp of the road) from the same state.
+        let ramp = LinearPiece {
+            start_time: 0.0,
+            step: sim.grid.step,
+            k: sim.grid_index,
+            start: 0.005,
+            value: 0.01,
+            slope: -0.3,
+        };
+        let [baseline, wide] = &both(&sim, ramp)[..] else {
+            unreachable!()
+        };
+        assert_eq!(baseline, wide);
+    }
+}

@@ -1,0 +1,273 @@
+//! The whole steps of [`Simulator::advance_to`] from a committed grid node:
+//! segments of the hot loop ([`super::kernel`]) between phase anchors and
+//! road breakpoints, and the steps that a road breakpoint splits, with
+//! their share of the RMS time integral.
+
+use super::kernel::{HarmonicPhase, HotState, LinearPiece, Segment, run_segment, within_bounds};
+use super::{PHASE_ANCHOR, Simulator};
+use crate::error::Result;
+use crate::model::{State, V_T, X_T};
+use crate::road::{RoadPiece, RoadSpec};
+
+impl Simulator {
+    /// `A [sin ω t_k, cos ω t_k]` of the harmonic road, evaluated directly.
+    fn exact_phase(&self, k: u64) -> [f64; 2] {
+        match self.config.road {
+            RoadSpec::Harmonic {
+                amplitude,
+                angular_frequency,
+            } => {
+                let (sin, cos) = (angular_frequency * self.grid_time(k)).sin_cos();
+                [amplitude * sin, amplitude * cos]
+            }
+            _ => [0.0; 2],
+        }
+    }
+
+    /// The harmonic road phase at grid node k as the whole-step loop
+    /// carries it: exact at the last anchor node, then rotated.
+    pub(super) fn harmonic_phase(&self, k: u64) -> [f64; 2] {
+        if let Some((index, z)) = self.phase
+            && index == k
+        {
+            return z;
+        }
+        let anchor = k - k % PHASE_ANCHOR;
+        let mut z = self.exact_phase(anchor);
+        for _ in anchor..k {
+            z = self.grid_step.rotate(z);
+        }
+        z
+    }
+
+    /// Commits the grid nodes `grid_index + 1 ..= last`, each by one whole
+    /// step from the node before (the committed state is on node
+    /// `grid_index`). Each node's state is a function of its index alone.
+    pub(super) fn whole_steps(&mut self, last: u64) -> Result<()> {
+        let harmonic = matches!(self.config.road, RoadSpec::Harmonic { .. });
+        match (self.grid.resolves_delay(), harmonic) {
+            (true, true) => self.harmonic_whole_steps::<true>(last),
+            (false, true) => self.harmonic_whole_steps::<false>(last),
+            (true, false) => self.whole_steps_with::<true>(last),
+            (false, false) => self.whole_steps_with::<false>(last),
+        }
+    }
+
+    /// [`Self::whole_steps`] on the harmonic road: segments that end at the
+    /// phase anchors (and at node m, where the history starts), each run by
+    /// [`segment`].
+    fn harmonic_whole_steps<const DELAY: bool>(&mut self, last: u64) -> Result<()> {
+        let m = self.grid.delay_steps;
+        let first = self.grid_index;
+        let len = self.history.len();
+        let x0 = self.config.initial_state[X_T];
+        let mut hot = HotState {
+            x: self.committed_state.into(),
+            road: HarmonicPhase(self.harmonic_phase(first)),
+            k: first,
+            slot: ((first + 1) % len as u64) as usize,
+            rms: self.rms,
+        };
+        let mut diverged = None;
+        while hot.k < last {
+            let start = hot.k;
+            let mut end = last.min((hot.k / PHASE_ANCHOR + 1) * PHASE_ANCHOR);
+            let before_history = DELAY && hot.k < m;
+            if before_history {
+                end = end.min(m);
+            }
+            let segment = Segment {
+                op: &self.grid_step,
+                history: &mut self.history,
+                end,
+                before_start: [x0, 0.0, x0, 0.0],
+            };
+            diverged = run_segment::<_, DELAY>(segment, &mut hot, before_history);
+            if hot.k.is_multiple_of(PHASE_ANCHOR) {
+                hot.road = HarmonicPhase(self.exact_phase(hot.k));
+            }
+            if diverged.is_some() {
+                break;
+            }
+            if hot.k > start {
+                self.grid_step.count(&mut hot.rms, &hot.x, hot.road.0[0]);
+            }
+        }
+        self.rms = hot.rms;
+        self.phase = Some((hot.k, hot.road.0));
+        self.set_committed_node(first, hot.k, hot.x);
+        match diverged {
+            Some(x) => self.check_divergence(self.grid_time(hot.k + 1), &State::from(x)),
+            None => Ok(()),
+        }
+    }
+
+    /// Records node k (reached by the whole-step loop from node `first`) as
+    /// the committed and current state.
+    fn set_committed_node(&mut self, first: u64, k: u64, x: [f64; 6]) {
+        if k > first {
+            let time = self.grid_time(k);
+            self.grid_index = k;
+            self.committed_time = time;
+            self.committed_state = State::from(x);
+            self.current_time = time;
+            self.current_state = self.committed_state;
+            self.road.release_before(time);
+        }
+    }
+
+    #[inline(always)]
+    pub(super) fn whole_steps_with_body<const DELAY: bool>(&mut self, last: u64) -> Result<()> {
+        let m = self.grid.delay_steps;
+        let len = self.history.len();
+        let first = self.grid_index;
+        let mut k = first;
+        let mut x: [f64; 6] = self.committed_state.into();
+        let before_start = {
+            let x0 = self.config.initial_state[X_T];
+            [x0, 0.0, x0, 0.0]
+        };
+        // Ring slot of node k + 1, which holds node k − m until overwritten.
+        let mut slot = ((k + 1) % len as u64) as usize;
+        let mut rms = self.rms;
+        // A local copy: the compiler then knows that the history writes do
+        // not change it.
+        let op = self.grid_step.clone();
+        // The piece at the node just reached, looked up for its road
+        // displacement and used again for the step that leaves it.
+        let mut piece_at_node = None;
+        let result = loop {
+            if k >= last {
+                break Ok(());
+            }
+            let (t, to) = (self.grid_time(k), self.grid_time(k + 1));
+            let covering = self.piece_over(t, to, piece_at_node.take());
+            if let Some(
+                piece @ RoadPiece::Linear {
+                    start,
+                    end,
+                    value,
+                    slope,
+                },
+            ) = covering
+            {
+                // The steps whose end nodes lie inside this piece, and the
+                // one after them that reaches its end, in the hot loop (no
+                // road lookup, no breakpoint test per step).
+                let mut inside = self.last_node_inside(k, last, end);
+                let before = DELAY && k < m;
+                if before {
+                    inside = inside.min(m);
+                }
+                let stop = inside.max(k + 1);
+                let mut hot = HotState {
+                    x,
+                    road: LinearPiece {
+                        start_time: self.config.start_time,
+                        step: self.grid.step,
+                        k,
+                        start,
+                        value,
+                        slope,
+                    },
+                    k,
+                    slot,
+                    rms,
+                };
+                let segment = Segment {
+                    op: &op,
+                    history: &mut self.history,
+                    end: stop,
+                    before_start,
+                };
+                let diverged = run_segment::<_, DELAY>(segment, &mut hot, before);
+                (x, k, slot, rms) = (hot.x, hot.k, hot.slot, hot.rms);
+                if let Some(x_next) = diverged {
+                    break self.check_divergence(self.grid_time(k + 1), &State::from(x_next));
+                }
+                let now = self.grid_time(k);
+                // `road.piece(now)` is this piece exactly when the node lies
+                // inside it.
+                let piece_now = if k == inside {
+                    piece
+                } else {
+                    self.road.piece(now)
+                };
+                op.count(&mut rms, &x, piece_now.value(now));
+                if k != inside && self.coincide(end, now) {
+                    // The node is a road breakpoint: x_g has a kink there,
+                    // so the RMS run of nodes closes at it.
+                    let after = self.piece_from(now);
+                    self.close_run_at_node(k, now, &State::from(x), &mut rms, &piece, &after);
+                }
+                self.road.release_before(self.grid_time(k - 1));
+                piece_at_node = Some(piece_now);
+                continue;
+            }
+            // A step that a road breakpoint splits: the RMS run closes at
+            // its start, and the step is integrated piece by piece.
+            let next_slot = if slot + 1 == len { 0 } else { slot + 1 };
+            let node = State::from(x);
+            let piece_at_start = self.piece_from(t);
+            self.close_run_at_node(k, t, &node, &mut rms, &piece_at_start, &piece_at_start);
+            let anchor = self.integral.anchor;
+            let (x_end, step_integral, at_end, last_piece) =
+                self.integrate_split_step(k, t, node, anchor, to);
+            let x_next: [f64; 6] = x_end.into();
+            if (k + 1).is_multiple_of(PHASE_ANCHOR) {
+                self.road.release_before(t);
+            }
+            let piece_next = self.road.piece(to);
+            piece_at_node = Some(piece_next);
+            if !within_bounds(&x_next)
+                && let Err(e) = self.check_divergence(to, &State::from(x_next))
+            {
+                break Err(e);
+            }
+            self.history[slot] = [x_next[X_T], x_next[V_T]];
+            self.restart_run_after_step(k + 1, to, &x_end, step_integral, (at_end, last_piece));
+            x = x_next;
+            slot = next_slot;
+            k += 1;
+        };
+        self.rms = rms;
+        self.set_committed_node(first, k, x);
+        result
+    }
+
+    /// The largest node index `n` in `[k, last]` such that the nodes
+    /// `k + 1 ..= n` lie strictly inside a road piece that ends at `end`
+    /// (before it and not coinciding with it).
+    fn last_node_inside(&self, k: u64, last: u64, end: f64) -> u64 {
+        let inside = |j: u64| {
+            let t = self.grid_time(j);
+            t < end && !self.coincide(end, t)
+        };
+        let estimate = ((end - self.config.start_time) / self.grid.step).floor();
+        let guess = if estimate > k as f64 {
+            estimate as u64
+        } else {
+            k
+        };
+        crate::monotone::last_index_where(k, last, guess, inside)
+    }
+
+    /// The road piece used over the whole step `[t, to]` if no breakpoint
+    /// splits it (the same choice as [`Self::integrate_within_step`]).
+    /// `at_t`: `self.road.piece(t)` if already known.
+    #[inline(always)]
+    fn piece_over(&mut self, t: f64, to: f64, at_t: Option<RoadPiece>) -> Option<RoadPiece> {
+        let mut piece = match at_t {
+            Some(piece) => piece,
+            None => self.road.piece(t),
+        };
+        if piece.end() <= t || self.coincide(piece.end(), t) {
+            piece = self.road.piece(piece.end().max(t));
+        }
+        if piece.end() < to && !self.coincide(piece.end(), to) {
+            None
+        } else {
+            Some(piece)
+        }
+    }
+}
