@@ -3,10 +3,10 @@
 //!
 //! The characteristic equation of Eq. (8) is
 //! `D(s, tau) = P(s) + Q(s) e^{-s tau} = 0` with s in 1/s and tau in s.
-//! [`CharacteristicPolynomials`] obtains P and Q by expanding the
-//! determinant of the mass–spring–damper matrix of Eq. (1) for any
-//! parameters; for the TDVASS it reproduces the a_0..a_6, b_2..b_4 of
-//! Eq. (9).
+//! [`CharacteristicPolynomials`] (in `analysis::characteristic`) obtains P
+//! and Q by expanding the determinant of the mass–spring–damper matrix of
+//! Eq. (1) for any parameters; for the TDVASS it reproduces the a_0..a_6,
+//! b_2..b_4 of Eq. (9).
 //!
 //! From them:
 //! - [`routh_hurwitz_g_max`]: the end of the Routh–Hurwitz gain range of the
@@ -22,6 +22,8 @@
 //!
 //! Gains g are in N/m, frequencies ω in rad/s, delays tau in s.
 
+pub use crate::analysis::characteristic::CharacteristicPolynomials;
+use crate::analysis::characteristic::{parts_on_imaginary_axis, squared_modulus_on_imaginary_axis};
 use crate::analysis::polynomial::Polynomial;
 use crate::analysis::spectrum::{CharacteristicRootSolver, RootTracker};
 use crate::error::{Error, Result};
@@ -29,187 +31,6 @@ use crate::model::{Params, Variant};
 use nalgebra::Complex;
 use serde_json::{Value, json};
 use std::f64::consts::TAU as FULL_TURN;
-
-/// P(s) and Q(s) of Eq. (8)-(9): `D(s, tau) = P(s) + Q(s) e^{-s tau}`.
-///
-/// Coefficients lowest degree first, in products of the SI units of the
-/// parameters (kg, N/m, N·s/m). `D(s, tau) / (m_s m_h m_t)` is
-/// `det(s I - A - b e_{x_t}^T e^{-s tau})` of the plant of Eq. (2).
-#[derive(Debug, Clone, PartialEq)]
-pub struct CharacteristicPolynomials {
-    /// P(s): the delay-free part, degree 6 (4 for the CS).
-    pub p: Vec<f64>,
-    /// Q(s): the part multiplied by e^{-s tau}; empty (zero) for CS and
-    /// PVASS, `b_2 s^2 + b_3 s^3 + b_4 s^4` for the TDVASS.
-    pub q: Vec<f64>,
-}
-
-impl CharacteristicPolynomials {
-    /// Expands the determinant of the Laplace-transformed Eq. (1):
-    /// `K(s) = M s^2 + C s + K` plus the delayed feedback column
-    /// `g e^{-s tau} [0, 1, -1]^T` on the x_t coordinate (TDVASS only).
-    ///
-    /// As the feedback matrix has rank one, `det(K(s) + e^{-s tau} G)` is
-    /// `det K(s) + e^{-s tau} det(K(s) with its x_t column replaced by G)`.
-    /// The CS uses its own 2×2 body–wheel matrix (degree-4 P, Q = 0).
-    pub fn new(params: &Params, variant: Variant) -> Result<CharacteristicPolynomials> {
-        params.validate()?;
-        let Params {
-            m_s,
-            m_h,
-            m_t,
-            k_s,
-            k_h,
-            k_t,
-            c_s,
-            c_h,
-            ..
-        } = *params;
-        let quadratic = |mass: f64, damping: f64, stiffness: f64| {
-            Polynomial::new(vec![stiffness, damping, mass])
-        };
-        let coupling = |damping: f64, stiffness: f64| Polynomial::new(vec![-stiffness, -damping]);
-        let zero = Polynomial::zero();
-        match variant {
-            Variant::Cs => {
-                let matrix = vec![
-                    vec![quadratic(m_s, c_s, k_s), coupling(c_s, k_s)],
-                    vec![coupling(c_s, k_s), quadratic(m_t, c_s, k_s + k_t)],
-                ];
-                Ok(CharacteristicPolynomials {
-                    p: determinant(&matrix).coefficients().to_vec(),
-                    q: Vec::new(),
-                })
-            }
-            Variant::Pvass | Variant::Tdvass => {
-                let mut matrix = vec![
-                    vec![quadratic(m_s, c_s, k_s), coupling(c_s, k_s), zero.clone()],
-                    vec![
-                        coupling(c_s, k_s),
-                        quadratic(m_h, c_s + c_h, k_s + k_h),
-                        coupling(c_h, k_h),
-                    ],
-                    vec![
-                        zero.clone(),
-                        coupling(c_h, k_h),
-                        quadratic(m_t, c_h, k_h + k_t),
-                    ],
-                ];
-                let p = determinant(&matrix);
-                let gain = params.effective_gain(variant);
-                let delayed_column = [
-                    zero,
-                    Polynomial::constant(gain),
-                    Polynomial::constant(-gain),
-                ];
-                for (row, entry) in matrix.iter_mut().zip(delayed_column) {
-                    row[2] = entry;
-                }
-                let q = determinant(&matrix);
-                Ok(CharacteristicPolynomials {
-                    p: p.coefficients().to_vec(),
-                    q: q.coefficients().to_vec(),
-                })
-            }
-        }
-    }
-
-    /// P(s) as a [`Polynomial`].
-    pub fn p_polynomial(&self) -> Polynomial {
-        Polynomial::new(self.p.clone())
-    }
-
-    /// Q(s) as a [`Polynomial`].
-    pub fn q_polynomial(&self) -> Polynomial {
-        Polynomial::new(self.q.clone())
-    }
-
-    /// `D(s, 0) = P(s) + Q(s)`, Eq. (10).
-    pub fn zero_delay(&self) -> Polynomial {
-        &self.p_polynomial() + &self.q_polynomial()
-    }
-
-    /// `D(s, tau)` of Eq. (8) at complex s (1/s) and delay tau (s).
-    pub fn evaluate(&self, s: Complex<f64>, tau: f64) -> Complex<f64> {
-        horner(&self.p, s) + horner(&self.q, s) * (-s * tau).exp()
-    }
-
-    /// F(ω) of Eq. (14)-(15) as a polynomial in `z = ω²` (rad²/s²):
-    /// `|P(iω)|² - |Q(iω)|²`.
-    pub fn discriminant_in_omega_squared(&self) -> Polynomial {
-        &squared_modulus_on_imaginary_axis(&self.p_polynomial())
-            - &squared_modulus_on_imaginary_axis(&self.q_polynomial())
-    }
-}
-
-/// Horner evaluation of coefficients (lowest degree first) at complex s.
-fn horner(coefficients: &[f64], s: Complex<f64>) -> Complex<f64> {
-    coefficients
-        .iter()
-        .rev()
-        .fold(Complex::new(0.0, 0.0), |acc, &c| acc * s + c)
-}
-
-/// Determinant of a square matrix of polynomials by Laplace expansion along
-/// the first row (used for the 2×2 and 3×3 matrices of Eq. (1)).
-fn determinant(matrix: &[Vec<Polynomial>]) -> Polynomial {
-    match matrix.len() {
-        0 => Polynomial::constant(1.0),
-        1 => matrix[0][0].clone(),
-        n => {
-            let mut total = Polynomial::zero();
-            for column in 0..n {
-                if matrix[0][column].is_zero() {
-                    continue;
-                }
-                let minor: Vec<Vec<Polynomial>> = matrix[1..]
-                    .iter()
-                    .map(|row| {
-                        row.iter()
-                            .enumerate()
-                            .filter(|&(j, _)| j != column)
-                            .map(|(_, entry)| entry.clone())
-                            .collect()
-                    })
-                    .collect();
-                let term = &matrix[0][column] * &determinant(&minor);
-                total = if column % 2 == 0 {
-                    &total + &term
-                } else {
-                    &total - &term
-                };
-            }
-            total
-        }
-    }
-}
-
-/// Real and imaginary parts of `p(iω)` as polynomials in ω:
-/// `Re p(iω) = Σ_{k even} (-1)^{k/2} c_k ω^k`,
-/// `Im p(iω) = Σ_{k odd} (-1)^{(k-1)/2} c_k ω^k` (Eq. (11)).
-fn parts_on_imaginary_axis(p: &Polynomial) -> (Polynomial, Polynomial) {
-    let coefficients = p.coefficients();
-    let mut real = vec![0.0; coefficients.len()];
-    let mut imaginary = vec![0.0; coefficients.len()];
-    for (k, &c) in coefficients.iter().enumerate() {
-        let sign = if (k / 2).is_multiple_of(2) { 1.0 } else { -1.0 };
-        if k.is_multiple_of(2) {
-            real[k] = sign * c;
-        } else {
-            imaginary[k] = sign * c;
-        }
-    }
-    (Polynomial::new(real), Polynomial::new(imaginary))
-}
-
-/// `|p(iω)|²` as a polynomial in `z = ω²`.
-fn squared_modulus_on_imaginary_axis(p: &Polynomial) -> Polynomial {
-    let (real, imaginary) = parts_on_imaginary_axis(p);
-    let in_omega = &(&real * &real) + &(&imaginary * &imaginary);
-    in_omega
-        .even_part_in_square()
-        .unwrap_or_else(Polynomial::zero)
-}
 
 /// The Routh first column of Fig. 4 for a real polynomial, normalised to a
 /// positive leading coefficient. The polynomial is Hurwitz (all roots in
@@ -1308,6 +1129,62 @@ mod tests {
                 .any(|&(from, to)| point.tau >= from && point.tau < to);
             assert_eq!(point.stable, inside, "{point:?} {intervals:?}");
             assert_eq!(point.stable, point.spectral_abscissa < 0.0, "{point:?}");
+        }
+    }
+
+    fn tdvass(g: f64, tau: f64) -> Params {
+        Params::with_controller(g, tau)
+    }
+
+    /// The slowest test here: 225 full spectra, about 0.1 s with the crate's
+    /// optimised test profile, about 5 s fully unoptimised.
+    #[test]
+    fn slow_spectrum_agrees_with_the_crossing_analysis_on_a_grid() {
+        let params = Params::default();
+        let gains: Vec<f64> = (0..15)
+            .map(|i| -150000.0 + 300000.0 * i as f64 / 14.0)
+            .collect();
+        let delays: Vec<f64> = (0..15).map(|j| 0.45 * j as f64 / 14.0).collect();
+        let mut compared = 0;
+        for &g in &gains {
+            let intervals = stable_delay_intervals(&params, g, 0.5).unwrap();
+            let critical: Vec<f64> = crossings(&params, g)
+                .unwrap()
+                .iter()
+                .flat_map(|c| critical_delays(c, 0.5))
+                .collect();
+            let solver = CharacteristicRootSolver::new(&tdvass(g, 0.0), Variant::Tdvass).unwrap();
+            for &tau in &delays {
+                if critical.iter().any(|&c| (c - tau).abs() < 1e-3) {
+                    continue;
+                }
+                let by_crossings = intervals.iter().any(|&(from, to)| tau >= from && tau < to);
+                let abscissa = solver.spectral_abscissa(tau).unwrap();
+                assert_eq!(by_crossings, abscissa < 0.0, "g {g} tau {tau}: {abscissa}");
+                compared += 1;
+            }
+        }
+        assert!(compared > 200, "{compared}");
+    }
+
+    #[test]
+    fn tracking_matches_fresh_spectra() {
+        let solver =
+            CharacteristicRootSolver::new(&tdvass(-50000.0, 0.0), Variant::Tdvass).unwrap();
+        let found = crossings(&Params::default(), -50000.0).unwrap();
+        let critical: Vec<(f64, f64)> = found
+            .iter()
+            .flat_map(|c| critical_delays(c, 0.45).into_iter().map(|d| (d, c.omega)))
+            .collect();
+        let mut tracker = RootTracker::new(&solver, critical).with_refresh_step(0.1);
+        for k in 0..=60 {
+            let tau = 0.45 * k as f64 / 60.0;
+            let tracked = tracker.spectral_abscissa(tau).unwrap();
+            let fresh = solver.spectral_abscissa(tau).unwrap();
+            assert!(
+                (tracked - fresh).abs() < 1e-8,
+                "tau {tau}: {tracked} vs {fresh}"
+            );
         }
     }
 }
