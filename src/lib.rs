@@ -70,6 +70,7 @@
 
 pub mod analysis;
 pub mod cli;
+pub mod comfort;
 pub mod error;
 pub mod fmi2;
 pub mod metrics;
