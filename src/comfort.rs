@@ -39,11 +39,12 @@
 //! let realization = wk_state_space();
 //! let same = realization.frequency_response(6.3);
 //! assert!((same - wk_response(6.3)).norm() < 1e-12);
-//! assert_eq!(comfort_reaction(0.4), "a little uncomfortable"); // a_w in m/s²
+//! assert_eq!(comfort_reaction(0.4).unwrap(), "a little uncomfortable"); // a_w in m/s²
 //! ```
 
 use std::f64::consts::{FRAC_1_SQRT_2, PI};
 
+use crate::error::{Error, Result};
 use nalgebra::{Complex, RowSVector, SMatrix, SVector};
 
 /// f1 (Hz): corner of the band-limiting high pass.
@@ -334,14 +335,16 @@ pub fn wk_state_space() -> WkStateSpace {
 /// `[0.315, 0.5)` a little, `[0.5, 0.8)` fairly, `[0.8, 1.25)`
 /// uncomfortable, `[1.25, 2)` very, `[2, ∞)` extremely uncomfortable.
 ///
-/// # Panics
-///
-/// If `a_w` is negative or NaN (an r.m.s. value is never either).
-pub fn comfort_reaction(a_w: f64) -> &'static str {
-    assert!(
-        a_w >= 0.0,
-        "the weighted r.m.s. acceleration must be >= 0 m/s², got {a_w}"
-    );
+/// A negative or NaN `a_w` (an r.m.s. value is never either) is an
+/// [`Error::InvalidParameter`].
+pub fn comfort_reaction(a_w: f64) -> Result<&'static str> {
+    if !(a_w >= 0.0) {
+        return Err(Error::InvalidParameter {
+            name: "a_w",
+            value: a_w,
+            reason: "the weighted r.m.s. acceleration must be >= 0 m/s²",
+        });
+    }
     const BANDS: [(f64, &str); 5] = [
         (2.0, "extremely uncomfortable"),
         (1.25, "very uncomfortable"),
@@ -352,7 +355,7 @@ pub fn comfort_reaction(a_w: f64) -> &'static str {
     BANDS
         .iter()
         .find(|(lower_bound, _)| a_w >= *lower_bound)
-        .map_or("not uncomfortable", |(_, reaction)| reaction)
+        .map_or(Ok("not uncomfortable"), |(_, reaction)| Ok(reaction))
 }
 
 #[cfg(test)]
@@ -633,7 +636,7 @@ mod tests {
             (f64::INFINITY, "extremely uncomfortable"),
         ];
         for (a_w, reaction) in cases {
-            assert_eq!(comfort_reaction(a_w), reaction, "a_w = {a_w} m/s²");
+            assert_eq!(comfort_reaction(a_w).unwrap(), reaction, "a_w = {a_w} m/s²");
         }
         // The reaction never becomes milder as a_w grows.
         let order = [
@@ -647,7 +650,7 @@ mod tests {
         let rank = |a_w: f64| {
             order
                 .iter()
-                .position(|&r| r == comfort_reaction(a_w))
+                .position(|&r| r == comfort_reaction(a_w).unwrap())
                 .expect("a known reaction")
         };
         let ranks: Vec<usize> = (0..=300).map(|i| rank(f64::from(i) * 0.01)).collect();
@@ -656,14 +659,13 @@ mod tests {
     }
 
     #[test]
-    #[should_panic(expected = "must be >= 0")]
-    fn comfort_reaction_rejects_a_negative_value() {
-        comfort_reaction(-0.1);
-    }
-
-    #[test]
-    #[should_panic(expected = "must be >= 0")]
-    fn comfort_reaction_rejects_nan() {
-        comfort_reaction(f64::NAN);
+    fn comfort_reaction_refuses_negative_and_nan_values() {
+        for bad in [-0.1, f64::NAN] {
+            let message = comfort_reaction(bad).unwrap_err().to_string();
+            assert!(
+                message.contains("a_w") && message.contains(">= 0"),
+                "{message}"
+            );
+        }
     }
 }
