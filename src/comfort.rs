@@ -338,7 +338,7 @@ pub fn wk_state_space() -> WkStateSpace {
 /// A negative or NaN `a_w` (an r.m.s. value is never either) is an
 /// [`Error::InvalidParameter`].
 pub fn comfort_reaction(a_w: f64) -> Result<&'static str> {
-    if !(a_w >= 0.0) {
+    if a_w.is_nan() || a_w < 0.0 {
         return Err(Error::InvalidParameter {
             name: "a_w",
             value: a_w,
