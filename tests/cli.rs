@@ -461,3 +461,53 @@ fn a_csv_road_warns_past_its_last_sample_and_accepts_the_documented_formats() {
         within.stderr
     );
 }
+
+#[test]
+fn cli_defaults_are_the_library_defaults_and_the_fmu_start_values() {
+    // One declaration: what `simulate` runs with when no flag is given must
+    // be Params::default() (Table 1, g1, tau1) and the FMU's start values.
+    let run = tdvass_json(&["simulate", "--duration", "0"]);
+    let params = tdvass::model::Params::default();
+    for (name, library) in params.named_values() {
+        let cli = run[name]
+            .as_f64()
+            .unwrap_or_else(|| panic!("`{name}` missing in {run}"));
+        let fmu = tdvass::fmi2::variables::by_name(name)
+            .and_then(|v| v.start)
+            .unwrap_or_else(|| panic!("no FMU start value for `{name}`"));
+        assert_eq!(
+            cli, library,
+            "`{name}`: CLI default against Params::default()"
+        );
+        assert_eq!(
+            cli, fmu,
+            "`{name}`: CLI default against the FMU start value"
+        );
+    }
+    for name in [
+        "road_amplitude",
+        "road_angular_frequency",
+        "vehicle_speed",
+        "road_cutoff_frequency",
+        "road_sample_interval",
+        "max_internal_step",
+        "w_ba",
+        "w_sdd",
+        "w_tdd",
+    ] {
+        let cli = run[name]
+            .as_f64()
+            .unwrap_or_else(|| panic!("`{name}` missing in {run}"));
+        let fmu = tdvass::fmi2::variables::by_name(name)
+            .and_then(|v| v.start)
+            .unwrap();
+        assert_eq!(
+            cli, fmu,
+            "`{name}`: CLI default against the FMU start value"
+        );
+    }
+    let seed = tdvass::fmi2::variables::by_name("road_seed")
+        .and_then(|v| v.start)
+        .unwrap();
+    assert_eq!(run["road_seed"].as_f64(), Some(seed));
+}

@@ -1174,7 +1174,7 @@ impl Drop for Instance {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fmi2::variables::by_name;
+    use crate::fmi2::variables::{VARIABLES, by_name};
     use std::cell::RefCell;
     use std::rc::Rc;
 
@@ -1597,6 +1597,50 @@ mod tests {
             })
             .is_err()
         );
+    }
+
+    #[test]
+    fn model_structure_dependencies_are_the_nonzero_partials() {
+        // One declaration: an output lists `x_g` among its dependencies in
+        // the description exactly when its partial with respect to `x_g`
+        // is not zero, for every variant with the road fed through `x_g`.
+        for variant in [1, 2, 3] {
+            let (mut i, _) = new_instance(false);
+            i.run(Function::SetupExperiment, |i| {
+                i.setup_experiment(None, 0.0, Some(1.0))
+            })
+            .unwrap();
+            i.run(Function::EnterInitializationMode, |i| {
+                i.enter_initialization_mode()
+            })
+            .unwrap();
+            i.run(Function::SetInteger, |i| {
+                i.set_integer(&[vr("variant"), vr("road")], &[variant, 0])
+            })
+            .unwrap();
+            i.run(Function::ExitInitializationMode, |i| {
+                i.exit_initialization_mode()
+            })
+            .unwrap();
+            for v in VARIABLES
+                .iter()
+                .filter(|v| v.causality == Causality::Output)
+            {
+                let mut partial = [f64::NAN];
+                i.run(Function::GetDirectionalDerivative, |i| {
+                    i.directional_derivative(&[v.vr], &[vr("x_g")], &[1.0], &mut partial)
+                })
+                .unwrap();
+                assert_eq!(
+                    partial[0] != 0.0,
+                    v.feedthrough.contains(&"x_g"),
+                    "variant {variant}, `{}`: partial {} against the declared dependencies {:?}",
+                    v.name,
+                    partial[0],
+                    v.feedthrough
+                );
+            }
+        }
     }
 
     #[test]

@@ -1375,6 +1375,48 @@ mod tests {
     }
 
     #[test]
+    fn table_ranges_are_the_ones_the_model_enforces() {
+        // One declaration: a physical parameter is admissible in the table
+        // exactly when `Params::validate` accepts it.
+        let probes = [
+            -1.0,
+            -1e-300,
+            -0.0,
+            0.0,
+            1e-300,
+            1.0,
+            1e300,
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        for (name, _) in Params::default().named_values() {
+            let variable = by_name(name).unwrap_or_else(|| panic!("`{name}` is not in the table"));
+            for probe in probes {
+                let mut params = Params::default();
+                match name {
+                    "m_s" => params.m_s = probe,
+                    "m_h" => params.m_h = probe,
+                    "m_t" => params.m_t = probe,
+                    "k_s" => params.k_s = probe,
+                    "k_h" => params.k_h = probe,
+                    "k_t" => params.k_t = probe,
+                    "c_s" => params.c_s = probe,
+                    "c_h" => params.c_h = probe,
+                    "g" => params.g = probe,
+                    "tau" => params.tau = probe,
+                    other => panic!("a parameter `{other}` this test does not know"),
+                }
+                assert_eq!(
+                    variable.range.check(name, probe).is_ok(),
+                    params.validate().is_ok(),
+                    "`{name}` = {probe}: the table and Params::validate disagree"
+                );
+            }
+        }
+    }
+
+    #[test]
     fn every_variable_is_readable_and_settings_round_trip() {
         let mut s = Settings::start_values();
         for (i, v) in VARIABLES.iter().enumerate() {
