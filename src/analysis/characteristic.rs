@@ -6,7 +6,7 @@
 
 use crate::analysis::polynomial::Polynomial;
 use crate::error::Result;
-use crate::model::{Params, Variant};
+use crate::model::{MassSpringDamper, Params, Variant};
 use nalgebra::Complex;
 
 /// P(s) and Q(s) of Eq. (8)-(9): `D(s, tau) = P(s) + Q(s) e^{-s tau}`.
@@ -32,65 +32,42 @@ impl CharacteristicPolynomials {
     /// `det K(s) + e^{-s tau} det(K(s) with its x_t column replaced by G)`.
     /// The CS uses its own 2×2 body–wheel matrix (degree-4 P, Q = 0).
     pub fn new(params: &Params, variant: Variant) -> Result<CharacteristicPolynomials> {
-        params.validate()?;
-        let Params {
-            m_s,
-            m_h,
-            m_t,
-            k_s,
-            k_h,
-            k_t,
-            c_s,
-            c_h,
-            ..
-        } = *params;
-        let quadratic = |mass: f64, damping: f64, stiffness: f64| {
-            Polynomial::new(vec![stiffness, damping, mass])
-        };
-        let coupling = |damping: f64, stiffness: f64| Polynomial::new(vec![-stiffness, -damping]);
-        let zero = Polynomial::zero();
-        match variant {
-            Variant::Cs => {
-                let matrix = vec![
-                    vec![quadratic(m_s, c_s, k_s), coupling(c_s, k_s)],
-                    vec![coupling(c_s, k_s), quadratic(m_t, c_s, k_s + k_t)],
-                ];
-                Ok(CharacteristicPolynomials {
-                    p: determinant(&matrix).coefficients().to_vec(),
-                    q: Vec::new(),
-                })
-            }
-            Variant::Pvass | Variant::Tdvass => {
-                let mut matrix = vec![
-                    vec![quadratic(m_s, c_s, k_s), coupling(c_s, k_s), zero.clone()],
-                    vec![
-                        coupling(c_s, k_s),
-                        quadratic(m_h, c_s + c_h, k_s + k_h),
-                        coupling(c_h, k_h),
-                    ],
-                    vec![
-                        zero.clone(),
-                        coupling(c_h, k_h),
-                        quadratic(m_t, c_h, k_h + k_t),
-                    ],
-                ];
-                let p = determinant(&matrix);
-                let gain = params.effective_gain(variant);
-                let delayed_column = [
-                    zero,
-                    Polynomial::constant(gain),
-                    Polynomial::constant(-gain),
-                ];
-                for (row, entry) in matrix.iter_mut().zip(delayed_column) {
-                    row[2] = entry;
-                }
-                let q = determinant(&matrix);
-                Ok(CharacteristicPolynomials {
-                    p: p.coefficients().to_vec(),
-                    q: q.coefficients().to_vec(),
-                })
-            }
+        let eq1 = MassSpringDamper::new(params, variant)?;
+        let n = eq1.dimension();
+        // Entry (i, j) of K(s) = M s² + C s + K, coefficients lowest first.
+        let mut matrix: Vec<Vec<Polynomial>> = (0..n)
+            .map(|i| {
+                (0..n)
+                    .map(|j| match (eq1.stiffness(i, j), eq1.damping(i, j)) {
+                        (Some(k), Some(c)) if i == j => Polynomial::new(vec![k, c, eq1.masses[i]]),
+                        (Some(k), Some(c)) => Polynomial::new(vec![k, c]),
+                        _ => Polynomial::zero(),
+                    })
+                    .collect()
+            })
+            .collect();
+        let p = determinant(&matrix);
+        if n == 2 {
+            return Ok(CharacteristicPolynomials {
+                p: p.coefficients().to_vec(),
+                q: Vec::new(),
+            });
         }
+        // The wheel's column replaced by the delayed force, moved to the
+        // left-hand side: `−f`.
+        let wheel = eq1.wheel();
+        for (i, row) in matrix.iter_mut().enumerate() {
+            row[wheel] = if i == 0 {
+                Polynomial::zero()
+            } else {
+                Polynomial::constant(-eq1.feedback[i])
+            };
+        }
+        let q = determinant(&matrix);
+        Ok(CharacteristicPolynomials {
+            p: p.coefficients().to_vec(),
+            q: q.coefficients().to_vec(),
+        })
     }
 
     /// P(s) as a [`Polynomial`].

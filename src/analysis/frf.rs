@@ -13,64 +13,55 @@
 //! `1 - g/k_h` (notes.md item 1), not 1.
 
 use crate::error::{Error, Result};
-use crate::model::{Params, Variant};
+use crate::model::{MassSpringDamper, Params, Variant};
 use nalgebra::{Complex, Matrix3};
 use serde_json::{Value, json};
 use std::f64::consts::PI;
 
 /// The 3×3 complex matrix A(ω) of Eq. (3) for the PVASS/TDVASS (the gain
-/// acting is `params.effective_gain(variant)`, so it is zero for the PVASS).
-/// For the CS the matrix is the 2×2 body–wheel system embedded on the
-/// `X_s` and `X_t` rows and columns, with `A_22 = 1` and no coupling, so
-/// that solving it gives `X_h = 0` and the CS `X_s`, `X_t`.
+/// acting is `params.effective_gain(variant)`, so it is zero for the PVASS),
+/// assembled from Eq. (1) ([`MassSpringDamper`]): `−M ω² + iω C + K` minus
+/// the delayed force `f e^{−iωτ}` in the wheel's column. For the CS the
+/// matrix is the 2×2 body–wheel system embedded on the `X_s` and `X_t` rows
+/// and columns, with `A_22 = 1` and no coupling, so that solving it gives
+/// `X_h = 0` and the CS `X_s`, `X_t`.
 pub fn dynamic_stiffness_matrix(
     params: &Params,
     variant: Variant,
     omega: f64,
-) -> Matrix3<Complex<f64>> {
-    let Params {
-        m_s,
-        m_h,
-        m_t,
-        k_s,
-        k_h,
-        k_t,
-        c_s,
-        c_h,
-        tau,
-        ..
-    } = *params;
+) -> Result<Matrix3<Complex<f64>>> {
+    let eq1 = MassSpringDamper::new(params, variant)?;
     let i_omega = Complex::new(0.0, omega);
     let zero = Complex::new(0.0, 0.0);
-    let suspension = i_omega * c_s + k_s;
-    match variant {
-        Variant::Cs => Matrix3::new(
-            -m_s * omega * omega + suspension,
-            zero,
-            -suspension,
-            zero,
-            Complex::new(1.0, 0.0),
-            zero,
-            -suspension,
-            zero,
-            -m_t * omega * omega + suspension + k_t,
-        ),
-        Variant::Pvass | Variant::Tdvass => {
-            let absorber = i_omega * c_h + k_h;
-            let feedback = (-i_omega * tau).exp() * params.effective_gain(variant);
-            Matrix3::new(
-                -m_s * omega * omega + suspension,
-                -suspension,
-                zero,
-                -suspension,
-                -m_h * omega * omega + suspension + absorber,
-                -absorber + feedback,
-                zero,
-                -absorber,
-                -m_t * omega * omega + k_t + absorber - feedback,
-            )
+    let n = eq1.dimension();
+    // Rows and columns of the 3×3 matrix that hold the coordinates.
+    let slots: Vec<usize> = if n == 2 { vec![0, 2] } else { vec![0, 1, 2] };
+    let mut a = Matrix3::from_element(zero);
+    if n == 2 {
+        a[(1, 1)] = Complex::new(1.0, 0.0);
+    }
+    for i in 0..n {
+        for j in 0..n {
+            let inertia = if i == j {
+                Complex::new(-eq1.masses[i] * omega * omega, 0.0)
+            } else {
+                zero
+            };
+            if let Some(entry) = eq1.assemble(i, j, inertia, |e| i_omega * e.damping + e.stiffness)
+            {
+                a[(slots[i], slots[j])] = entry;
+            }
         }
     }
+    if n == 3 {
+        // The delayed force acts on the absorber and the wheel rows.
+        let delayed = (-i_omega * params.tau).exp();
+        let wheel = eq1.wheel();
+        for i in 1..n {
+            a[(i, wheel)] += delayed * -eq1.feedback[i];
+        }
+    }
+    Ok(a)
 }
 
 /// The complex body displacement transfer `X_s/X_g` at angular frequency
@@ -89,7 +80,7 @@ pub fn body_displacement_transfer(
             reason: "the angular frequency must be finite",
         });
     }
-    let a = dynamic_stiffness_matrix(params, variant, omega);
+    let a = dynamic_stiffness_matrix(params, variant, omega)?;
     let k_t = params.k_t;
     let (numerator, denominator) = match variant {
         Variant::Cs => {
@@ -321,7 +312,7 @@ mod tests {
     fn eq4_agrees_with_solving_eq3_directly() {
         let params = delayed_params();
         for omega in [0.3, 6.0, 40.0, 69.0, 150.0] {
-            let a = dynamic_stiffness_matrix(&params, Variant::Tdvass, omega);
+            let a = dynamic_stiffness_matrix(&params, Variant::Tdvass, omega).unwrap();
             let rhs = Vector3::new(
                 Complex::new(0.0, 0.0),
                 Complex::new(0.0, 0.0),

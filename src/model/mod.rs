@@ -6,6 +6,10 @@
 //! absorber coordinates carry no dynamics (their rows and columns of A are
 //! zero and they stay at zero); outputs report `x_h = x_t`, `v_h = v_t`.
 
+mod equations;
+
+pub use equations::{Element, MassSpringDamper};
+
 use crate::error::{Error, Result};
 use nalgebra::{Matrix6, Vector6};
 
@@ -262,57 +266,30 @@ pub struct Plant {
 }
 
 impl Plant {
-    /// Builds A, b, e for `variant` after validating `params`.
+    /// Builds A, b, e for `variant` after validating `params`, from Eq. (1)
+    /// ([`MassSpringDamper`]): for each coordinate x_i with mass m_i,
+    /// `dx_i/dt = v_i`, `dv_i/dt = −(K x + C v)_i / m_i + …`.
     pub fn new(params: Params, variant: Variant) -> Result<Plant> {
-        params.validate()?;
-        let Params {
-            m_s,
-            m_h,
-            m_t,
-            k_s,
-            k_h,
-            k_t,
-            c_s,
-            c_h,
-            ..
-        } = params;
-        let g = params.effective_gain(variant);
+        let eq1 = MassSpringDamper::new(&params, variant)?;
         let mut a = Matrix6::zeros();
         let mut b = State::zeros();
         let mut e = State::zeros();
-        a[(X_S, V_S)] = 1.0;
-        a[(X_T, V_T)] = 1.0;
-        e[V_T] = k_t / m_t;
-        match variant {
-            Variant::Cs => {
-                // Body on the wheel through k_s, c_s; wheel on the road through k_t.
-                a[(V_S, X_S)] = -k_s / m_s;
-                a[(V_S, V_S)] = -c_s / m_s;
-                a[(V_S, X_T)] = k_s / m_s;
-                a[(V_S, V_T)] = c_s / m_s;
-                a[(V_T, X_S)] = k_s / m_t;
-                a[(V_T, V_S)] = c_s / m_t;
-                a[(V_T, X_T)] = -(k_s + k_t) / m_t;
-                a[(V_T, V_T)] = -c_s / m_t;
+        for (i, &x_i) in eq1.coordinates.iter().enumerate() {
+            let (v_i, mass) = (x_i + 1, eq1.masses[i]);
+            a[(x_i, v_i)] = 1.0;
+            for (j, &x_j) in eq1.coordinates.iter().enumerate() {
+                if let Some(stiffness) = eq1.stiffness(i, j) {
+                    a[(v_i, x_j)] = -stiffness / mass;
+                }
+                if let Some(damping) = eq1.damping(i, j) {
+                    a[(v_i, x_j + 1)] = -damping / mass;
+                }
             }
-            Variant::Pvass | Variant::Tdvass => {
-                a[(X_H, V_H)] = 1.0;
-                a[(V_S, X_S)] = -k_s / m_s;
-                a[(V_S, V_S)] = -c_s / m_s;
-                a[(V_S, X_H)] = k_s / m_s;
-                a[(V_S, V_H)] = c_s / m_s;
-                a[(V_H, X_S)] = k_s / m_h;
-                a[(V_H, V_S)] = c_s / m_h;
-                a[(V_H, X_H)] = -(k_s + k_h) / m_h;
-                a[(V_H, V_H)] = -(c_s + c_h) / m_h;
-                a[(V_H, X_T)] = k_h / m_h;
-                a[(V_H, V_T)] = c_h / m_h;
-                a[(V_T, X_H)] = k_h / m_t;
-                a[(V_T, V_H)] = c_h / m_t;
-                a[(V_T, X_T)] = -(k_h + k_t) / m_t;
-                a[(V_T, V_T)] = -c_h / m_t;
-                b[V_H] = -g / m_h;
-                b[V_T] = g / m_t;
+            if eq1.coordinates.len() == 3 {
+                b[v_i] = eq1.feedback[i] / mass;
+            }
+            if i == eq1.wheel() {
+                e[v_i] = eq1.road_stiffness(i) / mass;
             }
         }
         Ok(Plant {
