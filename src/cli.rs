@@ -2,18 +2,7 @@
 //! `optimize` and `map` (names and JSON keys fixed by the interface spec).
 //! Every subcommand prints a table, or one JSON object with `--json`.
 
-use crate::analysis::frf::{frequency_response, peaks_hz};
-use crate::analysis::optimize::{
-    CONTROLLER_DELAY_RANGE, CONTROLLER_GAIN_RANGE, Problem, Target, optimize,
-};
-use crate::analysis::pso::{Bounds, PsoSettings};
-use crate::analysis::spectrum::StableReport;
-use crate::analysis::stability::{StabilityReport, stability_map};
-use crate::error::{Error, Result};
-use crate::metrics::Weights;
-use crate::model::{Params, State, Variant};
-use crate::road::{RandomRoad, RoadClass, RoadSpec};
-use crate::solver::{DEFAULT_MAX_INTERNAL_STEP, SimulationConfig, Simulator};
+use crate::json::ToJson;
 use clap::parser::ValueSource;
 use clap::{ArgMatches, Args, CommandFactory, FromArgMatches, Parser, Subcommand};
 use serde_json::json;
@@ -21,6 +10,18 @@ use std::collections::BTreeSet;
 use std::fmt::Write as _;
 use std::io::{IsTerminal as _, Write as _};
 use std::time::{Duration, Instant};
+use tdvass::analysis::frf::{frequency_response, peaks_hz};
+use tdvass::analysis::optimize::{
+    CONTROLLER_DELAY_RANGE, CONTROLLER_GAIN_RANGE, Problem, Target, optimize,
+};
+use tdvass::analysis::pso::{Bounds, PsoSettings};
+use tdvass::analysis::spectrum::StableReport;
+use tdvass::analysis::stability::{StabilityReport, stability_map};
+use tdvass::error::{Error, Result};
+use tdvass::metrics::Weights;
+use tdvass::model::{Params, State, Variant};
+use tdvass::road::{RandomRoad, RoadClass, RoadSpec};
+use tdvass::solver::{DEFAULT_MAX_INTERNAL_STEP, SimulationConfig, Simulator};
 
 /// Wall time after which `simulate` reports its progress on standard error.
 const PROGRESS_AFTER: Duration = Duration::from_secs(2);

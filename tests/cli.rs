@@ -472,7 +472,7 @@ fn cli_defaults_are_the_library_defaults_and_the_fmu_start_values() {
         let cli = run[name]
             .as_f64()
             .unwrap_or_else(|| panic!("`{name}` missing in {run}"));
-        let fmu = tdvass::fmi2::variables::by_name(name)
+        let fmu = tdvass_fmi2::variables::by_name(name)
             .and_then(|v| v.start)
             .unwrap_or_else(|| panic!("no FMU start value for `{name}`"));
         assert_eq!(
@@ -498,7 +498,7 @@ fn cli_defaults_are_the_library_defaults_and_the_fmu_start_values() {
         let cli = run[name]
             .as_f64()
             .unwrap_or_else(|| panic!("`{name}` missing in {run}"));
-        let fmu = tdvass::fmi2::variables::by_name(name)
+        let fmu = tdvass_fmi2::variables::by_name(name)
             .and_then(|v| v.start)
             .unwrap();
         assert_eq!(
@@ -506,7 +506,7 @@ fn cli_defaults_are_the_library_defaults_and_the_fmu_start_values() {
             "`{name}`: CLI default against the FMU start value"
         );
     }
-    let seed = tdvass::fmi2::variables::by_name("road_seed")
+    let seed = tdvass_fmi2::variables::by_name("road_seed")
         .and_then(|v| v.start)
         .unwrap();
     assert_eq!(run["road_seed"].as_f64(), Some(seed));

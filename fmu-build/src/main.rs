@@ -20,15 +20,20 @@
 //! the `rustup target add` command or the Debian package that provides it.
 //!
 //! The description and documentation come from the library
-//! ([`tdvass::fmi2::description`]), generated from the variable table.
+//! ([`tdvass_fmi2::description`]), generated from the variable table.
 
 use std::fs;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
-use tdvass::fmi2::description::{documentation_html, model_description_xml};
-use tdvass::fmi2::markdown::{BEGIN_MARKER, END_MARKER, splice_into};
-use tdvass::fmi2::{MODEL_IDENTIFIER, guid};
+use tdvass_fmi2::description::{documentation_html, model_description_xml};
+use tdvass_fmi2::markdown::{BEGIN_MARKER, END_MARKER, splice_into};
+use tdvass_fmi2::{MODEL_IDENTIFIER, guid};
+
+/// The library target of the FMU crate (`tdvass-fmi2`): cargo names its
+/// shared library after it (`libtdvass_fmi2.so`, `tdvass_fmi2.dll`), and
+/// the FMU holds it under the model identifier (`tdvass.so`, `tdvass.dll`).
+const LIBRARY_NAME: &str = "tdvass_fmi2";
 use zip::write::SimpleFileOptions;
 use zip::{CompressionMethod, DateTime, ZipArchive, ZipWriter};
 
@@ -133,7 +138,8 @@ struct Platform {
     /// Rust target triple of a cross build; `None` builds for the host into
     /// `target/release/`.
     cross_target: Option<&'static str>,
-    /// The file name cargo gives the library (`libtdvass.so`, `tdvass.dll`).
+    /// The file name cargo gives the library (`libtdvass_fmi2.so`,
+    /// `tdvass_fmi2.dll`).
     built_file: String,
     /// The extension of the library inside the FMU (`so`, `dll`, `dylib`).
     extension: &'static str,
@@ -190,7 +196,7 @@ fn host_platform(os: &str, arch: &str) -> Result<Platform> {
         fmi2_folder: Some(fmi2_folder),
         label,
         cross_target: None,
-        built_file: format!("{prefix}{MODEL_IDENTIFIER}.{extension}"),
+        built_file: format!("{prefix}{LIBRARY_NAME}.{extension}"),
         extension,
         format,
         requirements: &[],
@@ -219,7 +225,7 @@ fn all_platforms() -> Result<Vec<Platform>> {
             fmi2_folder: Some("win64"),
             label: "Windows x86-64",
             cross_target: Some(WINDOWS_TARGET),
-            built_file: format!("{MODEL_IDENTIFIER}.dll"),
+            built_file: format!("{LIBRARY_NAME}.dll"),
             extension: "dll",
             format: BinaryFormat::PeX86_64,
             requirements: &[Requirement {
@@ -231,7 +237,7 @@ fn all_platforms() -> Result<Vec<Platform>> {
             fmi2_folder: None,
             label: "Linux aarch64",
             cross_target: Some(AARCH64_TARGET),
-            built_file: format!("lib{MODEL_IDENTIFIER}.so"),
+            built_file: format!("lib{LIBRARY_NAME}.so"),
             extension: "so",
             format: BinaryFormat::ElfAarch64,
             requirements: &[
@@ -319,7 +325,7 @@ fn missing_requirements(root: &Path, platforms: &[Platform]) -> Vec<String> {
 /// bytes, checked to be machine code of that platform.
 fn build_library(root: &Path, platform: &Platform) -> Result<Vec<u8>> {
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
-    let mut args = vec!["build", "--release", "-p", "tdvass", "--lib"];
+    let mut args = vec!["build", "--release", "-p", "tdvass-fmi2", "--lib"];
     if let Some(triple) = platform.cross_target {
         args.extend(["--target", triple]);
     }
@@ -592,26 +598,31 @@ mod tests {
                 "linux",
                 "x86_64",
                 "binaries/linux64/tdvass.so",
-                "libtdvass.so",
+                "libtdvass_fmi2.so",
             ),
             (
                 "windows",
                 "x86_64",
                 "binaries/win64/tdvass.dll",
-                "tdvass.dll",
+                "tdvass_fmi2.dll",
             ),
-            ("windows", "x86", "binaries/win32/tdvass.dll", "tdvass.dll"),
+            (
+                "windows",
+                "x86",
+                "binaries/win32/tdvass.dll",
+                "tdvass_fmi2.dll",
+            ),
             (
                 "macos",
                 "aarch64",
                 "binaries/darwin64/tdvass.dylib",
-                "libtdvass.dylib",
+                "libtdvass_fmi2.dylib",
             ),
             (
                 "macos",
                 "x86_64",
                 "binaries/darwin64/tdvass.dylib",
-                "libtdvass.dylib",
+                "libtdvass_fmi2.dylib",
             ),
         ];
         for (os, arch, entry, built) in cases {
@@ -645,7 +656,7 @@ mod tests {
         );
         assert_eq!(
             platforms[2].built_path(Path::new("t")),
-            Path::new("t/aarch64-unknown-linux-gnu/release/libtdvass.so")
+            Path::new("t/aarch64-unknown-linux-gnu/release/libtdvass_fmi2.so")
         );
     }
 
@@ -676,7 +687,7 @@ mod tests {
             fmi2_folder: Some("win64"),
             label: "Windows x86-64",
             cross_target: Some("x86_64-unknown-none-such"),
-            built_file: "tdvass.dll".to_string(),
+            built_file: "tdvass_fmi2.dll".to_string(),
             extension: "dll",
             format: BinaryFormat::PeX86_64,
             requirements: &[Requirement {

@@ -4,7 +4,7 @@
 #![allow(dead_code)]
 
 use std::ffi::{CStr, c_char, c_int, c_void};
-pub use tdvass::fmi2::ffi::*;
+pub use tdvass_fmi2::ffi::*;
 
 /// Status codes.
 pub const OK: fmi2Status = 0;
@@ -51,7 +51,7 @@ pub fn callbacks() -> fmi2CallbackFunctions {
 
 /// The GUID as a C string.
 pub fn guid() -> std::ffi::CString {
-    std::ffi::CString::new(tdvass::fmi2::guid()).unwrap()
+    std::ffi::CString::new(tdvass_fmi2::guid()).unwrap()
 }
 
 /// A Co-Simulation instance (NULL if refused).

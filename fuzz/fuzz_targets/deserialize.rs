@@ -13,11 +13,11 @@ mod common;
 
 use common::*;
 use libfuzzer_sys::fuzz_target;
-use tdvass::fmi2::snapshot;
+use tdvass_fmi2::snapshot;
 
 /// `payload` behind a valid header of this FMU.
 fn envelope(payload: &[u8]) -> Vec<u8> {
-    let guid = tdvass::fmi2::guid();
+    let guid = tdvass_fmi2::guid();
     let mut out = Vec::with_capacity(payload.len() + 64);
     out.extend_from_slice(snapshot::MAGIC);
     out.extend_from_slice(&snapshot::FORMAT_VERSION.to_le_bytes());
@@ -78,7 +78,7 @@ fuzz_target!(|data: &[u8]| {
         unsafe {
             assert_eq!(check(fmi2SetFMUstate(c, state)), OK);
         }
-        let model = snapshot::deserialize(&bytes, &tdvass::fmi2::guid()).expect("accepted above");
+        let model = snapshot::deserialize(&bytes, &tdvass_fmi2::guid()).expect("accepted above");
         if let Some(sim) = &model.sim {
             assert_outputs_finite(c);
             // A few short steps from where the state stands.

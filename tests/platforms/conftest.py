@@ -5,7 +5,7 @@ Platforms and how the harness runs there:
   linux64  binaries/linux64/tdvass.so of the FMU, natively
   win64    binaries/win64/tdvass.dll of the FMU, under wine
            (/usr/lib/wine/wine64, a private WINEPREFIX in target/platforms)
-  aarch64  target/aarch64-unknown-linux-gnu/release/libtdvass.so (FMI 2.0
+  aarch64  target/aarch64-unknown-linux-gnu/release/libtdvass_fmi2.so (FMI 2.0
            has no aarch64 platform folder, so it is not in the FMU), under
            qemu-user (`qemu-aarch64 -L /usr/aarch64-linux-gnu`)
 
@@ -141,7 +141,7 @@ def wine_environment() -> dict[str, str]:
 
 @pytest.fixture(scope="session")
 def platforms(fmu) -> dict[str, Platform]:
-    aarch64_library = target_dir() / "aarch64-unknown-linux-gnu" / "release" / "libtdvass.so"
+    aarch64_library = target_dir() / "aarch64-unknown-linux-gnu" / "release" / "libtdvass_fmi2.so"
     if not aarch64_library.is_file():
         pytest.fail(f"{aarch64_library} not found; {BUILD_HINT}")
     return {

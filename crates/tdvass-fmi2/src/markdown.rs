@@ -2,7 +2,7 @@
 //! table; `fmu-build` keeps the copy in README.md current and `--check`
 //! fails when it is stale.
 
-use super::variables::{Causality, VARIABLES, Variability};
+use crate::variables::{Causality, VARIABLES, Variability};
 use std::fmt::Write as _;
 
 /// Marker line before the generated table in README.md.

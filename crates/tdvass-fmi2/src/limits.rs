@@ -20,9 +20,9 @@
 //! - **Outputs** ([`non_finite_output`]): a last line of defence; a
 //!   non-finite output is never handed out.
 
-use super::FmiError;
-use super::variables::{Access, Settings, VARIABLES};
-use crate::solver::{DIVERGENCE_DISPLACEMENT, DIVERGENCE_VELOCITY, Outputs};
+use crate::FmiError;
+use crate::variables::{Access, Settings, VARIABLES};
+use tdvass::solver::{DIVERGENCE_DISPLACEMENT, DIVERGENCE_VELOCITY, Outputs};
 
 /// Largest stiffness, damping or gain over a mass (1/s² or 1/s).
 pub const MAX_RATE: f64 = 1e12;
@@ -31,7 +31,7 @@ pub const MAX_WEIGHT: f64 = 1e12;
 /// Most internal steps plus road breakpoints in one `fmi2DoStep` (2^22).
 pub const MAX_WORK_PER_STEP: f64 = 4_194_304.0;
 /// Node interval of the ISO 8608 road (s).
-const ISO_NODE_INTERVAL: f64 = crate::road::ISO_NODE_INTERVAL;
+const ISO_NODE_INTERVAL: f64 = tdvass::road::ISO_NODE_INTERVAL;
 
 fn beyond(name: &str, value: f64, reason: String) -> FmiError {
     FmiError::error(format!("invalid value {value} for `{name}`: {reason}"))
@@ -135,7 +135,7 @@ pub fn check_step_work(s: &Settings, grid_step: f64, h: f64) -> Result<(), FmiEr
 /// Largest |time| in internal steps (2^42): beyond it, times no longer
 /// resolve the internal step well (and at 2^52 not at all). The solver
 /// refuses start times beyond it too.
-pub const MAX_TIME_IN_STEPS: f64 = crate::solver::Simulator::MAX_START_TIME_IN_STEPS;
+pub const MAX_TIME_IN_STEPS: f64 = tdvass::solver::Simulator::MAX_START_TIME_IN_STEPS;
 
 /// Refuses a time `t` (s) too large for the internal step `grid_step`.
 pub fn check_time_resolution(what: &str, t: f64, grid_step: f64) -> Result<(), FmiError> {

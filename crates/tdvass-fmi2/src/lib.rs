@@ -1,6 +1,6 @@
 //! The FMI 2.0 Co-Simulation FMU (`modelIdentifier="tdvass"`).
 //!
-//! The physics stays in the safe library ([`crate::solver`] and friends);
+//! The physics stays in the safe library ([`tdvass::solver`] and friends);
 //! this module only adapts it to the FMI 2.0 calling convention:
 //!
 //! - [`variables`]: the **one table** of FMU variables. Value references,
@@ -11,7 +11,7 @@
 //! - [`states`]: the FMI state machine as one declarative table of which
 //!   function is allowed in which state.
 //! - [`instance`]: the safe [`Instance`](instance::Instance): settings, the
-//!   [`Simulator`](crate::solver::Simulator), the machine state, the logger
+//!   [`Simulator`](tdvass::solver::Simulator), the machine state, the logger
 //!   and the FMU states handed out to the master. Every method returns
 //!   `Result<_, FmiError>`.
 //! - [`snapshot`]: the versioned, checksummed, position-independent byte
@@ -46,6 +46,14 @@
 //! - `fmi2SetReal` on `x_g` resets its slope to 0; `fmi2SetRealInputDerivatives`
 //!   (order 1) sets the slope used from the current communication point on.
 //!   Higher orders are ignored with `fmi2Warning`.
+//!
+//! **What this crate owns and must never import.** It owns the FMI 2.0
+//! layer: the C ABI, the state machine, the variable table, logging and the
+//! generated description; it builds the FMU's shared library. It imports the
+//! physics from `tdvass` and nothing from the command line (`tdvass-cli`).
+//! `unsafe` lives in [`ffi`] only (denied everywhere else).
+
+#![deny(unsafe_code)]
 
 pub mod description;
 pub mod ffi;
@@ -134,11 +142,11 @@ impl FmiError {
     }
 }
 
-impl From<crate::Error> for FmiError {
+impl From<tdvass::Error> for FmiError {
     /// Library errors (invalid parameter, invalid state bytes...) are
     /// `fmi2Error` with the library's message, which names the variable and
     /// value.
-    fn from(e: crate::Error) -> FmiError {
+    fn from(e: tdvass::Error) -> FmiError {
         FmiError::error(e.to_string())
     }
 }

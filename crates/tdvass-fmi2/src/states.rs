@@ -11,7 +11,7 @@
 //! `fmi2GetTypesPlatform`, `fmi2GetVersion` and `fmi2Instantiate` take no
 //! instance and are always allowed.
 
-use super::FmiError;
+use crate::FmiError;
 
 /// State of an instance.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -323,7 +323,7 @@ mod tests {
                 assert_eq!(checked.is_ok(), mark == 'x');
                 if let Err(e) = checked {
                     assert_eq!(e.message, format!("not allowed in state {}", state.name()));
-                    assert_eq!(e.status, crate::fmi2::Status::Error);
+                    assert_eq!(e.status, crate::Status::Error);
                 }
             }
         }

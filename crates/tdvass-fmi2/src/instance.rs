@@ -1,18 +1,18 @@
 //! The safe FMU instance: settings, simulator, machine state, logger and the
-//! FMU states it handed out. No FFI here; [`super::ffi`] calls these methods
+//! FMU states it handed out. No FFI here; [`crate::ffi`] calls these methods
 //! through [`Instance::run`], which enforces the state table and logs every
 //! failure.
 
-use super::states::{self, Function, MachineState};
-use super::variables::{
+use crate::states::{self, Function, MachineState};
+use crate::variables::{
     Access, Calculated, Causality, Known, Linearization, OutputId, Settings, VarType, Variability,
     Variable, by_vr,
 };
-use super::{FmiError, LOG_CATEGORIES, Status, TIME_TOLERANCE, limits, snapshot};
-use crate::model::{Params, V_S, Variant};
-use crate::solver::{DelayGrid, Outputs, Simulator};
+use crate::{FmiError, LOG_CATEGORIES, Status, TIME_TOLERANCE, limits, snapshot};
 use std::collections::HashMap;
 use std::path::PathBuf;
+use tdvass::model::{Params, V_S, Variant};
+use tdvass::solver::{DelayGrid, Outputs, Simulator};
 
 /// Receives log messages: `(status, category, message)`.
 pub type LogSink = Box<dyn Fn(Status, &str, &str)>;
@@ -111,9 +111,9 @@ impl Model {
             previous_input: None,
             earlier_input: None,
             hold_warned: false,
-            start_time: super::DEFAULT_START_TIME,
+            start_time: crate::DEFAULT_START_TIME,
             stop_time: None,
-            last_successful_time: super::DEFAULT_START_TIME,
+            last_successful_time: crate::DEFAULT_START_TIME,
             terminate_requested: false,
             sim: None,
         }
@@ -179,7 +179,7 @@ impl Instance {
             );
             None
         };
-        let expected = super::guid();
+        let expected = crate::guid();
         let name = match request.instance_name {
             None => return refuse("instanceName is NULL".into()),
             Some("") => return refuse("instanceName is empty".into()),
@@ -205,7 +205,7 @@ impl Instance {
         }
         let resource_path = match request.resource_location {
             None | Some("") => None,
-            Some(uri) => match super::uri::resource_path(uri) {
+            Some(uri) => match crate::uri::resource_path(uri) {
                 Ok(path) => Some(path),
                 Err(reason) => {
                     return refuse(format!(
@@ -227,7 +227,7 @@ impl Instance {
         instance.event(format!(
             "fmi2Instantiate: instance `{}` of {} (GUID {}), resources {}",
             instance.name,
-            super::MODEL_NAME,
+            crate::MODEL_NAME,
             instance.guid,
             instance
                 .resource_path
@@ -530,7 +530,7 @@ impl Instance {
             .is_some_and(|c| c.params == params && c.variant == variant);
         if !fresh {
             let value = Variant::from_code(variant as i64)
-                .and_then(|v| crate::analysis::spectrum::spectral_abscissa(&params, v))
+                .and_then(|v| tdvass::analysis::spectrum::spectral_abscissa(&params, v))
                 .map_err(|e| e.to_string());
             self.spectrum = Some(SpectrumCache {
                 params,
@@ -778,7 +778,7 @@ impl Instance {
                     )))
                 }
             },
-            Err(e @ crate::Error::Diverged { .. }) => {
+            Err(e @ tdvass::Error::Diverged { .. }) => {
                 let stopped = sim.time();
                 self.model.last_successful_time = stopped;
                 self.model.terminate_requested = true;
@@ -1174,7 +1174,7 @@ impl Drop for Instance {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fmi2::variables::{VARIABLES, by_name};
+    use crate::variables::{VARIABLES, by_name};
     use std::cell::RefCell;
     use std::rc::Rc;
 
@@ -1183,7 +1183,7 @@ mod tests {
     fn new_instance(logging_on: bool) -> (Instance, Log) {
         let log: Log = Rc::default();
         let sink = log.clone();
-        let guid = crate::fmi2::guid();
+        let guid = crate::guid();
         let instance = Instance::instantiate(
             InstantiateRequest {
                 instance_name: Some("test"),
@@ -1228,7 +1228,7 @@ mod tests {
 
     #[test]
     fn instantiate_refusals_are_logged() {
-        let guid = crate::fmi2::guid();
+        let guid = crate::guid();
         let cases: [(InstantiateRequest, &str); 5] = [
             (
                 InstantiateRequest {

@@ -15,7 +15,6 @@
 use crate::error::{Error, Result};
 use crate::model::{MassSpringDamper, Params, Variant};
 use nalgebra::{Complex, Matrix3};
-use serde_json::{Value, json};
 use std::f64::consts::PI;
 
 /// The 3×3 complex matrix A(ω) of Eq. (3) for the PVASS/TDVASS (the gain
@@ -211,17 +210,6 @@ pub struct FrfPeaks {
     pub body_acceleration: Vec<f64>,
 }
 
-impl FrfPeaks {
-    /// The `peaks_hz` JSON object of the `frf` subcommand:
-    /// `{"body_displacement": [...], "body_acceleration": [...]}`.
-    pub fn to_json(&self) -> Value {
-        json!({
-            "body_displacement": self.body_displacement,
-            "body_acceleration": self.body_acceleration,
-        })
-    }
-}
-
 /// The interior local maxima of each sampled curve of `curve` (as returned by
 /// [`frequency_response`], increasing frequency), each refined by a
 /// golden-section search of the analytic gain over the two neighbouring
@@ -414,7 +402,5 @@ mod tests {
             let at = |f: f64| body_acceleration_gain(&params, Variant::Cs, 2.0 * PI * f).unwrap();
             assert!(at(f) >= at(f * 1.001) && at(f) >= at(f * 0.999));
         }
-        let json = peaks.to_json();
-        assert!(json["body_displacement"].is_array() && json["body_acceleration"].is_array());
     }
 }

@@ -29,7 +29,6 @@ use crate::analysis::spectrum::{CharacteristicRootSolver, RootTracker};
 use crate::error::{Error, Result};
 use crate::model::{Params, Variant};
 use nalgebra::Complex;
-use serde_json::{Value, json};
 use std::f64::consts::TAU as FULL_TURN;
 
 /// The Routh first column of Fig. 4 for a real polynomial, normalised to a
@@ -559,25 +558,6 @@ impl StabilityReport {
             stable_intervals: stable_delay_intervals(params, gain, tau_max)?,
         })
     }
-
-    /// The JSON object of the `stability` subcommand: `routh_hurwitz_g_max`,
-    /// `delay_independent_g_max`, `crossings` (list of
-    /// `{omega, direction, critical_delays}`), `stable_intervals` (list of
-    /// `[from, to]`). Non-finite numbers become `null`.
-    pub fn to_json(&self) -> Value {
-        json!({
-            "routh_hurwitz_g_max": self.routh_hurwitz_g_max,
-            "delay_independent_g_max": self.delay_independent_g_max,
-            "crossings": self.crossings.iter().map(|c| json!({
-                "omega": c.crossing.omega,
-                "direction": c.crossing.direction,
-                "critical_delays": c.critical_delays,
-            })).collect::<Vec<Value>>(),
-            "stable_intervals": self.stable_intervals.iter()
-                .map(|&(from, to)| json!([from, to]))
-                .collect::<Vec<Value>>(),
-        })
-    }
 }
 
 /// One point of the (g, tau) stability map (Fig. 8).
@@ -1066,30 +1046,6 @@ mod tests {
         let schedule = SwitchingSchedule::new(&table1(), gain, 0.5).unwrap();
         assert!(schedule.unstable_roots_at_zero_delay >= 2);
         assert!(!schedule.is_stable_at(0.0));
-    }
-
-    #[test]
-    fn report_has_the_specified_json_keys() {
-        let report = StabilityReport::compute(&table1(), 50000.0, 0.5).unwrap();
-        let json = report.to_json();
-        let object = json.as_object().unwrap();
-        let mut keys: Vec<&str> = object.keys().map(String::as_str).collect();
-        keys.sort_unstable();
-        assert_eq!(
-            keys,
-            [
-                "crossings",
-                "delay_independent_g_max",
-                "routh_hurwitz_g_max",
-                "stable_intervals"
-            ]
-        );
-        let crossing = &json["crossings"][0];
-        assert!(crossing["omega"].is_f64());
-        assert_eq!(crossing["direction"], -1);
-        assert!(crossing["critical_delays"].is_array());
-        assert_eq!(json["stable_intervals"][0][0], 0.0);
-        assert_eq!(json["stable_intervals"].as_array().unwrap().len(), 4);
     }
 
     #[test]

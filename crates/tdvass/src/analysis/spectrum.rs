@@ -32,7 +32,6 @@ use crate::analysis::polynomial::{Polynomial, matrix_eigenvalues, polish_root};
 use crate::error::{Error, Result};
 use crate::model::{Params, Plant, Variant, X_T};
 use nalgebra::{Complex, DMatrix};
-use serde_json::{Value, json};
 
 /// Smallest number of Chebyshev collocation nodes used for tau > 0.
 pub const MIN_NODES: usize = 16;
@@ -464,18 +463,6 @@ impl StableReport {
             rightmost_roots,
         })
     }
-
-    /// JSON object with the keys `stable`, `spectral_abscissa` and
-    /// `rightmost_roots` (list of `[re, im]`).
-    pub fn to_json(&self) -> Value {
-        json!({
-            "stable": self.stable,
-            "spectral_abscissa": self.spectral_abscissa,
-            "rightmost_roots": self.rightmost_roots.iter()
-                .map(|r| json!([r.re, r.im]))
-                .collect::<Vec<Value>>(),
-        })
-    }
 }
 
 #[cfg(test)]
@@ -578,15 +565,11 @@ mod tests {
     }
 
     #[test]
-    fn report_json_and_bad_input() {
+    fn report_and_bad_input() {
         let report = StableReport::compute(&tdvass(40000.0, 0.03), Variant::Tdvass, 2).unwrap();
-        let json = report.to_json();
-        assert_eq!(json["stable"], true);
-        assert!(json["spectral_abscissa"].as_f64().unwrap() < 0.0);
-        let roots = json["rightmost_roots"].as_array().unwrap();
-        assert_eq!(roots.len(), 2);
-        assert_eq!(roots[0].as_array().unwrap().len(), 2);
-        assert_eq!(json.as_object().unwrap().len(), 3);
+        assert!(report.stable);
+        assert!(report.spectral_abscissa < 0.0);
+        assert_eq!(report.rightmost_roots.len(), 2);
         let solver = CharacteristicRootSolver::new(&tdvass(1.0, 0.0), Variant::Tdvass).unwrap();
         assert!(solver.rightmost_roots(-0.1, 3).is_err());
         assert!(solver.rightmost_roots(f64::NAN, 3).is_err());

@@ -5,17 +5,17 @@
 //! unit, start value, admissible range (hence `min`/`max` and the check made
 //! when it is set), description, its direct dependencies (ModelStructure) and
 //! how it is read or written ([`Access`]). Everything else is derived: the
-//! get/set dispatch of [`super::Instance`], `modelDescription.xml` and
-//! `documentation/index.html` ([`super::description`]), the serialized
-//! settings ([`super::snapshot`]) and the GUID ([`guid`]).
+//! get/set dispatch of [`crate::Instance`], `modelDescription.xml` and
+//! `documentation/index.html` ([`crate::description`]), the serialized
+//! settings ([`crate::snapshot`]) and the GUID ([`guid`]).
 //!
 //! Value references are unique across all types.
 
-use super::FmiError;
-use crate::metrics::Weights;
-use crate::model::{Params, State, V_H, V_S, V_T, Variant, X_H, X_S, X_T};
-use crate::road::{RandomRoad, RoadClass, RoadSpec};
-use crate::solver::{OutputDerivatives, Outputs, SimulationConfig};
+use crate::FmiError;
+use tdvass::metrics::Weights;
+use tdvass::model::{Params, State, V_H, V_S, V_T, Variant, X_H, X_S, X_T};
+use tdvass::road::{RandomRoad, RoadClass, RoadSpec};
+use tdvass::solver::{OutputDerivatives, Outputs, SimulationConfig};
 
 /// FMI causality.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -377,7 +377,7 @@ impl Settings {
     }
 
     /// The variant (`variant` code checked).
-    pub fn variant(&self) -> crate::Result<Variant> {
+    pub fn variant(&self) -> tdvass::Result<Variant> {
         Variant::from_code(self.variant as i64)
     }
 
@@ -396,13 +396,13 @@ impl Settings {
     }
 
     /// The road (`road` code and the fields it uses checked).
-    pub fn road_spec(&self) -> crate::Result<RoadSpec> {
-        let random = || -> crate::Result<RandomRoad> {
+    pub fn road_spec(&self) -> tdvass::Result<RoadSpec> {
+        let random = || -> tdvass::Result<RandomRoad> {
             Ok(RandomRoad {
                 class: RoadClass::from_code(self.road_class as i64)?,
                 speed: self.vehicle_speed,
                 cutoff_frequency: self.road_cutoff_frequency,
-                seed: u64::try_from(self.road_seed).map_err(|_| crate::Error::InvalidSetting {
+                seed: u64::try_from(self.road_seed).map_err(|_| tdvass::Error::InvalidSetting {
                     name: "road_seed",
                     value: self.road_seed as i64,
                     reason: "must be >= 0",
@@ -421,7 +421,7 @@ impl Settings {
                 sample_interval: self.road_sample_interval,
             },
             other => {
-                return Err(crate::Error::InvalidSetting {
+                return Err(tdvass::Error::InvalidSetting {
                     name: "road",
                     value: other as i64,
                     reason: "must be 0 (input x_g), 1 (harmonic), 2 (ISO 8608) or 3 (paper-compatible)",
@@ -431,9 +431,9 @@ impl Settings {
     }
 
     /// The simulation these settings describe, starting at `start_time`.
-    /// Only the codes are checked here; [`crate::solver::Simulator::new`]
+    /// Only the codes are checked here; [`tdvass::solver::Simulator::new`]
     /// validates the rest.
-    pub fn to_config(&self, start_time: f64) -> crate::Result<SimulationConfig> {
+    pub fn to_config(&self, start_time: f64) -> tdvass::Result<SimulationConfig> {
         Ok(SimulationConfig {
             params: self.params(),
             variant: self.variant()?,

@@ -16,8 +16,14 @@
 //! - [`analysis`]: stability (section 3), frequency response (section 2.2)
 //!   and particle swarm optimisation (sections 2.3.2 and 4.2).
 //!
-//! The [`fmi2`] module is the only place with FFI: it wraps the simulator as
-//! an FMI 2.0 Co-Simulation FMU.
+//! - [`comfort`]: the ISO 2631-1 W_k weighting and comfort scale.
+//!
+//! **What this crate owns and must never import.** It owns the physics and
+//! the numerics. It has no FFI and no `unsafe` outside the solver's
+//! whole-step loop (`solver::kernel`), and it never imports a command-line,
+//! progress-display or JSON crate (clap, indicatif, serde_json) nor the FMU
+//! layer: the FMI 2.0 FMU (`tdvass-fmi2`) and the command line
+//! (`tdvass-cli`) are built on it, never the other way round.
 //!
 //! # Example: Table 2, TDVASS row
 //!
@@ -69,10 +75,8 @@
 #![deny(unsafe_code)]
 
 pub mod analysis;
-pub mod cli;
 pub mod comfort;
 pub mod error;
-pub mod fmi2;
 pub mod metrics;
 pub mod model;
 mod monotone;

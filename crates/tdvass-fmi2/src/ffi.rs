@@ -24,9 +24,9 @@
 #![allow(unsafe_code)]
 #![allow(non_camel_case_types, non_snake_case, clippy::missing_safety_doc)]
 
-use super::instance::{FMI2_COSIMULATION, Instance, InstantiateRequest, LogSink};
-use super::states::Function;
-use super::{FmiError, Status};
+use crate::instance::{FMI2_COSIMULATION, Instance, InstantiateRequest, LogSink};
+use crate::states::Function;
+use crate::{FmiError, Status};
 use libc::{c_char, c_double, c_int, c_uint, c_void, size_t};
 use std::ffi::{CStr, CString};
 use std::panic::{AssertUnwindSafe, catch_unwind};
@@ -915,11 +915,11 @@ const _: () = assert!(FMI2_COSIMULATION == 1);
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fmi2::{FMI_VERSION, TYPES_PLATFORM};
+    use crate::{FMI_VERSION, TYPES_PLATFORM};
 
     #[test]
     fn panics_are_caught_and_make_the_instance_fatal() {
-        let guid = crate::fmi2::guid();
+        let guid = crate::guid();
         let instance = Instance::instantiate(
             InstantiateRequest {
                 instance_name: Some("p"),

@@ -25,11 +25,11 @@
 //! consistency of the settings with the simulator: truncated, corrupted or
 //! foreign bytes give an error, never a panic.
 
-use super::FmiError;
-use super::instance::Model;
-use super::states::MachineState;
-use super::variables::{Access, Settings, VARIABLES, by_vr};
-use crate::solver::Simulator;
+use crate::FmiError;
+use crate::instance::Model;
+use crate::states::MachineState;
+use crate::variables::{Access, Settings, VARIABLES, by_vr};
+use tdvass::solver::Simulator;
 
 /// First bytes of every serialized state.
 pub const MAGIC: &[u8; 8] = b"TDVASSFS";
@@ -234,7 +234,7 @@ fn decode_settings(r: &mut Reader) -> Result<Settings, FmiError> {
                 let value = f64::from_bits(bits);
                 var.range
                     .check(var.name, value)
-                    .and_then(|()| super::limits::check_value(var.name, value))
+                    .and_then(|()| crate::limits::check_value(var.name, value))
                     .map_err(|e| invalid(e.message))?;
                 set(&mut settings, value);
             }
@@ -314,7 +314,7 @@ fn decode_payload(bytes: &[u8]) -> Result<Model, FmiError> {
         )));
     }
     if let Some(sim) = &mut sim {
-        super::limits::check_rates(&settings).map_err(|e| invalid(e.message))?;
+        crate::limits::check_rates(&settings).map_err(|e| invalid(e.message))?;
         let config = settings.to_config(start_time).map_err(invalid)?;
         if *sim.config() != config {
             return Err(invalid("the simulator does not match the settings"));
@@ -329,7 +329,7 @@ fn decode_payload(bytes: &[u8]) -> Result<Model, FmiError> {
                 "simulator time {now} s (committed {committed} s) does not fit its start {start_time} s and internal step {step} s"
             )));
         }
-        if let Some((name, value)) = super::limits::non_finite_output(&sim.outputs()) {
+        if let Some((name, value)) = crate::limits::non_finite_output(&sim.outputs()) {
             return Err(invalid(format_args!("output `{name}` = {value}")));
         }
     }
@@ -412,7 +412,7 @@ pub fn deserialize(bytes: &[u8], guid: &str) -> Result<Model, FmiError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fmi2::guid;
+    use crate::guid;
 
     fn running_model() -> Model {
         let mut model = Model::new();

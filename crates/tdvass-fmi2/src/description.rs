@@ -2,8 +2,8 @@
 //! variable table with quick-xml (no markup is written by hand, so every
 //! value is escaped). The output is deterministic: no timestamps.
 
-use super::variables::{Causality, Quantity, UNITS, VARIABLES, VarType, Variable, index_of};
-use super::{
+use crate::variables::{Causality, Quantity, UNITS, VARIABLES, VarType, Variable, index_of};
+use crate::{
     DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, FMI_VERSION, LOG_CATEGORIES,
     MODEL_IDENTIFIER, MODEL_NAME, guid,
 };
