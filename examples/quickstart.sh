@@ -8,7 +8,7 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
 python="$(tests/python_env.sh quickstart)"
 echo "== building the command line tool (target/release/tdvass)"
-cargo build --release -p tdvass --bin tdvass
+cargo build --release -p tdvass-cli --bin tdvass
 echo "== building the FMU (target/fmu/tdvass.fmu)"
 cargo run --release -p fmu-build
 echo "== the FMU's default experiment through fmpy"
