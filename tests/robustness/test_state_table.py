@@ -1,12 +1,12 @@
 """Every function called in every state it is not allowed in.
 
-The cases are generated from the state table of src/fmi2/states.rs (the
+The cases are generated from the state table of crates/tdvass-fmi2/src/states.rs (the
 standard's table as restated there, which the unit tests check against the
 table the library enforces). Each case brings a fresh instance of the real
 library into the state, makes the call with otherwise valid arguments and
 expects fmi2Error, the log line "fmi2X: not allowed in state Y", and the
 instance still in Y. `fatal` is reachable only through an internal panic
-(covered by the unit tests of src/fmi2/ffi.rs), so its column is skipped.
+(covered by the unit tests of crates/tdvass-fmi2/src/ffi.rs), so its column is skipped.
 """
 
 import re
@@ -23,7 +23,7 @@ REACHABLE = STATES[:-1]
 
 
 def state_table() -> dict[str, str]:
-    source = (Path(__file__).resolve().parents[2] / "src" / "fmi2" / "states.rs").read_text()
+    source = (Path(__file__).resolve().parents[2] / "crates" / "tdvass-fmi2" / "src" / "states.rs").read_text()
     block = source[source.index("const EXPECTED") :]
     block = block[: block.index("];")]
     rows = dict(re.findall(r'\("(fmi2\w+)",\s*"([x.]{7})"\)', block))

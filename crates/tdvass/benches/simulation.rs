@@ -423,7 +423,7 @@ fn floor_loop(mut step: impl FnMut(&mut Floor, u64) + 'static) -> Box<dyn FnMut(
 }
 
 /// Which loop the solver runs in this process: the rule of
-/// `wide_vectors()` in src/solver/mod.rs (AVX2 when the CPU has it and
+/// `wide_vectors()` in crates/tdvass/src/solver/kernel.rs (AVX2 when the CPU has it and
 /// `TDVASS_NO_AVX2` is not set), which the solver does not export.
 fn tdvass_isa() -> Isa {
     #[cfg(target_arch = "x86_64")]
