@@ -364,7 +364,7 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
     )?;
     paragraph(
         w,
-        "Outputs: BA = d2x_s/dt2, SDD = x_s - x_t, TDD = x_t - x_g, their running RMS values from the start time (sampled on the internal grid, as Eq. 6) and J = w_ba RMS(BA) + w_sdd RMS(SDD) + w_tdd RMS(TDD) with TDD in metres.",
+        "Outputs: BA = d2x_s/dt2, SDD = x_s - x_t, TDD = x_t - x_g, their running RMS values from the start time t0 (time averages sqrt(integral of y^2 dt / (t - t0)), Eq. 6 with the mean taken over time) and J = w_ba RMS(BA) + w_sdd RMS(SDD) + w_tdd RMS(TDD) with TDD in metres.",
     )?;
     paragraph(
         w,

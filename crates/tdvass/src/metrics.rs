@@ -1,4 +1,5 @@
-//! Running RMS values of BA, SDD, TDD and the objective J of Eq. (6).
+//! RMS values of BA, SDD, TDD, the objective J of Eq. (6) and the sums of
+//! squares the solver keeps for them.
 
 use crate::model::Performance;
 
@@ -44,8 +45,12 @@ impl RmsValues {
     }
 }
 
-/// Running sums of squares: `RMS = sqrt(Σ_{k=1..n} y_k² / n)` as in Eq. (6),
-/// with one sample per internal grid node after the start.
+/// Sums of squares of BA, SDD, TDD over a run of samples. The solver's
+/// whole-step loop keeps one per run of internal grid nodes, the node part
+/// of the RMS time integral (`solver::time_average`); [`RunningRms::values`]
+/// is the plain sample mean `sqrt(Σ_{k=1..n} y_k² / n)` of Eq. (6) as the
+/// paper writes it, which the simulator's RMS outputs no longer use (they
+/// are time averages).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct RunningRms {
     /// Σ BA², Σ SDD², Σ TDD².
