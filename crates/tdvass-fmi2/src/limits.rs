@@ -22,6 +22,8 @@
 
 use crate::FmiError;
 use crate::variables::{Access, Settings, VARIABLES};
+use tdvass::model::Variant;
+use tdvass::road::RoadType;
 use tdvass::solver::{DIVERGENCE_DISPLACEMENT, DIVERGENCE_VELOCITY, Outputs};
 
 /// Largest stiffness, damping or gain over a mass (1/s² or 1/s).
@@ -76,7 +78,10 @@ pub fn check_values(settings: &Settings) -> Result<(), FmiError> {
 
 /// Every coefficient over every mass it acts on at most [`MAX_RATE`].
 pub fn check_rates(s: &Settings) -> Result<(), FmiError> {
-    let absorber = s.variant != 1;
+    // An invalid code (refused elsewhere) counts as every part present.
+    let variant = s.variant().ok();
+    let absorber = variant.is_none_or(Variant::has_absorber);
+    let control = variant.is_some_and(Variant::has_control);
     let masses = [
         ("m_s", s.m_s, true),
         ("m_h", s.m_h, absorber),
@@ -88,7 +93,7 @@ pub fn check_rates(s: &Settings) -> Result<(), FmiError> {
         ("k_h", s.k_h, absorber),
         ("c_h", s.c_h, absorber),
         ("k_t", s.k_t, true),
-        ("g", s.g, s.variant == 3),
+        ("g", s.g, control),
     ];
     for (name, value, used) in coefficients {
         for (mass_name, mass, mass_used) in masses {
@@ -106,9 +111,9 @@ pub fn check_rates(s: &Settings) -> Result<(), FmiError> {
 /// The internal steps and road breakpoints a step of `h` s needs with the
 /// internal step `grid_step`.
 pub fn step_work(s: &Settings, grid_step: f64, h: f64) -> f64 {
-    let road = match s.road {
-        2 => h / ISO_NODE_INTERVAL,
-        3 => h / s.road_sample_interval,
+    let road = match s.road_type() {
+        Some(RoadType::Iso8608) => h / ISO_NODE_INTERVAL,
+        Some(RoadType::PaperCompatible) => h / s.road_sample_interval,
         _ => 0.0,
     };
     h / grid_step + road
@@ -122,9 +127,11 @@ pub fn check_step_work(s: &Settings, grid_step: f64, h: f64) -> Result<(), FmiEr
         let longest = h * MAX_WORK_PER_STEP / work;
         return Err(FmiError::error(format!(
             "a communication step of {h} s needs {work:e} internal steps (internal step {grid_step:e} s{}), more than the limit of {MAX_WORK_PER_STEP} per fmi2DoStep; use communication steps of at most {longest:e} s",
-            match s.road {
-                2 => format!(", road nodes every {ISO_NODE_INTERVAL} s"),
-                3 => format!(", road_sample_interval {} s", s.road_sample_interval),
+            match s.road_type() {
+                Some(RoadType::Iso8608) => format!(", road nodes every {ISO_NODE_INTERVAL} s"),
+                Some(RoadType::PaperCompatible) => {
+                    format!(", road_sample_interval {} s", s.road_sample_interval)
+                }
                 _ => String::new(),
             }
         )));

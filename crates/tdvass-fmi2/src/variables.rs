@@ -14,7 +14,7 @@
 use crate::FmiError;
 use tdvass::metrics::Weights;
 use tdvass::model::{Params, State, V_H, V_S, V_T, Variant, X_H, X_S, X_T};
-use tdvass::road::{RandomRoad, RoadClass, RoadSpec};
+use tdvass::road::{RandomRoad, RoadClass, RoadSpec, RoadType};
 use tdvass::solver::{OutputDerivatives, Outputs, SimulationConfig};
 
 /// FMI causality.
@@ -392,7 +392,13 @@ impl Settings {
 
     /// Whether the road is the input `x_g` (`road = 0`).
     pub fn road_is_input(&self) -> bool {
-        self.road == 0
+        self.road_type() == Some(RoadType::Input)
+    }
+
+    /// The road type of the `road` code (`None` for a code that is none,
+    /// or for the file samples, which are no setting).
+    pub fn road_type(&self) -> Option<RoadType> {
+        RoadType::from_code(self.road as i64).filter(|t| *t != RoadType::Samples)
     }
 
     /// The road (`road` code and the fields it uses checked).
@@ -409,21 +415,21 @@ impl Settings {
                 })?,
             })
         };
-        Ok(match self.road {
-            0 => RoadSpec::Input,
-            1 => RoadSpec::Harmonic {
+        Ok(match self.road_type() {
+            Some(RoadType::Input) => RoadSpec::Input,
+            Some(RoadType::Harmonic) => RoadSpec::Harmonic {
                 amplitude: self.road_amplitude,
                 angular_frequency: self.road_angular_frequency,
             },
-            2 => RoadSpec::Iso8608(random()?),
-            3 => RoadSpec::PaperCompatible {
+            Some(RoadType::Iso8608) => RoadSpec::Iso8608(random()?),
+            Some(RoadType::PaperCompatible) => RoadSpec::PaperCompatible {
                 road: random()?,
                 sample_interval: self.road_sample_interval,
             },
-            other => {
+            Some(RoadType::Samples) | None => {
                 return Err(tdvass::Error::InvalidSetting {
                     name: "road",
-                    value: other as i64,
+                    value: self.road as i64,
                     reason: "must be 0 (input x_g), 1 (harmonic), 2 (ISO 8608) or 3 (paper-compatible)",
                 });
             }

@@ -141,6 +141,43 @@ impl RandomRoad {
 }
 
 /// What road to apply.
+/// The integer code of each kind of road: the FMU's `road` parameter
+/// (0 to 3) and the saved state (which also knows roads read from a file).
+/// This is the one place the codes are declared.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RoadType {
+    /// 0: the external input `x_g`.
+    Input = 0,
+    /// 1: the harmonic road.
+    Harmonic = 1,
+    /// 2: the ISO 8608 road.
+    Iso8608 = 2,
+    /// 3: the paper-compatible random road.
+    PaperCompatible = 3,
+    /// 4: samples read from a file (not an FMU setting).
+    Samples = 4,
+}
+
+impl RoadType {
+    /// The integer code.
+    pub fn code(self) -> i64 {
+        self as i64
+    }
+
+    /// The road type of a code, if it is one.
+    pub fn from_code(code: i64) -> Option<RoadType> {
+        [
+            RoadType::Input,
+            RoadType::Harmonic,
+            RoadType::Iso8608,
+            RoadType::PaperCompatible,
+            RoadType::Samples,
+        ]
+        .into_iter()
+        .find(|t| t.code() == code)
+    }
+}
+
 #[derive(Debug, Clone, PartialEq)]
 pub enum RoadSpec {
     /// External signal set through [`Road::set_input`].
@@ -167,6 +204,17 @@ impl RoadSpec {
         RoadSpec::Harmonic {
             amplitude: 0.05,
             angular_frequency: 5.0,
+        }
+    }
+
+    /// The road's [`RoadType`] (its integer code).
+    pub fn road_type(&self) -> RoadType {
+        match self {
+            RoadSpec::Input => RoadType::Input,
+            RoadSpec::Harmonic { .. } => RoadType::Harmonic,
+            RoadSpec::Iso8608(_) => RoadType::Iso8608,
+            RoadSpec::PaperCompatible { .. } => RoadType::PaperCompatible,
+            RoadSpec::Samples(_) => RoadType::Samples,
         }
     }
 
@@ -740,6 +788,27 @@ mod tests {
         assert_eq!(road.value(2.5), -0.01);
         assert_eq!(road.value(40.0), -0.01);
         assert_eq!(RoadSpec::paper_harmonic().last_sample(), None);
+    }
+
+    #[test]
+    fn road_type_codes_round_trip() {
+        let specs = [
+            RoadSpec::Input,
+            RoadSpec::paper_harmonic(),
+            RoadSpec::Iso8608(RandomRoad::default()),
+            RoadSpec::PaperCompatible {
+                road: RandomRoad::default(),
+                sample_interval: 0.1,
+            },
+            RoadSpec::Samples(Arc::new(vec![(0.0, 0.0), (1.0, 0.0)])),
+        ];
+        for (code, spec) in specs.iter().enumerate() {
+            let road_type = spec.road_type();
+            assert_eq!(road_type.code(), code as i64, "{}", spec.kind());
+            assert_eq!(RoadType::from_code(code as i64), Some(road_type));
+        }
+        assert_eq!(RoadType::from_code(5), None);
+        assert_eq!(RoadType::from_code(-1), None);
     }
 
     #[test]

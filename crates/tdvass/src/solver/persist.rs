@@ -8,7 +8,7 @@ use super::{SimulationConfig, Simulator};
 use crate::error::{Error, Result};
 use crate::metrics::{RunningRms, Weights};
 use crate::model::{Params, State, Variant};
-use crate::road::{RandomRoad, RoadClass, RoadSpec, RoadState};
+use crate::road::{RandomRoad, RoadClass, RoadSpec, RoadState, RoadType};
 use std::sync::Arc;
 
 /// Appends little-endian values to a byte vector.
@@ -108,30 +108,27 @@ fn read_random_road(r: &mut ByteReader) -> Result<RandomRoad> {
 fn write_config(w: &mut ByteWriter, c: &SimulationConfig) {
     c.params.named_values().iter().for_each(|(_, v)| w.f64(*v));
     w.u64(c.variant.code() as u64);
+    w.u64(c.road.road_type().code() as u64);
     match &c.road {
-        RoadSpec::Input => w.u64(0),
+        RoadSpec::Input => {}
         RoadSpec::Harmonic {
             amplitude,
             angular_frequency,
         } => {
-            w.u64(1);
             w.f64(*amplitude);
             w.f64(*angular_frequency);
         }
         RoadSpec::Iso8608(road) => {
-            w.u64(2);
             write_random_road(w, road);
         }
         RoadSpec::PaperCompatible {
             road,
             sample_interval,
         } => {
-            w.u64(3);
             write_random_road(w, road);
             w.f64(*sample_interval);
         }
         RoadSpec::Samples(samples) => {
-            w.u64(4);
             let flat: Vec<f64> = samples.iter().flat_map(|&(t, x)| [t, x]).collect();
             w.f64s(&flat);
         }
@@ -162,25 +159,27 @@ fn read_config(r: &mut ByteReader) -> Result<SimulationConfig> {
         tau: p[9],
     };
     let variant = Variant::from_code(r.u64()? as i64)?;
-    let road = match r.u64()? {
-        0 => RoadSpec::Input,
-        1 => RoadSpec::Harmonic {
+    let code = r.u64()?;
+    let road_type = i64::try_from(code).ok().and_then(RoadType::from_code);
+    let road = match road_type {
+        Some(RoadType::Input) => RoadSpec::Input,
+        Some(RoadType::Harmonic) => RoadSpec::Harmonic {
             amplitude: r.f64()?,
             angular_frequency: r.f64()?,
         },
-        2 => RoadSpec::Iso8608(read_random_road(r)?),
-        3 => RoadSpec::PaperCompatible {
+        Some(RoadType::Iso8608) => RoadSpec::Iso8608(read_random_road(r)?),
+        Some(RoadType::PaperCompatible) => RoadSpec::PaperCompatible {
             road: read_random_road(r)?,
             sample_interval: r.f64()?,
         },
-        4 => {
+        Some(RoadType::Samples) => {
             let flat = r.f64s(1 << 28)?;
             if flat.len() % 2 != 0 {
                 return Err(Error::InvalidState("odd road sample count".into()));
             }
             RoadSpec::Samples(Arc::new(flat.chunks(2).map(|c| (c[0], c[1])).collect()))
         }
-        other => return Err(Error::InvalidState(format!("unknown road kind {other}"))),
+        None => return Err(Error::InvalidState(format!("unknown road kind {code}"))),
     };
     let max_internal_step = r.f64()?;
     let start_time = r.f64()?;
