@@ -431,10 +431,7 @@ impl Simulator {
         let mut start = from;
         let mut state = x;
         loop {
-            let mut piece = self.road.piece(start);
-            if piece.end() <= start || self.coincide(piece.end(), start) {
-                piece = self.road.piece(piece.end().max(start));
-            }
+            let piece = self.piece_from(start);
             let end = if piece.end() < to && !self.coincide(piece.end(), to) {
                 piece.end()
             } else {
@@ -495,10 +492,7 @@ impl Simulator {
         let mut state = x;
         let mut sensitivity = SMatrix::<f64, 6, 2>::zeros();
         loop {
-            let mut piece = self.road.piece(start);
-            if piece.end() <= start || self.coincide(piece.end(), start) {
-                piece = self.road.piece(piece.end().max(start));
-            }
+            let piece = self.piece_from(start);
             let mut end = if piece.end() < to && !self.coincide(piece.end(), to) {
                 piece.end()
             } else {
