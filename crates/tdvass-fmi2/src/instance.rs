@@ -433,7 +433,7 @@ impl Instance {
             if grid.delay_inside_step() {
                 "delay inside the step".to_string()
             } else {
-                format!("{} steps per delay", grid.delay_steps)
+                format!("{} steps per delay", grid.delay_steps())
             },
             self.model.start_time,
             self.model

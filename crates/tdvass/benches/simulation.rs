@@ -335,7 +335,7 @@ fn scaling(c: &mut Criterion) {
             format!(
                 "15 s, tau {tau:e} (h {:e}, {} history nodes)",
                 grid.step,
-                grid.delay_steps + 1
+                grid.delay_steps() + 1
             ),
             |b| b.iter(|| simulate(black_box(config.clone()), 15.0).unwrap()),
         );

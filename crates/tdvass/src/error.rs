@@ -55,6 +55,27 @@ pub enum Error {
     /// A road file could not be read or parsed.
     #[error("road file `{path}`: {reason}")]
     RoadFile { path: String, reason: String },
+    /// A value beyond a numerical limit (see [`crate::limits`]).
+    #[error("invalid value {value} for `{name}`: its magnitude exceeds {bound:e}, {what}")]
+    BeyondLimit {
+        name: String,
+        value: f64,
+        bound: f64,
+        what: &'static str,
+    },
+    /// A coefficient over a mass beyond the numerical limit of rates (see
+    /// [`crate::limits`]).
+    #[error(
+        "invalid combination `{name}` = {value} over `{mass_name}` = {mass}: the rate {rate:e} exceeds the numerical limit {limit:e} (natural frequencies up to 1e6 rad/s)"
+    )]
+    RateLimit {
+        name: &'static str,
+        value: f64,
+        mass_name: &'static str,
+        mass: f64,
+        rate: f64,
+        limit: f64,
+    },
     /// A saved simulator state could not be restored.
     #[error("invalid saved state: {0}")]
     InvalidState(String),

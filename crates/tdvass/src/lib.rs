@@ -75,8 +75,10 @@
 #![deny(unsafe_code)]
 
 pub mod analysis;
+pub mod bytes;
 pub mod comfort;
 pub mod error;
+pub mod limits;
 pub mod metrics;
 pub mod model;
 mod monotone;

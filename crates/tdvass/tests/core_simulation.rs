@@ -248,7 +248,7 @@ fn fourth_order_convergence_against_rk4_method_of_steps() {
             ..SimulationConfig::default()
         };
         let mut sim = Simulator::new(cfg).unwrap();
-        assert_eq!(sim.grid().delay_steps, m as u64);
+        assert_eq!(sim.grid().delay_steps(), m as u64);
         sim.advance_to(duration).unwrap();
         errors.push((sim.state() - reference).amax() / reference.amax());
     }
@@ -339,7 +339,7 @@ fn delays_shorter_than_the_step_agree_with_the_reference() {
         };
         let mut sim = Simulator::new(cfg.clone()).unwrap();
         assert_eq!(sim.grid().step, 1e-4);
-        assert_eq!(sim.grid().inner_delay, tau);
+        assert_eq!(sim.grid().inner_delay(), tau);
         for duration in times {
             let reference = rk4_method_of_steps(&plant, tau, x0, road, reference_step, duration);
             sim.advance_to(duration).unwrap();

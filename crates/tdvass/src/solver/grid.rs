@@ -5,20 +5,34 @@
 use super::{MAX_HISTORY_NODES, MIN_RESOLVED_DELAY};
 use crate::error::{Error, Result};
 
-/// How the delay is resolved on the grid.
+/// How the delay is resolved on the grid (section 4.1).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum DelayRegime {
+    /// tau is zero or below [`MIN_RESOLVED_DELAY`]: `x_t(t − tau)` is taken
+    /// as `x_t(t)`, the feedback folded into the plant matrix.
+    Folded,
+    /// `0 < tau < h`: the delayed argument of the first `tau` of each step
+    /// lies in the step before (nodes k − 1, k) and that of the rest in the
+    /// step itself (nodes k, k + 1); node k + 1 follows from a 2×2 linear
+    /// solve. The history keeps the nodes k − 1 and k.
+    InsideStep {
+        /// The delay tau (s).
+        tau: f64,
+    },
+    /// `tau = m h`: the delayed nodes are `m` whole steps back.
+    WholeSteps {
+        /// m >= 1.
+        m: u64,
+    },
+}
+
+/// The internal grid: the step and how the delay is resolved on it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DelayGrid {
     /// Internal step h (s).
     pub step: f64,
-    /// The delayed nodes are `m` steps back: `tau = m h` for a delay of at
-    /// least one step, `m = 1` for a delay shorter than a step (see
-    /// `inner_delay`), 0 when the delay is folded into the plant.
-    pub delay_steps: u64,
-    /// The delay when it is shorter than the step (`0 < tau < h`), else 0.
-    /// Then the delayed argument of the first `tau` of each step lies in the
-    /// step before (nodes k − 1, k) and that of the rest in the step itself
-    /// (nodes k, k + 1): node k + 1 follows from a 2×2 linear solve.
-    pub inner_delay: f64,
+    /// How the delay lies on the grid.
+    pub regime: DelayRegime,
 }
 
 impl DelayGrid {
@@ -44,8 +58,7 @@ impl DelayGrid {
         if tau < MIN_RESOLVED_DELAY {
             return Ok(DelayGrid {
                 step: max_internal_step,
-                delay_steps: 0,
-                inner_delay: 0.0,
+                regime: DelayRegime::Folded,
             });
         }
         let ratio = (tau / max_internal_step * (1.0 - 1e-12)).ceil().max(1.0);
@@ -59,25 +72,42 @@ impl DelayGrid {
         if ratio == 1.0 && tau < max_internal_step * (1.0 - 1e-12) {
             return Ok(DelayGrid {
                 step: max_internal_step,
-                delay_steps: 1,
-                inner_delay: tau,
+                regime: DelayRegime::InsideStep { tau },
             });
         }
-        let delay_steps = ratio as u64;
+        let m = ratio as u64;
         Ok(DelayGrid {
-            step: tau / delay_steps as f64,
-            delay_steps,
-            inner_delay: 0.0,
+            step: tau / m as f64,
+            regime: DelayRegime::WholeSteps { m },
         })
     }
 
     /// Whether the delay is resolved on the grid (not folded).
     pub fn resolves_delay(&self) -> bool {
-        self.delay_steps > 0
+        !matches!(self.regime, DelayRegime::Folded)
     }
 
-    /// Whether the delay is shorter than the step (see `inner_delay`).
+    /// Whether the delay is shorter than the step.
     pub fn delay_inside_step(&self) -> bool {
-        self.inner_delay > 0.0
+        matches!(self.regime, DelayRegime::InsideStep { .. })
+    }
+
+    /// How many steps back the history reaches: `m` for whole steps, 1 for
+    /// a delay inside the step (nodes k − 1 and k), 0 when folded. The
+    /// history holds `delay_steps() + 1` nodes.
+    pub fn delay_steps(&self) -> u64 {
+        match self.regime {
+            DelayRegime::Folded => 0,
+            DelayRegime::InsideStep { .. } => 1,
+            DelayRegime::WholeSteps { m } => m,
+        }
+    }
+
+    /// The delay when it lies inside the step, else 0.
+    pub fn inner_delay(&self) -> f64 {
+        match self.regime {
+            DelayRegime::InsideStep { tau } => tau,
+            _ => 0.0,
+        }
     }
 }

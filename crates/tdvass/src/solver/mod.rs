@@ -11,7 +11,7 @@
 //!   method is fourth-order accurate in the step; a delay shorter than the
 //!   step bound keeps the step and splits it at tau, the end node of the
 //!   step entering its own interpolant through a 2×2 solve
-//!   ([`DelayGrid::inner_delay`]);
+//!   ([`DelayRegime::InsideStep`]);
 //! - the road is a sine (an exosystem) or a straight line (see
 //!   [`crate::road`]).
 //!
@@ -58,7 +58,7 @@ use crate::error::{Error, Result};
 use crate::metrics::{RunningRms, Weights};
 use crate::model::{Params, Plant, State, V_T, Variant, X_T};
 use crate::road::{Road, RoadPiece, RoadSpec};
-pub use grid::DelayGrid;
+pub use grid::{DelayGrid, DelayRegime};
 use nalgebra::{Matrix2, Matrix6, SMatrix, Vector2, Vector4};
 use operators::{GridStep, StepOperator, hermite, hermite_matrix, infinity_norm, tire_pick};
 pub use outputs::{OutputDerivatives, Outputs, RunSummary};
@@ -189,8 +189,9 @@ impl Simulator {
     pub const MAX_START_TIME_IN_STEPS: f64 = 4_398_046_511_104.0;
 
     /// Validates the configuration and places the system at its initial
-    /// state. Besides each value, it checks that the internal step `h`
-    /// resolves times near the start: `|start_time| <= 2^42 h`
+    /// state. Besides each value and the numerical limits of
+    /// [`crate::limits::check_config`], it checks that the internal step
+    /// `h` resolves times near the start: `|start_time| <= 2^42 h`
     /// ([`Self::MAX_START_TIME_IN_STEPS`]).
     pub fn new(config: SimulationConfig) -> Result<Simulator> {
         let plant = Plant::new(config.params, config.variant)?;
@@ -224,6 +225,13 @@ impl Simulator {
                 });
             }
         }
+        crate::limits::check_config(
+            &config.params,
+            config.variant,
+            &config.road,
+            &config.initial_state,
+            &config.weights,
+        )?;
         let tau = if config.variant.has_control() {
             config.params.tau
         } else {
@@ -244,7 +252,7 @@ impl Simulator {
             initial[crate::model::V_H] = 0.0;
         }
         let (solver_matrix, full_step, grid_step) = Self::operators(&plant, &config, &grid)?;
-        let history = vec![[initial[X_T], initial[V_T]]; grid.delay_steps as usize + 1];
+        let history = vec![[initial[X_T], initial[V_T]]; grid.delay_steps() as usize + 1];
         let start_time = config.start_time;
         let mut sim = Simulator {
             plant,
@@ -299,7 +307,7 @@ impl Simulator {
             } => angular_frequency,
             _ => 0.0,
         };
-        let (h, tau) = (grid.step, grid.inner_delay);
+        let (h, tau) = (grid.step, grid.inner_delay());
         let step = StepOperator::new(&a, &b, &plant.e, omega, h);
         let grid_step = if grid.delay_inside_step() {
             let first = StepOperator::new(&a, &b, &plant.e, omega, tau);
@@ -375,7 +383,7 @@ impl Simulator {
     /// Delayed-input vector `[u, u', u'', u''']` at offset σ into grid step k.
     #[inline]
     fn delayed_input(&self, k: u64, offset: f64) -> Vector4<f64> {
-        let m = self.grid.delay_steps;
+        let m = self.grid.delay_steps();
         let nodes = if k < m {
             let x = self.config.initial_state[X_T];
             [x, 0.0, x, 0.0]
@@ -456,7 +464,7 @@ impl Simulator {
         }
     }
 
-    /// Delay inside the step ([`DelayGrid::inner_delay`]): the state at grid
+    /// Delay inside the step ([`DelayRegime::InsideStep`]): the state at grid
     /// node k + 1 reached from (from, x) in step k, and that node's
     /// `(x_t, v_t)`, which the delayed input of `[t_k + tau, t_{k+1})`
     /// interpolates (a 2×2 solve; NaN if it is singular, which the
@@ -484,7 +492,7 @@ impl Simulator {
         x: State,
         to: f64,
     ) -> (State, SMatrix<f64, 6, 2>) {
-        let (h, tau) = (self.grid.step, self.grid.inner_delay);
+        let (h, tau) = (self.grid.step, self.grid.inner_delay());
         let step_start = self.grid_time(k);
         let switch = step_start + tau;
         let [node_x, node_v] = self.history[(k % self.history.len() as u64) as usize];
@@ -669,7 +677,8 @@ impl Simulator {
         Ok(())
     }
 
-    /// Changes the feedback gain g (tunable); the history is kept.
+    /// Changes the feedback gain g (tunable; within the rate limit of
+    /// [`crate::limits::check_rates`]); the history is kept.
     pub fn set_gain(&mut self, g: f64) -> Result<()> {
         self.outputs_cache = None;
         let params = Params {
@@ -677,6 +686,7 @@ impl Simulator {
             ..self.config.params
         };
         let plant = Plant::new(params, self.config.variant)?;
+        crate::limits::check_rates(&params, Some(self.config.variant))?;
         self.config.params = params;
         let (matrix, step, grid_step) = Self::operators(&plant, &self.config, &self.grid)?;
         self.plant = plant;

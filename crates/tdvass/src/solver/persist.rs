@@ -1,93 +1,17 @@
 //! Byte encoding of a whole [`Simulator`]: configuration and dynamic state
 //! (time, committed and current state, the delay history, the road
 //! generator, the RMS accumulators). Little-endian, position independent.
-//! Framing (magic, version, checksum) is the caller's business; this layer
+//! Written and read with the one codec of [`crate::bytes`]. Framing
+//! (magic, version, checksum) is the caller's business; this layer
 //! refuses truncated or inconsistent input with an error, never a panic.
 
 use super::{SimulationConfig, Simulator};
+use crate::bytes::{ByteReader, ByteWriter};
 use crate::error::{Error, Result};
 use crate::metrics::{RunningRms, Weights};
 use crate::model::{Params, State, Variant};
 use crate::road::{RandomRoad, RoadClass, RoadSpec, RoadState, RoadType};
 use std::sync::Arc;
-
-/// Appends little-endian values to a byte vector.
-#[derive(Default)]
-pub struct ByteWriter {
-    /// The bytes written so far.
-    pub bytes: Vec<u8>,
-}
-
-impl ByteWriter {
-    /// Appends a u64.
-    pub fn u64(&mut self, v: u64) {
-        self.bytes.extend_from_slice(&v.to_le_bytes());
-    }
-    /// Appends a u128.
-    pub fn u128(&mut self, v: u128) {
-        self.bytes.extend_from_slice(&v.to_le_bytes());
-    }
-    /// Appends an f64 (bit pattern).
-    pub fn f64(&mut self, v: f64) {
-        self.u64(v.to_bits());
-    }
-    /// Appends a slice of f64 with its length.
-    pub fn f64s(&mut self, v: &[f64]) {
-        self.u64(v.len() as u64);
-        v.iter().for_each(|&x| self.f64(x));
-    }
-}
-
-/// Reads what [`ByteWriter`] wrote; every read checks the remaining length.
-pub struct ByteReader<'a> {
-    bytes: &'a [u8],
-}
-
-impl<'a> ByteReader<'a> {
-    /// Reads from `bytes`.
-    pub fn new(bytes: &'a [u8]) -> Self {
-        ByteReader { bytes }
-    }
-    fn take(&mut self, n: usize) -> Result<&'a [u8]> {
-        if self.bytes.len() < n {
-            return Err(Error::InvalidState(format!(
-                "truncated: needed {n} more bytes, {} left",
-                self.bytes.len()
-            )));
-        }
-        let (head, tail) = self.bytes.split_at(n);
-        self.bytes = tail;
-        Ok(head)
-    }
-    /// Reads a u64.
-    pub fn u64(&mut self) -> Result<u64> {
-        let mut b = [0u8; 8];
-        b.copy_from_slice(self.take(8)?);
-        Ok(u64::from_le_bytes(b))
-    }
-    /// Reads a u128.
-    pub fn u128(&mut self) -> Result<u128> {
-        let mut b = [0u8; 16];
-        b.copy_from_slice(self.take(16)?);
-        Ok(u128::from_le_bytes(b))
-    }
-    /// Reads an f64.
-    pub fn f64(&mut self) -> Result<f64> {
-        Ok(f64::from_bits(self.u64()?))
-    }
-    /// Reads a length-prefixed slice of f64 (at most `max` values).
-    pub fn f64s(&mut self, max: u64) -> Result<Vec<f64>> {
-        let n = self.u64()?;
-        if n > max || n.saturating_mul(8) > self.bytes.len() as u64 {
-            return Err(Error::InvalidState(format!("implausible length {n}")));
-        }
-        (0..n).map(|_| self.f64()).collect()
-    }
-    /// Whether every byte was consumed.
-    pub fn is_empty(&self) -> bool {
-        self.bytes.is_empty()
-    }
-}
 
 fn write_random_road(w: &mut ByteWriter, r: &RandomRoad) {
     w.u64(r.class.code() as u64);

@@ -57,7 +57,7 @@ impl Simulator {
     /// phase anchors (and at node m, where the history starts), each run by
     /// [`segment`].
     fn harmonic_whole_steps<const DELAY: bool>(&mut self, last: u64) -> Result<()> {
-        let m = self.grid.delay_steps;
+        let m = self.grid.delay_steps();
         let first = self.grid_index;
         let len = self.history.len();
         let x0 = self.config.initial_state[X_T];
@@ -118,7 +118,7 @@ impl Simulator {
 
     #[inline(always)]
     pub(super) fn whole_steps_with_body<const DELAY: bool>(&mut self, last: u64) -> Result<()> {
-        let m = self.grid.delay_steps;
+        let m = self.grid.delay_steps();
         let len = self.history.len();
         let first = self.grid_index;
         let mut k = first;

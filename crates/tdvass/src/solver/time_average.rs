@@ -144,7 +144,7 @@ impl Simulator {
     ) -> Vector4<f64> {
         let offset = t - self.grid_time(k);
         if self.grid.delay_inside_step() {
-            let (h, tau) = (self.grid.step, self.grid.inner_delay);
+            let (h, tau) = (self.grid.step, self.grid.inner_delay());
             if offset < tau {
                 self.delayed_input(k, h - tau + offset)
             } else {
@@ -644,7 +644,7 @@ mod tests {
                 params: Params::with_controller(5386.0, tau),
                 ..SimulationConfig::default()
             };
-            let steps = Simulator::new(cfg.clone()).unwrap().grid().delay_steps;
+            let steps = Simulator::new(cfg.clone()).unwrap().grid().delay_steps();
             (simulate(cfg, 15.0).unwrap().objective, steps)
         };
         let (j_at, two) = at(2e-4);
