@@ -472,7 +472,7 @@ fn cli_defaults_are_the_library_defaults_and_the_fmu_start_values() {
         let cli = run[name]
             .as_f64()
             .unwrap_or_else(|| panic!("`{name}` missing in {run}"));
-        let fmu = tdvass_fmi2::variables::by_name(name)
+        let fmu = tdvass_fmu::variables::by_name(name)
             .and_then(|v| v.start)
             .unwrap_or_else(|| panic!("no FMU start value for `{name}`"));
         assert_eq!(
@@ -498,7 +498,7 @@ fn cli_defaults_are_the_library_defaults_and_the_fmu_start_values() {
         let cli = run[name]
             .as_f64()
             .unwrap_or_else(|| panic!("`{name}` missing in {run}"));
-        let fmu = tdvass_fmi2::variables::by_name(name)
+        let fmu = tdvass_fmu::variables::by_name(name)
             .and_then(|v| v.start)
             .unwrap();
         assert_eq!(
@@ -506,8 +506,44 @@ fn cli_defaults_are_the_library_defaults_and_the_fmu_start_values() {
             "`{name}`: CLI default against the FMU start value"
         );
     }
-    let seed = tdvass_fmi2::variables::by_name("road_seed")
+    let seed = tdvass_fmu::variables::by_name("road_seed")
         .and_then(|v| v.start)
         .unwrap();
     assert_eq!(run["road_seed"].as_f64(), Some(seed));
+}
+
+#[test]
+fn the_cli_refuses_the_runaway_inputs_the_fmu_refuses_with_the_same_message() {
+    use tdvass_fmi2::instance::FMI2_DIALECT;
+    use tdvass_fmu::slave::Logger;
+    use tdvass_fmu::variables::by_name;
+    // Each case is within the declared range, beyond a numerical limit.
+    for (flag, name, value) in [
+        ("--k-t", "k_t", 1e30),
+        ("--c-s", "c_s", 1e300),
+        ("--road-amplitude", "road_amplitude", 2e3),
+        ("--road-angular-frequency", "road_angular_frequency", 1e7),
+        ("--w-ba", "w_ba", 1e13),
+    ] {
+        let text = value.to_string();
+        let cli = failure(&["simulate", "--duration", "0.01", flag, &text]);
+        let mut slave = tdvass_fmu::Slave::new(
+            FMI2_DIALECT,
+            tdvass_fmu::guid(),
+            Logger::new(Box::new(|_, _, _| {}), false),
+        );
+        let vr = by_name(name).unwrap().vr;
+        // The FMU refuses the value when it is set, or the settings when
+        // the simulation is built.
+        let fmu = slave
+            .set_real(&[vr], &[value])
+            .and_then(|_| slave.enter_initialization_mode())
+            .and_then(|_| slave.exit_initialization_mode())
+            .expect_err(name)
+            .message;
+        assert!(
+            cli.contains(&fmu),
+            "`{name}` = {value}: the CLI says\n{cli}\nthe FMU says\n{fmu}"
+        );
+    }
 }

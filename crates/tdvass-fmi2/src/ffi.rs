@@ -1,6 +1,8 @@
 //! The C ABI: every fmi2 function of FMI 2.0 Co-Simulation, exported with C
 //! linkage, plus the Model Exchange functions as stubs that return
-//! `fmi2Error` with a log message.
+//! `fmi2Error` with a log message. (About 900 lines because the standard
+//! has 47 functions, each a few lines of checks; they stay together so that
+//! every `unsafe` of the FMU is in one file.)
 //!
 //! This layer only null-checks, converts raw pointers to slices and strings,
 //! and calls the safe [`Instance`] through [`Instance::run`] (which enforces
@@ -394,30 +396,26 @@ pub unsafe extern "C" fn fmi2SetupExperiment(
 
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2Status {
-    call(
-        c,
-        Function::EnterInitializationMode,
-        Instance::enter_initialization_mode,
-    )
+    call(c, Function::EnterInitializationMode, |i: &mut Instance| {
+        i.enter_initialization_mode()
+    })
 }
 
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Status {
-    call(
-        c,
-        Function::ExitInitializationMode,
-        Instance::exit_initialization_mode,
-    )
+    call(c, Function::ExitInitializationMode, |i: &mut Instance| {
+        i.exit_initialization_mode()
+    })
 }
 
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2Terminate(c: fmi2Component) -> fmi2Status {
-    call(c, Function::Terminate, Instance::terminate)
+    call(c, Function::Terminate, |i: &mut Instance| i.terminate())
 }
 
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
-    call(c, Function::Reset, Instance::reset)
+    call(c, Function::Reset, |i: &mut Instance| i.reset())
 }
 
 // ------------------------------------------------------------- get and set
@@ -913,73 +911,4 @@ pub unsafe extern "C" fn fmi2GetNominalsOfContinuousStates(
 const _: () = assert!(FMI2_COSIMULATION == 1);
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::{FMI_VERSION, TYPES_PLATFORM};
-
-    #[test]
-    fn panics_are_caught_and_make_the_instance_fatal() {
-        let guid = crate::guid();
-        let instance = Instance::instantiate(
-            InstantiateRequest {
-                instance_name: Some("p"),
-                fmu_type: FMI2_COSIMULATION,
-                guid: Some(&guid),
-                ..Default::default()
-            },
-            Box::new(|_, _, _| {}),
-        )
-        .unwrap();
-        let c = Box::into_raw(Box::new(Handle {
-            magic: HANDLE_MAGIC,
-            instance,
-        })) as fmi2Component;
-        let s = call(c, Function::Reset, |_| panic!("deliberate"));
-        assert_eq!(s, status(Status::Fatal));
-        // SAFETY: `c` is the live handle created above.
-        unsafe {
-            assert_eq!(fmi2Reset(c), status(Status::Error));
-            fmi2FreeInstance(c);
-        }
-    }
-
-    #[test]
-    fn null_and_foreign_components_are_refused() {
-        // SAFETY: NULL is a valid argument by contract.
-        unsafe {
-            assert_eq!(fmi2Reset(std::ptr::null_mut()), status(Status::Error));
-            fmi2FreeInstance(std::ptr::null_mut());
-            assert!(
-                fmi2Instantiate(
-                    c"x".as_ptr(),
-                    1,
-                    c"{}".as_ptr(),
-                    std::ptr::null(),
-                    std::ptr::null(),
-                    0,
-                    0
-                )
-                .is_null()
-            );
-        }
-        let mut not_a_handle = [0u64; 8];
-        let c = not_a_handle.as_mut_ptr() as fmi2Component;
-        // SAFETY: points to readable memory the size of a handle tag.
-        assert_eq!(unsafe { fmi2Terminate(c) }, status(Status::Error));
-    }
-
-    #[test]
-    fn version_strings() {
-        // SAFETY: static NUL-terminated strings.
-        unsafe {
-            assert_eq!(
-                CStr::from_ptr(fmi2GetVersion()).to_str().unwrap(),
-                FMI_VERSION
-            );
-            assert_eq!(
-                CStr::from_ptr(fmi2GetTypesPlatform()).to_str().unwrap(),
-                TYPES_PLATFORM
-            );
-        }
-    }
-}
+mod tests;

@@ -13,65 +13,9 @@
 
 use crate::FmiError;
 
-/// State of an instance.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum MachineState {
-    Instantiated,
-    InitializationMode,
-    StepComplete,
-    StepFailed,
-    Terminated,
-    Error,
-    Fatal,
-}
-
-impl MachineState {
-    /// Every state.
-    pub const ALL: [MachineState; 7] = [
-        MachineState::Instantiated,
-        MachineState::InitializationMode,
-        MachineState::StepComplete,
-        MachineState::StepFailed,
-        MachineState::Terminated,
-        MachineState::Error,
-        MachineState::Fatal,
-    ];
-
-    /// The standard's name of the state.
-    pub fn name(self) -> &'static str {
-        match self {
-            MachineState::Instantiated => "instantiated",
-            MachineState::InitializationMode => "initializationMode",
-            MachineState::StepComplete => "stepComplete",
-            MachineState::StepFailed => "stepFailed",
-            MachineState::Terminated => "terminated",
-            MachineState::Error => "error",
-            MachineState::Fatal => "fatal",
-        }
-    }
-
-    /// Stable code used in serialized FMU states.
-    pub fn code(self) -> u8 {
-        self as u8
-    }
-
-    /// Inverse of [`MachineState::code`].
-    pub fn from_code(code: u8) -> Option<MachineState> {
-        MachineState::ALL.get(code as usize).copied()
-    }
-
-    /// Whether the instance has a running simulation (after initialization).
-    pub fn is_simulating(self) -> bool {
-        !matches!(
-            self,
-            MachineState::Instantiated | MachineState::InitializationMode
-        )
-    }
-
-    const fn bit(self) -> u8 {
-        1 << self as u8
-    }
-}
+/// The state of an instance: the version-neutral [`Phase`] of the slave,
+/// named by the FMI 2.0 standard's state names ([`Phase::name`]).
+pub use tdvass_fmu::Phase as MachineState;
 
 /// A set of states.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -11,7 +11,7 @@
 //! 28+n    ...   payload
 //! ```
 //!
-//! The payload is the FMU-level state ([`Model`]): machine state, every
+//! The payload is the FMU-level state ([`SlaveState`]): the phase, every
 //! setting (by value reference, so the layout follows the variable table),
 //! input slope and its origin, the last two input values (for
 //! `input_extrapolation`), the hold-warning flag, start and stop time, last successful time, the terminate
@@ -26,9 +26,11 @@
 //! foreign bytes give an error, never a panic.
 
 use crate::FmiError;
-use crate::instance::Model;
-use crate::states::MachineState;
-use crate::variables::{Access, Settings, VARIABLES, by_vr};
+use crate::phase::Phase;
+use crate::settings::Settings;
+use crate::slave::SlaveState;
+use crate::variables::{Access, VARIABLES, by_vr};
+use tdvass::bytes::{ByteReader, ByteWriter};
 use tdvass::solver::Simulator;
 
 /// First bytes of every serialized state.
@@ -72,59 +74,35 @@ pub fn crc32(bytes: &[u8]) -> u32 {
     })
 }
 
-#[derive(Default)]
-struct Writer(Vec<u8>);
-
-impl Writer {
-    fn u8(&mut self, v: u8) {
-        self.0.push(v);
-    }
-    fn u32(&mut self, v: u32) {
-        self.0.extend_from_slice(&v.to_le_bytes());
-    }
-    fn u64(&mut self, v: u64) {
-        self.0.extend_from_slice(&v.to_le_bytes());
-    }
-    fn f64(&mut self, v: f64) {
-        self.u64(v.to_bits());
-    }
-    fn bytes(&mut self, v: &[u8]) {
-        self.0.extend_from_slice(v);
-    }
-}
-
-struct Reader<'a> {
-    bytes: &'a [u8],
-    offset: usize,
-}
-
 fn invalid(message: impl std::fmt::Display) -> FmiError {
     FmiError::error(format!("invalid serialized FMU state: {message}"))
 }
 
+/// The library's [`ByteReader`] with each read named in its error.
+struct Reader<'a>(ByteReader<'a>);
+
 impl<'a> Reader<'a> {
     fn new(bytes: &'a [u8]) -> Self {
-        Reader { bytes, offset: 0 }
+        Reader(ByteReader::new(bytes))
+    }
+    fn named<T>(
+        &mut self,
+        what: &str,
+        read: impl FnOnce(&mut ByteReader<'a>) -> tdvass::Result<T>,
+    ) -> Result<T, FmiError> {
+        let at = self.0.offset();
+        read(&mut self.0).map_err(|e| match e {
+            tdvass::Error::InvalidState(reason) => {
+                invalid(format_args!("reading {what} at byte {at}: {reason}"))
+            }
+            other => invalid(other),
+        })
     }
     fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8], FmiError> {
-        let left = self.bytes.len() - self.offset;
-        if left < n {
-            return Err(invalid(format_args!(
-                "truncated at byte {} reading {what}: {n} bytes needed, {left} left",
-                self.offset
-            )));
-        }
-        let out = &self.bytes[self.offset..self.offset + n];
-        self.offset += n;
-        Ok(out)
-    }
-    fn array<const N: usize>(&mut self, what: &str) -> Result<[u8; N], FmiError> {
-        let mut out = [0u8; N];
-        out.copy_from_slice(self.take(N, what)?);
-        Ok(out)
+        self.named(what, |r| r.take(n))
     }
     fn u8(&mut self, what: &str) -> Result<u8, FmiError> {
-        Ok(self.array::<1>(what)?[0])
+        self.named(what, ByteReader::u8)
     }
     fn flag(&mut self, what: &str) -> Result<bool, FmiError> {
         match self.u8(what)? {
@@ -134,13 +112,13 @@ impl<'a> Reader<'a> {
         }
     }
     fn u32(&mut self, what: &str) -> Result<u32, FmiError> {
-        Ok(u32::from_le_bytes(self.array(what)?))
+        self.named(what, ByteReader::u32)
     }
     fn u64(&mut self, what: &str) -> Result<u64, FmiError> {
-        Ok(u64::from_le_bytes(self.array(what)?))
+        self.named(what, ByteReader::u64)
     }
     fn f64(&mut self, what: &str) -> Result<f64, FmiError> {
-        Ok(f64::from_bits(self.u64(what)?))
+        self.named(what, ByteReader::f64)
     }
     fn finite(&mut self, what: &str) -> Result<f64, FmiError> {
         let v = self.f64(what)?;
@@ -151,15 +129,13 @@ impl<'a> Reader<'a> {
         }
     }
     fn rest(&mut self) -> &'a [u8] {
-        let out = &self.bytes[self.offset..];
-        self.offset = self.bytes.len();
-        out
+        self.0.rest()
     }
 }
 
-fn encode_payload(model: &Model) -> Vec<u8> {
-    let mut w = Writer::default();
-    w.u8(model.machine.code());
+fn encode_payload(model: &SlaveState) -> Vec<u8> {
+    let mut w = ByteWriter::default();
+    w.u8(model.phase.code());
     let settings: Vec<_> = VARIABLES
         .iter()
         .filter_map(|v| match v.access {
@@ -193,11 +169,11 @@ fn encode_payload(model: &Model) -> Vec<u8> {
             let bytes = sim.to_bytes();
             w.u8(1);
             w.u64(bytes.len() as u64);
-            w.bytes(&bytes);
+            w.raw(&bytes);
         }
         None => w.u8(0),
     }
-    w.0
+    w.bytes
 }
 
 fn decode_settings(r: &mut Reader) -> Result<Settings, FmiError> {
@@ -256,12 +232,12 @@ fn decode_settings(r: &mut Reader) -> Result<Settings, FmiError> {
     Ok(settings)
 }
 
-fn decode_payload(bytes: &[u8]) -> Result<Model, FmiError> {
+fn decode_payload(bytes: &[u8]) -> Result<SlaveState, FmiError> {
     let mut r = Reader::new(bytes);
-    let code = r.u8("the machine state")?;
-    let machine = MachineState::from_code(code)
-        .filter(|s| *s != MachineState::Fatal)
-        .ok_or_else(|| invalid(format_args!("machine state code {code}")))?;
+    let code = r.u8("the phase")?;
+    let phase = Phase::from_code(code)
+        .filter(|s| *s != Phase::Fatal)
+        .ok_or_else(|| invalid(format_args!("phase code {code}")))?;
     let settings = decode_settings(&mut r)?;
     let input_slope = r.finite("the input slope")?;
     let input_pending = r.flag("input pending")?;
@@ -306,10 +282,10 @@ fn decode_payload(bytes: &[u8]) -> Result<Model, FmiError> {
     if !r.rest().is_empty() {
         return Err(invalid("trailing bytes"));
     }
-    if machine.is_simulating() != sim.is_some() {
+    if phase.is_simulating() != sim.is_some() {
         return Err(invalid(format_args!(
             "state {} {} a simulator",
-            machine.name(),
+            phase.name(),
             if sim.is_some() { "with" } else { "without" }
         )));
     }
@@ -333,8 +309,8 @@ fn decode_payload(bytes: &[u8]) -> Result<Model, FmiError> {
             return Err(invalid(format_args!("output `{name}` = {value}")));
         }
     }
-    Ok(Model {
-        machine,
+    Ok(SlaveState {
+        phase,
         settings,
         input_slope,
         input_pending,
@@ -351,21 +327,21 @@ fn decode_payload(bytes: &[u8]) -> Result<Model, FmiError> {
 }
 
 /// Serializes `model` for the FMU with `guid`.
-pub fn serialize(model: &Model, guid: &str) -> Vec<u8> {
+pub fn serialize(model: &SlaveState, guid: &str) -> Vec<u8> {
     let payload = encode_payload(model);
-    let mut w = Writer::default();
-    w.bytes(MAGIC);
+    let mut w = ByteWriter::default();
+    w.raw(MAGIC);
     w.u32(FORMAT_VERSION);
     w.u32(guid.len() as u32);
-    w.bytes(guid.as_bytes());
+    w.raw(guid.as_bytes());
     w.u64(payload.len() as u64);
     w.u32(crc32(&payload));
-    w.bytes(&payload);
-    w.0
+    w.raw(&payload);
+    w.bytes
 }
 
 /// Reads what [`serialize`] wrote, for the FMU with `guid`.
-pub fn deserialize(bytes: &[u8], guid: &str) -> Result<Model, FmiError> {
+pub fn deserialize(bytes: &[u8], guid: &str) -> Result<SlaveState, FmiError> {
     let mut r = Reader::new(bytes);
     if bytes.len() < MAGIC.len() || &bytes[..MAGIC.len()] != MAGIC {
         return Err(invalid(format_args!(
@@ -414,13 +390,13 @@ mod tests {
     use super::*;
     use crate::guid;
 
-    fn running_model() -> Model {
-        let mut model = Model::new();
+    fn running_model() -> SlaveState {
+        let mut model = SlaveState::new();
         let config = model.settings.to_config(0.0).unwrap();
         let mut sim = Simulator::new(config).unwrap();
         sim.advance_to(0.0123).unwrap();
         model.sim = Some(sim);
-        model.machine = MachineState::StepComplete;
+        model.phase = Phase::StepComplete;
         model.stop_time = Some(15.0);
         model.last_successful_time = 0.0123;
         model
@@ -438,13 +414,13 @@ mod tests {
         let bytes = serialize(&model, &guid());
         let back = deserialize(&bytes, &guid()).unwrap();
         assert_eq!(serialize(&back, &guid()), bytes);
-        assert_eq!(back.machine, MachineState::StepComplete);
+        assert_eq!(back.phase, Phase::StepComplete);
         assert_eq!(back.stop_time, Some(15.0));
         let (mut a, mut b) = (model.sim.unwrap(), back.sim.unwrap());
         a.advance_to(0.5).unwrap();
         b.advance_to(0.5).unwrap();
         assert_eq!(a.outputs(), b.outputs());
-        let fresh = Model::new();
+        let fresh = SlaveState::new();
         let back = deserialize(&serialize(&fresh, &guid()), &guid()).unwrap();
         assert!(back.sim.is_none());
         assert_eq!(back.settings, fresh.settings);
@@ -520,18 +496,18 @@ mod tests {
         let g = guid();
         let model = running_model();
         let mut payload = encode_payload(&model);
-        // A negative mass (m_s is the second setting: machine byte, count, then vr/value pairs).
+        // A negative mass (m_s is the second setting: phase byte, count, then vr/value pairs).
         let m_s_at = 1 + 4 + 12 + 4;
         payload[m_s_at..m_s_at + 8].copy_from_slice(&(-1.0f64).to_bits().to_le_bytes());
-        let mut w = Writer::default();
-        w.bytes(MAGIC);
+        let mut w = ByteWriter::default();
+        w.raw(MAGIC);
         w.u32(FORMAT_VERSION);
         w.u32(g.len() as u32);
-        w.bytes(g.as_bytes());
+        w.raw(g.as_bytes());
         w.u64(payload.len() as u64);
         w.u32(crc32(&payload));
-        w.bytes(&payload);
-        let e = deserialize(&w.0, &g).unwrap_err().message;
+        w.raw(&payload);
+        let e = deserialize(&w.bytes, &g).unwrap_err().message;
         assert!(e.contains("m_s") && e.contains("-1"), "{e}");
     }
 }

@@ -5,17 +5,21 @@
 //! unit, start value, admissible range (hence `min`/`max` and the check made
 //! when it is set), description, its direct dependencies (ModelStructure) and
 //! how it is read or written ([`Access`]). Everything else is derived: the
-//! get/set dispatch of [`crate::Instance`], `modelDescription.xml` and
-//! `documentation/index.html` ([`crate::description`]), the serialized
-//! settings ([`crate::snapshot`]) and the GUID ([`guid`]).
+//! get/set dispatch of [`crate::Slave`], the `modelDescription.xml` of
+//! every FMI version and `documentation/index.html` (in the front-end
+//! crates), the serialized settings ([`crate::snapshot`]), the GUID
+//! ([`guid`]) and the command line's defaults (checked by its tests).
 //!
 //! Value references are unique across all types.
+//!
+//! This file is longer than the others on purpose: the table is the single
+//! declaration of every variable (about 500 lines of data), and splitting it
+//! would scatter what must be read, and changed, in one place.
 
 use crate::FmiError;
-use tdvass::metrics::Weights;
-use tdvass::model::{Params, State, V_H, V_S, V_T, Variant, X_H, X_S, X_T};
-use tdvass::road::{RandomRoad, RoadClass, RoadSpec, RoadType};
-use tdvass::solver::{OutputDerivatives, Outputs, SimulationConfig};
+use crate::outputs::OutputId;
+use crate::settings::Settings;
+use tdvass::model::{V_H, V_S, V_T, X_H, X_S, X_T};
 
 /// FMI causality.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -283,280 +287,6 @@ impl Range {
     }
 }
 
-/// Every setting of an instance: the parameters and the input. Start values
-/// come from [`VARIABLES`] ([`Settings::default`]).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Settings {
-    pub variant: i32,
-    pub m_s: f64,
-    pub m_h: f64,
-    pub m_t: f64,
-    pub k_s: f64,
-    pub k_h: f64,
-    pub k_t: f64,
-    pub c_s: f64,
-    pub c_h: f64,
-    pub g: f64,
-    pub tau: f64,
-    pub road: i32,
-    pub road_amplitude: f64,
-    pub road_angular_frequency: f64,
-    pub road_class: i32,
-    pub vehicle_speed: f64,
-    pub road_cutoff_frequency: f64,
-    pub road_seed: i32,
-    pub road_sample_interval: f64,
-    pub max_internal_step: f64,
-    pub w_ba: f64,
-    pub w_sdd: f64,
-    pub w_tdd: f64,
-    /// `road = 0`: 0 holds `x_g` over a communication step, 1 extrapolates
-    /// it linearly from the last two values set, 2 from the last three.
-    pub input_extrapolation: i32,
-    /// `[x_s, v_s, x_h, v_h, x_t, v_t]` at the start time.
-    pub initial_state: [f64; 6],
-    /// The input `x_g` (m).
-    pub x_g: f64,
-}
-
-impl Settings {
-    /// The settings with every start value of [`VARIABLES`].
-    pub fn start_values() -> Settings {
-        let mut s = Settings {
-            variant: 0,
-            m_s: 0.0,
-            m_h: 0.0,
-            m_t: 0.0,
-            k_s: 0.0,
-            k_h: 0.0,
-            k_t: 0.0,
-            c_s: 0.0,
-            c_h: 0.0,
-            g: 0.0,
-            tau: 0.0,
-            road: 0,
-            road_amplitude: 0.0,
-            road_angular_frequency: 0.0,
-            road_class: 0,
-            vehicle_speed: 0.0,
-            road_cutoff_frequency: 0.0,
-            road_seed: 0,
-            road_sample_interval: 0.0,
-            max_internal_step: 0.0,
-            w_ba: 0.0,
-            w_sdd: 0.0,
-            w_tdd: 0.0,
-            input_extrapolation: 0,
-            initial_state: [0.0; 6],
-            x_g: 0.0,
-        };
-        for v in VARIABLES {
-            match (v.access, v.start) {
-                (Access::Real { set, .. }, Some(start)) => set(&mut s, start),
-                (Access::Integer { set, .. }, Some(start)) => set(&mut s, start as i32),
-                _ => {}
-            }
-        }
-        s
-    }
-
-    /// The physical parameters.
-    pub fn params(&self) -> Params {
-        Params {
-            m_s: self.m_s,
-            m_h: self.m_h,
-            m_t: self.m_t,
-            k_s: self.k_s,
-            k_h: self.k_h,
-            k_t: self.k_t,
-            c_s: self.c_s,
-            c_h: self.c_h,
-            g: self.g,
-            tau: self.tau,
-        }
-    }
-
-    /// The variant (`variant` code checked).
-    pub fn variant(&self) -> tdvass::Result<Variant> {
-        Variant::from_code(self.variant as i64)
-    }
-
-    /// The weights of J.
-    pub fn weights(&self) -> Weights {
-        Weights {
-            body_acceleration: self.w_ba,
-            suspension_deflection: self.w_sdd,
-            tire_deflection: self.w_tdd,
-        }
-    }
-
-    /// Whether the road is the input `x_g` (`road = 0`).
-    pub fn road_is_input(&self) -> bool {
-        self.road_type() == Some(RoadType::Input)
-    }
-
-    /// The road type of the `road` code (`None` for a code that is none,
-    /// or for the file samples, which are no setting).
-    pub fn road_type(&self) -> Option<RoadType> {
-        RoadType::from_code(self.road as i64).filter(|t| *t != RoadType::Samples)
-    }
-
-    /// The road (`road` code and the fields it uses checked).
-    pub fn road_spec(&self) -> tdvass::Result<RoadSpec> {
-        let random = || -> tdvass::Result<RandomRoad> {
-            Ok(RandomRoad {
-                class: RoadClass::from_code(self.road_class as i64)?,
-                speed: self.vehicle_speed,
-                cutoff_frequency: self.road_cutoff_frequency,
-                seed: u64::try_from(self.road_seed).map_err(|_| tdvass::Error::InvalidSetting {
-                    name: "road_seed",
-                    value: self.road_seed as i64,
-                    reason: "must be >= 0",
-                })?,
-            })
-        };
-        Ok(match self.road_type() {
-            Some(RoadType::Input) => RoadSpec::Input,
-            Some(RoadType::Harmonic) => RoadSpec::Harmonic {
-                amplitude: self.road_amplitude,
-                angular_frequency: self.road_angular_frequency,
-            },
-            Some(RoadType::Iso8608) => RoadSpec::Iso8608(random()?),
-            Some(RoadType::PaperCompatible) => RoadSpec::PaperCompatible {
-                road: random()?,
-                sample_interval: self.road_sample_interval,
-            },
-            Some(RoadType::Samples) | None => {
-                return Err(tdvass::Error::InvalidSetting {
-                    name: "road",
-                    value: self.road as i64,
-                    reason: "must be 0 (input x_g), 1 (harmonic), 2 (ISO 8608) or 3 (paper-compatible)",
-                });
-            }
-        })
-    }
-
-    /// The simulation these settings describe, starting at `start_time`.
-    /// Only the codes are checked here; [`tdvass::solver::Simulator::new`]
-    /// validates the rest.
-    pub fn to_config(&self, start_time: f64) -> tdvass::Result<SimulationConfig> {
-        Ok(SimulationConfig {
-            params: self.params(),
-            variant: self.variant()?,
-            road: self.road_spec()?,
-            max_internal_step: self.max_internal_step,
-            start_time,
-            initial_state: State::from(self.initial_state),
-            weights: self.weights(),
-        })
-    }
-}
-
-/// An output of the simulator.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum OutputId {
-    /// Component of the reported state `[x_s, v_s, x_h, v_h, x_t, v_t]`.
-    State(usize),
-    BodyAcceleration,
-    SuspensionDeflection,
-    TireDeflection,
-    RoadDisplacement,
-    ControlForce,
-    RmsBodyAcceleration,
-    RmsSuspensionDeflection,
-    RmsTireDeflection,
-    Objective,
-}
-
-/// A "known" of `fmi2GetDirectionalDerivative`: the input `x_g` or a
-/// component of the state `X` (addressed by the value reference of the
-/// state output of the same name).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Known {
-    RoadInput,
-    State(usize),
-}
-
-/// What the partial derivatives of the outputs depend on, at the current point.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Linearization {
-    /// Row `v_s` of A: BA = row · X.
-    pub body_acceleration_row: [f64; 6],
-    /// CS reports `x_h = x_t`, `v_h = v_t`.
-    pub conventional: bool,
-    /// `road = 0`: the applied road is the input.
-    pub road_is_input: bool,
-    /// `(g, tau)` when the control force is `g (x_t − tau v_t)` of the current
-    /// state (delay folded into the plant); `None` when it acts on the delayed
-    /// history only (or there is no control).
-    pub instantaneous_control: Option<(f64, f64)>,
-}
-
-impl OutputId {
-    /// The value in `outputs`.
-    pub fn value(self, o: &Outputs) -> f64 {
-        match self {
-            OutputId::State(i) => o.state[i],
-            OutputId::BodyAcceleration => o.performance.body_acceleration,
-            OutputId::SuspensionDeflection => o.performance.suspension_deflection,
-            OutputId::TireDeflection => o.performance.tire_deflection,
-            OutputId::RoadDisplacement => o.road_displacement,
-            OutputId::ControlForce => o.control_force,
-            OutputId::RmsBodyAcceleration => o.rms.body_acceleration,
-            OutputId::RmsSuspensionDeflection => o.rms.suspension_deflection,
-            OutputId::RmsTireDeflection => o.rms.tire_deflection,
-            OutputId::Objective => o.objective,
-        }
-    }
-
-    /// The exact first time derivative (the running RMS values and J are
-    /// time averages, differentiable after the start).
-    pub fn derivative(self, d: &OutputDerivatives) -> f64 {
-        match self {
-            OutputId::State(i) => d.state[i],
-            OutputId::BodyAcceleration => d.performance.body_acceleration,
-            OutputId::SuspensionDeflection => d.performance.suspension_deflection,
-            OutputId::TireDeflection => d.performance.tire_deflection,
-            OutputId::RoadDisplacement => d.road_displacement,
-            OutputId::ControlForce => d.control_force,
-            OutputId::RmsBodyAcceleration => d.rms.body_acceleration,
-            OutputId::RmsSuspensionDeflection => d.rms.suspension_deflection,
-            OutputId::RmsTireDeflection => d.rms.tire_deflection,
-            OutputId::Objective => d.objective,
-        }
-    }
-
-    /// The exact partial derivative with respect to `known` at the current
-    /// point. The running RMS values and J are integrals over the past: their
-    /// partials with respect to the current state and input are 0.
-    pub fn partial(self, known: Known, lin: &Linearization) -> f64 {
-        let indicator = |b: bool| if b { 1.0 } else { 0.0 };
-        match (self, known) {
-            (OutputId::State(i), Known::State(j)) => {
-                let source = match i {
-                    X_H if lin.conventional => X_T,
-                    V_H if lin.conventional => V_T,
-                    _ => i,
-                };
-                indicator(source == j)
-            }
-            (OutputId::BodyAcceleration, Known::State(j)) => lin.body_acceleration_row[j],
-            (OutputId::SuspensionDeflection, Known::State(j)) => {
-                indicator(j == X_S) - indicator(j == X_T)
-            }
-            (OutputId::TireDeflection, Known::State(j)) => indicator(j == X_T),
-            (OutputId::TireDeflection, Known::RoadInput) => -indicator(lin.road_is_input),
-            (OutputId::RoadDisplacement, Known::RoadInput) => indicator(lin.road_is_input),
-            (OutputId::ControlForce, Known::State(j)) => match lin.instantaneous_control {
-                Some((g, _)) if j == X_T => g,
-                Some((g, tau)) if j == V_T => -g * tau,
-                _ => 0.0,
-            },
-            _ => 0.0,
-        }
-    }
-}
-
 /// A calculated parameter.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Calculated {
@@ -774,7 +504,7 @@ pub static VARIABLES: &[Variable] = &[
         Q::Mass,
         345.0,
         Range::Positive,
-        real!(m_s),
+        real!(params.m_s),
         "Body (sprung) mass (> 0)",
     ),
     parameter(
@@ -784,7 +514,7 @@ pub static VARIABLES: &[Variable] = &[
         Q::Mass,
         4.05,
         Range::Positive,
-        real!(m_h),
+        real!(params.m_h),
         "Annular absorber mass (> 0)",
     ),
     parameter(
@@ -794,7 +524,7 @@ pub static VARIABLES: &[Variable] = &[
         Q::Mass,
         40.5,
         Range::Positive,
-        real!(m_t),
+        real!(params.m_t),
         "Wheel (unsprung) mass (> 0)",
     ),
     parameter(
@@ -804,7 +534,7 @@ pub static VARIABLES: &[Variable] = &[
         Q::Stiffness,
         16000.0,
         Range::AtLeast(0.0),
-        real!(k_s),
+        real!(params.k_s),
         "Suspension stiffness",
     ),
     parameter(
@@ -814,7 +544,7 @@ pub static VARIABLES: &[Variable] = &[
         Q::Stiffness,
         6444.0,
         Range::AtLeast(0.0),
-        real!(k_h),
+        real!(params.k_h),
         "Absorber stiffness",
     ),
     parameter(
@@ -824,7 +554,7 @@ pub static VARIABLES: &[Variable] = &[
         Q::Stiffness,
         190000.0,
         Range::AtLeast(0.0),
-        real!(k_t),
+        real!(params.k_t),
         "Tire stiffness",
     ),
     parameter(
@@ -834,7 +564,7 @@ pub static VARIABLES: &[Variable] = &[
         Q::Damping,
         1500.0,
         Range::AtLeast(0.0),
-        real!(c_s),
+        real!(params.c_s),
         "Suspension damping",
     ),
     parameter(
@@ -844,7 +574,7 @@ pub static VARIABLES: &[Variable] = &[
         Q::Damping,
         348.0,
         Range::AtLeast(0.0),
-        real!(c_h),
+        real!(params.c_h),
         "Absorber damping",
     ),
     parameter(
@@ -854,7 +584,7 @@ pub static VARIABLES: &[Variable] = &[
         Q::Stiffness,
         5386.0,
         Range::Finite,
-        real!(g),
+        real!(params.g),
         "Feedback gain of u = g x_t(t - tau) (TDVASS only; tunable between steps)",
     ),
     parameter(
@@ -864,7 +594,7 @@ pub static VARIABLES: &[Variable] = &[
         Q::Time,
         2e-4,
         Range::AtLeast(0.0),
-        real!(tau),
+        real!(params.tau),
         "Feedback delay (>= 0; TDVASS only)",
     ),
     parameter(
@@ -964,7 +694,7 @@ pub static VARIABLES: &[Variable] = &[
         Q::Dimensionless,
         0.4,
         Range::AtLeast(0.0),
-        real!(w_ba),
+        real!(weights.body_acceleration),
         "Weight z1 of RMS(BA) in the objective J (Eq. 6; tunable)",
     ),
     parameter(
@@ -974,7 +704,7 @@ pub static VARIABLES: &[Variable] = &[
         Q::Dimensionless,
         0.2,
         Range::AtLeast(0.0),
-        real!(w_sdd),
+        real!(weights.suspension_deflection),
         "Weight z2 of RMS(SDD) in the objective J (Eq. 6; tunable)",
     ),
     parameter(
@@ -984,7 +714,7 @@ pub static VARIABLES: &[Variable] = &[
         Q::Dimensionless,
         0.4,
         Range::AtLeast(0.0),
-        real!(w_tdd),
+        real!(weights.tire_deflection),
         "Weight z3 of RMS(TDD) in the objective J (Eq. 6, TDD in m; tunable)",
     ),
     parameter(
@@ -1282,272 +1012,4 @@ pub fn guid() -> String {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use std::collections::HashSet;
-
-    #[test]
-    fn names_and_value_references_are_unique() {
-        let names: HashSet<_> = VARIABLES.iter().map(|v| v.name).collect();
-        let vrs: HashSet<_> = VARIABLES.iter().map(|v| v.vr).collect();
-        assert_eq!(names.len(), VARIABLES.len());
-        assert_eq!(vrs.len(), VARIABLES.len());
-    }
-
-    #[test]
-    fn interface_of_the_spec_is_present() {
-        let spec: [(&str, Causality, VarType); 45] = {
-            use Causality::*;
-            use VarType::*;
-            [
-                ("variant", Parameter, Integer),
-                ("m_s", Parameter, Real),
-                ("m_h", Parameter, Real),
-                ("m_t", Parameter, Real),
-                ("k_s", Parameter, Real),
-                ("k_h", Parameter, Real),
-                ("k_t", Parameter, Real),
-                ("c_s", Parameter, Real),
-                ("c_h", Parameter, Real),
-                ("g", Parameter, Real),
-                ("tau", Parameter, Real),
-                ("road", Parameter, Integer),
-                ("road_amplitude", Parameter, Real),
-                ("road_angular_frequency", Parameter, Real),
-                ("road_class", Parameter, Integer),
-                ("vehicle_speed", Parameter, Real),
-                ("road_cutoff_frequency", Parameter, Real),
-                ("road_seed", Parameter, Integer),
-                ("road_sample_interval", Parameter, Real),
-                ("max_internal_step", Parameter, Real),
-                ("w_ba", Parameter, Real),
-                ("w_sdd", Parameter, Real),
-                ("w_tdd", Parameter, Real),
-                ("input_extrapolation", Parameter, Integer),
-                ("x_g", Input, Real),
-                ("x_s", Output, Real),
-                ("x_h", Output, Real),
-                ("x_t", Output, Real),
-                ("v_s", Output, Real),
-                ("v_h", Output, Real),
-                ("v_t", Output, Real),
-                ("body_acceleration", Output, Real),
-                ("suspension_deflection", Output, Real),
-                ("tire_deflection", Output, Real),
-                ("road_displacement", Output, Real),
-                ("control_force", Output, Real),
-                ("rms_body_acceleration", Output, Real),
-                ("rms_suspension_deflection", Output, Real),
-                ("rms_tire_deflection", Output, Real),
-                ("objective", Output, Real),
-                ("spectral_abscissa", CalculatedParameter, Real),
-                ("stable", CalculatedParameter, Boolean),
-                ("x_s_start", Parameter, Real),
-                ("v_s_start", Parameter, Real),
-                ("x_t_start", Parameter, Real),
-            ]
-        };
-        for (name, causality, ty) in spec {
-            let v = by_name(name).unwrap_or_else(|| panic!("{name} missing"));
-            assert_eq!(v.causality, causality, "{name}");
-            assert_eq!(v.var_type(), ty, "{name}");
-        }
-        let tunable: Vec<_> = VARIABLES
-            .iter()
-            .filter(|v| v.causality == Causality::Parameter && v.variability == Tunable)
-            .map(|v| v.name)
-            .collect();
-        assert_eq!(tunable, ["g", "w_ba", "w_sdd", "w_tdd"]);
-        assert_eq!(by_name("tire_deflection").unwrap().display_unit, Some("mm"));
-    }
-
-    #[test]
-    fn start_values_are_admissible_and_match_the_library_defaults() {
-        for v in VARIABLES {
-            match v.causality {
-                Causality::Parameter | Causality::Input => {
-                    let start = v.start.unwrap_or_else(|| panic!("{} has no start", v.name));
-                    v.range.check(v.name, start).unwrap();
-                    let (min, max) = v.range.bounds();
-                    assert!(min.is_none_or(|m| start >= m) && max.is_none_or(|m| start <= m));
-                }
-                _ => assert!(v.start.is_none(), "{} is calculated", v.name),
-            }
-        }
-        let s = Settings::start_values();
-        let config = s.to_config(0.0).unwrap();
-        assert_eq!(config, SimulationConfig::default());
-        assert_eq!(s.x_g, 0.0);
-    }
-
-    #[test]
-    fn table_ranges_are_the_ones_the_model_enforces() {
-        // One declaration: a physical parameter is admissible in the table
-        // exactly when `Params::validate` accepts it.
-        let probes = [
-            -1.0,
-            -1e-300,
-            -0.0,
-            0.0,
-            1e-300,
-            1.0,
-            1e300,
-            f64::NAN,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-        ];
-        for (name, _) in Params::default().named_values() {
-            let variable = by_name(name).unwrap_or_else(|| panic!("`{name}` is not in the table"));
-            for probe in probes {
-                let mut params = Params::default();
-                match name {
-                    "m_s" => params.m_s = probe,
-                    "m_h" => params.m_h = probe,
-                    "m_t" => params.m_t = probe,
-                    "k_s" => params.k_s = probe,
-                    "k_h" => params.k_h = probe,
-                    "k_t" => params.k_t = probe,
-                    "c_s" => params.c_s = probe,
-                    "c_h" => params.c_h = probe,
-                    "g" => params.g = probe,
-                    "tau" => params.tau = probe,
-                    other => panic!("a parameter `{other}` this test does not know"),
-                }
-                assert_eq!(
-                    variable.range.check(name, probe).is_ok(),
-                    params.validate().is_ok(),
-                    "`{name}` = {probe}: the table and Params::validate disagree"
-                );
-            }
-        }
-    }
-
-    #[test]
-    fn every_variable_is_readable_and_settings_round_trip() {
-        let mut s = Settings::start_values();
-        for (i, v) in VARIABLES.iter().enumerate() {
-            match v.access {
-                Access::Real { get, set } => {
-                    set(&mut s, 1000.0 + i as f64);
-                    assert_eq!(get(&s), 1000.0 + i as f64, "{}", v.name);
-                }
-                Access::Integer { get, set } => {
-                    set(&mut s, 1000 + i as i32);
-                    assert_eq!(get(&s), 1000 + i as i32, "{}", v.name);
-                }
-                Access::Output(_) => assert_eq!(v.causality, Causality::Output),
-                Access::Calculated(_) => assert_eq!(v.causality, Causality::CalculatedParameter),
-            }
-        }
-        // Distinct fields: every value written is still there.
-        for (i, v) in VARIABLES.iter().enumerate() {
-            match v.access {
-                Access::Real { get, .. } => assert_eq!(get(&s), 1000.0 + i as f64, "{}", v.name),
-                Access::Integer { get, .. } => assert_eq!(get(&s), 1000 + i as i32, "{}", v.name),
-                _ => {}
-            }
-        }
-        let outputs: Vec<_> = VARIABLES
-            .iter()
-            .filter(|v| v.causality == Causality::Output)
-            .collect();
-        assert_eq!(outputs.len(), 15);
-        assert!(
-            outputs
-                .iter()
-                .all(|v| matches!(v.access, Access::Output(_)))
-        );
-    }
-
-    #[test]
-    fn units_and_dependencies_are_declared() {
-        for v in VARIABLES {
-            if let Some(unit) = v.unit() {
-                let def = UNITS.iter().find(|u| u.name == unit).expect(unit);
-                if let Some(d) = v.display_unit {
-                    assert!(def.display.iter().any(|(n, _)| *n == d), "{}", v.name);
-                }
-            }
-            for dep in v.feedthrough {
-                assert_eq!(by_name(dep).unwrap().causality, Causality::Input);
-            }
-            for dep in v.initial_dependencies {
-                let known = by_name(dep).unwrap_or_else(|| panic!("{dep}"));
-                assert!(matches!(
-                    known.causality,
-                    Causality::Input | Causality::Parameter
-                ));
-            }
-        }
-    }
-
-    #[test]
-    fn range_checks_name_variable_and_value() {
-        let e = Range::Positive.check("m_s", -1.0).unwrap_err();
-        assert!(
-            e.message.contains("m_s") && e.message.contains("-1"),
-            "{}",
-            e.message
-        );
-        assert!(Range::Finite.check("g", f64::NAN).is_err());
-        assert!(Range::AtLeast(0.0).check("tau", f64::INFINITY).is_err());
-        assert!(Range::Integers(1, 8).check("road_class", 9.0).is_err());
-        assert!(Range::Integers(1, 8).check("road_class", 8.0).is_ok());
-        assert!(Range::Computed.check("x_s", f64::NAN).is_ok());
-    }
-
-    #[test]
-    fn guid_is_stable_and_tracks_the_interface() {
-        let g = guid();
-        assert_eq!(g, guid());
-        assert_eq!(g.len(), 38);
-        assert!(g.starts_with('{') && g.ends_with('}'));
-        let mut changed: Vec<Variable> = VARIABLES.to_vec();
-        changed[3].vr = 999;
-        assert_ne!(guid_of(&changed), g);
-        let mut renamed: Vec<Variable> = VARIABLES.to_vec();
-        renamed[0].name = "variant2";
-        assert_ne!(guid_of(&renamed), g);
-        let mut retuned: Vec<Variable> = VARIABLES.to_vec();
-        retuned[1].variability = Tunable;
-        assert_ne!(guid_of(&retuned), g);
-        // Descriptions and start values are not part of the interface.
-        let mut described: Vec<Variable> = VARIABLES.to_vec();
-        described[1].description = "another text";
-        described[1].start = Some(1.0);
-        assert_eq!(guid_of(&described), g);
-    }
-
-    #[test]
-    fn partials_of_the_outputs() {
-        let lin = Linearization {
-            body_acceleration_row: [1.0, 2.0, 3.0, 4.0, 5.0, 6.0],
-            conventional: true,
-            road_is_input: true,
-            instantaneous_control: Some((10.0, 0.5)),
-        };
-        assert_eq!(OutputId::State(X_H).partial(Known::State(X_T), &lin), 1.0);
-        assert_eq!(OutputId::State(X_H).partial(Known::State(X_H), &lin), 0.0);
-        assert_eq!(
-            OutputId::BodyAcceleration.partial(Known::State(V_H), &lin),
-            4.0
-        );
-        assert_eq!(
-            OutputId::TireDeflection.partial(Known::RoadInput, &lin),
-            -1.0
-        );
-        assert_eq!(
-            OutputId::ControlForce.partial(Known::State(V_T), &lin),
-            -5.0
-        );
-        assert_eq!(OutputId::Objective.partial(Known::State(X_S), &lin), 0.0);
-        let lin = Linearization {
-            road_is_input: false,
-            ..lin
-        };
-        assert_eq!(
-            OutputId::RoadDisplacement.partial(Known::RoadInput, &lin),
-            0.0
-        );
-    }
-}
+mod tests;

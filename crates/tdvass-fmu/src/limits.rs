@@ -1,67 +1,32 @@
-//! Numerical limits of the FMU, beyond the declared ranges of the variable
-//! table: what keeps every output finite and every call bounded in time.
+//! The limits of one slave call, beyond the declared ranges of the
+//! variable table and the library's numerical limits ([`tdvass::limits`]:
+//! values and rates, which the library checks for every configuration, so
+//! the command line refuses the same runaway inputs):
 //!
-//! - **Values** ([`check_value`]): initial displacements and the road
-//!   (`x_s_start` .. `x_t_start`, `road_amplitude`, `x_g`) within the
-//!   divergence bound of displacements, initial velocities and the slope of
-//!   `x_g` within the bound of velocities, `road_angular_frequency` and the
-//!   weights of J within [`MAX_RATE`] and [`MAX_WEIGHT`]. Checked when the
-//!   value is set (and when a serialized state is read).
-//! - **Rates** ([`check_rates`]): every stiffness, damping and the gain over
-//!   every mass it can act on at most [`MAX_RATE`] (natural frequencies up to
-//!   1e6 rad/s). With states inside the divergence bounds this keeps every
-//!   output finite. Checked when the simulation is built and when `g` is
+//! - **Values and rates** ([`check_value`], [`check_rates`]): the library's
+//!   checks applied to a value when it is set (and when a serialized state
+//!   is read) and to the settings when the simulation is built or `g` is
 //!   tuned.
-//! - **Work per step** ([`step_work`]): one `fmi2DoStep` may need at most
+//! - **Work per step** ([`step_work`]): one step may need at most
 //!   [`MAX_WORK_PER_STEP`] internal steps and road breakpoints, so that no
 //!   call runs for more than a few seconds (a huge communication step
 //!   without a stop time, a tiny `max_internal_step` or a tiny
 //!   `road_sample_interval`). A longer step is refused: the master splits it.
+//! - **Time resolution** ([`check_time_resolution`]).
 //! - **Outputs** ([`non_finite_output`]): a last line of defence; a
 //!   non-finite output is never handed out.
 
 use crate::FmiError;
-use crate::variables::{Access, Settings, VARIABLES};
-use tdvass::model::Variant;
+use crate::settings::Settings;
+use crate::variables::{Access, VARIABLES};
 use tdvass::road::RoadType;
-use tdvass::solver::{DIVERGENCE_DISPLACEMENT, DIVERGENCE_VELOCITY, Outputs};
+use tdvass::solver::Outputs;
 
-/// Largest stiffness, damping or gain over a mass (1/s² or 1/s).
-pub const MAX_RATE: f64 = 1e12;
-/// Largest weight of the objective J.
-pub const MAX_WEIGHT: f64 = 1e12;
-/// Most internal steps plus road breakpoints in one `fmi2DoStep` (2^22).
-pub const MAX_WORK_PER_STEP: f64 = 4_194_304.0;
-/// Node interval of the ISO 8608 road (s).
-const ISO_NODE_INTERVAL: f64 = tdvass::road::ISO_NODE_INTERVAL;
+pub use tdvass::limits::{MAX_RATE, MAX_WEIGHT};
 
-fn beyond(name: &str, value: f64, reason: String) -> FmiError {
-    FmiError::error(format!("invalid value {value} for `{name}`: {reason}"))
-}
-
-/// The limit on a single value (already in its declared range), if any.
+/// The library's limit on a single value (already in its declared range).
 pub fn check_value(name: &str, value: f64) -> Result<(), FmiError> {
-    let (bound, what) = match name {
-        "x_s_start" | "x_h_start" | "x_t_start" | "road_amplitude" | "x_g" => (
-            DIVERGENCE_DISPLACEMENT,
-            "the divergence bound of displacements (m)",
-        ),
-        "v_s_start" | "v_h_start" | "v_t_start" | "x_g derivative" => (
-            DIVERGENCE_VELOCITY,
-            "the divergence bound of velocities (m/s)",
-        ),
-        "road_angular_frequency" => (MAX_RATE.sqrt(), "the numerical limit (rad/s)"),
-        "w_ba" | "w_sdd" | "w_tdd" => (MAX_WEIGHT, "the numerical limit of the weights"),
-        _ => return Ok(()),
-    };
-    if value.abs() > bound {
-        return Err(beyond(
-            name,
-            value,
-            format!("its magnitude exceeds {bound:e}, {what}"),
-        ));
-    }
-    Ok(())
+    Ok(tdvass::limits::check_value(name, value)?)
 }
 
 /// Every single-value limit of `settings`.
@@ -76,37 +41,16 @@ pub fn check_values(settings: &Settings) -> Result<(), FmiError> {
     Ok(())
 }
 
-/// Every coefficient over every mass it acts on at most [`MAX_RATE`].
+/// The library's rate limit for the parameters of `s` in its variant (an
+/// invalid code, refused elsewhere, counts as every part present).
 pub fn check_rates(s: &Settings) -> Result<(), FmiError> {
-    // An invalid code (refused elsewhere) counts as every part present.
-    let variant = s.variant().ok();
-    let absorber = variant.is_none_or(Variant::has_absorber);
-    let control = variant.is_some_and(Variant::has_control);
-    let masses = [
-        ("m_s", s.m_s, true),
-        ("m_h", s.m_h, absorber),
-        ("m_t", s.m_t, true),
-    ];
-    let coefficients = [
-        ("k_s", s.k_s, true),
-        ("c_s", s.c_s, true),
-        ("k_h", s.k_h, absorber),
-        ("c_h", s.c_h, absorber),
-        ("k_t", s.k_t, true),
-        ("g", s.g, control),
-    ];
-    for (name, value, used) in coefficients {
-        for (mass_name, mass, mass_used) in masses {
-            let rate = value.abs() / mass;
-            if used && mass_used && rate > MAX_RATE {
-                return Err(FmiError::error(format!(
-                    "invalid combination `{name}` = {value} over `{mass_name}` = {mass}: the rate {rate:e} exceeds the numerical limit {MAX_RATE:e} (natural frequencies up to 1e6 rad/s)"
-                )));
-            }
-        }
-    }
-    Ok(())
+    Ok(tdvass::limits::check_rates(&s.params, s.variant().ok())?)
 }
+
+/// Most internal steps plus road breakpoints in one step (2^22).
+pub const MAX_WORK_PER_STEP: f64 = 4_194_304.0;
+/// Node interval of the ISO 8608 road (s).
+const ISO_NODE_INTERVAL: f64 = tdvass::road::ISO_NODE_INTERVAL;
 
 /// The internal steps and road breakpoints a step of `h` s needs with the
 /// internal step `grid_step`.
@@ -120,13 +64,18 @@ pub fn step_work(s: &Settings, grid_step: f64, h: f64) -> f64 {
 }
 
 /// Refuses a step of `h` s that needs more than [`MAX_WORK_PER_STEP`]
-/// internal steps and road breakpoints.
-pub fn check_step_work(s: &Settings, grid_step: f64, h: f64) -> Result<(), FmiError> {
+/// internal steps and road breakpoints in one call of `function`.
+pub fn check_step_work(
+    s: &Settings,
+    grid_step: f64,
+    h: f64,
+    function: &str,
+) -> Result<(), FmiError> {
     let work = step_work(s, grid_step, h);
     if work > MAX_WORK_PER_STEP {
         let longest = h * MAX_WORK_PER_STEP / work;
         return Err(FmiError::error(format!(
-            "a communication step of {h} s needs {work:e} internal steps (internal step {grid_step:e} s{}), more than the limit of {MAX_WORK_PER_STEP} per fmi2DoStep; use communication steps of at most {longest:e} s",
+            "a communication step of {h} s needs {work:e} internal steps (internal step {grid_step:e} s{}), more than the limit of {MAX_WORK_PER_STEP} per {function}; use communication steps of at most {longest:e} s",
             match s.road_type() {
                 Some(RoadType::Iso8608) => format!(", road nodes every {ISO_NODE_INTERVAL} s"),
                 Some(RoadType::PaperCompatible) => {
@@ -175,7 +124,7 @@ mod tests {
         let s = Settings::start_values();
         check_values(&s).unwrap();
         check_rates(&s).unwrap();
-        check_step_work(&s, 1e-4, 15.0).unwrap();
+        check_step_work(&s, 1e-4, 15.0, "fmi2DoStep").unwrap();
     }
 
     #[test]
@@ -188,19 +137,19 @@ mod tests {
             "{e}"
         );
         let mut s = Settings::start_values();
-        s.k_s = 1e300;
+        s.params.k_s = 1e300;
         let e = check_rates(&s).unwrap_err().message;
         assert!(
             e.contains("`k_s` = ") && e.contains(&1e300.to_string()),
             "{e}"
         );
         let mut s = Settings::start_values();
-        s.m_h = 1e-300;
+        s.params.m_h = 1e-300;
         assert!(check_rates(&s).unwrap_err().message.contains("m_h"));
         s.variant = 1;
         check_rates(&s).unwrap();
         let mut s = Settings::start_values();
-        s.g = -1e13;
+        s.params.g = -1e13;
         assert!(check_rates(&s).is_err());
         s.variant = 2;
         check_rates(&s).unwrap();
@@ -209,13 +158,15 @@ mod tests {
     #[test]
     fn work_per_step() {
         let mut s = Settings::start_values();
-        assert!(check_step_work(&s, 1e-4, 1e9).is_err());
-        assert!(check_step_work(&s, 1e-12, 0.01).is_err());
+        assert!(check_step_work(&s, 1e-4, 1e9, "fmi2DoStep").is_err());
+        assert!(check_step_work(&s, 1e-12, 0.01, "fmi2DoStep").is_err());
         assert!(check_time_resolution("startTime", -4.3e42, 1e-4).is_err());
         assert!(check_time_resolution("startTime", 4e8, 1e-4).is_ok());
         s.road = 3;
         s.road_sample_interval = 1e-300;
-        let e = check_step_work(&s, 1e-4, 0.01).unwrap_err().message;
+        let e = check_step_work(&s, 1e-4, 0.01, "fmi2DoStep")
+            .unwrap_err()
+            .message;
         assert!(e.contains("road_sample_interval"), "{e}");
     }
 }

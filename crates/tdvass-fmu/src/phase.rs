@@ -1,0 +1,62 @@
+//! The phase of a slave: where it is in its life cycle.
+
+/// The phase of a co-simulation slave. FMI 2.0 calls it the state of the
+/// instance (with these names); FMI 3.0's Step Mode is [`Phase::StepComplete`]
+/// (and [`Phase::StepFailed`] after a discarded step). The codes are stored
+/// in serialized FMU states.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Phase {
+    Instantiated,
+    InitializationMode,
+    StepComplete,
+    StepFailed,
+    Terminated,
+    Error,
+    Fatal,
+}
+
+impl Phase {
+    /// Every state.
+    pub const ALL: [Phase; 7] = [
+        Phase::Instantiated,
+        Phase::InitializationMode,
+        Phase::StepComplete,
+        Phase::StepFailed,
+        Phase::Terminated,
+        Phase::Error,
+        Phase::Fatal,
+    ];
+
+    /// The name FMI 2.0 gives the state (`stepComplete`, ...).
+    pub fn name(self) -> &'static str {
+        match self {
+            Phase::Instantiated => "instantiated",
+            Phase::InitializationMode => "initializationMode",
+            Phase::StepComplete => "stepComplete",
+            Phase::StepFailed => "stepFailed",
+            Phase::Terminated => "terminated",
+            Phase::Error => "error",
+            Phase::Fatal => "fatal",
+        }
+    }
+
+    /// Stable code used in serialized FMU states.
+    pub fn code(self) -> u8 {
+        self as u8
+    }
+
+    /// Inverse of [`Phase::code`].
+    pub fn from_code(code: u8) -> Option<Phase> {
+        Phase::ALL.get(code as usize).copied()
+    }
+
+    /// Whether the instance has a running simulation (after initialization).
+    pub fn is_simulating(self) -> bool {
+        !matches!(self, Phase::Instantiated | Phase::InitializationMode)
+    }
+
+    /// The bit of the phase in a set of phases.
+    pub const fn bit(self) -> u8 {
+        1 << self as u8
+    }
+}

@@ -1,0 +1,162 @@
+//! The settings of an instance: every parameter and the input, as the core
+//! library's types ([`Params`], [`Weights`], the initial [`State`]) plus the
+//! FMU's integer codes; [`Settings::to_config`] turns them into a
+//! [`SimulationConfig`]. Start values come from the one variable table.
+
+use crate::variables::{Access, VARIABLES};
+use tdvass::metrics::Weights;
+use tdvass::model::{Params, State, Variant};
+use tdvass::road::{RandomRoad, RoadClass, RoadSpec, RoadType};
+use tdvass::solver::SimulationConfig;
+
+/// Every setting of an instance: the parameters and the input. Start values
+/// come from [`VARIABLES`] ([`Settings::default`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Settings {
+    /// `variant` code: 1 CS, 2 PVASS, 3 TDVASS.
+    pub variant: i32,
+    /// The physical and controller parameters (Table 1, g, tau).
+    pub params: Params,
+    /// `road` code ([`RoadType`]).
+    pub road: i32,
+    pub road_amplitude: f64,
+    pub road_angular_frequency: f64,
+    pub road_class: i32,
+    pub vehicle_speed: f64,
+    pub road_cutoff_frequency: f64,
+    pub road_seed: i32,
+    pub road_sample_interval: f64,
+    pub max_internal_step: f64,
+    /// The weights of J (Eq. (6)).
+    pub weights: Weights,
+    /// `road = 0`: 0 holds `x_g` over a communication step, 1 extrapolates
+    /// it linearly from the last two values set, 2 from the last three.
+    pub input_extrapolation: i32,
+    /// `[x_s, v_s, x_h, v_h, x_t, v_t]` at the start time.
+    pub initial_state: [f64; 6],
+    /// The input `x_g` (m).
+    pub x_g: f64,
+}
+
+impl Settings {
+    /// The settings with every start value of [`VARIABLES`].
+    pub fn start_values() -> Settings {
+        let zero_params = Params {
+            m_s: 0.0,
+            m_h: 0.0,
+            m_t: 0.0,
+            k_s: 0.0,
+            k_h: 0.0,
+            k_t: 0.0,
+            c_s: 0.0,
+            c_h: 0.0,
+            g: 0.0,
+            tau: 0.0,
+        };
+        let mut s = Settings {
+            variant: 0,
+            params: zero_params,
+            road: 0,
+            road_amplitude: 0.0,
+            road_angular_frequency: 0.0,
+            road_class: 0,
+            vehicle_speed: 0.0,
+            road_cutoff_frequency: 0.0,
+            road_seed: 0,
+            road_sample_interval: 0.0,
+            max_internal_step: 0.0,
+            weights: Weights {
+                body_acceleration: 0.0,
+                suspension_deflection: 0.0,
+                tire_deflection: 0.0,
+            },
+            input_extrapolation: 0,
+            initial_state: [0.0; 6],
+            x_g: 0.0,
+        };
+        for v in VARIABLES {
+            match (v.access, v.start) {
+                (Access::Real { set, .. }, Some(start)) => set(&mut s, start),
+                (Access::Integer { set, .. }, Some(start)) => set(&mut s, start as i32),
+                _ => {}
+            }
+        }
+        s
+    }
+
+    /// The physical parameters.
+    pub fn params(&self) -> Params {
+        self.params
+    }
+
+    /// The variant (`variant` code checked).
+    pub fn variant(&self) -> tdvass::Result<Variant> {
+        Variant::from_code(self.variant as i64)
+    }
+
+    /// The weights of J.
+    pub fn weights(&self) -> Weights {
+        self.weights
+    }
+
+    /// Whether the road is the input `x_g` (`road = 0`).
+    pub fn road_is_input(&self) -> bool {
+        self.road_type() == Some(RoadType::Input)
+    }
+
+    /// The road type of the `road` code (`None` for a code that is none,
+    /// or for the file samples, which are no setting).
+    pub fn road_type(&self) -> Option<RoadType> {
+        RoadType::from_code(self.road as i64).filter(|t| *t != RoadType::Samples)
+    }
+
+    /// The road (`road` code and the fields it uses checked).
+    pub fn road_spec(&self) -> tdvass::Result<RoadSpec> {
+        let random = || -> tdvass::Result<RandomRoad> {
+            Ok(RandomRoad {
+                class: RoadClass::from_code(self.road_class as i64)?,
+                speed: self.vehicle_speed,
+                cutoff_frequency: self.road_cutoff_frequency,
+                seed: u64::try_from(self.road_seed).map_err(|_| tdvass::Error::InvalidSetting {
+                    name: "road_seed",
+                    value: self.road_seed as i64,
+                    reason: "must be >= 0",
+                })?,
+            })
+        };
+        Ok(match self.road_type() {
+            Some(RoadType::Input) => RoadSpec::Input,
+            Some(RoadType::Harmonic) => RoadSpec::Harmonic {
+                amplitude: self.road_amplitude,
+                angular_frequency: self.road_angular_frequency,
+            },
+            Some(RoadType::Iso8608) => RoadSpec::Iso8608(random()?),
+            Some(RoadType::PaperCompatible) => RoadSpec::PaperCompatible {
+                road: random()?,
+                sample_interval: self.road_sample_interval,
+            },
+            Some(RoadType::Samples) | None => {
+                return Err(tdvass::Error::InvalidSetting {
+                    name: "road",
+                    value: self.road as i64,
+                    reason: "must be 0 (input x_g), 1 (harmonic), 2 (ISO 8608) or 3 (paper-compatible)",
+                });
+            }
+        })
+    }
+
+    /// The simulation these settings describe, starting at `start_time`.
+    /// Only the codes are checked here; [`tdvass::solver::Simulator::new`]
+    /// validates the rest.
+    pub fn to_config(&self, start_time: f64) -> tdvass::Result<SimulationConfig> {
+        Ok(SimulationConfig {
+            params: self.params(),
+            variant: self.variant()?,
+            road: self.road_spec()?,
+            max_internal_step: self.max_internal_step,
+            start_time,
+            initial_state: State::from(self.initial_state),
+            weights: self.weights(),
+        })
+    }
+}

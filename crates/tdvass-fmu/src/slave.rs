@@ -1,0 +1,358 @@
+//! The version-neutral co-simulation slave: settings, simulator, phase,
+//! logging and the FMU states handed out. No FFI and no FMI version here:
+//! the FMI 2.0 and FMI 3.0 front-ends check their state tables, convert
+//! their arguments and call these methods, which return
+//! `Result<_, FmiError>`. Function names in log messages come from the
+//! front-end's [`Dialect`].
+
+use crate::limits;
+use crate::phase::Phase;
+use crate::settings::Settings;
+use crate::{FmiError, Status};
+use std::collections::HashMap;
+use tdvass::model::Params;
+use tdvass::solver::{DelayGrid, Simulator};
+
+mod fmu_states;
+mod logger;
+mod partials;
+mod stepping;
+mod values;
+
+pub use logger::{LogSink, Logger};
+pub use stepping::extrapolation_slope;
+
+/// How a front-end names what the slave's messages mention.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Dialect {
+    /// Prefix of the C function names: `fmi2` or `fmi3`.
+    pub prefix: &'static str,
+    /// Where the master reads the time a discarded step stopped at.
+    pub last_successful_time: &'static str,
+    /// What tells the master to terminate.
+    pub terminate_flag: &'static str,
+    /// The setter of Real (Float64) values, without the prefix.
+    pub set_float: &'static str,
+    /// The setter of input derivatives, without the prefix.
+    pub set_input_derivatives: &'static str,
+    /// How the C names spell "FMU state" (`FMUstate`, `FMUState`).
+    pub fmu_state: &'static str,
+    /// The deserializer of FMU states, without the prefix.
+    pub deserialize_state: &'static str,
+    /// How the master gives the input's course over a step (the hold
+    /// warning's remedy).
+    pub input_slope_remedy: &'static str,
+}
+
+/// Communication steps longer than this (s) with a held, changing `x_g`
+/// get one warning per instance (the default experiment's 1 ms stays
+/// silent).
+pub const HOLD_WARNING_STEP: f64 = 2e-3;
+
+/// Everything that makes up an FMU state (what getting an FMU state copies
+/// and serializing it writes).
+#[derive(Debug, Clone)]
+pub struct SlaveState {
+    /// Where the slave is in its life cycle.
+    pub phase: Phase,
+    /// Parameter and input values.
+    pub settings: Settings,
+    /// Slope of `x_g` (m/s) set by `an input derivative`.
+    pub input_slope: f64,
+    /// `x_g` or its slope changed since they were last applied to the road.
+    pub input_pending: bool,
+    /// The slope came from `an input derivative` (since `x_g` was
+    /// last set); it then takes precedence over `input_extrapolation`.
+    pub input_slope_given: bool,
+    /// `(t, x_g)` of the last value applied at a communication point: the
+    /// earlier of the two values that `input_extrapolation = 1` uses.
+    pub previous_input: Option<(f64, f64)>,
+    /// `(t, x_g)` of the value applied before `previous_input` (the third
+    /// value of `input_extrapolation = 2`).
+    pub earlier_input: Option<(f64, f64)>,
+    /// The hold warning of [`Slave::do_step`] was logged.
+    pub hold_warned: bool,
+    /// Start time from `the experiment set-up` (s).
+    pub start_time: f64,
+    /// Stop time from `the experiment set-up`, if defined (s).
+    pub stop_time: Option<f64>,
+    /// End of the last successful communication step (s).
+    pub last_successful_time: f64,
+    /// The FMU asks the master to terminate (after a divergence).
+    pub terminate_requested: bool,
+    /// The simulation, from `the end of initialization` on.
+    pub sim: Option<Simulator>,
+}
+
+impl SlaveState {
+    /// A freshly instantiated model: start values, no simulation.
+    pub fn new() -> SlaveState {
+        SlaveState {
+            phase: Phase::Instantiated,
+            settings: Settings::start_values(),
+            input_slope: 0.0,
+            input_pending: false,
+            input_slope_given: false,
+            previous_input: None,
+            earlier_input: None,
+            hold_warned: false,
+            start_time: crate::DEFAULT_START_TIME,
+            stop_time: None,
+            last_successful_time: crate::DEFAULT_START_TIME,
+            terminate_requested: false,
+            sim: None,
+        }
+    }
+}
+
+impl Default for SlaveState {
+    fn default() -> Self {
+        SlaveState::new()
+    }
+}
+
+#[derive(Debug, Clone, PartialEq)]
+struct SpectrumCache {
+    params: Params,
+    variant: i32,
+    value: Result<f64, String>,
+}
+
+/// One co-simulation slave.
+pub struct Slave {
+    dialect: Dialect,
+    /// The token serialized states carry (the GUID or instantiation token).
+    token: String,
+    logger: Logger,
+    state: SlaveState,
+    /// FMU states handed out, by their address (the handle the master gets).
+    fmu_states: HashMap<usize, Box<SlaveState>>,
+    spectrum: Option<SpectrumCache>,
+}
+
+impl Slave {
+    /// A slave at its start values, speaking `dialect`; serialized states
+    /// carry (and must match) `token`.
+    pub fn new(dialect: Dialect, token: String, logger: Logger) -> Slave {
+        Slave {
+            dialect,
+            token,
+            logger,
+            state: SlaveState::new(),
+            fmu_states: HashMap::new(),
+            spectrum: None,
+        }
+    }
+
+    /// The C name of `function` (without prefix) in this dialect.
+    pub fn call(&self, function: &str) -> String {
+        format!("{}{function}", self.dialect.prefix)
+    }
+
+    /// The settings.
+    pub fn settings(&self) -> &Settings {
+        &self.state.settings
+    }
+
+    /// The running simulation (after initialization).
+    pub fn simulator(&self) -> Option<&Simulator> {
+        self.state.sim.as_ref()
+    }
+
+    fn event(&self, message: String) {
+        self.logger.log(Status::Ok, &message);
+    }
+
+    fn warning(&self, message: String) {
+        self.logger.log(Status::Warning, &message);
+    }
+
+    /// The phase.
+    pub fn phase(&self) -> Phase {
+        self.state.phase
+    }
+
+    /// Moves the slave to `phase` (the front-end's state table decides
+    /// when: a fatal error, a panic).
+    pub fn set_phase(&mut self, phase: Phase) {
+        self.state.phase = phase;
+    }
+
+    /// The logger.
+    pub fn logger(&self) -> &Logger {
+        &self.logger
+    }
+
+    /// The logger, to switch categories.
+    pub fn logger_mut(&mut self) -> &mut Logger {
+        &mut self.logger
+    }
+
+    /// End of the last successful communication step (s).
+    pub fn last_successful_time(&self) -> f64 {
+        self.state.last_successful_time
+    }
+
+    /// Whether the slave asks the master to terminate (after a divergence).
+    pub fn terminate_requested(&self) -> bool {
+        self.state.terminate_requested
+    }
+
+    /// Number of FMU states currently owned by the instance.
+    pub fn fmu_state_count(&self) -> usize {
+        self.fmu_states.len()
+    }
+
+    // ------------------------------------------------------------- life cycle
+
+    /// `SetupExperiment`. The tolerance is ignored: the integration is
+    /// exact up to rounding for the internal step `max_internal_step`.
+    pub fn setup_experiment(
+        &mut self,
+        tolerance: Option<f64>,
+        start_time: f64,
+        stop_time: Option<f64>,
+    ) -> Result<Status, FmiError> {
+        if !start_time.is_finite() {
+            return Err(FmiError::error(format!(
+                "invalid startTime {start_time}: must be finite"
+            )));
+        }
+        if let Some(stop) = stop_time
+            && !(stop.is_finite() && stop >= start_time)
+        {
+            return Err(FmiError::error(format!(
+                "invalid stopTime {stop}: must be finite and >= startTime {start_time}"
+            )));
+        }
+        if let Some(tol) = tolerance {
+            self.event(format!(
+                "{}: tolerance {tol} ignored (accuracy is set by max_internal_step)",
+                self.call("SetupExperiment")
+            ));
+        }
+        self.state.start_time = start_time;
+        self.state.stop_time = stop_time;
+        self.state.last_successful_time = start_time;
+        Ok(Status::Ok)
+    }
+
+    /// `EnterInitializationMode`.
+    pub fn enter_initialization_mode(&mut self) -> Result<Status, FmiError> {
+        self.state.phase = Phase::InitializationMode;
+        Ok(Status::Ok)
+    }
+
+    /// A simulator for the current settings at the start time, with the
+    /// input applied.
+    fn build_simulator(&self) -> Result<Simulator, FmiError> {
+        let m = &self.state;
+        limits::check_rates(&m.settings)?;
+        let config = m.settings.to_config(m.start_time)?;
+        // Checked before `Simulator::new` (which refuses the same start
+        // times) for the FMU's message, which gives the limit in seconds.
+        let tau = if config.variant.has_control() {
+            config.params.tau
+        } else {
+            0.0
+        };
+        let step = DelayGrid::new(tau, config.max_internal_step)?.step;
+        limits::check_time_resolution("startTime", m.start_time, step)?;
+        let mut sim = Simulator::new(config)?;
+        if m.settings.road_is_input() {
+            sim.set_road_input(m.settings.x_g, m.input_slope)?;
+        }
+        if let Some((name, value)) = limits::non_finite_output(&sim.outputs()) {
+            return Err(FmiError::error(format!(
+                "the settings give a non-finite initial output `{name}` = {value}"
+            )));
+        }
+        Ok(sim)
+    }
+
+    /// `ExitInitializationMode`: validates every setting (an invalid
+    /// one refuses the call, naming variable and value, and the instance
+    /// stays in initialization mode), starts the simulation and checks
+    /// stability (an unstable (g, tau) gives `Warning`).
+    pub fn exit_initialization_mode(&mut self) -> Result<Status, FmiError> {
+        let sim = self.build_simulator()?;
+        let grid = sim.grid();
+        self.state.sim = Some(sim);
+        self.state.input_pending = false;
+        self.state.previous_input = Some((self.state.start_time, self.state.settings.x_g));
+        self.state.earlier_input = None;
+        self.state.phase = Phase::StepComplete;
+        self.state.last_successful_time = self.state.start_time;
+        self.state.terminate_requested = false;
+        let s = &self.state.settings;
+        self.event(format!(
+            "{}: variant {}, road {}, internal step {} s ({}), start {} s, stop {}",
+            self.call("ExitInitializationMode"),
+            s.variant,
+            s.road,
+            grid.step,
+            if grid.delay_inside_step() {
+                "delay inside the step".to_string()
+            } else {
+                format!("{} steps per delay", grid.delay_steps())
+            },
+            self.state.start_time,
+            self.state
+                .stop_time
+                .map(|t| format!("{t} s"))
+                .unwrap_or_else(|| "not defined".into())
+        ));
+        Ok(self.stability_check(&self.call("ExitInitializationMode")))
+    }
+
+    /// Logs a warning (and returns `Warning`) when (g, tau) is unstable.
+    fn stability_check(&mut self, function: &str) -> Status {
+        let s = self.state.settings;
+        match self.spectral_abscissa() {
+            Ok(a) if a >= 0.0 => {
+                self.warning(format!(
+                    "{function}: unstable feedback: g = {} N/m, tau = {} s gives spectral abscissa {a} 1/s >= 0; the response will grow without bound",
+                    s.params.g, s.params.tau
+                ));
+                Status::Warning
+            }
+            Ok(_) => Status::Ok,
+            Err(e) => {
+                self.warning(format!(
+                    "{function}: stability of g = {} N/m, tau = {} s not determined: {e}",
+                    s.params.g, s.params.tau
+                ));
+                Status::Warning
+            }
+        }
+    }
+
+    /// `Terminate`.
+    pub fn terminate(&mut self) -> Result<Status, FmiError> {
+        self.state.phase = Phase::Terminated;
+        self.event(format!(
+            "{}: at t = {} s",
+            self.call("Terminate"),
+            self.time()
+        ));
+        Ok(Status::Ok)
+    }
+
+    /// `Reset`: back to `instantiated` with every start value (time,
+    /// history, road generator, RMS accumulators, stop time all reset). FMU
+    /// states handed out stay valid.
+    pub fn reset(&mut self) -> Result<Status, FmiError> {
+        self.state = SlaveState::new();
+        self.event(format!("{}: back to the start values", self.call("Reset")));
+        Ok(Status::Ok)
+    }
+
+    /// Current time: the simulator's, or the start time before initialization.
+    pub fn time(&self) -> f64 {
+        self.state
+            .sim
+            .as_ref()
+            .map(Simulator::time)
+            .unwrap_or(self.state.start_time)
+    }
+}

@@ -1,0 +1,90 @@
+//! FMU states handed out to the master: copies of the whole slave state,
+//! owned by the slave, and their serialized bytes.
+
+use super::{Slave, SlaveState};
+use crate::snapshot;
+use crate::{FmiError, Status};
+
+impl Slave {
+    fn owned(&self, handle: usize) -> Result<&SlaveState, FmiError> {
+        self.fmu_states.get(&handle).map(|b| &**b).ok_or_else(|| {
+            FmiError::error(format!(
+                "FMU state {handle:#x} was not created by this instance or was already freed"
+            ))
+        })
+    }
+
+    fn store(&mut self, model: SlaveState, reuse: Option<usize>) -> Result<usize, FmiError> {
+        match reuse {
+            Some(handle) => {
+                self.owned(handle)?;
+                if let Some(slot) = self.fmu_states.get_mut(&handle) {
+                    **slot = model;
+                }
+                Ok(handle)
+            }
+            None => {
+                let boxed = Box::new(model);
+                let handle = &*boxed as *const SlaveState as usize;
+                self.fmu_states.insert(handle, boxed);
+                Ok(handle)
+            }
+        }
+    }
+
+    /// `GetFMUstate`: a copy of everything; `reuse` overwrites a state
+    /// of this instance. Returns the handle (the `FMUstate` value).
+    pub fn get_fmu_state(&mut self, reuse: Option<usize>) -> Result<usize, FmiError> {
+        let handle = self.store(self.state.clone(), reuse)?;
+        self.event(format!(
+            "{}: state {handle:#x} at t = {} s",
+            self.call(&format!("Get{}", self.dialect.fmu_state)),
+            self.time()
+        ));
+        Ok(handle)
+    }
+
+    /// `SetFMUstate`: only states of this instance are accepted.
+    pub fn set_fmu_state(&mut self, handle: usize) -> Result<Status, FmiError> {
+        self.state = self.owned(handle)?.clone();
+        self.event(format!(
+            "{}: state {handle:#x}, now at t = {} s in state {}",
+            self.call(&format!("Set{}", self.dialect.fmu_state)),
+            self.time(),
+            self.state.phase.name()
+        ));
+        Ok(Status::Ok)
+    }
+
+    /// `FreeFMUstate`.
+    pub fn free_fmu_state(&mut self, handle: usize) -> Result<Status, FmiError> {
+        self.owned(handle)?;
+        self.fmu_states.remove(&handle);
+        Ok(Status::Ok)
+    }
+
+    /// The serialized bytes of a state of this instance.
+    pub fn serialize_fmu_state(&self, handle: usize) -> Result<Vec<u8>, FmiError> {
+        Ok(snapshot::serialize(self.owned(handle)?, &self.token))
+    }
+
+    /// `DeSerializeFMUstate`: a new state (or `reuse` overwritten) from
+    /// bytes written by this FMU, in any instance or process.
+    pub fn deserialize_fmu_state(
+        &mut self,
+        bytes: &[u8],
+        reuse: Option<usize>,
+    ) -> Result<usize, FmiError> {
+        if let Some(handle) = reuse {
+            self.owned(handle)?;
+        }
+        let model = snapshot::deserialize(bytes, &self.token)?;
+        let handle = self.store(model, reuse)?;
+        self.event(format!(
+            "{}: {} bytes into state {handle:#x}",
+            self.call(self.dialect.deserialize_state),
+            bytes.len()
+        ));
+        Ok(handle)
+    }
+}

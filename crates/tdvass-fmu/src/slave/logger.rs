@@ -1,0 +1,69 @@
+//! Logging of a slave: the master's sink and the categories switched on.
+
+use crate::{FmiError, LOG_CATEGORIES, Status};
+
+/// Receives log messages: `(status, category, message)`.
+pub type LogSink = Box<dyn Fn(Status, &str, &str)>;
+
+/// The log sink and which categories are on: Discard, Error and Fatal are
+/// always reported; events and warnings only when enabled.
+pub struct Logger {
+    sink: LogSink,
+    /// Enabled flags of the categories of [`LOG_CATEGORIES`] (without `logAll`).
+    enabled: [bool; 5],
+}
+
+impl Logger {
+    /// A logger with events on or off (warnings on).
+    pub fn new(sink: LogSink, events: bool) -> Logger {
+        Logger {
+            sink,
+            enabled: [events, true, true, true, true],
+        }
+    }
+
+    fn category_of(status: Status) -> usize {
+        match status {
+            Status::Ok => 0,
+            Status::Warning => 1,
+            Status::Discard => 2,
+            Status::Error => 3,
+            Status::Fatal => 4,
+        }
+    }
+
+    /// Logs `message` under the category of `status`, when enabled.
+    pub fn log(&self, status: Status, message: &str) {
+        let category = Self::category_of(status);
+        if category >= 2 || self.enabled[category] {
+            (self.sink)(status, LOG_CATEGORIES[category].0, message);
+        }
+    }
+
+    /// Switches `categories` (empty: all) on or off. Unknown categories
+    /// refuse the whole call.
+    pub fn set_categories(&mut self, on: bool, categories: &[&str]) -> Result<Status, FmiError> {
+        let mut enabled = self.enabled;
+        if categories.is_empty() {
+            enabled = [on; 5];
+        }
+        for &category in categories {
+            match LOG_CATEGORIES
+                .iter()
+                .position(|(name, _)| *name == category)
+            {
+                Some(5) => enabled = [on; 5],
+                Some(i) => enabled[i] = on,
+                None => {
+                    let known: Vec<_> = LOG_CATEGORIES.iter().map(|(n, _)| *n).collect();
+                    return Err(FmiError::error(format!(
+                        "unknown log category `{category}` (known: {})",
+                        known.join(", ")
+                    )));
+                }
+            }
+        }
+        self.enabled = enabled;
+        Ok(Status::Ok)
+    }
+}

@@ -1,0 +1,96 @@
+//! Exact partial derivatives of the outputs with respect to the input and
+//! the states (directional derivatives).
+
+use super::Slave;
+use crate::outputs::{Known, Linearization, OutputId};
+use crate::variables::{Access, Causality, by_vr};
+use crate::{FmiError, Status};
+use tdvass::model::{V_S, Variant};
+
+impl Slave {
+    /// `GetDirectionalDerivative`: exact partials of the outputs
+    /// (`vUnknown_ref`) with respect to the input `x_g` and the states
+    /// (addressed by the value references of the outputs `x_s` .. `v_t`).
+    pub fn directional_derivative(
+        &mut self,
+        unknowns: &[u32],
+        knowns: &[u32],
+        seed: &[f64],
+        result: &mut [f64],
+    ) -> Result<Status, FmiError> {
+        let known: Vec<Known> = knowns
+            .iter()
+            .map(|&vr| {
+                let var = by_vr(vr).ok_or_else(|| FmiError::error(format!("unknown value reference {vr}")))?;
+                match var.access {
+                    Access::Real { .. } if var.causality == Causality::Input => Ok(Known::RoadInput),
+                    Access::Output(OutputId::State(i)) => Ok(Known::State(i)),
+                    _ => Err(FmiError::error(format!(
+                        "`{}` is not a known of the directional derivative (only the input x_g and the states x_s, v_s, x_h, v_h, x_t, v_t)",
+                        var.name
+                    ))),
+                }
+            })
+            .collect::<Result<_, _>>()?;
+        let outputs: Vec<OutputId> = unknowns
+            .iter()
+            .map(|&vr| {
+                let var = by_vr(vr)
+                    .ok_or_else(|| FmiError::error(format!("unknown value reference {vr}")))?;
+                match var.access {
+                    Access::Output(id) => Ok(id),
+                    _ => Err(FmiError::error(format!(
+                        "`{}` is not an output; directional derivatives exist for outputs only",
+                        var.name
+                    ))),
+                }
+            })
+            .collect::<Result<_, _>>()?;
+        if let Some(bad) = seed.iter().find(|v| !v.is_finite()) {
+            return Err(FmiError::error(format!(
+                "invalid seed value {bad} in dvKnown: must be finite"
+            )));
+        }
+        let lin = self.linearization()?;
+        for (out, r) in outputs.iter().zip(result.iter_mut()) {
+            *r = known
+                .iter()
+                .zip(seed)
+                .map(|(k, dv)| out.partial(*k, &lin) * dv)
+                .sum();
+            if !r.is_finite() {
+                let bad = std::mem::replace(r, 0.0);
+                return Err(FmiError::error(format!(
+                    "a directional derivative = {bad} is not finite (seed too large); no value returned"
+                )));
+            }
+        }
+        Ok(Status::Ok)
+    }
+
+    fn linearization(&self) -> Result<Linearization, FmiError> {
+        let preview;
+        let sim = match &self.state.sim {
+            Some(sim) => sim,
+            None => {
+                preview = self.build_simulator()?;
+                &preview
+            }
+        };
+        let plant = sim.plant();
+        let variant = sim.config().variant;
+        let mut row = [0.0; 6];
+        for (j, r) in row.iter_mut().enumerate() {
+            *r = plant.a[(V_S, j)];
+        }
+        let params = sim.config().params;
+        let instantaneous_control = (!sim.grid().resolves_delay() && variant.has_control())
+            .then_some((params.effective_gain(variant), params.tau));
+        Ok(Linearization {
+            body_acceleration_row: row,
+            conventional: variant == Variant::Cs,
+            road_is_input: self.state.settings.road_is_input(),
+            instantaneous_control,
+        })
+    }
+}

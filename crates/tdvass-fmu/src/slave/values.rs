@@ -1,0 +1,231 @@
+//! Getting and setting values by value reference: type checks, range and
+//! limit checks, and tunable parameters reaching the running simulation.
+
+use super::{Slave, SpectrumCache};
+use crate::limits;
+use crate::variables::{Access, Calculated, Causality, VarType, Variability, Variable, by_vr};
+use crate::{FmiError, Status};
+use tdvass::model::Variant;
+use tdvass::solver::Outputs;
+
+impl Slave {
+    pub(super) fn variable(&self, vr: u32, ty: VarType) -> Result<&'static Variable, FmiError> {
+        let var = by_vr(vr).ok_or_else(|| {
+            FmiError::error(format!(
+                "unknown value reference {vr} (for a {})",
+                ty.as_str()
+            ))
+        })?;
+        if var.var_type() != ty {
+            return Err(FmiError::error(format!(
+                "value reference {vr} is `{}`, a {}, not a {}",
+                var.name,
+                var.var_type().as_str(),
+                ty.as_str()
+            )));
+        }
+        Ok(var)
+    }
+
+    /// The outputs now: from the simulation, or during initialization from
+    /// a simulator built from the current settings.
+    fn outputs(&mut self) -> Result<Outputs, FmiError> {
+        match self.state.sim.as_mut() {
+            Some(sim) => Ok(sim.outputs()),
+            None => Ok(self.build_simulator()?.outputs()),
+        }
+    }
+
+    /// The spectral abscissa at the current settings (cached).
+    pub fn spectral_abscissa(&mut self) -> Result<f64, FmiError> {
+        let params = self.state.settings.params();
+        let variant = self.state.settings.variant;
+        let fresh = self
+            .spectrum
+            .as_ref()
+            .is_some_and(|c| c.params == params && c.variant == variant);
+        if !fresh {
+            let value = Variant::from_code(variant as i64)
+                .and_then(|v| tdvass::analysis::spectrum::spectral_abscissa(&params, v))
+                .map_err(|e| e.to_string());
+            self.spectrum = Some(SpectrumCache {
+                params,
+                variant,
+                value,
+            });
+        }
+        match &self.spectrum {
+            Some(SpectrumCache { value: Ok(a), .. }) => Ok(*a),
+            Some(SpectrumCache { value: Err(e), .. }) => Err(FmiError::error(format!(
+                "spectral abscissa not available: {e}"
+            ))),
+            None => unreachable!("filled above"),
+        }
+    }
+
+    /// `GetReal`.
+    pub fn get_real(&mut self, vrs: &[u32], values: &mut [f64]) -> Result<Status, FmiError> {
+        let mut outputs = None;
+        for (&vr, value) in vrs.iter().zip(values.iter_mut()) {
+            let var = self.variable(vr, VarType::Real)?;
+            *value = match var.access {
+                Access::Real { get, .. } => get(&self.state.settings),
+                Access::Output(id) => {
+                    if outputs.is_none() {
+                        outputs = Some(self.outputs()?);
+                    }
+                    id.value(outputs.as_ref().expect("computed above"))
+                }
+                Access::Calculated(Calculated::SpectralAbscissa) => self.spectral_abscissa()?,
+                Access::Integer { .. } | Access::Calculated(Calculated::Stable) => {
+                    unreachable!("type checked")
+                }
+            };
+            if !value.is_finite() {
+                let bad = std::mem::replace(value, 0.0);
+                return Err(FmiError::error(format!(
+                    "`{}` = {bad} is not finite; no value returned",
+                    var.name
+                )));
+            }
+        }
+        Ok(Status::Ok)
+    }
+
+    /// `GetInteger`.
+    pub fn get_integer(&mut self, vrs: &[u32], values: &mut [i32]) -> Result<Status, FmiError> {
+        for (&vr, value) in vrs.iter().zip(values.iter_mut()) {
+            match self.variable(vr, VarType::Integer)?.access {
+                Access::Integer { get, .. } => *value = get(&self.state.settings),
+                _ => unreachable!("type checked"),
+            }
+        }
+        Ok(Status::Ok)
+    }
+
+    /// `GetBoolean`.
+    pub fn get_boolean(&mut self, vrs: &[u32], values: &mut [bool]) -> Result<Status, FmiError> {
+        for (&vr, value) in vrs.iter().zip(values.iter_mut()) {
+            match self.variable(vr, VarType::Boolean)?.access {
+                Access::Calculated(Calculated::Stable) => *value = self.spectral_abscissa()? < 0.0,
+                _ => unreachable!("type checked"),
+            }
+        }
+        Ok(Status::Ok)
+    }
+
+    /// `GetString`: there are no String variables, so any value
+    /// reference is refused.
+    pub fn get_string(&mut self, vrs: &[u32]) -> Result<Status, FmiError> {
+        for &vr in vrs {
+            self.variable(vr, VarType::String)?;
+        }
+        Ok(Status::Ok)
+    }
+
+    /// Whether `var` may be set now to `value` (the state table already
+    /// allows setting something).
+    fn check_settable(&self, var: &Variable, value: f64) -> Result<(), FmiError> {
+        match (var.causality, var.variability) {
+            (Causality::Output, _) => Err(FmiError::error(format!(
+                "`{}` is an output and cannot be set (value {value} refused)",
+                var.name
+            ))),
+            (Causality::CalculatedParameter, _) => Err(FmiError::error(format!(
+                "`{}` is a calculated parameter and cannot be set (value {value} refused)",
+                var.name
+            ))),
+            (Causality::Parameter, Variability::Fixed) if self.state.phase.is_simulating() => {
+                Err(FmiError::error(format!(
+                    "`{}` is a fixed parameter and cannot be changed after initialization (value {value} refused; reset the instance to change it)",
+                    var.name
+                )))
+            }
+            _ => {
+                var.range.check(var.name, value)?;
+                limits::check_value(var.name, value)
+            }
+        }
+    }
+
+    /// Applies a checked Real value; tunable parameters reach the running
+    /// simulation at once.
+    fn apply_real(&mut self, var: &Variable, value: f64) -> Result<(), FmiError> {
+        let Access::Real { set, .. } = var.access else {
+            unreachable!("only settable Reals get here")
+        };
+        set(&mut self.state.settings, value);
+        let weights = self.state.settings.weights();
+        match (var.name, self.state.sim.as_mut()) {
+            ("x_g", _) => {
+                self.state.input_slope = 0.0;
+                self.state.input_slope_given = false;
+                self.state.input_pending = true;
+            }
+            ("g", Some(sim)) => sim.set_gain(value)?,
+            ("w_ba" | "w_sdd" | "w_tdd", Some(sim)) => sim.set_weights(weights),
+            _ => {}
+        }
+        Ok(())
+    }
+
+    /// `SetReal`. All values are checked first; a refused value leaves
+    /// every variable unchanged. Tuning `g` to an unstable value while
+    /// simulating gives `Warning`.
+    pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Result<Status, FmiError> {
+        let mut checked = Vec::with_capacity(vrs.len());
+        for (&vr, &value) in vrs.iter().zip(values) {
+            let var = self.variable(vr, VarType::Real)?;
+            self.check_settable(var, value)?;
+            checked.push((var, value));
+        }
+        if self.state.phase.is_simulating() {
+            let mut candidate = self.state.settings;
+            for (var, value) in &checked {
+                if let Access::Real { set, .. } = var.access {
+                    set(&mut candidate, *value);
+                }
+            }
+            limits::check_rates(&candidate)?;
+        }
+        let mut gain_tuned = false;
+        for (var, value) in checked {
+            self.apply_real(var, value)?;
+            gain_tuned |= var.name == "g";
+        }
+        if gain_tuned && self.state.phase.is_simulating() {
+            return Ok(self.stability_check(&self.call(self.dialect.set_float)));
+        }
+        Ok(Status::Ok)
+    }
+
+    /// `SetInteger` (all Integer variables are fixed parameters).
+    pub fn set_integer(&mut self, vrs: &[u32], values: &[i32]) -> Result<Status, FmiError> {
+        let mut checked = Vec::with_capacity(vrs.len());
+        for (&vr, &value) in vrs.iter().zip(values) {
+            let var = self.variable(vr, VarType::Integer)?;
+            self.check_settable(var, value as f64)?;
+            checked.push((var, value));
+        }
+        for (var, value) in checked {
+            if let Access::Integer { set, .. } = var.access {
+                set(&mut self.state.settings, value);
+            }
+        }
+        Ok(Status::Ok)
+    }
+
+    /// `SetBoolean`: the only Boolean is a calculated parameter.
+    pub fn set_boolean(&mut self, vrs: &[u32], values: &[bool]) -> Result<Status, FmiError> {
+        for (&vr, &value) in vrs.iter().zip(values) {
+            let var = self.variable(vr, VarType::Boolean)?;
+            self.check_settable(var, value as i32 as f64)?;
+        }
+        Ok(Status::Ok)
+    }
+
+    /// `SetString`: there are no String variables.
+    pub fn set_string(&mut self, vrs: &[u32]) -> Result<Status, FmiError> {
+        self.get_string(vrs)
+    }
+}
