@@ -14,16 +14,19 @@
 //!   from files and from an external input;
 //! - [`metrics`]: running RMS values and the objective J of Eq. (6);
 //! - [`analysis`]: stability (section 3), frequency response (section 2.2)
-//!   and particle swarm optimisation (sections 2.3.2 and 4.2).
-//!
-//! - [`comfort`]: the ISO 2631-1 W_k weighting and comfort scale.
+//!   and particle swarm optimisation (sections 2.3.2 and 4.2);
+//! - [`comfort`]: the ISO 2631-1 W_k weighting and comfort scale;
+//! - [`limits`]: the numerical limits every configuration is checked
+//!   against, whoever builds it (the FMU, the command line, a library user);
+//! - [`bytes`]: the one little-endian codec of saved states.
 //!
 //! **What this crate owns and must never import.** It owns the physics and
 //! the numerics. It has no FFI and no `unsafe` outside the solver's
 //! whole-step loop (`solver::kernel`), and it never imports a command-line,
 //! progress-display or JSON crate (clap, indicatif, serde_json) nor the FMU
-//! layer: the FMI 2.0 FMU (`tdvass-fmi2`) and the command line
-//! (`tdvass-cli`) are built on it, never the other way round.
+//! layers: the co-simulation slave (`tdvass-fmu`), the FMI 2.0 FMU
+//! (`tdvass-fmi2`) and the command line (`tdvass-cli`) are built on it,
+//! never the other way round.
 //!
 //! # Example: Table 2, TDVASS row
 //!
