@@ -10,6 +10,7 @@ use crate::{FmiError, Status};
 use std::ops::{Deref, DerefMut};
 use std::path::PathBuf;
 use tdvass_fmu::slave::{Dialect, Logger};
+use tdvass_fmu::variables::FmiVersion;
 
 pub use tdvass_fmu::Slave;
 pub use tdvass_fmu::slave::{HOLD_WARNING_STEP, LogSink, SlaveState, extrapolation_slope};
@@ -29,6 +30,7 @@ pub mod status_kind {
 
 /// How the slave's messages name FMI 2.0 functions and flags.
 pub const FMI2_DIALECT: Dialect = Dialect {
+    version: FmiVersion::Fmi2,
     prefix: "fmi2",
     last_successful_time: "fmi2LastSuccessfulTime",
     terminate_flag: "fmi2Terminated",

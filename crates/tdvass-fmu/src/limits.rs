@@ -18,7 +18,7 @@
 
 use crate::FmiError;
 use crate::settings::Settings;
-use crate::variables::{Access, VARIABLES};
+use crate::variables::{ALL_VARIABLES, Access, VARIABLES};
 use tdvass::road::RoadType;
 use tdvass::solver::Outputs;
 
@@ -31,7 +31,7 @@ pub fn check_value(name: &str, value: f64) -> Result<(), FmiError> {
 
 /// Every single-value limit of `settings`.
 pub fn check_values(settings: &Settings) -> Result<(), FmiError> {
-    for v in VARIABLES {
+    for v in ALL_VARIABLES {
         match v.access {
             Access::Real { get, .. } => check_value(v.name, get(settings))?,
             Access::Integer { get, .. } => check_value(v.name, get(settings) as f64)?,

@@ -3,14 +3,14 @@
 //! FMU's integer codes; [`Settings::to_config`] turns them into a
 //! [`SimulationConfig`]. Start values come from the one variable table.
 
-use crate::variables::{Access, VARIABLES};
+use crate::variables::{ALL_VARIABLES, Access};
 use tdvass::metrics::Weights;
 use tdvass::model::{Params, State, Variant};
 use tdvass::road::{RandomRoad, RoadClass, RoadSpec, RoadType};
 use tdvass::solver::SimulationConfig;
 
 /// Every setting of an instance: the parameters and the input. Start values
-/// come from [`VARIABLES`] ([`Settings::default`]).
+/// come from [`ALL_VARIABLES`] ([`Settings::default`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Settings {
     /// `variant` code: 1 CS, 2 PVASS, 3 TDVASS.
@@ -36,10 +36,15 @@ pub struct Settings {
     pub initial_state: [f64; 6],
     /// The input `x_g` (m).
     pub x_g: f64,
+    /// FMI 3.0: simulated time between intermediate updates (s; 0 = every
+    /// internal node).
+    pub intermediate_update_interval: f64,
+    /// FMI 3.0: how many rightmost roots `rightmost_roots` lists.
+    pub root_count: i32,
 }
 
 impl Settings {
-    /// The settings with every start value of [`VARIABLES`].
+    /// The settings with every start value of [`ALL_VARIABLES`].
     pub fn start_values() -> Settings {
         let zero_params = Params {
             m_s: 0.0,
@@ -73,8 +78,10 @@ impl Settings {
             input_extrapolation: 0,
             initial_state: [0.0; 6],
             x_g: 0.0,
+            intermediate_update_interval: 0.0,
+            root_count: 0,
         };
-        for v in VARIABLES {
+        for v in ALL_VARIABLES {
             match (v.access, v.start) {
                 (Access::Real { set, .. }, Some(start)) => set(&mut s, start),
                 (Access::Integer { set, .. }, Some(start)) => set(&mut s, start as i32),

@@ -8,6 +8,7 @@
 use crate::limits;
 use crate::phase::Phase;
 use crate::settings::Settings;
+use crate::variables::FmiVersion;
 use crate::{FmiError, Status};
 use std::collections::HashMap;
 use tdvass::model::Params;
@@ -25,6 +26,8 @@ pub use stepping::extrapolation_slope;
 /// How a front-end names what the slave's messages mention.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Dialect {
+    /// The FMI version (which variables exist).
+    pub version: FmiVersion,
     /// Prefix of the C function names: `fmi2` or `fmi3`.
     pub prefix: &'static str,
     /// Where the master reads the time a discarded step stopped at.

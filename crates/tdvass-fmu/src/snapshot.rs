@@ -29,16 +29,19 @@ use crate::FmiError;
 use crate::phase::Phase;
 use crate::settings::Settings;
 use crate::slave::SlaveState;
-use crate::variables::{Access, VARIABLES, by_vr};
+use crate::variables::{ALL_VARIABLES, Access, FmiVersion, by_vr_in};
 use tdvass::bytes::{ByteReader, ByteWriter};
 use tdvass::solver::Simulator;
 
 /// First bytes of every serialized state.
 pub const MAGIC: &[u8; 8] = b"TDVASSFS";
 /// Format version written (and the only one read). Version 2 added the
-/// time integral of the RMS outputs and the input extrapolation state;
-/// version 1 states are refused.
-pub const FORMAT_VERSION: u32 = 2;
+/// time integral of the RMS outputs and the input extrapolation state,
+/// version 3 the FMI 3.0 settings (`intermediate_update_interval`,
+/// `root_count`); older states are refused. Both FMI versions write the
+/// same format; the header's token (the FMI 2.0 GUID or the FMI 3.0
+/// instantiation token) keeps a state of one from being read by the other.
+pub const FORMAT_VERSION: u32 = 3;
 /// Longest GUID accepted in a header.
 const MAX_GUID_LEN: usize = 64;
 /// Most internal steps between the start and a restored state (2^52: node
@@ -136,7 +139,7 @@ impl<'a> Reader<'a> {
 fn encode_payload(model: &SlaveState) -> Vec<u8> {
     let mut w = ByteWriter::default();
     w.u8(model.phase.code());
-    let settings: Vec<_> = VARIABLES
+    let settings: Vec<_> = ALL_VARIABLES
         .iter()
         .filter_map(|v| match v.access {
             Access::Real { get, .. } => Some((v.vr, get(&model.settings).to_bits())),
@@ -178,7 +181,7 @@ fn encode_payload(model: &SlaveState) -> Vec<u8> {
 
 fn decode_settings(r: &mut Reader) -> Result<Settings, FmiError> {
     let mut settings = Settings::start_values();
-    let expected: Vec<_> = VARIABLES
+    let expected: Vec<_> = ALL_VARIABLES
         .iter()
         .filter(|v| matches!(v.access, Access::Real { .. } | Access::Integer { .. }))
         .collect();
@@ -194,7 +197,7 @@ fn decode_settings(r: &mut Reader) -> Result<Settings, FmiError> {
         let vr = r.u32("a value reference")?;
         let bits = r.u64("a setting")?;
         let position = expected.iter().position(|v| v.vr == vr);
-        let (Some(i), Some(var)) = (position, by_vr(vr)) else {
+        let (Some(i), Some(var)) = (position, by_vr_in(FmiVersion::Fmi3, vr)) else {
             return Err(invalid(format_args!(
                 "unknown setting value reference {vr}"
             )));
@@ -458,7 +461,7 @@ mod tests {
                 "{cut}: {e}"
             );
         }
-        for version in [1, 3] {
+        for version in [1, 2, 4] {
             let mut other = bytes.clone();
             other[8] = version;
             assert!(err(&other).contains(&format!("format version {version}")));

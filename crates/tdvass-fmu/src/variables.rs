@@ -25,6 +25,8 @@ use tdvass::model::{V_H, V_S, V_T, X_H, X_S, X_T};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Causality {
     Parameter,
+    /// FMI 3.0 only: a parameter that sets the size of an array.
+    StructuralParameter,
     CalculatedParameter,
     Input,
     Output,
@@ -35,6 +37,7 @@ impl Causality {
     pub fn as_str(self) -> &'static str {
         match self {
             Causality::Parameter => "parameter",
+            Causality::StructuralParameter => "structuralParameter",
             Causality::CalculatedParameter => "calculatedParameter",
             Causality::Input => "input",
             Causality::Output => "output",
@@ -294,6 +297,98 @@ pub enum Calculated {
     SpectralAbscissa,
     /// `spectral_abscissa < 0`.
     Stable,
+    /// The `root_count` rightmost characteristic roots, `(re, im)` each
+    /// (1/s), rightmost first (an FMI 3.0 array of `root_count` × 2).
+    RightmostRoots,
+}
+
+/// One named item of an enumeration.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EnumerationItem {
+    pub name: &'static str,
+    /// The integer code (the FMI 2.0 Integer value).
+    pub value: i32,
+    pub description: &'static str,
+}
+
+/// An enumeration type: the FMI 3.0 `EnumerationType` of an Integer
+/// setting whose codes have names (FMI 2.0 keeps the Integer).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Enumeration {
+    /// The type's name in `TypeDefinitions`.
+    pub type_name: &'static str,
+    pub items: &'static [EnumerationItem],
+}
+
+impl Enumeration {
+    /// The code of the item called `name`.
+    pub fn value_of(&self, name: &str) -> Option<i32> {
+        self.items.iter().find(|i| i.name == name).map(|i| i.value)
+    }
+}
+
+const fn item(name: &'static str, value: i32, description: &'static str) -> EnumerationItem {
+    EnumerationItem {
+        name,
+        value,
+        description,
+    }
+}
+
+/// `variant`.
+pub static VARIANT_ITEMS: Enumeration = Enumeration {
+    type_name: "Variant",
+    items: &[
+        item("CS", 1, "conventional 2-DOF suspension"),
+        item("PVASS", 2, "annular vibration absorber, no control"),
+        item("TDVASS", 3, "absorber with time-delay feedback"),
+    ],
+};
+
+/// `road`.
+pub static ROAD_ITEMS: Enumeration = Enumeration {
+    type_name: "Road",
+    items: &[
+        item("input", 0, "the input x_g"),
+        item(
+            "harmonic",
+            1,
+            "road_amplitude sin(road_angular_frequency t)",
+        ),
+        item("iso8608", 2, "ISO 8608 filtered white noise"),
+        item("paper", 3, "the paper-compatible random road"),
+    ],
+};
+
+/// `road_class`.
+pub static ROAD_CLASS_ITEMS: Enumeration = Enumeration {
+    type_name: "RoadClass",
+    items: &[
+        item("A", 1, "ISO 8608 class A"),
+        item("B", 2, "ISO 8608 class B"),
+        item("C", 3, "ISO 8608 class C"),
+        item("D", 4, "ISO 8608 class D"),
+        item("E", 5, "ISO 8608 class E"),
+        item("F", 6, "ISO 8608 class F"),
+        item("G", 7, "ISO 8608 class G"),
+        item("H", 8, "ISO 8608 class H"),
+    ],
+};
+
+/// The size of one dimension of an array variable.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Dimension {
+    /// A fixed size.
+    Fixed(u64),
+    /// The value of the structural parameter of this name.
+    Structural(&'static str),
+}
+
+/// The FMI versions a variable exists in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum FmiVersion {
+    Fmi2,
+    Fmi3,
 }
 
 /// How a variable is read and written.
@@ -335,6 +430,13 @@ pub struct Variable {
     /// Outputs and calculated parameters: the parameters and inputs the
     /// initial value depends on (ModelStructure/InitialUnknowns).
     pub initial_dependencies: &'static [&'static str],
+    /// Named codes of an Integer setting (an FMI 3.0 Enumeration).
+    pub enumeration: Option<&'static Enumeration>,
+    /// The dimensions of an array (FMI 3.0 only); empty for a scalar.
+    pub dimensions: &'static [Dimension],
+    /// FMI 3.0: may be read (outputs) or set (the input) inside an
+    /// intermediate update.
+    pub intermediate_update: bool,
 }
 
 impl Variable {
@@ -343,7 +445,9 @@ impl Variable {
         match self.access {
             Access::Real { .. } | Access::Output(_) => VarType::Real,
             Access::Integer { .. } => VarType::Integer,
-            Access::Calculated(Calculated::SpectralAbscissa) => VarType::Real,
+            Access::Calculated(Calculated::SpectralAbscissa | Calculated::RightmostRoots) => {
+                VarType::Real
+            }
             Access::Calculated(Calculated::Stable) => VarType::Boolean,
         }
     }
@@ -351,7 +455,7 @@ impl Variable {
     /// The `initial` attribute (`None` for inputs, where it is not allowed).
     pub fn initial(&self) -> Option<Initial> {
         match self.causality {
-            Causality::Parameter => Some(Initial::Exact),
+            Causality::Parameter | Causality::StructuralParameter => Some(Initial::Exact),
             Causality::CalculatedParameter | Causality::Output => Some(Initial::Calculated),
             Causality::Input => None,
         }
@@ -362,20 +466,44 @@ impl Variable {
         self.quantity.unit()
     }
 
+    /// Whether the variable exists in `version` (the FMI 3.0 additions
+    /// follow the common variables in the table).
+    pub fn is_in(&self, version: FmiVersion) -> bool {
+        version == FmiVersion::Fmi3 || self.vr < FIRST_FMI3_ONLY_VR
+    }
+
     const fn display(mut self, unit: &'static str) -> Variable {
         self.display_unit = Some(unit);
         self
     }
+
+    const fn enumerated(mut self, enumeration: &'static Enumeration) -> Variable {
+        self.enumeration = Some(enumeration);
+        self
+    }
 }
 
-/// Looks a variable up by value reference.
+/// The variables of `version`, in `ModelVariables` order.
+pub fn variables_of(version: FmiVersion) -> &'static [Variable] {
+    match version {
+        FmiVersion::Fmi2 => VARIABLES,
+        FmiVersion::Fmi3 => ALL_VARIABLES,
+    }
+}
+
+/// Looks a variable of FMI 2.0 (the common variables) up by value reference.
 pub fn by_vr(vr: u32) -> Option<&'static Variable> {
     VARIABLES.iter().find(|v| v.vr == vr)
 }
 
-/// Looks a variable up by name.
+/// Looks a variable of `version` up by value reference.
+pub fn by_vr_in(version: FmiVersion, vr: u32) -> Option<&'static Variable> {
+    variables_of(version).iter().find(|v| v.vr == vr)
+}
+
+/// Looks a variable up by name (any version).
 pub fn by_name(name: &str) -> Option<&'static Variable> {
-    VARIABLES.iter().find(|v| v.name == name)
+    ALL_VARIABLES.iter().find(|v| v.name == name)
 }
 
 /// 1-based index of a variable in `ModelVariables`.
@@ -425,6 +553,9 @@ const fn parameter(
         description,
         feedthrough: &[],
         initial_dependencies: &[],
+        enumeration: None,
+        dimensions: &[],
+        intermediate_update: false,
     }
 }
 
@@ -450,6 +581,9 @@ const fn output(
         description,
         feedthrough,
         initial_dependencies,
+        enumeration: None,
+        dimensions: &[],
+        intermediate_update: true,
     }
 }
 
@@ -474,6 +608,9 @@ const fn calculated(
         description,
         feedthrough: &[],
         initial_dependencies: SPECTRUM_DEPENDENCIES,
+        enumeration: None,
+        dimensions: &[],
+        intermediate_update: false,
     }
 }
 
@@ -485,8 +622,28 @@ const SPECTRUM_DEPENDENCIES: &[&str] = &[
 ];
 const ROAD_DEPENDENCIES: &[&str] = &["road", "road_amplitude", "road_angular_frequency", "x_g"];
 
-/// Every FMU variable, in `ModelVariables` order.
-pub static VARIABLES: &[Variable] = &[
+/// The value reference of the first variable that only FMI 3.0 has; the
+/// FMI 3.0 additions follow the common variables at the end of [`TABLE`].
+pub const FIRST_FMI3_ONLY_VR: u32 = 49;
+
+const fn common_count(table: &[Variable]) -> usize {
+    let mut i = 0;
+    while i < table.len() && table[i].vr < FIRST_FMI3_ONLY_VR {
+        i += 1;
+    }
+    i
+}
+
+/// The variables of both FMI versions, in `ModelVariables` order (the
+/// FMI 2.0 FMU's variables).
+pub static VARIABLES: &[Variable] = TABLE.split_at(common_count(TABLE)).0;
+
+/// Every variable of the FMI 3.0 FMU: [`VARIABLES`], then the FMI 3.0
+/// additions.
+pub static ALL_VARIABLES: &[Variable] = TABLE;
+
+/// The one table: every variable, the common ones first.
+const TABLE: &[Variable] = &[
     parameter(
         "variant",
         1,
@@ -496,7 +653,8 @@ pub static VARIABLES: &[Variable] = &[
         Range::Integers(1, 3),
         integer!(variant),
         "Suspension: 1 = CS (conventional 2-DOF), 2 = PVASS (annular absorber, no control), 3 = TDVASS (absorber with time-delay feedback)",
-    ),
+    )
+    .enumerated(&VARIANT_ITEMS),
     parameter(
         "m_s",
         2,
@@ -606,7 +764,8 @@ pub static VARIABLES: &[Variable] = &[
         Range::Integers(0, 3),
         integer!(road),
         "Road: 0 = input x_g, 1 = harmonic road_amplitude sin(road_angular_frequency t), 2 = ISO 8608 filtered white noise, 3 = paper-compatible random road (reproduces the paper's Table 3; about 10 times weaker than a true class-C road)",
-    ),
+    )
+    .enumerated(&ROAD_ITEMS),
     parameter(
         "road_amplitude",
         13,
@@ -636,7 +795,8 @@ pub static VARIABLES: &[Variable] = &[
         Range::Integers(1, 8),
         integer!(road_class),
         "ISO 8608 road class 1..8 = A..H (random roads)",
-    ),
+    )
+    .enumerated(&ROAD_CLASS_ITEMS),
     parameter(
         "vehicle_speed",
         16,
@@ -800,6 +960,9 @@ pub static VARIABLES: &[Variable] = &[
         description: "Road displacement when road = 0 (linearly extrapolated with the slope from fmi2SetRealInputDerivatives)",
         feedthrough: &[],
         initial_dependencies: &[],
+        enumeration: None,
+        dimensions: &[],
+        intermediate_update: true,
     },
     output(
         "x_s",
@@ -969,6 +1132,44 @@ pub static VARIABLES: &[Variable] = &[
         Calculated::Stable,
         "spectral_abscissa < 0 (asymptotically stable)",
     ),
+    // FMI 3.0 only (value references from FIRST_FMI3_ONLY_VR on).
+    parameter(
+        "intermediate_update_interval",
+        49,
+        Tunable,
+        Q::Time,
+        0.0,
+        Range::AtLeast(0.0),
+        real!(intermediate_update_interval),
+        "FMI 3.0: simulated time between two intermediate updates inside a step, at internal grid nodes (0 = at every node); used when the master passes an intermediateUpdate callback",
+    ),
+    Variable {
+        name: "root_count",
+        vr: 50,
+        causality: Causality::StructuralParameter,
+        variability: Fixed,
+        quantity: Q::Dimensionless,
+        display_unit: None,
+        start: Some(3.0),
+        range: Range::Integers(1, 16),
+        access: integer!(root_count),
+        description: "FMI 3.0: how many rightmost characteristic roots rightmost_roots lists",
+        feedthrough: &[],
+        initial_dependencies: &[],
+        enumeration: None,
+        dimensions: &[],
+        intermediate_update: false,
+    },
+    Variable {
+        dimensions: &[Dimension::Structural("root_count"), Dimension::Fixed(2)],
+        ..calculated(
+            "rightmost_roots",
+            51,
+            Q::Rate,
+            Calculated::RightmostRoots,
+            "FMI 3.0: the root_count rightmost characteristic roots as (real, imaginary) pairs, rightmost first",
+        )
+    },
 ];
 
 /// FNV-1a, 128 bits.
@@ -978,6 +1179,20 @@ fn fnv1a_128(bytes: &[u8]) -> u128 {
     bytes
         .iter()
         .fold(OFFSET, |h, &b| (h ^ b as u128).wrapping_mul(PRIME))
+}
+
+/// A hash of `text` formatted as a GUID,
+/// `{xxxxxxxx-xxxx-xxxx-xxxx-xxxxxxxxxxxx}`.
+fn guid_format(text: &str) -> String {
+    let h = format!("{:032x}", fnv1a_128(text.as_bytes()));
+    format!(
+        "{{{}-{}-{}-{}-{}}}",
+        &h[0..8],
+        &h[8..12],
+        &h[12..16],
+        &h[16..20],
+        &h[20..32]
+    )
 }
 
 /// The GUID of an interface: a hash of every variable's name, value
@@ -995,15 +1210,26 @@ pub fn guid_of(variables: &[Variable]) -> String {
             v.variability.as_str()
         ));
     }
-    let h = format!("{:032x}", fnv1a_128(text.as_bytes()));
-    format!(
-        "{{{}-{}-{}-{}-{}}}",
-        &h[0..8],
-        &h[8..12],
-        &h[12..16],
-        &h[16..20],
-        &h[20..32]
-    )
+    guid_format(&text)
+}
+
+/// The FMI 3.0 `instantiationToken`: like [`guid_of`], over every variable
+/// of FMI 3.0, with the enumeration types and array dimensions.
+pub fn instantiation_token() -> String {
+    let mut text = String::from("tdvass FMI 3.0 Co-Simulation interface\n");
+    for v in ALL_VARIABLES {
+        text.push_str(&format!(
+            "{}\t{}\t{}\t{}\t{}\t{}\t{:?}\n",
+            v.name,
+            v.vr,
+            v.var_type().as_str(),
+            v.causality.as_str(),
+            v.variability.as_str(),
+            v.enumeration.map(|e| e.type_name).unwrap_or(""),
+            v.dimensions
+        ));
+    }
+    guid_format(&text)
 }
 
 /// The GUID of this FMU.

@@ -3,14 +3,17 @@
 
 use super::{Slave, SpectrumCache};
 use crate::limits;
-use crate::variables::{Access, Calculated, Causality, VarType, Variability, Variable, by_vr};
+use crate::variables::{
+    Access, Calculated, Causality, Dimension, VarType, Variability, Variable, by_name, by_vr_in,
+};
 use crate::{FmiError, Status};
+use tdvass::analysis::spectrum::CharacteristicRootSolver;
 use tdvass::model::Variant;
 use tdvass::solver::Outputs;
 
 impl Slave {
     pub(super) fn variable(&self, vr: u32, ty: VarType) -> Result<&'static Variable, FmiError> {
-        let var = by_vr(vr).ok_or_else(|| {
+        let var = by_vr_in(self.dialect.version, vr).ok_or_else(|| {
             FmiError::error(format!(
                 "unknown value reference {vr} (for a {})",
                 ty.as_str()
@@ -63,31 +66,92 @@ impl Slave {
         }
     }
 
-    /// `GetReal`.
+    /// How many values `var` holds: 1 for a scalar, the product of its
+    /// dimensions for an array.
+    pub fn size_of(&self, var: &Variable) -> usize {
+        var.dimensions
+            .iter()
+            .map(|d| match d {
+                Dimension::Fixed(n) => *n as usize,
+                Dimension::Structural(name) => match by_name(name).map(|v| v.access) {
+                    Some(Access::Integer { get, .. }) => get(&self.state.settings).max(0) as usize,
+                    _ => 0,
+                },
+            })
+            .product()
+    }
+
+    /// The `root_count` rightmost characteristic roots at the current
+    /// settings, `(re, im)` each, rightmost first.
+    fn rightmost_roots(&self) -> Result<Vec<f64>, FmiError> {
+        let settings = &self.state.settings;
+        let count = settings.root_count.max(0) as usize;
+        let variant = Variant::from_code(settings.variant as i64)?;
+        let tau = if variant.has_control() {
+            settings.params.tau
+        } else {
+            0.0
+        };
+        let roots = CharacteristicRootSolver::new(&settings.params, variant)
+            .and_then(|solver| solver.rightmost_roots(tau, count))
+            .map_err(|e| FmiError::error(format!("rightmost roots not available: {e}")))?;
+        if roots.len() < count {
+            return Err(FmiError::error(format!(
+                "`root_count` = {count} asks for more roots than were found ({}; CS has 4, PVASS 6)",
+                roots.len()
+            )));
+        }
+        Ok(roots.iter().flat_map(|r| [r.re, r.im]).collect())
+    }
+
+    /// `GetReal` / `GetFloat64`: scalars one value each, arrays their
+    /// elements in row-major order; `values` must hold exactly as many as
+    /// the value references need.
     pub fn get_real(&mut self, vrs: &[u32], values: &mut [f64]) -> Result<Status, FmiError> {
         let mut outputs = None;
-        for (&vr, value) in vrs.iter().zip(values.iter_mut()) {
+        let mut at = 0;
+        for &vr in vrs {
             let var = self.variable(vr, VarType::Real)?;
-            *value = match var.access {
-                Access::Real { get, .. } => get(&self.state.settings),
+            let size = self.size_of(var);
+            let available = values.len();
+            let Some(slots) = values.get_mut(at..at + size) else {
+                return Err(FmiError::error(format!(
+                    "{available} values given for value references that hold more (`{}` needs {size} from position {at})",
+                    var.name
+                )));
+            };
+            match var.access {
+                Access::Real { get, .. } => slots[0] = get(&self.state.settings),
                 Access::Output(id) => {
                     if outputs.is_none() {
                         outputs = Some(self.outputs()?);
                     }
-                    id.value(outputs.as_ref().expect("computed above"))
+                    slots[0] = id.value(outputs.as_ref().expect("computed above"));
                 }
-                Access::Calculated(Calculated::SpectralAbscissa) => self.spectral_abscissa()?,
+                Access::Calculated(Calculated::SpectralAbscissa) => {
+                    slots[0] = self.spectral_abscissa()?
+                }
+                Access::Calculated(Calculated::RightmostRoots) => {
+                    slots.copy_from_slice(&self.rightmost_roots()?)
+                }
                 Access::Integer { .. } | Access::Calculated(Calculated::Stable) => {
                     unreachable!("type checked")
                 }
-            };
-            if !value.is_finite() {
+            }
+            if let Some(value) = slots.iter_mut().find(|v| !v.is_finite()) {
                 let bad = std::mem::replace(value, 0.0);
                 return Err(FmiError::error(format!(
                     "`{}` = {bad} is not finite; no value returned",
                     var.name
                 )));
             }
+            at += size;
+        }
+        if at != values.len() {
+            return Err(FmiError::error(format!(
+                "{} values given, the value references hold {at}",
+                values.len()
+            )));
         }
         Ok(Status::Ok)
     }
