@@ -30,7 +30,8 @@ use crate::instance::{FMI2_COSIMULATION, Instance, InstantiateRequest, LogSink};
 use crate::states::Function;
 use crate::{FmiError, Status};
 use libc::{c_char, c_double, c_int, c_uint, c_void, size_t};
-use std::ffi::{CStr, CString};
+use std::ffi::CStr;
+use tdvass_fmu::pointers::{self, c_string, copy_str, input, out_value, output, panic_text};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
 pub type fmi2Component = *mut c_void;
@@ -87,38 +88,11 @@ pub struct fmi2EventInfo {
 const FMI2_TRUE: fmi2Boolean = 1;
 const FMI2_FALSE: fmi2Boolean = 0;
 
-/// What a component pointer points to: a tag (checked on every call, reset
-/// on free, so a pointer that is not a live component of this FMU is
-/// usually recognised) and the instance. `repr(C)` keeps the tag first, so
-/// it can be read before a reference to the whole handle is made.
-#[repr(C)]
-struct Handle {
-    magic: u64,
-    instance: Instance,
-}
-
+/// The tag of an FMI 2.0 instance handle (see [`pointers::Handle`]).
 const HANDLE_MAGIC: u64 = 0x5444_5641_5353_4649; // "TDVASSFI"
 
 fn status(s: Status) -> fmi2Status {
     s as fmi2Status
-}
-
-/// A C string for the logger: interior NULs shown as `\0`.
-fn c_string(text: &str) -> CString {
-    CString::new(text.replace('\0', "\\0")).unwrap_or_default()
-}
-
-/// Copies a C string (lossy UTF-8), `None` for NULL.
-///
-/// # Safety
-/// `s` is NULL or a NUL-terminated string.
-unsafe fn copy_str(s: fmi2String) -> Option<String> {
-    if s.is_null() {
-        return None;
-    }
-    // SAFETY: non-NULL and NUL-terminated by the caller's contract; the bytes
-    // are copied before returning.
-    Some(unsafe { CStr::from_ptr(s) }.to_string_lossy().into_owned())
 }
 
 /// The master's logger as a [`LogSink`].
@@ -154,92 +128,6 @@ fn c_logger(
     })
 }
 
-/// The handle behind `c`, if `c` looks like a live component.
-///
-/// # Safety
-/// `c` is NULL or a pointer returned by `fmi2Instantiate`.
-unsafe fn handle<'a>(c: fmi2Component) -> Option<&'a mut Handle> {
-    let h = c as *mut Handle;
-    if h.is_null() || !h.is_aligned() {
-        return None;
-    }
-    // SAFETY: non-NULL and aligned; by the caller's contract it points to a
-    // live `Handle`, whose first field is the tag (`repr(C)`). Only the tag
-    // is read here, through the raw pointer.
-    let magic = unsafe { std::ptr::addr_of!((*h).magic).read() };
-    if magic != HANDLE_MAGIC {
-        return None;
-    }
-    // SAFETY: the tag says this is a live handle made by `fmi2Instantiate`;
-    // the master does not use an instance from two threads at once.
-    Some(unsafe { &mut *h })
-}
-
-/// A read-only array argument: empty for `n == 0` (the pointer may then be
-/// NULL), refused when NULL, unaligned or absurdly long.
-///
-/// # Safety
-/// `ptr` is NULL or points to `n` initialised elements.
-unsafe fn input<'a, T>(ptr: *const T, n: size_t, what: &str) -> Result<&'a [T], FmiError> {
-    if n == 0 {
-        return Ok(&[]);
-    }
-    if ptr.is_null() {
-        return Err(FmiError::error(format!(
-            "{what} is NULL while its length is {n}"
-        )));
-    }
-    if !ptr.is_aligned() || n > isize::MAX as usize / std::mem::size_of::<T>().max(1) {
-        return Err(FmiError::error(format!(
-            "{what} is not a valid array of {n} elements"
-        )));
-    }
-    // SAFETY: non-NULL, aligned, size in range; the caller guarantees `n`
-    // initialised elements that stay valid and unmodified during the call.
-    Ok(unsafe { std::slice::from_raw_parts(ptr, n) })
-}
-
-/// A writable array argument (same rules as [`input`]).
-///
-/// # Safety
-/// `ptr` is NULL or points to `n` writable elements not aliased by another
-/// argument.
-unsafe fn output<'a, T>(ptr: *mut T, n: size_t, what: &str) -> Result<&'a mut [T], FmiError> {
-    if n == 0 {
-        return Ok(&mut []);
-    }
-    if ptr.is_null() {
-        return Err(FmiError::error(format!(
-            "{what} is NULL while its length is {n}"
-        )));
-    }
-    if !ptr.is_aligned() || n > isize::MAX as usize / std::mem::size_of::<T>().max(1) {
-        return Err(FmiError::error(format!(
-            "{what} is not a valid array of {n} elements"
-        )));
-    }
-    // SAFETY: non-NULL, aligned, size in range; the caller guarantees `n`
-    // writable elements, exclusively ours during the call.
-    Ok(unsafe { std::slice::from_raw_parts_mut(ptr, n) })
-}
-
-/// A single output value.
-///
-/// # Safety
-/// `ptr` is NULL or points to a writable `T`.
-unsafe fn out_value<'a, T>(ptr: *mut T, what: &str) -> Result<&'a mut T, FmiError> {
-    // SAFETY: forwarded contract; a length of one.
-    unsafe { output(ptr, 1, what) }.map(|s| &mut s[0])
-}
-
-fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
-    payload
-        .downcast_ref::<&str>()
-        .map(|s| s.to_string())
-        .or_else(|| payload.downcast_ref::<String>().cloned())
-        .unwrap_or_else(|| "unknown panic".into())
-}
-
 /// Runs `op` on the instance behind `c` as `function`: state table, logging,
 /// panics caught (then `fmi2Fatal`). An invalid `c` gives `fmi2Error`.
 fn with_instance<T>(
@@ -249,7 +137,7 @@ fn with_instance<T>(
 ) -> Result<T, Status> {
     // SAFETY: `c` comes from the master, which passes a component of this FMU
     // (module contract).
-    let Some(h) = (unsafe { handle(c) }) else {
+    let Some(h) = (unsafe { pointers::handle::<Instance>(c, HANDLE_MAGIC) }) else {
         return Err(Status::Error);
     };
     let instance = &mut h.instance;
@@ -351,10 +239,7 @@ pub unsafe extern "C" fn fmi2Instantiate(
             logging_on: loggingOn != FMI2_FALSE,
         };
         match Instance::instantiate(request, sink) {
-            Some(instance) => Box::into_raw(Box::new(Handle {
-                magic: HANDLE_MAGIC,
-                instance,
-            })) as fmi2Component,
+            Some(instance) => pointers::into_raw(HANDLE_MAGIC, instance),
             None => std::ptr::null_mut(),
         }
     });
@@ -365,13 +250,11 @@ pub unsafe extern "C" fn fmi2Instantiate(
 pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
     let _ = catch_unwind(|| {
         // SAFETY: module contract.
-        if let Some(h) = unsafe { handle(c) }
+        if let Some(h) = unsafe { pointers::handle::<Instance>(c, HANDLE_MAGIC) }
             && h.instance.run(Function::FreeInstance, |_| Ok(())).is_ok()
         {
-            h.magic = 0;
-            // SAFETY: `c` was created by `Box::into_raw` in fmi2Instantiate
-            // and is freed exactly once here (the magic is cleared first).
-            drop(unsafe { Box::from_raw(c as *mut Handle) });
+            // SAFETY: a live handle of this FMU; the master passes it no more.
+            unsafe { pointers::free::<Instance>(c, HANDLE_MAGIC) };
         }
     });
 }
@@ -822,7 +705,7 @@ pub unsafe extern "C" fn fmi2GetStringStatus(
 fn model_exchange_only(c: fmi2Component, function: &str) -> fmi2Status {
     let refused = catch_unwind(AssertUnwindSafe(|| {
         // SAFETY: module contract.
-        if let Some(h) = unsafe { handle(c) } {
+        if let Some(h) = unsafe { pointers::handle::<Instance>(c, HANDLE_MAGIC) } {
             h.instance.refuse_model_exchange(function);
         }
     }));

@@ -25,18 +25,22 @@
 //!   snapshots, partials). Every method returns `Result<_, FmiError>`.
 //! - [`phase`]: the life-cycle phase each front-end's state table checks.
 //! - [`markdown`]: the variable table as Markdown for the README.
+//! - [`pointers`]: instance handles, array and string arguments of the C
+//!   interfaces (the crate's only `unsafe`, shared by every FMI version).
 //!
 //! **What this crate owns and must never import.** It owns the behaviour of
 //! an FMU instance that does not depend on the FMI version. It imports the
 //! physics from `tdvass` and nothing else of the workspace: no C types, no
-//! FMI version's names or state table, no command line. It has no `unsafe`.
+//! FMI version's names or state table, no command line. Its only `unsafe`
+//! is [`pointers`], the checked conversions every C interface needs.
 
-#![forbid(unsafe_code)]
+#![deny(unsafe_code)]
 
 pub mod limits;
 pub mod markdown;
 pub mod outputs;
 pub mod phase;
+pub mod pointers;
 pub mod settings;
 pub mod slave;
 pub mod snapshot;

@@ -38,11 +38,19 @@ pub fn extrapolation_slope(values: &[(f64, f64)], h: f64) -> f64 {
 
 impl Slave {
     /// `DoStep` from `t` (must equal the FMU time to a relative 1e-9)
-    /// over `h` (> 0, finite, not past a defined stop time). A divergence
-    /// returns `Discard`: the instance stays at the last good grid node
-    /// (`LastSuccessfulTime`), asks for termination (`Terminated`)
-    /// and goes to `stepFailed`.
+    /// over `h` (> 0, finite, not past a defined stop time): [`Self::begin_step`]
+    /// then [`Self::advance_within_step`] to its end. A divergence returns
+    /// `Discard`: the instance stays at the last good grid node
+    /// (`LastSuccessfulTime`), asks for termination (`Terminated`) and
+    /// goes to `stepFailed`.
     pub fn do_step(&mut self, t: f64, h: f64) -> Result<Status, FmiError> {
+        let target = self.begin_step(t, h)?;
+        self.advance_within_step(target, h)
+    }
+
+    /// Checks a communication step from `t` over `h` (the arguments, the
+    /// stop time, the work it needs) and returns its end.
+    pub fn begin_step(&mut self, t: f64, h: f64) -> Result<f64, FmiError> {
         let now = self.time();
         if !(h.is_finite() && h > 0.0) {
             return Err(FmiError::error(format!(
@@ -67,26 +75,53 @@ impl Slave {
                 "a step of {h} s from {t} s ends at {target} s, past the stop time {stop} s"
             )));
         }
+        let function = self.call("DoStep");
+        let Some(sim) = self.state.sim.as_ref() else {
+            unreachable!("stepComplete has a simulator")
+        };
+        let settings = &self.state.settings;
+        limits::check_step_work(settings, sim.grid().step, target - now, &function)?;
+        limits::check_time_resolution("the step end", target, sim.grid().step)?;
+        Ok(target)
+    }
+
+    /// The next time, after `from` by at least `intermediate_update_interval`,
+    /// at which an intermediate update is due inside the step that ends at
+    /// `target`: an internal grid node strictly between the current time
+    /// and `target` (beyond the snap tolerance of each), if there is one.
+    pub fn next_intermediate_time(&self, from: f64, target: f64) -> Option<f64> {
+        let sim = self.state.sim.as_ref()?;
+        let now = sim.time();
+        let interval = self.state.settings.intermediate_update_interval;
+        let node = sim.node_at_or_after((from + interval).max(now));
+        let tolerance = sim.snap_tolerance(node);
+        (node > now + tolerance && node < target - tolerance).then_some(node)
+    }
+
+    /// Advances to `until` (the end of the step begun by
+    /// [`Self::begin_step`], or a time inside it): a new input value is
+    /// applied from the current time with the slope fitted over `span`
+    /// (s); then the outputs must be finite. A divergence is a `Discard`
+    /// as described at [`Self::do_step`].
+    pub fn advance_within_step(&mut self, until: f64, span: f64) -> Result<Status, FmiError> {
+        let now = self.time();
         let settings = self.state.settings;
         let pending = self.state.input_pending;
         let slope = if settings.road_is_input() {
-            self.input_slope_for_step(now, h)?
+            self.input_slope_for_step(now, span)?
         } else {
             0.0
         };
-        let function = self.call("DoStep");
         let Some(sim) = self.state.sim.as_mut() else {
             unreachable!("stepComplete has a simulator")
         };
-        limits::check_step_work(&settings, sim.grid().step, target - now, &function)?;
-        limits::check_time_resolution("the step end", target, sim.grid().step)?;
         if pending && settings.road_is_input() {
             sim.set_road_input(settings.x_g, slope)?;
             self.state.earlier_input = self.state.previous_input;
             self.state.previous_input = Some((now, settings.x_g));
         }
         self.state.input_pending = false;
-        match sim.advance_to(target) {
+        match sim.advance_to(until) {
             Ok(()) => match limits::non_finite_output(&sim.outputs()) {
                 None => {
                     self.state.last_successful_time = sim.time();
@@ -96,7 +131,7 @@ impl Slave {
                     self.state.terminate_requested = true;
                     self.state.phase = Phase::StepFailed;
                     Err(FmiError::discard(format!(
-                        "output `{name}` = {value} is not finite at t = {target} s; the outputs are not available, {} is {} s, the FMU asks to terminate ({})",
+                        "output `{name}` = {value} is not finite at t = {until} s; the outputs are not available, {} is {} s, the FMU asks to terminate ({})",
                         self.dialect.last_successful_time,
                         self.state.last_successful_time,
                         self.dialect.terminate_flag

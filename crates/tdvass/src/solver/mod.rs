@@ -373,6 +373,23 @@ impl Simulator {
         drift.min(self.grid.step * SNAP_STEP_FRACTION).max(floor)
     }
 
+    /// The time of the first internal grid node after the committed one
+    /// that is at or after `t` (s): where a master can be called back
+    /// inside a step (FMI 3.0 intermediate updates) without moving the
+    /// grid.
+    pub fn node_at_or_after(&self, t: f64) -> f64 {
+        let first = self.grid_index.saturating_add(1);
+        // `as` saturates (and maps NaN to 0); the loops correct the guess.
+        let mut k = (((t - self.config.start_time) / self.grid.step).ceil() as u64).max(first);
+        while k > first && self.grid_time(k - 1) >= t {
+            k -= 1;
+        }
+        while self.grid_time(k) < t && k < u64::MAX - 1 {
+            k += 1;
+        }
+        self.grid_time(k)
+    }
+
     /// Whether a requested time `a` and a grid time `b` differ only by
     /// floating-point accumulation: then `b` is reached (committed) and
     /// the outputs are evaluated at `a` itself from there.

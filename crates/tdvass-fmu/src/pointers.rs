@@ -1,0 +1,148 @@
+//! The C side of every FMI version, written once: instance handles, array
+//! and string arguments, and panic messages. Each function checks what can
+//! be checked (NULL, alignment, length, the handle's tag) and states the
+//! rest of its contract; the `extern "C"` layers of the front-ends call
+//! them and contain nothing else unsafe.
+// The only `unsafe` of this crate (the crate denies it elsewhere).
+#![allow(unsafe_code)]
+
+use crate::FmiError;
+use std::ffi::{CStr, CString, c_char, c_void};
+
+/// What an instance pointer points to: a tag (checked on every call,
+/// cleared on free, so a pointer that is not a live instance of this FMU is
+/// usually recognised) and the instance. `repr(C)` keeps the tag first, so
+/// it can be read before a reference to the whole handle is made.
+#[repr(C)]
+pub struct Handle<T> {
+    magic: u64,
+    /// The instance.
+    pub instance: T,
+}
+
+/// Boxes `instance` with the tag `magic`; the pointer goes to the master.
+pub fn into_raw<T>(magic: u64, instance: T) -> *mut c_void {
+    Box::into_raw(Box::new(Handle { magic, instance })) as *mut c_void
+}
+
+/// The handle behind `c`, if `c` looks like a live instance tagged `magic`.
+///
+/// # Safety
+/// `c` is NULL or a pointer returned by [`into_raw`] with the same `T`, and
+/// the master does not use the instance from two threads at once.
+pub unsafe fn handle<'a, T>(c: *mut c_void, magic: u64) -> Option<&'a mut Handle<T>> {
+    let h = c as *mut Handle<T>;
+    if h.is_null() || !h.is_aligned() {
+        return None;
+    }
+    // SAFETY: non-NULL and aligned; by the caller's contract it points to a
+    // live `Handle<T>`, whose first field is the tag (`repr(C)`). Only the
+    // tag is read here, through the raw pointer.
+    let tag = unsafe { std::ptr::addr_of!((*h).magic).read() };
+    if tag != magic {
+        return None;
+    }
+    // SAFETY: the tag says this is a live handle made by `into_raw`; no
+    // other reference to it exists during the call (caller's contract).
+    Some(unsafe { &mut *h })
+}
+
+/// Frees the handle behind `c` (its tag cleared first, so a second free is
+/// recognised and ignored).
+///
+/// # Safety
+/// As [`handle`]; `c` is not used by the master afterwards.
+pub unsafe fn free<T>(c: *mut c_void, magic: u64) {
+    // SAFETY: forwarded contract.
+    if let Some(h) = unsafe { handle::<T>(c, magic) } {
+        h.magic = 0;
+        // SAFETY: `c` was created by `Box::into_raw` in `into_raw` and is
+        // freed exactly once here (its tag is now cleared).
+        drop(unsafe { Box::from_raw(c as *mut Handle<T>) });
+    }
+}
+
+/// A C string for a logger: interior NULs shown as `\0`.
+pub fn c_string(text: &str) -> CString {
+    CString::new(text.replace('\0', "\\0")).unwrap_or_default()
+}
+
+/// Copies a C string (lossy UTF-8), `None` for NULL.
+///
+/// # Safety
+/// `s` is NULL or a NUL-terminated string.
+pub unsafe fn copy_str(s: *const c_char) -> Option<String> {
+    if s.is_null() {
+        return None;
+    }
+    // SAFETY: non-NULL and NUL-terminated by the caller's contract; the
+    // bytes are copied before returning.
+    Some(unsafe { CStr::from_ptr(s) }.to_string_lossy().into_owned())
+}
+
+/// A read-only array argument: empty for `n == 0` (the pointer may then be
+/// NULL), refused when NULL, unaligned or absurdly long.
+///
+/// # Safety
+/// `ptr` is NULL or points to `n` initialised elements that stay valid and
+/// unmodified during the call.
+pub unsafe fn input<'a, T>(ptr: *const T, n: usize, what: &str) -> Result<&'a [T], FmiError> {
+    if n == 0 {
+        return Ok(&[]);
+    }
+    if ptr.is_null() {
+        return Err(FmiError::error(format!(
+            "{what} is NULL while its length is {n}"
+        )));
+    }
+    if !ptr.is_aligned() || n > isize::MAX as usize / std::mem::size_of::<T>().max(1) {
+        return Err(FmiError::error(format!(
+            "{what} is not a valid array of {n} elements"
+        )));
+    }
+    // SAFETY: non-NULL, aligned, size in range; the caller guarantees `n`
+    // initialised elements that stay valid and unmodified during the call.
+    Ok(unsafe { std::slice::from_raw_parts(ptr, n) })
+}
+
+/// A writable array argument (same rules as [`input`]).
+///
+/// # Safety
+/// `ptr` is NULL or points to `n` writable elements not aliased by another
+/// argument.
+pub unsafe fn output<'a, T>(ptr: *mut T, n: usize, what: &str) -> Result<&'a mut [T], FmiError> {
+    if n == 0 {
+        return Ok(&mut []);
+    }
+    if ptr.is_null() {
+        return Err(FmiError::error(format!(
+            "{what} is NULL while its length is {n}"
+        )));
+    }
+    if !ptr.is_aligned() || n > isize::MAX as usize / std::mem::size_of::<T>().max(1) {
+        return Err(FmiError::error(format!(
+            "{what} is not a valid array of {n} elements"
+        )));
+    }
+    // SAFETY: non-NULL, aligned, size in range; the caller guarantees `n`
+    // writable elements, exclusively ours during the call.
+    Ok(unsafe { std::slice::from_raw_parts_mut(ptr, n) })
+}
+
+/// A single output value.
+///
+/// # Safety
+/// `ptr` is NULL or points to a writable `T`.
+pub unsafe fn out_value<'a, T>(ptr: *mut T, what: &str) -> Result<&'a mut T, FmiError> {
+    // SAFETY: forwarded contract; a length of one.
+    unsafe { output(ptr, 1, what) }.map(|s| &mut s[0])
+}
+
+/// The message of a caught panic.
+pub fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
+    payload
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "unknown panic".into())
+}
