@@ -31,8 +31,8 @@ use crate::states::Function;
 use crate::{FmiError, Status};
 use libc::{c_char, c_double, c_int, c_uint, c_void, size_t};
 use std::ffi::CStr;
-use tdvass_fmu::pointers::{self, c_string, copy_str, input, out_value, output, panic_text};
 use std::panic::{AssertUnwindSafe, catch_unwind};
+use tdvass_fmu::pointers::{self, c_string, copy_str, input, out_value, output, panic_text};
 
 pub type fmi2Component = *mut c_void;
 pub type fmi2ComponentEnvironment = *mut c_void;

@@ -5,8 +5,17 @@
 //! adapts them to the FMI 3.0 calling convention:
 //!
 //! - [`types`]: the FMI 3.0 type of each variable of the one table.
+//! - [`states`]: the FMI 3.0 state machine as one declarative table.
+//! - [`instance`]: the FMI 3.0 [`Instance`](instance::Instance): the
+//!   instantiation checks, the state table, the FMI 3.0 types,
+//!   Configuration Mode and intermediate updates, around a
+//!   [`Slave`](tdvass_fmu::Slave).
 //! - [`description`]: the FMI 3.0 `modelDescription.xml` and
 //!   `documentation/index.html`.
+//! - [`ffi`]: every fmi3 function with C linkage: null checks, pointers to
+//!   slices (through [`tdvass_fmu::pointers`]), `catch_unwind` around every
+//!   entry point, and the intermediate-update loop of `fmi3DoStep`, which
+//!   holds no reference to the instance while the master's callback runs.
 //!
 //! **What this crate owns and must never import.** It owns the FMI 3.0
 //! layer. It imports the slave from `tdvass-fmu` and the physics from
@@ -15,7 +24,12 @@
 #![deny(unsafe_code)]
 
 pub mod description;
+pub mod ffi;
+pub mod instance;
+pub mod states;
 pub mod types;
+
+pub use instance::Instance;
 
 pub use tdvass_fmu::{
     DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, FmiError, LOG_CATEGORIES,

@@ -30,6 +30,8 @@ pub enum Causality {
     CalculatedParameter,
     Input,
     Output,
+    /// FMI 3.0 only: the independent variable `time`.
+    Independent,
 }
 
 impl Causality {
@@ -41,6 +43,7 @@ impl Causality {
             Causality::CalculatedParameter => "calculatedParameter",
             Causality::Input => "input",
             Causality::Output => "output",
+            Causality::Independent => "independent",
         }
     }
 }
@@ -408,6 +411,8 @@ pub enum Access {
     Output(OutputId),
     /// A calculated parameter.
     Calculated(Calculated),
+    /// The independent variable: the slave's time.
+    Time,
 }
 
 /// One FMU variable.
@@ -443,7 +448,7 @@ impl Variable {
     /// The FMI base type.
     pub fn var_type(&self) -> VarType {
         match self.access {
-            Access::Real { .. } | Access::Output(_) => VarType::Real,
+            Access::Real { .. } | Access::Output(_) | Access::Time => VarType::Real,
             Access::Integer { .. } => VarType::Integer,
             Access::Calculated(Calculated::SpectralAbscissa | Calculated::RightmostRoots) => {
                 VarType::Real
@@ -457,7 +462,7 @@ impl Variable {
         match self.causality {
             Causality::Parameter | Causality::StructuralParameter => Some(Initial::Exact),
             Causality::CalculatedParameter | Causality::Output => Some(Initial::Calculated),
-            Causality::Input => None,
+            Causality::Input | Causality::Independent => None,
         }
     }
 
@@ -1169,6 +1174,23 @@ const TABLE: &[Variable] = &[
             Calculated::RightmostRoots,
             "FMI 3.0: the root_count rightmost characteristic roots as (real, imaginary) pairs, rightmost first",
         )
+    },
+    Variable {
+        name: "time",
+        vr: 52,
+        causality: Causality::Independent,
+        variability: Variability::Continuous,
+        quantity: Q::Time,
+        display_unit: None,
+        start: None,
+        range: Range::Computed,
+        access: Access::Time,
+        description: "FMI 3.0: simulation time",
+        feedthrough: &[],
+        initial_dependencies: &[],
+        enumeration: None,
+        dimensions: &[],
+        intermediate_update: false,
     },
 ];
 

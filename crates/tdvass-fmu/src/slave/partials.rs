@@ -8,16 +8,11 @@ use crate::{FmiError, Status};
 use tdvass::model::{V_S, Variant};
 
 impl Slave {
-    /// `GetDirectionalDerivative`: exact partials of the outputs
-    /// (`vUnknown_ref`) with respect to the input `x_g` and the states
-    /// (addressed by the value references of the outputs `x_s` .. `v_t`).
-    pub fn directional_derivative(
-        &mut self,
-        unknowns: &[u32],
-        knowns: &[u32],
-        seed: &[f64],
-        result: &mut [f64],
-    ) -> Result<Status, FmiError> {
+    /// The exact partials `∂unknown_i/∂known_j` of the outputs
+    /// (`unknowns`) with respect to the input `x_g` and the states
+    /// (`knowns`, the states addressed by the value references of the
+    /// outputs `x_s` .. `v_t`), row by row.
+    pub fn partials(&self, unknowns: &[u32], knowns: &[u32]) -> Result<Vec<f64>, FmiError> {
         let known: Vec<Known> = knowns
             .iter()
             .map(|&vr| {
@@ -46,24 +41,73 @@ impl Slave {
                 }
             })
             .collect::<Result<_, _>>()?;
-        if let Some(bad) = seed.iter().find(|v| !v.is_finite()) {
-            return Err(FmiError::error(format!(
-                "invalid seed value {bad} in dvKnown: must be finite"
-            )));
-        }
         let lin = self.linearization()?;
-        for (out, r) in outputs.iter().zip(result.iter_mut()) {
-            *r = known
+        Ok(outputs
+            .iter()
+            .flat_map(|out| known.iter().map(move |k| out.partial(*k, &lin)))
+            .collect())
+    }
+
+    /// `GetDirectionalDerivative`: `result_i = Σ_j ∂unknown_i/∂known_j seed_j`
+    /// (see [`Self::partials`]).
+    pub fn directional_derivative(
+        &mut self,
+        unknowns: &[u32],
+        knowns: &[u32],
+        seed: &[f64],
+        result: &mut [f64],
+    ) -> Result<Status, FmiError> {
+        let matrix = self.partials(unknowns, knowns)?;
+        Self::check_seed(seed)?;
+        let n = knowns.len();
+        for (i, r) in result.iter_mut().enumerate().take(unknowns.len()) {
+            *r = matrix[i * n..(i + 1) * n]
                 .iter()
                 .zip(seed)
-                .map(|(k, dv)| out.partial(*k, &lin) * dv)
+                .map(|(p, dv)| p * dv)
                 .sum();
-            if !r.is_finite() {
-                let bad = std::mem::replace(r, 0.0);
-                return Err(FmiError::error(format!(
-                    "a directional derivative = {bad} is not finite (seed too large); no value returned"
-                )));
-            }
+        }
+        Self::check_sensitivity(result)
+    }
+
+    /// `GetAdjointDerivative`: `result_j = Σ_i seed_i ∂unknown_i/∂known_j`
+    /// (the transpose of [`Self::directional_derivative`], from the same
+    /// partials).
+    pub fn adjoint_derivative(
+        &mut self,
+        unknowns: &[u32],
+        knowns: &[u32],
+        seed: &[f64],
+        result: &mut [f64],
+    ) -> Result<Status, FmiError> {
+        let matrix = self.partials(unknowns, knowns)?;
+        Self::check_seed(seed)?;
+        let n = knowns.len();
+        for (j, r) in result.iter_mut().enumerate().take(n) {
+            *r = seed
+                .iter()
+                .enumerate()
+                .map(|(i, s)| s * matrix[i * n + j])
+                .sum();
+        }
+        Self::check_sensitivity(result)
+    }
+
+    fn check_seed(seed: &[f64]) -> Result<(), FmiError> {
+        match seed.iter().find(|v| !v.is_finite()) {
+            Some(bad) => Err(FmiError::error(format!(
+                "invalid seed value {bad} in dvKnown: must be finite"
+            ))),
+            None => Ok(()),
+        }
+    }
+
+    fn check_sensitivity(result: &mut [f64]) -> Result<Status, FmiError> {
+        if let Some(r) = result.iter_mut().find(|r| !r.is_finite()) {
+            let bad = std::mem::replace(r, 0.0);
+            return Err(FmiError::error(format!(
+                "a directional derivative = {bad} is not finite (seed too large); no value returned"
+            )));
         }
         Ok(Status::Ok)
     }

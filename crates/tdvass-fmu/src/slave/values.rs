@@ -3,6 +3,7 @@
 
 use super::{Slave, SpectrumCache};
 use crate::limits;
+use crate::phase::Phase;
 use crate::variables::{
     Access, Calculated, Causality, Dimension, VarType, Variability, Variable, by_name, by_vr_in,
 };
@@ -122,6 +123,7 @@ impl Slave {
             };
             match var.access {
                 Access::Real { get, .. } => slots[0] = get(&self.state.settings),
+                Access::Time => slots[0] = self.time(),
                 Access::Output(id) => {
                     if outputs.is_none() {
                         outputs = Some(self.outputs()?);
@@ -199,6 +201,16 @@ impl Slave {
                 "`{}` is a calculated parameter and cannot be set (value {value} refused)",
                 var.name
             ))),
+            (Causality::Independent, _) => Err(FmiError::error(format!(
+                "`{}` is the independent variable and cannot be set (value {value} refused)",
+                var.name
+            ))),
+            (Causality::StructuralParameter, _) if self.state.phase != Phase::Instantiated => {
+                Err(FmiError::error(format!(
+                    "`{}` is a structural parameter: it can be set only before initialization (value {value} refused; reset the instance to change it)",
+                    var.name
+                )))
+            }
             (Causality::Parameter, Variability::Fixed) if self.state.phase.is_simulating() => {
                 Err(FmiError::error(format!(
                     "`{}` is a fixed parameter and cannot be changed after initialization (value {value} refused; reset the instance to change it)",

@@ -1,5 +1,6 @@
 use super::*;
 use crate::outputs::{Known, Linearization};
+use crate::variables::ALL_VARIABLES;
 use std::collections::HashSet;
 use tdvass::model::Params;
 use tdvass::solver::SimulationConfig;
@@ -143,7 +144,7 @@ fn table_ranges_are_the_ones_the_model_enforces() {
 #[test]
 fn every_variable_is_readable_and_settings_round_trip() {
     let mut s = Settings::start_values();
-    for (i, v) in VARIABLES.iter().enumerate() {
+    for (i, v) in ALL_VARIABLES.iter().enumerate() {
         match v.access {
             Access::Real { get, set } => {
                 set(&mut s, 1000.0 + i as f64);
@@ -155,10 +156,11 @@ fn every_variable_is_readable_and_settings_round_trip() {
             }
             Access::Output(_) => assert_eq!(v.causality, Causality::Output),
             Access::Calculated(_) => assert_eq!(v.causality, Causality::CalculatedParameter),
+            Access::Time => assert_eq!(v.causality, Causality::Independent),
         }
     }
     // Distinct fields: every value written is still there.
-    for (i, v) in VARIABLES.iter().enumerate() {
+    for (i, v) in ALL_VARIABLES.iter().enumerate() {
         match v.access {
             Access::Real { get, .. } => assert_eq!(get(&s), 1000.0 + i as f64, "{}", v.name),
             Access::Integer { get, .. } => assert_eq!(get(&s), 1000 + i as i32, "{}", v.name),

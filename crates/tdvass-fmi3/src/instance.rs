@@ -1,0 +1,502 @@
+//! The FMI 3.0 instance: what `fmi3InstantiateCoSimulation` checks, the
+//! FMI 3.0 state table around every call, the FMI 3.0 types of the values,
+//! Configuration Mode and the intermediate updates, around a
+//! version-neutral [`Slave`] that does everything else (reached through
+//! `Deref`). No FFI here; [`crate::ffi`] calls these methods through
+//! [`Instance::run`].
+
+use crate::states::{self, Function, State};
+use crate::types::{ValueType, fmi3_type};
+use crate::{FmiError, Status};
+use std::ops::{Deref, DerefMut};
+use std::path::PathBuf;
+use tdvass_fmu::Phase;
+use tdvass_fmu::slave::{Dialect, LogSink, Logger};
+use tdvass_fmu::variables::{Causality, FmiVersion, Variable, by_name, by_vr_in};
+
+pub use tdvass_fmu::Slave;
+
+/// How the slave's messages name FMI 3.0 functions and flags.
+pub const FMI3_DIALECT: Dialect = Dialect {
+    version: FmiVersion::Fmi3,
+    prefix: "fmi3",
+    last_successful_time: "lastSuccessfulTime",
+    terminate_flag: "terminateSimulation",
+    set_float: "SetFloat64",
+    set_input_derivatives: "SetFloat64",
+    fmu_state: "FMUState",
+    deserialize_state: "DeserializeFMUState",
+    input_slope_remedy: "set x_g in intermediate updates",
+};
+
+/// What `fmi3InstantiateCoSimulation` was given (strings copied out of C).
+#[derive(Debug, Clone, Default)]
+pub struct InstantiateRequest<'a> {
+    pub instance_name: Option<&'a str>,
+    pub instantiation_token: Option<&'a str>,
+    pub resource_path: Option<&'a str>,
+    pub logging_on: bool,
+    pub event_mode_used: bool,
+    pub early_return_allowed: bool,
+    pub required_intermediate_variables: &'a [u32],
+    /// The master passed an `intermediateUpdate` callback.
+    pub intermediate_update: bool,
+}
+
+/// What the master may do inside the current intermediate update.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct IntermediatePoint {
+    /// `intermediateVariableSetRequested`: inputs may be set.
+    pub set_requested: bool,
+    /// `intermediateVariableGetAllowed`: outputs may be read.
+    pub get_allowed: bool,
+}
+
+/// One FMI 3.0 instance.
+pub struct Instance {
+    name: String,
+    resource_path: Option<PathBuf>,
+    slave: Slave,
+    early_return_allowed: bool,
+    intermediate_update: bool,
+    configuration: bool,
+    intermediate: Option<IntermediatePoint>,
+}
+
+impl Deref for Instance {
+    type Target = Slave;
+    fn deref(&self) -> &Slave {
+        &self.slave
+    }
+}
+
+impl DerefMut for Instance {
+    fn deref_mut(&mut self) -> &mut Slave {
+        &mut self.slave
+    }
+}
+
+impl Instance {
+    /// `fmi3InstantiateCoSimulation`: checks the request and creates the
+    /// instance. A refusal is logged through `logger` and returns `None`.
+    pub fn instantiate(request: InstantiateRequest<'_>, logger: LogSink) -> Option<Instance> {
+        let refuse = |message: String| {
+            logger(
+                Status::Error,
+                "logStatusError",
+                &format!("fmi3InstantiateCoSimulation: {message}"),
+            );
+            None
+        };
+        let expected = crate::instantiation_token();
+        let name = match request.instance_name {
+            None => return refuse("instanceName is NULL".into()),
+            Some("") => return refuse("instanceName is empty".into()),
+            Some(name) => name.to_string(),
+        };
+        match request.instantiation_token {
+            None => return refuse("instantiationToken is NULL".into()),
+            Some(t) if t != expected => {
+                return refuse(format!(
+                    "instantiationToken {t} does not match this FMU's token {expected} (modelDescription.xml and binary are from different builds)"
+                ));
+            }
+            Some(_) => {}
+        }
+        if request.event_mode_used {
+            return refuse(
+                "eventModeUsed = true, but this FMU has no event mode (hasEventMode = false)"
+                    .into(),
+            );
+        }
+        for &vr in request.required_intermediate_variables {
+            match by_vr_in(FmiVersion::Fmi3, vr) {
+                Some(v) if v.intermediate_update => {}
+                Some(v) => {
+                    return refuse(format!(
+                        "requiredIntermediateVariables: `{}` (value reference {vr}) is not available in intermediate updates",
+                        v.name
+                    ));
+                }
+                None => {
+                    return refuse(format!(
+                        "requiredIntermediateVariables: unknown value reference {vr}"
+                    ));
+                }
+            }
+        }
+        let resource_path = request
+            .resource_path
+            .filter(|p| !p.is_empty())
+            .map(PathBuf::from);
+        let logger = Logger::new(logger, request.logging_on);
+        let instance = Instance {
+            name,
+            resource_path,
+            slave: Slave::new(FMI3_DIALECT, expected.clone(), logger),
+            early_return_allowed: request.early_return_allowed,
+            intermediate_update: request.intermediate_update,
+            configuration: false,
+            intermediate: None,
+        };
+        instance.logger().log(
+            Status::Ok,
+            &format!(
+                "fmi3InstantiateCoSimulation: instance `{}` of {} (token {}), resources {}, intermediate updates {}, early return {}",
+                instance.name,
+                crate::MODEL_NAME,
+                expected,
+                instance
+                    .resource_path
+                    .as_ref()
+                    .map(|p| format!("at {}", p.display()))
+                    .unwrap_or_else(|| "not given".into()),
+                if instance.intermediate_update { "on" } else { "off" },
+                if instance.early_return_allowed { "allowed" } else { "not allowed" },
+            ),
+        );
+        Some(instance)
+    }
+
+    /// The instance name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// The resources directory given at instantiation.
+    pub fn resource_path(&self) -> Option<&std::path::Path> {
+        self.resource_path.as_deref()
+    }
+
+    /// Whether the master allows returning early from `fmi3DoStep`.
+    pub fn early_return_allowed(&self) -> bool {
+        self.early_return_allowed
+    }
+
+    /// Whether the master passed an `intermediateUpdate` callback.
+    pub fn has_intermediate_update(&self) -> bool {
+        self.intermediate_update
+    }
+
+    /// The FMI 3.0 state.
+    pub fn state(&self) -> State {
+        match self.slave.phase() {
+            Phase::Instantiated if self.configuration => State::ConfigurationMode,
+            Phase::Instantiated => State::Instantiated,
+            Phase::InitializationMode => State::InitializationMode,
+            Phase::StepComplete if self.intermediate.is_some() => State::IntermediateUpdate,
+            Phase::StepComplete => State::StepMode,
+            Phase::StepFailed => State::StepDiscarded,
+            Phase::Terminated => State::Terminated,
+            Phase::Error => State::Error,
+            Phase::Fatal => State::Fatal,
+        }
+    }
+
+    /// Runs `op` as `function`: refuses it (Error, logged "fmi3X: not
+    /// allowed in state Y") when the state table forbids it, and logs any
+    /// failure with the function name. A refused call changes nothing;
+    /// Fatal moves the instance to `Fatal`.
+    pub fn run<T>(
+        &mut self,
+        function: Function,
+        op: impl FnOnce(&mut Self) -> Result<T, FmiError>,
+    ) -> Result<T, Status> {
+        let result = states::check(function, self.state()).and_then(|()| op(self));
+        result.map_err(|e| {
+            self.logger()
+                .log(e.status, &format!("{}: {}", function.name(), e.message));
+            if e.status == Status::Fatal {
+                self.slave.set_phase(Phase::Fatal);
+            }
+            e.status
+        })
+    }
+
+    /// After a panic inside `function` (caught by the FFI layer): the
+    /// instance may be inconsistent, so it goes to `Fatal`.
+    pub fn on_panic(&mut self, function: &str, message: &str) {
+        self.slave.set_phase(Phase::Fatal);
+        self.intermediate = None;
+        self.logger().log(
+            Status::Fatal,
+            &format!(
+                "{function}: internal error (panic: {message}); the instance is unusable, free it"
+            ),
+        );
+    }
+
+    /// Logs why `function` (of Model Exchange, Scheduled Execution, event
+    /// mode or clocks) does not apply, and returns Error.
+    pub fn refuse_not_applicable(&self, function: &str, reason: &str) -> Status {
+        self.logger().log(
+            Status::Error,
+            &format!("{function}: {reason}; this FMU implements Co-Simulation only, without event mode or clocks"),
+        );
+        Status::Error
+    }
+
+    /// `fmi3SetDebugLogging`: `categories` empty means all.
+    pub fn set_debug_logging(&mut self, on: bool, categories: &[&str]) -> Result<Status, FmiError> {
+        self.slave.logger_mut().set_categories(on, categories)
+    }
+
+    /// `fmi3EnterInitializationMode`: the experiment's times, then
+    /// Initialization Mode.
+    pub fn enter_initialization_mode(
+        &mut self,
+        tolerance: Option<f64>,
+        start_time: f64,
+        stop_time: Option<f64>,
+    ) -> Result<Status, FmiError> {
+        self.slave
+            .setup_experiment(tolerance, start_time, stop_time)?;
+        self.slave.enter_initialization_mode()
+    }
+
+    /// `fmi3EnterConfigurationMode`: structural parameters may be set.
+    pub fn enter_configuration_mode(&mut self) -> Result<Status, FmiError> {
+        self.configuration = true;
+        Ok(Status::Ok)
+    }
+
+    /// `fmi3ExitConfigurationMode`: back to Instantiated.
+    pub fn exit_configuration_mode(&mut self) -> Result<Status, FmiError> {
+        self.configuration = false;
+        Ok(Status::Ok)
+    }
+
+    /// `fmi3Reset`: back to Instantiated with every start value.
+    pub fn reset(&mut self) -> Result<Status, FmiError> {
+        self.configuration = false;
+        self.intermediate = None;
+        self.slave.reset()
+    }
+
+    /// Starts an intermediate update (the master's callback runs next).
+    pub fn enter_intermediate_update(&mut self, point: IntermediatePoint) {
+        self.intermediate = Some(point);
+    }
+
+    /// Ends the intermediate update.
+    pub fn exit_intermediate_update(&mut self) {
+        self.intermediate = None;
+    }
+
+    // ------------------------------------------------------------- values
+
+    /// The variables behind `vrs`, each of FMI 3.0 value type `expected`
+    /// and accessible now (`write`: to be set): in Configuration Mode only
+    /// structural parameters; inside an intermediate update only the
+    /// variables marked `intermediateUpdate`, outputs when reading is
+    /// allowed and inputs when setting is requested.
+    fn typed(
+        &self,
+        vrs: &[u32],
+        expected: ValueType,
+        write: bool,
+    ) -> Result<Vec<&'static Variable>, FmiError> {
+        vrs.iter()
+            .map(|&vr| {
+                let var = by_vr_in(FmiVersion::Fmi3, vr).ok_or_else(|| {
+                    FmiError::error(format!(
+                        "unknown value reference {vr} (for a {})",
+                        expected.name()
+                    ))
+                })?;
+                let actual = fmi3_type(var).value_type();
+                if actual != expected {
+                    return Err(FmiError::error(format!(
+                        "value reference {vr} is `{}`, a {}, not a {}",
+                        var.name,
+                        actual.name(),
+                        expected.name()
+                    )));
+                }
+                if self.configuration && var.causality != Causality::StructuralParameter {
+                    return Err(FmiError::error(format!(
+                        "`{}` is not a structural parameter: only those are accessible in Configuration Mode",
+                        var.name
+                    )));
+                }
+                if let Some(point) = self.intermediate {
+                    let (allowed, what) = if write {
+                        (point.set_requested, "setting was not requested")
+                    } else {
+                        (point.get_allowed, "reading is not allowed")
+                    };
+                    if !var.intermediate_update || !allowed {
+                        return Err(FmiError::error(format!(
+                            "`{}` is not accessible in this intermediate update ({})",
+                            var.name,
+                            if var.intermediate_update {
+                                what
+                            } else {
+                                "it is not an intermediate-update variable"
+                            }
+                        )));
+                    }
+                }
+                Ok(var)
+            })
+            .collect()
+    }
+
+    /// `fmi3GetFloat64` (arrays element by element).
+    pub fn get_float64(&mut self, vrs: &[u32], values: &mut [f64]) -> Result<Status, FmiError> {
+        self.typed(vrs, ValueType::Float64, false)?;
+        self.slave.get_real(vrs, values)
+    }
+
+    /// `fmi3SetFloat64` (no Float64 array is settable).
+    pub fn set_float64(&mut self, vrs: &[u32], values: &[f64]) -> Result<Status, FmiError> {
+        self.typed(vrs, ValueType::Float64, true)?;
+        Self::check_count(vrs, values.len())?;
+        self.slave.set_real(vrs, values)
+    }
+
+    fn check_count(vrs: &[u32], n: usize) -> Result<(), FmiError> {
+        if vrs.len() == n {
+            Ok(())
+        } else {
+            Err(FmiError::error(format!(
+                "{n} values given for {} value references",
+                vrs.len()
+            )))
+        }
+    }
+
+    /// `fmi3GetInt32`.
+    pub fn get_int32(&mut self, vrs: &[u32], values: &mut [i32]) -> Result<Status, FmiError> {
+        self.typed(vrs, ValueType::Int32, false)?;
+        Self::check_count(vrs, values.len())?;
+        self.slave.get_integer(vrs, values)
+    }
+
+    /// `fmi3SetInt32`.
+    pub fn set_int32(&mut self, vrs: &[u32], values: &[i32]) -> Result<Status, FmiError> {
+        self.typed(vrs, ValueType::Int32, true)?;
+        Self::check_count(vrs, values.len())?;
+        self.slave.set_integer(vrs, values)
+    }
+
+    fn get_wide<T>(
+        &mut self,
+        vrs: &[u32],
+        values: &mut [T],
+        ty: ValueType,
+        widen: impl Fn(i32) -> T,
+    ) -> Result<Status, FmiError> {
+        self.typed(vrs, ty, false)?;
+        Self::check_count(vrs, values.len())?;
+        let mut narrow = vec![0; vrs.len()];
+        self.slave.get_integer(vrs, &mut narrow)?;
+        for (v, n) in values.iter_mut().zip(narrow) {
+            *v = widen(n);
+        }
+        Ok(Status::Ok)
+    }
+
+    fn set_wide<T: Copy + std::fmt::Display>(
+        &mut self,
+        vrs: &[u32],
+        values: &[T],
+        ty: ValueType,
+        narrow: impl Fn(T) -> Option<i32>,
+    ) -> Result<Status, FmiError> {
+        let vars = self.typed(vrs, ty, true)?;
+        Self::check_count(vrs, values.len())?;
+        let narrowed = vars
+            .iter()
+            .zip(values)
+            .map(|(var, &value)| {
+                narrow(value).ok_or_else(|| {
+                    FmiError::error(format!(
+                        "invalid value {value} for `{}`: {}",
+                        var.name,
+                        var.range.describe()
+                    ))
+                })
+            })
+            .collect::<Result<Vec<i32>, _>>()?;
+        self.slave.set_integer(vrs, &narrowed)
+    }
+
+    /// `fmi3GetInt64`: the Enumerations (`variant`, `road`, `road_class`).
+    pub fn get_int64(&mut self, vrs: &[u32], values: &mut [i64]) -> Result<Status, FmiError> {
+        self.get_wide(vrs, values, ValueType::Int64, i64::from)
+    }
+
+    /// `fmi3SetInt64`: the Enumerations, by their codes.
+    pub fn set_int64(&mut self, vrs: &[u32], values: &[i64]) -> Result<Status, FmiError> {
+        self.set_wide(vrs, values, ValueType::Int64, |v| i32::try_from(v).ok())
+    }
+
+    /// `fmi3GetUInt64`: the structural parameter `root_count`.
+    pub fn get_uint64(&mut self, vrs: &[u32], values: &mut [u64]) -> Result<Status, FmiError> {
+        self.get_wide(vrs, values, ValueType::UInt64, |v| v.max(0) as u64)
+    }
+
+    /// `fmi3SetUInt64`: the structural parameter `root_count`.
+    pub fn set_uint64(&mut self, vrs: &[u32], values: &[u64]) -> Result<Status, FmiError> {
+        self.set_wide(vrs, values, ValueType::UInt64, |v| i32::try_from(v).ok())
+    }
+
+    /// `fmi3GetBoolean`.
+    pub fn get_boolean(&mut self, vrs: &[u32], values: &mut [bool]) -> Result<Status, FmiError> {
+        self.typed(vrs, ValueType::Boolean, false)?;
+        Self::check_count(vrs, values.len())?;
+        self.slave.get_boolean(vrs, values)
+    }
+
+    /// `fmi3SetBoolean`: the only Boolean is a calculated parameter.
+    pub fn set_boolean(&mut self, vrs: &[u32], values: &[bool]) -> Result<Status, FmiError> {
+        self.typed(vrs, ValueType::Boolean, true)?;
+        Self::check_count(vrs, values.len())?;
+        self.slave.set_boolean(vrs, values)
+    }
+
+    /// A getter or setter of a type no variable has: every value reference
+    /// is refused (none is of that type), an empty call succeeds.
+    pub fn no_variable_of(&mut self, vrs: &[u32], ty: ValueType) -> Result<Status, FmiError> {
+        self.typed(vrs, ty, false)?;
+        Ok(Status::Ok)
+    }
+
+    /// `fmi3GetNumberOfVariableDependencies`: the inputs an output depends
+    /// on directly (ModelStructure); other variables have none listed.
+    pub fn number_of_dependencies(&self, vr: u32) -> Result<usize, FmiError> {
+        Ok(self.dependencies(vr)?.len())
+    }
+
+    /// `fmi3GetVariableDependencies`: value references of the inputs `vr`
+    /// depends on directly.
+    pub fn dependencies(&self, vr: u32) -> Result<Vec<u32>, FmiError> {
+        let var = by_vr_in(FmiVersion::Fmi3, vr)
+            .ok_or_else(|| FmiError::error(format!("unknown value reference {vr}")))?;
+        if var.causality != Causality::Output {
+            return Err(FmiError::error(format!(
+                "`{}` is not an output; dependencies are listed for outputs",
+                var.name
+            )));
+        }
+        Ok(var
+            .feedthrough
+            .iter()
+            .filter_map(|name| by_name(name).map(|v| v.vr))
+            .collect())
+    }
+}
+
+impl Drop for Instance {
+    fn drop(&mut self) {
+        self.logger().log(
+            Status::Ok,
+            &format!(
+                "fmi3FreeInstance: `{}` freed with {} FMU state(s)",
+                self.name,
+                self.slave.fmu_state_count()
+            ),
+        );
+    }
+}

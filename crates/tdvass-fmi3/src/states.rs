@@ -1,0 +1,314 @@
+//! The FMI 3.0 Co-Simulation state machine, as one declarative table
+//! ([`ALLOWED`]) of which function may be called in which state, checked by
+//! one function ([`check`]).
+//!
+//! The table follows the state machine of the FMI 3.0 standard (section
+//! 4.2) for an FMU without event mode, clocks or tunable structural
+//! parameters, so Event Mode, Reconfiguration Mode and Clock Activation
+//! Mode never occur. Two refinements:
+//! - Step Mode after a discarded step ([`State::StepDiscarded`]): the
+//!   master may read values, restore an FMU state, reset or terminate, but
+//!   not step on.
+//! - Inside an intermediate update ([`State::IntermediateUpdate`]) only
+//!   getters and setters are allowed (the instance then admits only the
+//!   variables marked `intermediateUpdate`); freeing or resetting the
+//!   instance from its own callback is refused.
+//!
+//! `fmi3FreeInstance` is also allowed in `Fatal`, so that a master can
+//! always release the memory. Functions of Model Exchange, Scheduled
+//! Execution, event mode and clocks are not in the table: they are refused
+//! in every state, with the reason logged.
+
+use crate::FmiError;
+use crate::types::ValueType;
+
+/// State of an FMI 3.0 instance.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum State {
+    Instantiated,
+    ConfigurationMode,
+    InitializationMode,
+    StepMode,
+    StepDiscarded,
+    IntermediateUpdate,
+    Terminated,
+    Error,
+    Fatal,
+}
+
+impl State {
+    /// Every state.
+    pub const ALL: [State; 9] = [
+        State::Instantiated,
+        State::ConfigurationMode,
+        State::InitializationMode,
+        State::StepMode,
+        State::StepDiscarded,
+        State::IntermediateUpdate,
+        State::Terminated,
+        State::Error,
+        State::Fatal,
+    ];
+
+    /// The standard's name of the state.
+    pub fn name(self) -> &'static str {
+        match self {
+            State::Instantiated => "Instantiated",
+            State::ConfigurationMode => "Configuration Mode",
+            State::InitializationMode => "Initialization Mode",
+            State::StepMode => "Step Mode",
+            State::StepDiscarded => "Step Mode after a discarded step",
+            State::IntermediateUpdate => "Intermediate Update Mode",
+            State::Terminated => "Terminated",
+            State::Error => "Error",
+            State::Fatal => "Fatal",
+        }
+    }
+
+    const fn bit(self) -> u16 {
+        1 << self as u16
+    }
+}
+
+/// A set of states.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct StateSet(u16);
+
+impl StateSet {
+    /// The set of `states`.
+    pub const fn of(states: &[State]) -> StateSet {
+        let mut bits = 0;
+        let mut i = 0;
+        while i < states.len() {
+            bits |= states[i].bit();
+            i += 1;
+        }
+        StateSet(bits)
+    }
+
+    /// Whether `state` is in the set.
+    pub fn contains(self, state: State) -> bool {
+        self.0 & state.bit() != 0
+    }
+}
+
+/// The fmi3 functions that take an instance and apply to this FMU.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Function {
+    SetDebugLogging,
+    FreeInstance,
+    EnterInitializationMode,
+    ExitInitializationMode,
+    Terminate,
+    Reset,
+    Get(ValueType),
+    Set(ValueType),
+    GetNumberOfVariableDependencies,
+    GetVariableDependencies,
+    GetFmuState,
+    SetFmuState,
+    FreeFmuState,
+    SerializedFmuStateSize,
+    SerializeFmuState,
+    DeserializeFmuState,
+    GetDirectionalDerivative,
+    GetAdjointDerivative,
+    EnterConfigurationMode,
+    ExitConfigurationMode,
+    GetOutputDerivatives,
+    DoStep,
+}
+
+impl Function {
+    /// The C name.
+    pub fn name(self) -> &'static str {
+        use Function::*;
+        match self {
+            SetDebugLogging => "fmi3SetDebugLogging",
+            FreeInstance => "fmi3FreeInstance",
+            EnterInitializationMode => "fmi3EnterInitializationMode",
+            ExitInitializationMode => "fmi3ExitInitializationMode",
+            Terminate => "fmi3Terminate",
+            Reset => "fmi3Reset",
+            Get(t) => t.getter(),
+            Set(t) => t.setter(),
+            GetNumberOfVariableDependencies => "fmi3GetNumberOfVariableDependencies",
+            GetVariableDependencies => "fmi3GetVariableDependencies",
+            GetFmuState => "fmi3GetFMUState",
+            SetFmuState => "fmi3SetFMUState",
+            FreeFmuState => "fmi3FreeFMUState",
+            SerializedFmuStateSize => "fmi3SerializedFMUStateSize",
+            SerializeFmuState => "fmi3SerializeFMUState",
+            DeserializeFmuState => "fmi3DeserializeFMUState",
+            GetDirectionalDerivative => "fmi3GetDirectionalDerivative",
+            GetAdjointDerivative => "fmi3GetAdjointDerivative",
+            EnterConfigurationMode => "fmi3EnterConfigurationMode",
+            ExitConfigurationMode => "fmi3ExitConfigurationMode",
+            GetOutputDerivatives => "fmi3GetOutputDerivatives",
+            DoStep => "fmi3DoStep",
+        }
+    }
+
+    /// The states in which the function may be called.
+    pub fn allowed_states(self) -> StateSet {
+        let key = match self {
+            Function::Get(_) => Function::Get(ValueType::Float64),
+            Function::Set(_) => Function::Set(ValueType::Float64),
+            other => other,
+        };
+        ALLOWED
+            .iter()
+            .find(|(f, _)| *f == key)
+            .map(|(_, set)| *set)
+            .unwrap_or(StateSet(0))
+    }
+}
+
+use State::{
+    ConfigurationMode as Conf, Error as Err_, Fatal, InitializationMode as Init,
+    Instantiated as Inst, IntermediateUpdate as Inter, StepDiscarded as Disc, StepMode as Step,
+    Terminated as Term,
+};
+
+/// Every state but `Fatal` and the intermediate update.
+const NOT_FATAL: StateSet = StateSet::of(&[Inst, Conf, Init, Step, Disc, Term, Err_]);
+/// Where values can be read (inside an intermediate update: the
+/// intermediate variables only; in Configuration Mode: structural
+/// parameters only).
+const READABLE: StateSet = StateSet::of(&[Conf, Init, Step, Disc, Inter, Term, Err_]);
+/// Where values can be set (which ones depends on causality, variability
+/// and, inside an intermediate update, on the variable's flag).
+const SETTABLE: StateSet = StateSet::of(&[Inst, Conf, Init, Step, Inter]);
+/// Where the model's partial derivatives can be evaluated.
+const LINEARIZABLE: StateSet = StateSet::of(&[Init, Step, Disc, Term, Err_]);
+
+/// The state table: which function is allowed in which state. Getters and
+/// setters of every type share one row each.
+pub const ALLOWED: &[(Function, StateSet)] = {
+    use Function::*;
+    &[
+        (SetDebugLogging, NOT_FATAL),
+        (
+            FreeInstance,
+            StateSet::of(&[Inst, Conf, Init, Step, Disc, Term, Err_, Fatal]),
+        ),
+        (EnterInitializationMode, StateSet::of(&[Inst])),
+        (ExitInitializationMode, StateSet::of(&[Init])),
+        (Terminate, StateSet::of(&[Step, Disc])),
+        (Reset, NOT_FATAL),
+        (Get(ValueType::Float64), READABLE),
+        (Set(ValueType::Float64), SETTABLE),
+        (GetNumberOfVariableDependencies, LINEARIZABLE),
+        (GetVariableDependencies, LINEARIZABLE),
+        (GetFmuState, NOT_FATAL),
+        (SetFmuState, NOT_FATAL),
+        (FreeFmuState, NOT_FATAL),
+        (SerializedFmuStateSize, NOT_FATAL),
+        (SerializeFmuState, NOT_FATAL),
+        (DeserializeFmuState, NOT_FATAL),
+        (GetDirectionalDerivative, LINEARIZABLE),
+        (GetAdjointDerivative, LINEARIZABLE),
+        (EnterConfigurationMode, StateSet::of(&[Inst])),
+        (ExitConfigurationMode, StateSet::of(&[Conf])),
+        (
+            GetOutputDerivatives,
+            StateSet::of(&[Step, Disc, Term, Err_]),
+        ),
+        (DoStep, StateSet::of(&[Step])),
+    ]
+};
+
+/// Refuses `function` in `state` with "not allowed in state Y" (the caller
+/// prefixes the function name).
+pub fn check(function: Function, state: State) -> Result<(), FmiError> {
+    if function.allowed_states().contains(state) {
+        Ok(())
+    } else {
+        Err(FmiError::error(format!(
+            "not allowed in state {}",
+            state.name()
+        )))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The table restated independently: one row per function, columns
+    /// Instantiated, Configuration, Initialization, Step, Step after a
+    /// discard, Intermediate Update, Terminated, Error, Fatal.
+    const EXPECTED: &[(&str, &str)] = &[
+        ("fmi3SetDebugLogging", "xxxxx.xx."),
+        ("fmi3FreeInstance", "xxxxx.xxx"),
+        ("fmi3EnterInitializationMode", "x........"),
+        ("fmi3ExitInitializationMode", "..x......"),
+        ("fmi3Terminate", "...xx...."),
+        ("fmi3Reset", "xxxxx.xx."),
+        ("fmi3GetFloat64", ".xxxxxxx."),
+        ("fmi3GetInt64", ".xxxxxxx."),
+        ("fmi3SetFloat64", "xxxx.x..."),
+        ("fmi3SetBinary", "xxxx.x..."),
+        ("fmi3GetVariableDependencies", "..xxx.xx."),
+        ("fmi3GetFMUState", "xxxxx.xx."),
+        ("fmi3DeserializeFMUState", "xxxxx.xx."),
+        ("fmi3GetDirectionalDerivative", "..xxx.xx."),
+        ("fmi3GetAdjointDerivative", "..xxx.xx."),
+        ("fmi3EnterConfigurationMode", "x........"),
+        ("fmi3ExitConfigurationMode", ".x......."),
+        ("fmi3GetOutputDerivatives", "...xx.xx."),
+        ("fmi3DoStep", "...x....."),
+    ];
+
+    fn by_name(name: &str) -> Function {
+        use Function::*;
+        let mut all = vec![
+            SetDebugLogging,
+            FreeInstance,
+            EnterInitializationMode,
+            ExitInitializationMode,
+            Terminate,
+            Reset,
+            GetNumberOfVariableDependencies,
+            GetVariableDependencies,
+            GetFmuState,
+            SetFmuState,
+            FreeFmuState,
+            SerializedFmuStateSize,
+            SerializeFmuState,
+            DeserializeFmuState,
+            GetDirectionalDerivative,
+            GetAdjointDerivative,
+            EnterConfigurationMode,
+            ExitConfigurationMode,
+            GetOutputDerivatives,
+            DoStep,
+        ];
+        for t in ValueType::ALL {
+            all.push(Get(t));
+            all.push(Set(t));
+        }
+        all.into_iter().find(|f| f.name() == name).unwrap()
+    }
+
+    #[test]
+    fn the_table_is_the_restated_one() {
+        for (name, row) in EXPECTED {
+            let function = by_name(name);
+            for (state, mark) in State::ALL.iter().zip(row.chars()) {
+                assert_eq!(
+                    check(function, *state).is_ok(),
+                    mark == 'x',
+                    "{name} in {}",
+                    state.name()
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn refusals_name_the_state() {
+        let e = check(Function::DoStep, State::InitializationMode).unwrap_err();
+        assert_eq!(e.message, "not allowed in state Initialization Mode");
+    }
+}
