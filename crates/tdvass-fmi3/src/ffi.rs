@@ -1245,3 +1245,6 @@ refused!(fmi3GetContinuousStates(states: *mut fmi3Float64, n: size_t), MODEL_EXC
 refused!(fmi3GetNominalsOfContinuousStates(nominals: *mut fmi3Float64, n: size_t), MODEL_EXCHANGE);
 refused!(fmi3GetNumberOfEventIndicators(n: *mut size_t), MODEL_EXCHANGE);
 refused!(fmi3GetNumberOfContinuousStates(n: *mut size_t), MODEL_EXCHANGE);
+
+#[cfg(test)]
+mod tests;
