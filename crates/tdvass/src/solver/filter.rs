@@ -277,6 +277,16 @@ impl FilterGridStep {
             + ((c[4] * w[4] + c[5] * w[5]) + (c[6] * w[6] + c[7] * w[7]))
     }
 
+    /// `Φ_ww w`, summed pairwise.
+    #[inline(always)]
+    pub(super) fn transition_times(&self, w: &[f64; WK_STATES]) -> [f64; WK_STATES] {
+        let c = &self.transition;
+        std::array::from_fn(|i| {
+            ((c[0][i] * w[0] + c[1][i] * w[1]) + (c[2][i] * w[2] + c[3][i] * w[3]))
+                + ((c[4][i] * w[4] + c[5][i] * w[5]) + (c[6][i] * w[6] + c[7][i] * w[7]))
+        })
+    }
+
     /// Adds `a_w²` and `a_w⁴` at filter state w to `sums`.
     #[inline(always)]
     pub(super) fn count(&self, w: &[f64; WK_STATES], sums: &mut [f64; 2]) {

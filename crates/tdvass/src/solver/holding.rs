@@ -70,6 +70,10 @@ impl Holding {
     /// Adds an interval starting at `start` (s), of length `length` (s),
     /// with the margins `[g, g']` at its ends.
     pub fn add_interval(&mut self, start: f64, length: f64, a: [f64; 2], b: [f64; 2]) {
+        if a[0].min(b[0]) >= HERMITE_BOUND * length.abs() * (a[1].abs() + b[1].abs()) {
+            // In contact throughout (the test of [`check_step`]).
+            return;
+        }
         let (lost, first) = time_below_zero(length, a, b);
         self.lost_time += lost;
         if let (None, Some(offset)) = (self.first_loss, first) {
@@ -101,39 +105,76 @@ pub(crate) struct ContactCheck {
 }
 
 /// The whole-step loop's test of the step from node k (margins a) to node
-/// k + 1 (margins b): nothing when the cubic cannot be negative, one lost
-/// step when it cannot be positive, else the exact measure by
-/// [`Holding::add_interval`].
+/// k + 1 (margins b): `None` when the cubic cannot be negative (the common
+/// case, decided inline), else what the step adds, from
+/// [`step_without_contact`].
 #[inline(always)]
 pub(crate) fn check_step(
-    holding: &mut Holding,
     check: ContactCheck,
     k: u64,
     a: [f64; 2],
     b: [f64; 2],
-) {
+) -> Option<StepLoss> {
     let slack = HERMITE_BOUND * check.step * (a[1].abs() + b[1].abs());
     if a[0].min(b[0]) < slack {
-        near_or_without_contact(holding, check, k, a, b, slack);
+        Some(step_without_contact(check, k, a, b, slack))
+    } else {
+        None
     }
 }
 
+/// What one step adds to the time without contact.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct StepLoss {
+    /// The whole step (one lost step), or a part of it.
+    pub whole: bool,
+    /// The part's length (s) when not the whole step.
+    pub time: f64,
+    /// When the contact is lost first in the step (s).
+    pub first: Option<f64>,
+}
+
+impl Holding {
+    /// Adds what a step without contact (in part) contributes.
+    #[inline]
+    pub fn add_step(&mut self, loss: StepLoss) {
+        if loss.whole {
+            self.lost_steps += 1;
+        } else {
+            self.lost_time += loss.time;
+        }
+        if let (None, Some(first)) = (self.first_loss, loss.first) {
+            self.first_loss = Some(first);
+        }
+    }
+}
+
+/// A step near a crossing, or without contact throughout: one lost step
+/// when the cubic cannot be positive, else the measure of
+/// [`time_below_zero`].
 #[cold]
 #[inline(never)]
-fn near_or_without_contact(
-    holding: &mut Holding,
+fn step_without_contact(
     check: ContactCheck,
     k: u64,
     a: [f64; 2],
     b: [f64; 2],
     slack: f64,
-) {
+) -> StepLoss {
     let (h, t_k) = (check.step, check.start_time + k as f64 * check.step);
     if a[0].max(b[0]) < -slack {
-        holding.lost_steps += 1;
-        holding.first_loss.get_or_insert(t_k);
+        StepLoss {
+            whole: true,
+            time: 0.0,
+            first: Some(t_k),
+        }
     } else {
-        holding.add_interval(t_k, h, a, b);
+        let (time, first) = time_below_zero(h, a, b);
+        StepLoss {
+            whole: false,
+            time,
+            first: first.map(|offset| t_k + offset),
+        }
     }
 }
 
@@ -267,7 +308,9 @@ mod tests {
                             start_time: 0.0,
                             step: h,
                         };
-                        check_step(&mut fast, check, 0, [g0, d0], [g1, d1]);
+                        if let Some(loss) = check_step(check, 0, [g0, d0], [g1, d1]) {
+                            fast.add_step(loss);
+                        }
                         let fast_time = fast.lost_steps as f64 * h + fast.lost_time;
                         let (exact, _) = time_below_zero(h, [g0, d0], [g1, d1]);
                         assert!(

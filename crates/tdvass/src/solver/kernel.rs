@@ -12,7 +12,7 @@ use super::{DIVERGENCE_BOUNDS, Simulator};
 use crate::comfort::WK_STATES;
 use crate::error::Result;
 use crate::metrics::RunningRms;
-use crate::model::{V_T, X_T};
+use crate::model::{V_T, X_S, X_T};
 
 /// Whether every state component is within its divergence bound (false
 /// for NaN), with one branch for the whole state.
@@ -153,7 +153,13 @@ pub(super) struct Segment<'a> {
 /// filter steps along ([`FilterGridStep`]) and its `a_w²`, `a_w⁴` are
 /// summed like the RMS sums.
 #[inline(always)]
-pub(super) fn segment<R: NodeRoad, const DELAY: bool, const BEFORE: bool, const FILTER: bool>(
+pub(super) fn segment<
+    R: NodeRoad,
+    const DELAY: bool,
+    const BEFORE: bool,
+    const FILTER: bool,
+    const HOLDING: bool,
+>(
     seg: Segment,
     hot: &mut HotState<R>,
 ) -> Option<[f64; 6]> {
@@ -173,6 +179,8 @@ pub(super) fn segment<R: NodeRoad, const DELAY: bool, const BEFORE: bool, const 
     } = *hot;
     let filter = if FILTER { op.filter.as_ref() } else { None };
     let contact = op.contact;
+    // In a register: the largest |SDD| of the nodes.
+    let mut max_deflection = holding.max_deflection;
     let mut edge = margin(contact.limit, &x, road.displacement(), road.rate(op));
     let mut diverged = None;
     // Node k, where the segment starts, was counted in the RMS sums already;
@@ -214,31 +222,37 @@ pub(super) fn segment<R: NodeRoad, const DELAY: bool, const BEFORE: bool, const 
             break;
         }
         if let Some(f) = filter {
-            let mut next = filter_combine(&f.transition, &w);
-            let parts = [
-                filter_combine(&f.plant, &x),
+            // The inputs first, then `Φ_ww w` as a pairwise sum added last:
+            // the filter's own recurrence is then a short chain.
+            let mut inputs = filter_combine(&f.plant, &x);
+            for part in [
                 filter_combine(&f.nodes, &nodes),
                 filter_combine(&f.next_node, &[x_next[X_T], x_next[V_T]]),
                 road.filter_input(f),
-            ];
-            for part in parts {
+            ] {
                 for i in 0..WK_STATES {
-                    next[i] += part[i];
+                    inputs[i] += part[i];
                 }
             }
-            w = next;
+            let own = f.transition_times(&w);
+            w = std::array::from_fn(|i| own[i] + inputs[i]);
         }
         road.advance(op);
-        let next_edge = margin(contact.limit, &x_next, road.displacement(), road.rate(op));
-        check_step(&mut holding, contact, k, edge, next_edge);
-        holding.add_node(&x_next);
-        edge = next_edge;
+        if HOLDING {
+            let next_edge = margin(contact.limit, &x_next, road.displacement(), road.rate(op));
+            if let Some(loss) = check_step(contact, k, edge, next_edge) {
+                holding.add_step(loss);
+            }
+            max_deflection = max_deflection.max((x_next[X_S] - x_next[X_T]).abs());
+            edge = next_edge;
+        }
         // SAFETY: slot < len, as above.
         unsafe { *history.get_unchecked_mut(slot) = [x_next[X_T], x_next[V_T]] };
         x = x_next;
         slot = next_slot;
         k += 1;
     }
+    holding.max_deflection = max_deflection;
     *hot = HotState {
         x,
         road,
@@ -261,28 +275,30 @@ pub(super) fn segment_avx2<
     const DELAY: bool,
     const BEFORE: bool,
     const FILTER: bool,
+    const HOLDING: bool,
 >(
     seg: Segment,
     hot: &mut HotState<R>,
 ) -> Option<[f64; 6]> {
-    segment::<R, DELAY, BEFORE, FILTER>(seg, hot)
+    segment::<R, DELAY, BEFORE, FILTER, HOLDING>(seg, hot)
 }
 
 /// Runs [`segment`] with the widest vector unit available; the filter
-/// steps along when the grid step has it.
+/// steps along when the grid step has it, the road-holding test when the
+/// grid step asks for it ([`super::Metrics`]: the filter implies it).
 pub(super) fn run_segment<R: NodeRoad, const DELAY: bool>(
     seg: Segment,
     hot: &mut HotState<R>,
     before: bool,
 ) -> Option<[f64; 6]> {
-    if seg.op.filter.is_some() {
-        run_segment_with::<R, DELAY, true>(seg, hot, before)
-    } else {
-        run_segment_with::<R, DELAY, false>(seg, hot, before)
+    match (seg.op.filter.is_some(), seg.op.holding) {
+        (true, _) => run_segment_with::<R, DELAY, true, true>(seg, hot, before),
+        (false, true) => run_segment_with::<R, DELAY, false, true>(seg, hot, before),
+        (false, false) => run_segment_with::<R, DELAY, false, false>(seg, hot, before),
     }
 }
 
-fn run_segment_with<R: NodeRoad, const DELAY: bool, const FILTER: bool>(
+fn run_segment_with<R: NodeRoad, const DELAY: bool, const FILTER: bool, const HOLDING: bool>(
     seg: Segment,
     hot: &mut HotState<R>,
     before: bool,
@@ -292,16 +308,16 @@ fn run_segment_with<R: NodeRoad, const DELAY: bool, const FILTER: bool>(
         // SAFETY: the CPU supports AVX2 (checked at run time).
         return unsafe {
             match (DELAY, before) {
-                (true, true) => segment_avx2::<R, true, true, FILTER>(seg, hot),
-                (true, false) => segment_avx2::<R, true, false, FILTER>(seg, hot),
-                _ => segment_avx2::<R, false, false, FILTER>(seg, hot),
+                (true, true) => segment_avx2::<R, true, true, FILTER, HOLDING>(seg, hot),
+                (true, false) => segment_avx2::<R, true, false, FILTER, HOLDING>(seg, hot),
+                _ => segment_avx2::<R, false, false, FILTER, HOLDING>(seg, hot),
             }
         };
     }
     match (DELAY, before) {
-        (true, true) => segment::<R, true, true, FILTER>(seg, hot),
-        (true, false) => segment::<R, true, false, FILTER>(seg, hot),
-        _ => segment::<R, false, false, FILTER>(seg, hot),
+        (true, true) => segment::<R, true, true, FILTER, HOLDING>(seg, hot),
+        (true, false) => segment::<R, true, false, FILTER, HOLDING>(seg, hot),
+        _ => segment::<R, false, false, FILTER, HOLDING>(seg, hot),
     }
 }
 
@@ -372,9 +388,9 @@ mod tests {
                 };
                 if wide {
                     // SAFETY: AVX2 was detected by the caller.
-                    unsafe { segment_avx2::<_, true, false, true>(seg, &mut hot) };
+                    unsafe { segment_avx2::<_, true, false, true, true>(seg, &mut hot) };
                 } else {
-                    segment::<_, true, false, true>(seg, &mut hot);
+                    segment::<_, true, false, true, true>(seg, &mut hot);
                 }
                 let mut v: Vec<u64> = hot.x.iter().map(|v| v.to_bits()).collect();
                 v.extend(hot.rms.sums_of_squares.map(f64::to_bits));
@@ -389,7 +405,7 @@ mod tests {
             results
         }
         let mut sim = Simulator::new(SimulationConfig {
-            comfort: true,
+            metrics: crate::solver::Metrics::Comfort,
             ..SimulationConfig::default()
         })
         .unwrap();

@@ -65,7 +65,9 @@ pub use grid::DelayGrid;
 use holding::Holding;
 use nalgebra::{Matrix2, Matrix6, SMatrix, Vector2, Vector4};
 use operators::{GridStep, StepOperator, hermite, hermite_matrix, infinity_norm, tire_pick};
-pub use outputs::{ComfortValues, ContactLoss, OutputDerivatives, Outputs, RunSummary};
+pub use outputs::{
+    ComfortValues, ContactLoss, OutputDerivatives, Outputs, RoadHolding, RunSummary,
+};
 use std::collections::HashMap;
 use time_average::{INTEGRALS, SquareIntegral};
 
@@ -128,12 +130,65 @@ pub struct SimulationConfig {
     pub initial_state: State,
     /// Weights of the objective J.
     pub weights: Weights,
-    /// Whether to integrate the ISO 2631-1 W_k weighting of BA (8 more
-    /// states in the exact step, see `solver::filter`) for the comfort
-    /// outputs a_w, RMS a_w and VDV ([`ComfortValues`]). Off by default:
-    /// without it a step costs what it always did, and every other output
-    /// is the same to the bit with it or without it.
-    pub comfort: bool,
+    /// Which outputs beyond the RMS values of Eq. (6) the run accumulates
+    /// ([`Metrics`]; [`Metrics::Paper`] by default, at the cost a step
+    /// always had). The outputs they share are the same to the bit at every
+    /// level.
+    pub metrics: Metrics,
+}
+
+/// What a run accumulates besides the RMS values of BA, SDD, TDD and J.
+/// The levels are ordered: each includes the one before.
+///
+/// The instantaneous dynamic tire load `k_t (x_g − x_t)` and the RMS
+/// dynamic tire load ratio `k_t RMS(TDD) / W` need nothing more and are
+/// given at every level.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
+pub enum Metrics {
+    /// The paper's evaluation only: a step costs what it always did (the
+    /// PSO on J, the floor-ratio loop).
+    #[default]
+    Paper,
+    /// Also road holding and working space ([`RoadHolding`]): the time
+    /// without tire contact with its first occurrence, and the largest
+    /// |SDD|; a test of every internal step.
+    RoadHolding,
+    /// Also ISO 2631-1 ride comfort ([`ComfortValues`]): the W_k weighting
+    /// of BA integrated as 8 more states in the exact step (see
+    /// `solver::filter`), for a_w, RMS a_w and VDV.
+    Comfort,
+}
+
+impl Metrics {
+    /// All levels, in order.
+    pub const ALL: [Metrics; 3] = [Metrics::Paper, Metrics::RoadHolding, Metrics::Comfort];
+
+    /// Whether the road-holding and working-space accumulators run.
+    pub fn road_holding(self) -> bool {
+        self >= Metrics::RoadHolding
+    }
+
+    /// Whether the W_k filter runs.
+    pub fn comfort(self) -> bool {
+        self >= Metrics::Comfort
+    }
+
+    /// Integer code (0 = paper, 1 = road holding, 2 = comfort), as saved.
+    pub fn code(self) -> u64 {
+        self as u64
+    }
+
+    /// Inverse of [`Metrics::code`].
+    pub fn from_code(code: u64) -> Result<Metrics> {
+        Metrics::ALL
+            .get(usize::try_from(code).unwrap_or(usize::MAX))
+            .copied()
+            .ok_or(Error::InvalidSetting {
+                name: "metrics",
+                value: i64::try_from(code).unwrap_or(i64::MAX),
+                reason: "must be 0 (paper), 1 (road holding) or 2 (comfort)",
+            })
+    }
 }
 
 impl Default for SimulationConfig {
@@ -147,7 +202,7 @@ impl Default for SimulationConfig {
             start_time: 0.0,
             initial_state: State::zeros(),
             weights: Weights::default(),
-            comfort: false,
+            metrics: Metrics::Paper,
         }
     }
 }
@@ -190,7 +245,7 @@ pub struct Simulator {
     /// node reached by the whole-step loop: a cache of a function of k alone
     /// (see [`PHASE_ANCHOR`]), so it is not part of the saved state.
     phase: Option<(u64, [f64; 2])>,
-    /// How BA drives the W_k filter (only with `config.comfort`).
+    /// How BA drives the W_k filter (only with [`Metrics::Comfort`]).
     coupling: Option<FilterCoupling>,
     /// The W_k filter state at the committed point (zero without it).
     committed_filter: Filter,
@@ -315,7 +370,8 @@ impl Simulator {
     }
 
     /// The solver's state matrix, the whole step, its grid form (with the
-    /// contact-loss test and, with `config.comfort`, the filter) and the
+    /// contact-loss test with [`Metrics::RoadHolding`] and the filter with
+    /// [`Metrics::Comfort`]) and the
     /// filter coupling.
     fn operators(
         plant: &Plant,
@@ -344,7 +400,10 @@ impl Simulator {
             _ => 0.0,
         };
         let (h, tau) = (grid.step, grid.inner_delay);
-        let coupling = config.comfort.then(|| FilterCoupling::new(&a, &b, plant));
+        let coupling = config
+            .metrics
+            .comfort()
+            .then(|| FilterCoupling::new(&a, &b, plant));
         let filter = coupling.as_ref();
         let step = StepOperator::new(&a, &b, &plant.e, omega, h, filter);
         let mut grid_step = if grid.delay_inside_step() {
@@ -371,6 +430,7 @@ impl Simulator {
             f64::INFINITY
         };
         grid_step.contact.start_time = config.start_time;
+        grid_step.holding = config.metrics.road_holding();
         Ok((a, step, grid_step, coupling))
     }
 
@@ -718,7 +778,9 @@ impl Simulator {
         self.committed_filter = w;
         self.current_time = time;
         self.current_state = x;
-        self.holding.add_node(&x.into());
+        if self.config.metrics.road_holding() {
+            self.holding.add_node(&x.into());
+        }
         self.restart_run_after_step(k, (time, &x, &w), step_integral, arrival);
         self.road.release_before(time);
     }
@@ -781,9 +843,7 @@ impl Simulator {
             objective: outputs.objective,
             comfort: outputs.comfort,
             rms_dynamic_tire_load_ratio: outputs.rms_dynamic_tire_load_ratio,
-            contact_loss_time: outputs.contact_loss_time,
-            max_suspension_deflection: outputs.max_suspension_deflection,
-            first_contact_loss: outputs.first_contact_loss,
+            road_holding: outputs.road_holding,
         })
     }
 }
@@ -928,7 +988,12 @@ mod tests {
             ..SimulationConfig::default()
         };
         for (cfg, comfort) in [(displaced.clone(), false), (displaced, true), (inner, true)] {
-            let cfg = SimulationConfig { comfort, ..cfg };
+            let metrics = if comfort {
+                Metrics::Comfort
+            } else {
+                Metrics::RoadHolding
+            };
+            let cfg = SimulationConfig { metrics, ..cfg };
             let mut fast = Simulator::new(cfg.clone()).unwrap();
             let mut general = Simulator::new(cfg).unwrap();
             for k in 0..3000u64 {
@@ -960,7 +1025,10 @@ mod tests {
             );
             assert!((a.tire_deflection - b.tire_deflection).abs() < 1e-12 * b.tire_deflection);
             let (a, b) = (fast.outputs(), general.outputs());
-            let (u, v) = (a.max_suspension_deflection, b.max_suspension_deflection);
+            let (u, v) = (
+                a.road_holding.unwrap().max_suspension_deflection,
+                b.road_holding.unwrap().max_suspension_deflection,
+            );
             assert!((u - v).abs() < 1e-12 * v, "{u} {v}");
             if comfort {
                 let filter_scale = general.committed_filter.amax();

@@ -189,6 +189,9 @@ pub(super) struct GridStep {
     /// The contact-loss test of every step (the limit is set by the
     /// simulator; +∞ until then).
     pub(super) contact: ContactCheck,
+    /// Whether the whole-step loop runs the road-holding test and the
+    /// largest |SDD| ([`super::Metrics::RoadHolding`]).
+    pub(super) holding: bool,
 }
 
 impl GridStep {
@@ -292,6 +295,7 @@ impl GridStep {
                 start_time: 0.0,
                 step: h,
             },
+            holding: false,
         }
     }
 

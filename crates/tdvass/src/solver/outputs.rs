@@ -25,6 +25,21 @@ pub struct ComfortValues {
     pub vibration_dose_value: f64,
 }
 
+/// Road holding and working space so far, kept with
+/// [`super::Metrics::RoadHolding`] (and [`super::Metrics::Comfort`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct RoadHolding {
+    /// The time without tire contact so far (s): the measure of the times
+    /// at which the dynamic tire load was below −W, crossings located
+    /// inside the steps (see `solver::holding`).
+    pub contact_loss_time: f64,
+    /// The largest |SDD| so far (m), over the grid nodes (and other
+    /// committed points) and now: the suspension working space used.
+    pub max_suspension_deflection: f64,
+    /// The first loss of tire contact, if any so far.
+    pub first_contact_loss: Option<ContactLoss>,
+}
+
 /// The first loss of tire contact: the first time at which the dynamic
 /// tire load `k_t (x_g − x_t)` fell below minus the static load
 /// ([`crate::model::Params::static_load`]). The linear model does not hold
@@ -72,15 +87,9 @@ pub struct Outputs {
     /// At most 1/3 keeps the contact with 3σ confidence for a Gaussian
     /// load.
     pub rms_dynamic_tire_load_ratio: f64,
-    /// The time without tire contact so far (s): the measure of the times
-    /// at which the dynamic tire load was below −W, crossings located inside
-    /// the steps (see `solver::holding`).
-    pub contact_loss_time: f64,
-    /// The largest |SDD| so far (m), over the grid nodes (and other
-    /// committed points) and now: the suspension working space used.
-    pub max_suspension_deflection: f64,
-    /// The first loss of tire contact, if any so far.
-    pub first_contact_loss: Option<ContactLoss>,
+    /// Road holding and working space (`None` below
+    /// [`super::Metrics::RoadHolding`]).
+    pub road_holding: Option<RoadHolding>,
 }
 
 /// First time derivatives of the outputs.
@@ -106,11 +115,11 @@ pub struct OutputDerivatives {
     pub dynamic_tire_load: f64,
     /// d/dt of the RMS dynamic tire load ratio (1/s).
     pub rms_dynamic_tire_load_ratio: f64,
-    /// d/dt of the contact loss time: 1 while the contact is lost, else 0.
-    pub contact_loss_time: f64,
-    /// d/dt of the largest |SDD| (m/s): `d|SDD|/dt` while |SDD| now is the
-    /// largest and growing, else 0.
-    pub max_suspension_deflection: f64,
+    /// d/dt of road holding and working space: of the contact loss time 1
+    /// while the contact is lost, else 0; of the largest |SDD| (m/s)
+    /// `d|SDD|/dt` while |SDD| now is the largest and growing, else 0;
+    /// `first_contact_loss` is `None`.
+    pub road_holding: Option<RoadHolding>,
 }
 
 /// Summary of a finished run.
@@ -125,12 +134,9 @@ pub struct RunSummary {
     pub comfort: Option<ComfortValues>,
     /// `RMS(dynamic tire load) / W` over the run (see [`Outputs`]).
     pub rms_dynamic_tire_load_ratio: f64,
-    /// The time without tire contact (s).
-    pub contact_loss_time: f64,
-    /// The largest |SDD| over the run (m).
-    pub max_suspension_deflection: f64,
-    /// The first loss of tire contact, if any.
-    pub first_contact_loss: Option<ContactLoss>,
+    /// Road holding and working space over the run (`None` below
+    /// [`super::Metrics::RoadHolding`]).
+    pub road_holding: Option<RoadHolding>,
 }
 
 impl Simulator {
@@ -177,16 +183,18 @@ impl Simulator {
             comfort: self.comfort_values(&now, duration),
             dynamic_tire_load: k_t * (road - x[X_T]),
             rms_dynamic_tire_load_ratio: k_t * rms.tire_deflection / self.static_load(),
-            contact_loss_time: now.holding.lost_steps as f64 * self.grid.step
-                + now.holding.lost_time,
-            max_suspension_deflection: now
-                .holding
-                .max_deflection
-                .max(performance.suspension_deflection.abs()),
-            first_contact_loss: now
-                .holding
-                .first_loss
-                .map(|time| self.contact_loss_at(time)),
+            road_holding: self.config.metrics.road_holding().then(|| RoadHolding {
+                contact_loss_time: now.holding.lost_steps as f64 * self.grid.step
+                    + now.holding.lost_time,
+                max_suspension_deflection: now
+                    .holding
+                    .max_deflection
+                    .max(performance.suspension_deflection.abs()),
+                first_contact_loss: now
+                    .holding
+                    .first_loss
+                    .map(|time| self.contact_loss_at(time)),
+            }),
         };
         self.outputs_cache = Some(outputs);
         outputs
@@ -198,9 +206,12 @@ impl Simulator {
         self.config.params.static_load(self.config.variant)
     }
 
-    /// The first loss of tire contact so far, if any (see [`ContactLoss`]).
+    /// The first loss of tire contact so far, if any (see [`ContactLoss`];
+    /// always `None` below [`super::Metrics::RoadHolding`]).
     pub fn first_contact_loss(&mut self) -> Option<ContactLoss> {
-        self.outputs().first_contact_loss
+        self.outputs()
+            .road_holding
+            .and_then(|holding| holding.first_contact_loss)
     }
 
     fn contact_loss_at(&self, time: f64) -> ContactLoss {
@@ -288,12 +299,15 @@ impl Simulator {
             comfort,
             dynamic_tire_load: k_t * (road_rate - dx[X_T]),
             rms_dynamic_tire_load_ratio: k_t * rms_rate.tire_deflection / self.static_load(),
-            contact_loss_time: if in_contact { 0.0 } else { 1.0 },
-            max_suspension_deflection: if sdd.abs() >= holding.max_deflection && growing > 0.0 {
-                growing
-            } else {
-                0.0
-            },
+            road_holding: self.config.metrics.road_holding().then_some(RoadHolding {
+                contact_loss_time: if in_contact { 0.0 } else { 1.0 },
+                max_suspension_deflection: if sdd.abs() >= holding.max_deflection && growing > 0.0 {
+                    growing
+                } else {
+                    0.0
+                },
+                first_contact_loss: None,
+            }),
             rms: rms_rate,
             objective: rms_rate.objective(&self.config.weights),
             state: self.plant.reported_state(&dx),

@@ -9,7 +9,7 @@
 
 use super::holding::Holding;
 use super::time_average::{INTEGRALS, WEIGHTED_FOURTH, WEIGHTED_SQUARE};
-use super::{SimulationConfig, Simulator};
+use super::{Metrics, SimulationConfig, Simulator};
 use crate::error::{Error, Result};
 use crate::metrics::{RunningRms, Weights};
 use crate::model::{Params, State, Variant};
@@ -17,7 +17,7 @@ use crate::road::{RandomRoad, RoadClass, RoadSpec, RoadState, RoadType};
 use std::sync::Arc;
 
 /// Version of the byte layout written by [`Simulator::to_bytes`] (the
-/// first u64), and the only one read. Version 2 added the comfort flag, the
+/// first u64), and the only one read. Version 2 added the metrics level, the
 /// W_k filter state, the integrals of a_w² and a_w⁴, and the road-holding
 /// and working-space accumulators; the bytes of version 1 had no version
 /// word (they begin with the body mass) and are refused.
@@ -151,7 +151,7 @@ fn write_config(w: &mut ByteWriter, c: &SimulationConfig) {
     w.f64(c.weights.body_acceleration);
     w.f64(c.weights.suspension_deflection);
     w.f64(c.weights.tire_deflection);
-    w.u64(u64::from(c.comfort));
+    w.u64(c.metrics.code());
 }
 
 fn read_config(r: &mut ByteReader) -> Result<SimulationConfig> {
@@ -205,11 +205,8 @@ fn read_config(r: &mut ByteReader) -> Result<SimulationConfig> {
         suspension_deflection: r.f64()?,
         tire_deflection: r.f64()?,
     };
-    let comfort = match r.u64()? {
-        0 => false,
-        1 => true,
-        other => return Err(Error::InvalidState(format!("comfort flag {other}"))),
-    };
+    let metrics = Metrics::from_code(r.u64()?)
+        .map_err(|e| Error::InvalidState(format!("metrics level: {e}")))?;
     Ok(SimulationConfig {
         params,
         variant,
@@ -218,7 +215,7 @@ fn read_config(r: &mut ByteReader) -> Result<SimulationConfig> {
         start_time,
         initial_state,
         weights,
-        comfort,
+        metrics,
     })
 }
 
@@ -350,6 +347,7 @@ impl Simulator {
         for v in sim.committed_filter.iter_mut() {
             *v = r.f64()?;
         }
+        let initial_holding = sim.holding;
         sim.holding = Holding {
             max_deflection: r.f64()?,
             lost_steps: r.u64()?,
@@ -387,7 +385,13 @@ impl Simulator {
         sim.check_times()?;
         sim.check_rms()?;
         sim.check_comfort()?;
-        sim.check_holding()?;
+        if sim.config.metrics.road_holding() {
+            sim.check_holding()?;
+        } else if sim.holding != initial_holding {
+            return Err(Error::InvalidState(
+                "road-holding accumulators moved, but road holding is off".into(),
+            ));
+        }
         let horizon = sim.grid_time(sim.grid_index.saturating_add(2));
         sim.road
             .restore_dynamic_state(&road, sim.committed_time, horizon)?;

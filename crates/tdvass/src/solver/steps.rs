@@ -261,8 +261,10 @@ impl Simulator {
                 break Err(e);
             }
             self.history[slot] = [x_next[X_T], x_next[V_T]];
-            holding = step_holding;
-            holding.add_node(&x_next);
+            if self.config.metrics.road_holding() {
+                holding = step_holding;
+                holding.add_node(&x_next);
+            }
             self.restart_run_after_step(
                 k + 1,
                 (to, &x_end, &w_end),

@@ -306,11 +306,13 @@ impl Simulator {
             };
             let at_end = self.squares_at(k, end, &x_end, &w_end, from, &piece);
             total = add(total, corrected_trapezoid(end - start, &at_start, &at_end));
-            let (a, b) = (
-                self.margin_at(start, &x_start, &piece),
-                self.margin_at(end, &x_end, &piece),
-            );
-            holding.add_interval(start, end - start, a, b);
+            if self.config.metrics.road_holding() {
+                let (a, b) = (
+                    self.margin_at(start, &x_start, &piece),
+                    self.margin_at(end, &x_end, &piece),
+                );
+                holding.add_interval(start, end - start, a, b);
+            }
             if end == to {
                 return (total, at_end, piece);
             }
@@ -361,11 +363,13 @@ impl Simulator {
             let w_end = self.filter_within_step(k, (start, x_start), &w_start, end);
             let at_end = self.squares_at(k, end, &x_end, &w_end, (start, x_start), &piece);
             total = add(total, corrected_trapezoid(end - start, &at, &at_end));
-            let (a, b) = (
-                self.margin_at(start, &x_start, &piece),
-                self.margin_at(end, &x_end, &piece),
-            );
-            holding.add_interval(start, end - start, a, b);
+            if self.config.metrics.road_holding() {
+                let (a, b) = (
+                    self.margin_at(start, &x_start, &piece),
+                    self.margin_at(end, &x_end, &piece),
+                );
+                holding.add_interval(start, end - start, a, b);
+            }
             if end == to {
                 return (x_end, w_end, total, at_end, piece);
             }
@@ -440,7 +444,7 @@ impl Simulator {
             // the integral).
             let delta = t - tc;
             let piece = self.piece_from(tc);
-            if self.margin_at(tc, &xc, &piece)[0] < 0.0 {
+            if self.config.metrics.road_holding() && self.margin_at(tc, &xc, &piece)[0] < 0.0 {
                 holding.lost_time += delta;
             }
             return Accumulated {
@@ -552,7 +556,9 @@ impl Simulator {
             let now = self.accumulated_now();
             self.integral.closed = now.integral;
             self.holding = now.holding;
-            self.holding.add_node(&self.current_state.into());
+            if self.config.metrics.road_holding() {
+                self.holding.add_node(&self.current_state.into());
+            }
             self.committed_filter = now.filter;
             self.committed_time = t;
             self.committed_state = self.current_state;
