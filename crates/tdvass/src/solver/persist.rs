@@ -733,6 +733,84 @@ mod tests {
         }
     }
 
+    #[test]
+    fn comfort_and_holding_accumulators_inconsistent_with_the_run_are_refused() {
+        use crate::solver::Metrics;
+        let config = |metrics| SimulationConfig {
+            road: RoadSpec::Iso8608(RandomRoad {
+                class: RoadClass::H,
+                speed: 30.0,
+                ..RandomRoad::default()
+            }),
+            metrics,
+            ..SimulationConfig::default()
+        };
+        let mut sim = Simulator::new(config(Metrics::Comfort)).unwrap();
+        sim.advance_to(0.5).unwrap();
+        let holding = sim.holding;
+        assert!(holding.lost_steps > 0 && holding.first_loss.is_some());
+        let bytes = sim.to_bytes();
+        Simulator::from_bytes(&bytes).unwrap();
+        // Offsets from the end: the road state (input tag, the nodes with
+        // their count, first_node, word position), then the first loss (tag
+        // and time), the lost time, the lost steps, the max deflection, the
+        // 8 filter states and the 2 a_w sums.
+        let road = sim.road.dynamic_state();
+        let road_len = 16 + 8 + 8 + 8 * road.nodes.len() + 8;
+        let first_loss_at = bytes.len() - road_len - 16;
+        let lost_time_at = first_loss_at - 8;
+        let lost_steps_at = lost_time_at - 8;
+        let max_at = lost_steps_at - 8;
+        let filter_at = max_at - 8 * 8;
+        let sums_at = filter_at - 16;
+        assert_eq!(
+            bytes[lost_steps_at..lost_steps_at + 8],
+            holding.lost_steps.to_le_bytes()
+        );
+        for (at, value, words) in [
+            (sums_at, (-1.0f64).to_bits(), ["comfort", "negative"]),
+            (filter_at, f64::NAN.to_bits(), ["comfort", "NaN"]),
+            (
+                max_at,
+                0.0f64.to_bits(),
+                ["max suspension deflection", "below"],
+            ),
+            (
+                lost_steps_at,
+                sim.grid_index + 1,
+                ["contact loss time", "whole steps"],
+            ),
+            (lost_time_at, 1e3f64.to_bits(), ["contact loss time", "run"]),
+            (
+                first_loss_at + 8,
+                1e3f64.to_bits(),
+                ["first contact loss", "outside"],
+            ),
+        ] {
+            let mut forged = bytes.clone();
+            put(&mut forged, at, value);
+            refused(&forged, &words);
+        }
+        // No first loss recorded (tag 0, without its time).
+        let mut forged = bytes[..first_loss_at].to_vec();
+        forged.extend(0u64.to_le_bytes());
+        forged.extend(&bytes[first_loss_at + 16..]);
+        refused(&forged, &["contact loss time", "without a first"]);
+        // A foreign version.
+        let mut forged = bytes.clone();
+        put(&mut forged, 0, 1);
+        refused(&forged, &["format version 1"]);
+        // Filter state or holding accumulators where they are not kept.
+        let mut paper = Simulator::new(config(Metrics::Paper)).unwrap();
+        paper.advance_to(0.5).unwrap();
+        paper.committed_filter[3] = 1e-3;
+        refused(&paper.to_bytes(), &["comfort", "off"]);
+        paper.committed_filter[3] = 0.0;
+        Simulator::from_bytes(&paper.to_bytes()).unwrap();
+        paper.holding.lost_steps = 1;
+        refused(&paper.to_bytes(), &["road holding is off"]);
+    }
+
     /// The bytes of `sim` with its random road state replaced.
     fn with_road(sim: &Simulator, first_node: u64, nodes: &[f64]) -> Vec<u8> {
         let bytes = sim.to_bytes();
