@@ -450,6 +450,24 @@ mod tests {
     }
 
     #[test]
+    fn static_load_and_deflection_follow_the_weights_on_the_springs() {
+        let p = Params::default();
+        let g0 = STANDARD_GRAVITY;
+        assert_eq!(p.static_load(Variant::Tdvass), (345.0 + 4.05 + 40.5) * g0);
+        assert_eq!(
+            p.static_load(Variant::Pvass),
+            p.static_load(Variant::Tdvass)
+        );
+        assert_eq!(p.static_load(Variant::Cs), (345.0 + 40.5) * g0);
+        let absorber = 345.0 * g0 / 16000.0 + (345.0 + 4.05) * g0 / 6444.0;
+        assert!((p.static_deflection(Variant::Pvass) - absorber).abs() < 1e-15);
+        assert!((absorber - 0.742_649).abs() < 1e-6);
+        assert_eq!(p.static_deflection(Variant::Cs), 345.0 * g0 / 16000.0);
+        let loose = Params { k_h: 0.0, ..p };
+        assert_eq!(loose.static_deflection(Variant::Pvass), f64::INFINITY);
+    }
+
+    #[test]
     fn cs_is_the_two_dof_quarter_car() {
         let p = Params::default();
         let cs = Plant::new(p, Variant::Cs).unwrap();
