@@ -68,6 +68,7 @@ use operators::{GridStep, StepOperator, hermite, hermite_matrix, infinity_norm, 
 pub use outputs::{
     ComfortValues, ContactLoss, OutputDerivatives, Outputs, RoadHolding, RunSummary,
 };
+pub use persist::STATE_FORMAT_VERSION;
 use std::collections::HashMap;
 use time_average::{INTEGRALS, SquareIntegral};
 
