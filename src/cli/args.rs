@@ -7,7 +7,7 @@ use tdvass::error::{Error, Result};
 use tdvass::metrics::Weights;
 use tdvass::model::{Params, State, Variant};
 use tdvass::road::{RandomRoad, RoadClass, RoadSpec};
-use tdvass::solver::{DEFAULT_MAX_INTERNAL_STEP, SimulationConfig};
+use tdvass::solver::{DEFAULT_MAX_INTERNAL_STEP, Metrics, SimulationConfig};
 
 /// Accepted `--road` values (case-insensitive), for error messages.
 pub(super) const ROAD_NAMES: &str = "harmonic, iso8608 (alias iso), paper or file:PATH (any case)";
@@ -225,6 +225,7 @@ impl RunArgs {
                 suspension_deflection: self.w_sdd,
                 tire_deflection: self.w_tdd,
             },
+            metrics: Metrics::Paper,
         })
     }
 

@@ -7,7 +7,7 @@ use crate::variables::{ALL_VARIABLES, Access};
 use tdvass::metrics::Weights;
 use tdvass::model::{Params, State, Variant};
 use tdvass::road::{RandomRoad, RoadClass, RoadSpec, RoadType};
-use tdvass::solver::SimulationConfig;
+use tdvass::solver::{Metrics, SimulationConfig};
 
 /// Every setting of an instance: the parameters and the input. Start values
 /// come from [`ALL_VARIABLES`] ([`Settings::default`]).
@@ -164,6 +164,9 @@ impl Settings {
             start_time,
             initial_state: State::from(self.initial_state),
             weights: self.weights(),
+            // The FMU computes every metric (ISO 2631-1 comfort, road
+            // holding, working space) whatever the master reads.
+            metrics: Metrics::Comfort,
         })
     }
 }

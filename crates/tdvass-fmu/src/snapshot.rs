@@ -38,7 +38,9 @@ pub const MAGIC: &[u8; 8] = b"TDVASSFS";
 /// Format version written (and the only one read). Version 2 added the
 /// time integral of the RMS outputs and the input extrapolation state,
 /// version 3 the FMI 3.0 settings (`intermediate_update_interval`,
-/// `root_count`); older states are refused. Both FMI versions write the
+/// `root_count`) and the simulator's own versioned bytes with the
+/// comfort, road-holding and working-space accumulators; older states are
+/// refused. Both FMI versions write the
 /// same format; the header's token (the FMI 2.0 GUID or the FMI 3.0
 /// instantiation token) keeps a state of one from being read by the other.
 pub const FORMAT_VERSION: u32 = 3;

@@ -20,6 +20,17 @@
 //!
 //! Each run prints every loop's min and median-of-3 ns per step and the
 //! ratio of the tdvass loop to the fastest floor of its instruction set.
+//!
+//! The cost of the extra metrics (`SimulationConfig::metrics`): the same
+//! min-of-N harness on the default TDVASS case at the three levels, paper
+//! (the baseline), road holding, and comfort (the ISO 2631-1 W_k filter),
+//! interleaved in one process, and their ratios to the baseline:
+//!
+//! ```text
+//! cargo bench --bench simulation -- --comfort-cost
+//! ```
+//!
+//! (criterion's view of the same: `cargo bench --bench simulation -- 'comfort filter'`).
 
 use criterion::{Criterion, Throughput, criterion_group};
 use nalgebra::{Matrix6, SMatrix, Vector2, Vector4, Vector6};
@@ -28,7 +39,7 @@ use std::time::Instant;
 use tdvass::model::{PAPER_G2, PAPER_TAU2, Params, Plant, Variant};
 use tdvass::road::{RandomRoad, RoadSpec};
 use tdvass::solver::expm::precise_exp;
-use tdvass::solver::{SimulationConfig, Simulator, simulate};
+use tdvass::solver::{Metrics, SimulationConfig, Simulator, simulate};
 
 /// Steps per benchmark iteration of the floor-ratio group.
 const STEPS: u64 = 1000;
@@ -37,7 +48,13 @@ const STEPS: u64 = 1000;
 /// m = 2, harmonic road), advanced `n` internal steps per call by one
 /// `advance_to`, so each call does everything a step does.
 fn tdvass_steps() -> impl FnMut(u64) {
-    let mut sim = Simulator::new(SimulationConfig::default()).unwrap();
+    config_steps(SimulationConfig::default())
+}
+
+/// `n` internal steps per call of the simulator of `config` by one
+/// `advance_to`.
+fn config_steps(config: SimulationConfig) -> impl FnMut(u64) {
+    let mut sim = Simulator::new(config).unwrap();
     let h = sim.grid().step;
     let mut k = 0u64;
     move |n| {
@@ -247,6 +264,23 @@ fn floor_ratio(c: &mut Criterion) {
     group.finish();
 }
 
+/// The extra metrics' cost: 1000 internal steps of the default TDVASS
+/// case at each [`Metrics`] level.
+fn comfort_filter(c: &mut Criterion) {
+    let mut group = c.benchmark_group("comfort filter");
+    group.throughput(Throughput::Elements(STEPS));
+    for metrics in Metrics::ALL {
+        let mut steps = config_steps(SimulationConfig {
+            metrics,
+            ..SimulationConfig::default()
+        });
+        group.bench_function(format!("metrics {metrics:?}: 1000 internal steps"), |b| {
+            b.iter(|| steps(STEPS))
+        });
+    }
+    group.finish();
+}
+
 fn internal_step(c: &mut Criterion) {
     let mut sim = Simulator::new(SimulationConfig::default()).unwrap();
     let h = sim.grid().step;
@@ -372,6 +406,7 @@ fn scaling(c: &mut Criterion) {
 criterion_group!(
     benches,
     floor_ratio,
+    comfort_filter,
     internal_step,
     whole_runs,
     communication_steps,
@@ -556,11 +591,77 @@ fn min_of_n() {
     );
 }
 
-/// `criterion_main!(benches)` plus the min-of-N mode: with `--min-of-n`
-/// among the arguments, runs [`min_of_n`] instead of criterion.
+/// The extra metrics' cost per internal step: the default TDVASS case
+/// (harmonic road, h = 1e-4 s, m = 2) at each [`Metrics`] level, each
+/// timed by [`min_ns_per_step`] within every repetition, the whole
+/// repeated [`REPETITIONS`] times; also on the ISO 8608 class C road with
+/// (g2, tau2), whose steps are split by road breakpoints. Prints the min
+/// and median-of-3 ns per step of each level and its ratio (of the minima)
+/// to [`Metrics::Paper`] measured in the same run.
+fn comfort_cost() {
+    let iso = SimulationConfig {
+        params: Params::with_controller(PAPER_G2, PAPER_TAU2),
+        road: RoadSpec::Iso8608(RandomRoad::default()),
+        ..SimulationConfig::default()
+    };
+    let cases = [
+        ("TDVASS harmonic (g1, tau1)", SimulationConfig::default()),
+        ("TDVASS ISO 8608 C (g2, tau2)", iso),
+    ];
+    println!(
+        "min of {REPETITIONS} x {BATCHES} batches of {BATCH_STEPS} steps \
+         ({WARM_UP_BATCHES} warm-up batches), ns per internal step, \
+         tdvass loop instruction set {}",
+        tdvass_isa().label()
+    );
+    println!();
+    println!(
+        "{:<30} {:<12} {:>9} {:>12} {:>18}",
+        "case", "metrics", "min", "median of 3", "ratio to Paper"
+    );
+    for (name, config) in cases {
+        let mut runs: Vec<Box<dyn FnMut(u64)>> = Metrics::ALL
+            .iter()
+            .map(|&metrics| {
+                Box::new(config_steps(SimulationConfig {
+                    metrics,
+                    ..config.clone()
+                })) as Box<dyn FnMut(u64)>
+            })
+            .collect();
+        let mut minima = vec![Vec::new(); runs.len()];
+        for _ in 0..REPETITIONS {
+            for (run, mins) in runs.iter_mut().zip(&mut minima) {
+                mins.push(min_ns_per_step(run));
+            }
+        }
+        for mins in &mut minima {
+            mins.sort_by(f64::total_cmp);
+        }
+        let median = REPETITIONS / 2;
+        let baseline = minima[0][0];
+        for (metrics, mins) in Metrics::ALL.iter().zip(&minima) {
+            println!(
+                "{name:<30} {:<12} {:>9.2} {:>12.2} {:>18.2}",
+                format!("{metrics:?}"),
+                mins[0],
+                mins[median],
+                mins[0] / baseline
+            );
+        }
+    }
+}
+
+/// `criterion_main!(benches)` plus the min-of-N modes: with `--min-of-n`
+/// among the arguments, runs [`min_of_n`], with `--comfort-cost`
+/// [`comfort_cost`], instead of criterion.
 fn main() {
     if std::env::args().any(|arg| arg == "--min-of-n") {
         min_of_n();
+        return;
+    }
+    if std::env::args().any(|arg| arg == "--comfort-cost") {
+        comfort_cost();
         return;
     }
     benches();

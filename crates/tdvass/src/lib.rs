@@ -20,6 +20,26 @@
 //!   against, whoever builds it (the FMU, the command line, a library user);
 //! - [`bytes`]: the one little-endian codec of saved states.
 //!
+//! # The metrics beyond Eq. (6)
+//!
+//! [`solver::SimulationConfig::metrics`] chooses what a run accumulates
+//! besides the RMS values of BA, SDD, TDD and J ([`solver::Metrics`]; the
+//! levels are ordered and the default costs what a step always did):
+//! - always: the dynamic tire load `k_t (x_g − x_t)` (N) and
+//!   `RMS(dynamic tire load) / W` with the static load
+//!   `W = (m_s + m_h + m_t) g0` (CS: `(m_s + m_t) g0`);
+//! - [`solver::Metrics::RoadHolding`]: the time without tire contact
+//!   (dynamic tire load below −W, crossings located inside the steps), its
+//!   first occurrence, and the largest |SDD| ([`solver::RoadHolding`]);
+//! - [`solver::Metrics::Comfort`]: also the ISO 2631-1 W_k-weighted body
+//!   acceleration a_w(t), its running RMS and the vibration dose value
+//!   `VDV = (∫ a_w⁴ dt)^{1/4}` ([`solver::ComfortValues`]), the filter
+//!   integrated as 8 more states of the exact step.
+//!
+//! The outputs the levels share are the same to the bit at every level.
+//! [`analysis::optimize::Objective::Comfort`] minimises RMS a_w under
+//! road-holding, travel and static-sag constraints.
+//!
 //! **What this crate owns and must never import.** It owns the physics and
 //! the numerics. It has no FFI and no `unsafe` outside the solver's
 //! whole-step loop (`solver::kernel`), and it never imports a command-line,

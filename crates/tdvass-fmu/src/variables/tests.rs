@@ -95,7 +95,14 @@ fn start_values_are_admissible_and_match_the_library_defaults() {
     }
     let s = Settings::start_values();
     let config = s.to_config(0.0).unwrap();
-    assert_eq!(config, SimulationConfig::default());
+    // The library's defaults, with every metric computed (the FMU's level).
+    assert_eq!(
+        config,
+        SimulationConfig {
+            metrics: tdvass::solver::Metrics::Comfort,
+            ..SimulationConfig::default()
+        }
+    );
     assert_eq!(s.x_g, 0.0);
 }
 

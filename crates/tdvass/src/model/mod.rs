@@ -142,6 +142,10 @@ pub struct Params {
     pub tau: f64,
 }
 
+/// Standard acceleration of gravity g0 (m/s²), ISO 80000-3 (and
+/// ISO 2631-1's unit of acceleration).
+pub const STANDARD_GRAVITY: f64 = 9.80665;
+
 /// The paper's harmonic-road optimum `g1` (N/m), section 4.2.
 pub const PAPER_G1: f64 = 5386.0;
 /// The paper's harmonic-road optimum `tau1` (s), section 4.2.
@@ -242,6 +246,44 @@ impl Params {
     /// The gain that acts in `variant` (g for TDVASS, 0 otherwise).
     pub fn effective_gain(&self, variant: Variant) -> f64 {
         if variant.has_control() { self.g } else { 0.0 }
+    }
+
+    /// Static tire load W (N): the weight on the tire,
+    /// `(m_s + m_h + m_t) g0` for PVASS and TDVASS, `(m_s + m_t) g0` for
+    /// the CS (which has no absorber mass), with the standard gravity
+    /// [`STANDARD_GRAVITY`]. The tire keeps contact while the dynamic tire
+    /// load `k_t (x_g − x_t)` stays above `−W`.
+    pub fn static_load(&self, variant: Variant) -> f64 {
+        let masses = if variant.has_absorber() {
+            self.m_s + self.m_h + self.m_t
+        } else {
+            self.m_s + self.m_t
+        };
+        masses * STANDARD_GRAVITY
+    }
+
+    /// Static deflection (m) of the springs between body and wheel under
+    /// the weight above them: `m_s g0 / k_s + (m_s + m_h) g0 / k_h` for
+    /// PVASS and TDVASS (k_s and k_h in series through the absorber mass),
+    /// `m_s g0 / k_s` for the CS. A spring of zero stiffness gives +∞.
+    ///
+    /// The linear model around the static equilibrium does not see this
+    /// sag; the comfort objective of `analysis::optimize` bounds it, so that
+    /// a design cannot win comfort by being statically softer.
+    pub fn static_deflection(&self, variant: Variant) -> f64 {
+        let sag = |load: f64, stiffness: f64| {
+            if stiffness > 0.0 {
+                load / stiffness
+            } else {
+                f64::INFINITY
+            }
+        };
+        let body = sag(self.m_s * STANDARD_GRAVITY, self.k_s);
+        if variant.has_absorber() {
+            body + sag((self.m_s + self.m_h) * STANDARD_GRAVITY, self.k_h)
+        } else {
+            body
+        }
     }
 }
 
@@ -405,6 +447,24 @@ mod tests {
         let pv = Plant::new(p, Variant::Pvass).unwrap();
         assert_eq!(pv.b, State::zeros());
         assert_eq!(pv.a, plant.a);
+    }
+
+    #[test]
+    fn static_load_and_deflection_follow_the_weights_on_the_springs() {
+        let p = Params::default();
+        let g0 = STANDARD_GRAVITY;
+        assert_eq!(p.static_load(Variant::Tdvass), (345.0 + 4.05 + 40.5) * g0);
+        assert_eq!(
+            p.static_load(Variant::Pvass),
+            p.static_load(Variant::Tdvass)
+        );
+        assert_eq!(p.static_load(Variant::Cs), (345.0 + 40.5) * g0);
+        let absorber = 345.0 * g0 / 16000.0 + (345.0 + 4.05) * g0 / 6444.0;
+        assert!((p.static_deflection(Variant::Pvass) - absorber).abs() < 1e-15);
+        assert!((absorber - 0.742_649).abs() < 1e-6);
+        assert_eq!(p.static_deflection(Variant::Cs), 345.0 * g0 / 16000.0);
+        let loose = Params { k_h: 0.0, ..p };
+        assert_eq!(loose.static_deflection(Variant::Pvass), f64::INFINITY);
     }
 
     #[test]

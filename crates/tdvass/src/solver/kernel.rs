@@ -5,11 +5,14 @@
 //! only after a run-time check that the CPU has it.
 #![allow(unsafe_code)]
 
+use super::filter::{FilterGridStep, filter_combine};
+use super::holding::{Holding, check_step, margin};
 use super::operators::{GridStep, add6, combine2, combine4, combine6};
 use super::{DIVERGENCE_BOUNDS, Simulator};
+use crate::comfort::WK_STATES;
 use crate::error::Result;
 use crate::metrics::RunningRms;
-use crate::model::{V_T, X_T};
+use crate::model::{V_T, X_S, X_T};
 
 /// Whether every state component is within its divergence bound (false
 /// for NaN), with one branch for the whole state.
@@ -28,8 +31,13 @@ pub(super) fn within_bounds(x: &[f64; 6]) -> bool {
 pub(super) trait NodeRoad: Copy {
     /// The road's part of the step that leaves the current node.
     fn input(&self, op: &GridStep) -> [f64; 6];
+    /// The road's part of the W_k filter's step that leaves the current node.
+    fn filter_input(&self, filter: &FilterGridStep) -> [f64; WK_STATES];
     /// `x_g` at the current node (m).
     fn displacement(&self) -> f64;
+    /// `dx_g/dt` at the current node (m/s), on the side of the step that
+    /// leaves it.
+    fn rate(&self, op: &GridStep) -> f64;
     /// Moves to the next node.
     fn advance(&mut self, op: &GridStep);
 }
@@ -45,8 +53,16 @@ impl NodeRoad for HarmonicPhase {
         combine2(&op.harmonic, &self.0)
     }
     #[inline(always)]
+    fn filter_input(&self, filter: &FilterGridStep) -> [f64; WK_STATES] {
+        filter_combine(&filter.harmonic, &self.0)
+    }
+    #[inline(always)]
     fn displacement(&self) -> f64 {
         self.0[0]
+    }
+    #[inline(always)]
+    fn rate(&self, op: &GridStep) -> f64 {
+        op.contact.angular_frequency * self.0[1]
     }
     #[inline(always)]
     fn advance(&mut self, op: &GridStep) {
@@ -80,8 +96,16 @@ impl NodeRoad for LinearPiece {
         combine2(&op.linear, &[self.value_now(), self.slope])
     }
     #[inline(always)]
+    fn filter_input(&self, filter: &FilterGridStep) -> [f64; WK_STATES] {
+        filter_combine(&filter.linear, &[self.value_now(), self.slope])
+    }
+    #[inline(always)]
     fn displacement(&self) -> f64 {
         self.value_now()
+    }
+    #[inline(always)]
+    fn rate(&self, _: &GridStep) -> f64 {
+        self.slope
     }
     #[inline(always)]
     fn advance(&mut self, _: &GridStep) {
@@ -98,6 +122,12 @@ pub(super) struct HotState<R> {
     /// Ring slot of node k + 1 (it holds node k − m until overwritten).
     pub(super) slot: usize,
     pub(super) rms: RunningRms,
+    /// The W_k filter state at node k (zero without the filter).
+    pub(super) w: [f64; WK_STATES],
+    /// `Σ a_w²`, `Σ a_w⁴` over the nodes of the open run, as `rms`.
+    pub(super) weighted: [f64; 2],
+    /// Road holding and working space so far.
+    pub(super) holding: Holding,
 }
 
 /// One run of the whole-step loop, within which neither a phase anchor
@@ -116,11 +146,20 @@ pub(super) struct Segment<'a> {
 /// the new node stored in the history. The BA, SDD, TDD of every node
 /// after the first are added to the RMS sums, except the last one's, which
 /// the caller adds (on the harmonic road its phase is exact at an anchor).
-/// Stops at `end` or before a state out of bounds, which it returns.
-/// `DELAY`: the delay is resolved on the grid; `BEFORE`: all the delayed
-/// nodes lie before the start.
+/// Every step is tested for contact loss and every new node enters the
+/// largest |SDD| ([`super::holding`]). Stops at `end` or before a state out
+/// of bounds, which it returns. `DELAY`: the delay is resolved on the grid;
+/// `BEFORE`: all the delayed nodes lie before the start; `FILTER`: the W_k
+/// filter steps along ([`FilterGridStep`]) and its `a_w²`, `a_w⁴` are
+/// summed like the RMS sums.
 #[inline(always)]
-pub(super) fn segment<R: NodeRoad, const DELAY: bool, const BEFORE: bool>(
+pub(super) fn segment<
+    R: NodeRoad,
+    const DELAY: bool,
+    const BEFORE: bool,
+    const FILTER: bool,
+    const HOLDING: bool,
+>(
     seg: Segment,
     hot: &mut HotState<R>,
 ) -> Option<[f64; 6]> {
@@ -134,7 +173,15 @@ pub(super) fn segment<R: NodeRoad, const DELAY: bool, const BEFORE: bool>(
         mut k,
         mut slot,
         mut rms,
+        mut w,
+        mut weighted,
+        mut holding,
     } = *hot;
+    let filter = if FILTER { op.filter.as_ref() } else { None };
+    let contact = op.contact;
+    // In a register: the largest |SDD| of the nodes.
+    let mut max_deflection = holding.max_deflection;
+    let mut edge = margin(contact.limit, &x, road.displacement(), road.rate(op));
     let mut diverged = None;
     // Node k, where the segment starts, was counted in the RMS sums already;
     // each later node is counted in the step that leaves it.
@@ -142,7 +189,7 @@ pub(super) fn segment<R: NodeRoad, const DELAY: bool, const BEFORE: bool>(
     while k < seg.end {
         let next_slot = if slot + 1 == len { 0 } else { slot + 1 };
         let mut input = road.input(op);
-        if DELAY {
+        let nodes = if DELAY {
             let nodes = if BEFORE {
                 seg.before_start
             } else {
@@ -158,29 +205,63 @@ pub(super) fn segment<R: NodeRoad, const DELAY: bool, const BEFORE: bool>(
                 [x0, v0, x1, v1]
             };
             input = add6(combine4(&op.nodes, &nodes), input);
-        }
+            nodes
+        } else {
+            [0.0; 4]
+        };
         let x_next = add6(combine6(&op.transition, &x), input);
         if count {
             op.count(&mut rms, &x, road.displacement());
+            if let Some(f) = filter {
+                f.count(&w, &mut weighted);
+            }
         }
         count = true;
         if !within_bounds(&x_next) {
             diverged = Some(x_next);
             break;
         }
+        if let Some(f) = filter {
+            // The inputs first, then `Φ_ww w` as a pairwise sum added last:
+            // the filter's own recurrence is then a short chain.
+            let mut inputs = filter_combine(&f.plant, &x);
+            for part in [
+                filter_combine(&f.nodes, &nodes),
+                filter_combine(&f.next_node, &[x_next[X_T], x_next[V_T]]),
+                road.filter_input(f),
+            ] {
+                for i in 0..WK_STATES {
+                    inputs[i] += part[i];
+                }
+            }
+            let own = f.transition_times(&w);
+            w = std::array::from_fn(|i| own[i] + inputs[i]);
+        }
         road.advance(op);
+        if HOLDING {
+            let next_edge = margin(contact.limit, &x_next, road.displacement(), road.rate(op));
+            if let Some(loss) = check_step(contact, k, edge, next_edge) {
+                holding.add_step(loss);
+            }
+            max_deflection = max_deflection.max((x_next[X_S] - x_next[X_T]).abs());
+            edge = next_edge;
+        }
         // SAFETY: slot < len, as above.
         unsafe { *history.get_unchecked_mut(slot) = [x_next[X_T], x_next[V_T]] };
         x = x_next;
         slot = next_slot;
         k += 1;
     }
+    holding.max_deflection = max_deflection;
     *hot = HotState {
         x,
         road,
         k,
         slot,
         rms,
+        w,
+        weighted,
+        holding,
     };
     diverged
 }
@@ -189,15 +270,35 @@ pub(super) fn segment<R: NodeRoad, const DELAY: bool, const BEFORE: bool>(
 /// without FMA, so the results are bit-identical).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-pub(super) fn segment_avx2<R: NodeRoad, const DELAY: bool, const BEFORE: bool>(
+pub(super) fn segment_avx2<
+    R: NodeRoad,
+    const DELAY: bool,
+    const BEFORE: bool,
+    const FILTER: bool,
+    const HOLDING: bool,
+>(
     seg: Segment,
     hot: &mut HotState<R>,
 ) -> Option<[f64; 6]> {
-    segment::<R, DELAY, BEFORE>(seg, hot)
+    segment::<R, DELAY, BEFORE, FILTER, HOLDING>(seg, hot)
 }
 
-/// Runs [`segment`] with the widest vector unit available.
+/// Runs [`segment`] with the widest vector unit available; the filter
+/// steps along when the grid step has it, the road-holding test when the
+/// grid step asks for it ([`super::Metrics`]: the filter implies it).
 pub(super) fn run_segment<R: NodeRoad, const DELAY: bool>(
+    seg: Segment,
+    hot: &mut HotState<R>,
+    before: bool,
+) -> Option<[f64; 6]> {
+    match (seg.op.filter.is_some(), seg.op.holding) {
+        (true, _) => run_segment_with::<R, DELAY, true, true>(seg, hot, before),
+        (false, true) => run_segment_with::<R, DELAY, false, true>(seg, hot, before),
+        (false, false) => run_segment_with::<R, DELAY, false, false>(seg, hot, before),
+    }
+}
+
+fn run_segment_with<R: NodeRoad, const DELAY: bool, const FILTER: bool, const HOLDING: bool>(
     seg: Segment,
     hot: &mut HotState<R>,
     before: bool,
@@ -207,16 +308,16 @@ pub(super) fn run_segment<R: NodeRoad, const DELAY: bool>(
         // SAFETY: the CPU supports AVX2 (checked at run time).
         return unsafe {
             match (DELAY, before) {
-                (true, true) => segment_avx2::<R, true, true>(seg, hot),
-                (true, false) => segment_avx2::<R, true, false>(seg, hot),
-                _ => segment_avx2::<R, false, false>(seg, hot),
+                (true, true) => segment_avx2::<R, true, true, FILTER, HOLDING>(seg, hot),
+                (true, false) => segment_avx2::<R, true, false, FILTER, HOLDING>(seg, hot),
+                _ => segment_avx2::<R, false, false, FILTER, HOLDING>(seg, hot),
             }
         };
     }
     match (DELAY, before) {
-        (true, true) => segment::<R, true, true>(seg, hot),
-        (true, false) => segment::<R, true, false>(seg, hot),
-        _ => segment::<R, false, false>(seg, hot),
+        (true, true) => segment::<R, true, true, FILTER, HOLDING>(seg, hot),
+        (true, false) => segment::<R, true, false, FILTER, HOLDING>(seg, hot),
+        _ => segment::<R, false, false, FILTER, HOLDING>(seg, hot),
     }
 }
 
@@ -271,6 +372,9 @@ mod tests {
                 k: sim.grid_index,
                 slot: ((sim.grid_index + 1) % sim.history.len() as u64) as usize,
                 rms: sim.rms,
+                w: sim.committed_filter.into(),
+                weighted: sim.weighted,
+                holding: sim.holding,
             };
             let mut results = Vec::new();
             for wide in [false, true] {
@@ -284,19 +388,27 @@ mod tests {
                 };
                 if wide {
                     // SAFETY: AVX2 was detected by the caller.
-                    unsafe { segment_avx2::<_, true, false>(seg, &mut hot) };
+                    unsafe { segment_avx2::<_, true, false, true, true>(seg, &mut hot) };
                 } else {
-                    segment::<_, true, false>(seg, &mut hot);
+                    segment::<_, true, false, true, true>(seg, &mut hot);
                 }
                 let mut v: Vec<u64> = hot.x.iter().map(|v| v.to_bits()).collect();
                 v.extend(hot.rms.sums_of_squares.map(f64::to_bits));
+                v.extend(hot.w.map(f64::to_bits));
+                v.extend(hot.weighted.map(f64::to_bits));
+                v.push(hot.holding.max_deflection.to_bits());
+                v.push(hot.holding.lost_time.to_bits());
                 v.push(hot.road.displacement().to_bits());
                 v.extend(history.iter().flatten().map(|v| v.to_bits()));
                 results.push(v);
             }
             results
         }
-        let mut sim = Simulator::new(SimulationConfig::default()).unwrap();
+        let mut sim = Simulator::new(SimulationConfig {
+            metrics: crate::solver::Metrics::Comfort,
+            ..SimulationConfig::default()
+        })
+        .unwrap();
         sim.advance_to(0.01).unwrap();
         let phase = HarmonicPhase(sim.harmonic_phase(sim.grid_index));
         let [baseline, wide] = &both(&sim, phase)[..] else {

@@ -46,7 +46,9 @@
 //! the configuration, the `Simulator` and its general step.
 
 pub mod expm;
+mod filter;
 mod grid;
+mod holding;
 mod kernel;
 mod operators;
 mod outputs;
@@ -58,12 +60,17 @@ use crate::error::{Error, Result};
 use crate::metrics::{RunningRms, Weights};
 use crate::model::{Params, Plant, State, V_T, Variant, X_T};
 use crate::road::{Road, RoadPiece, RoadSpec};
+use filter::{Filter, FilterCoupling, FilterGridStep};
 pub use grid::{DelayGrid, DelayRegime};
+use holding::Holding;
 use nalgebra::{Matrix2, Matrix6, SMatrix, Vector2, Vector4};
 use operators::{GridStep, StepOperator, hermite, hermite_matrix, infinity_norm, tire_pick};
-pub use outputs::{OutputDerivatives, Outputs, RunSummary};
+pub use outputs::{
+    ComfortValues, ContactLoss, OutputDerivatives, Outputs, RoadHolding, RunSummary,
+};
+pub use persist::STATE_FORMAT_VERSION;
 use std::collections::HashMap;
-use time_average::SquareIntegral;
+use time_average::{INTEGRALS, SquareIntegral};
 
 /// Default upper bound of the internal step (s).
 pub const DEFAULT_MAX_INTERNAL_STEP: f64 = 1e-4;
@@ -124,6 +131,65 @@ pub struct SimulationConfig {
     pub initial_state: State,
     /// Weights of the objective J.
     pub weights: Weights,
+    /// Which outputs beyond the RMS values of Eq. (6) the run accumulates
+    /// ([`Metrics`]; [`Metrics::Paper`] by default, at the cost a step
+    /// always had). The outputs they share are the same to the bit at every
+    /// level.
+    pub metrics: Metrics,
+}
+
+/// What a run accumulates besides the RMS values of BA, SDD, TDD and J.
+/// The levels are ordered: each includes the one before.
+///
+/// The instantaneous dynamic tire load `k_t (x_g − x_t)` and the RMS
+/// dynamic tire load ratio `k_t RMS(TDD) / W` need nothing more and are
+/// given at every level.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
+pub enum Metrics {
+    /// The paper's evaluation only: a step costs what it always did (the
+    /// PSO on J, the floor-ratio loop).
+    #[default]
+    Paper,
+    /// Also road holding and working space ([`RoadHolding`]): the time
+    /// without tire contact with its first occurrence, and the largest
+    /// |SDD|; a test of every internal step.
+    RoadHolding,
+    /// Also ISO 2631-1 ride comfort ([`ComfortValues`]): the W_k weighting
+    /// of BA integrated as 8 more states in the exact step (see
+    /// `solver::filter`), for a_w, RMS a_w and VDV.
+    Comfort,
+}
+
+impl Metrics {
+    /// All levels, in order.
+    pub const ALL: [Metrics; 3] = [Metrics::Paper, Metrics::RoadHolding, Metrics::Comfort];
+
+    /// Whether the road-holding and working-space accumulators run.
+    pub fn road_holding(self) -> bool {
+        self >= Metrics::RoadHolding
+    }
+
+    /// Whether the W_k filter runs.
+    pub fn comfort(self) -> bool {
+        self >= Metrics::Comfort
+    }
+
+    /// Integer code (0 = paper, 1 = road holding, 2 = comfort), as saved.
+    pub fn code(self) -> u64 {
+        self as u64
+    }
+
+    /// Inverse of [`Metrics::code`].
+    pub fn from_code(code: u64) -> Result<Metrics> {
+        Metrics::ALL
+            .get(usize::try_from(code).unwrap_or(usize::MAX))
+            .copied()
+            .ok_or(Error::InvalidSetting {
+                name: "metrics",
+                value: i64::try_from(code).unwrap_or(i64::MAX),
+                reason: "must be 0 (paper), 1 (road holding) or 2 (comfort)",
+            })
+    }
 }
 
 impl Default for SimulationConfig {
@@ -137,6 +203,7 @@ impl Default for SimulationConfig {
             start_time: 0.0,
             initial_state: State::zeros(),
             weights: Weights::default(),
+            metrics: Metrics::Paper,
         }
     }
 }
@@ -179,6 +246,16 @@ pub struct Simulator {
     /// node reached by the whole-step loop: a cache of a function of k alone
     /// (see [`PHASE_ANCHOR`]), so it is not part of the saved state.
     phase: Option<(u64, [f64; 2])>,
+    /// How BA drives the W_k filter (only with [`Metrics::Comfort`]).
+    coupling: Option<FilterCoupling>,
+    /// The W_k filter state at the committed point (zero without it).
+    committed_filter: Filter,
+    /// `Σ a_w²`, `Σ a_w⁴` over the grid nodes of the open run (as `rms`).
+    weighted: [f64; 2],
+    /// Road holding and working space up to the committed point.
+    holding: Holding,
+    /// The dynamic tire load at the start (N).
+    start_load: f64,
 }
 
 impl Simulator {
@@ -251,7 +328,8 @@ impl Simulator {
             initial[crate::model::X_H] = 0.0;
             initial[crate::model::V_H] = 0.0;
         }
-        let (solver_matrix, full_step, grid_step) = Self::operators(&plant, &config, &grid)?;
+        let (solver_matrix, full_step, grid_step, coupling) =
+            Self::operators(&plant, &config, &grid)?;
         let history = vec![[initial[X_T], initial[V_T]]; grid.delay_steps() as usize + 1];
         let start_time = config.start_time;
         let mut sim = Simulator {
@@ -273,19 +351,42 @@ impl Simulator {
             integral: SquareIntegral::new(start_time, Default::default()),
             outputs_cache: None,
             phase: None,
+            coupling,
+            committed_filter: Filter::zeros(),
+            weighted: [0.0; 2],
+            holding: Holding::new(0.0, 1.0, start_time),
+            start_load: 0.0,
             config,
         };
         let piece = sim.piece_from(start_time);
-        sim.integral.anchor =
-            sim.squares_at(0, start_time, &initial, (start_time, initial), &piece);
+        let rest = Filter::zeros();
+        sim.integral.anchor = sim.squares_at(
+            0,
+            start_time,
+            &initial,
+            &rest,
+            (start_time, initial),
+            &piece,
+        );
+        let margin = sim.margin_at(start_time, &initial, &piece);
+        sim.holding = Holding::new(
+            initial[crate::model::X_S] - initial[X_T],
+            margin[0],
+            start_time,
+        );
+        sim.start_load = sim.config.params.k_t * (piece.value(start_time) - initial[X_T]);
         Ok(sim)
     }
 
+    /// The solver's state matrix, the whole step, its grid form (with the
+    /// contact-loss test with [`Metrics::RoadHolding`] and the filter with
+    /// [`Metrics::Comfort`]) and the
+    /// filter coupling.
     fn operators(
         plant: &Plant,
         config: &SimulationConfig,
         grid: &DelayGrid,
-    ) -> Result<(Matrix6<f64>, StepOperator, GridStep)> {
+    ) -> Result<(Matrix6<f64>, StepOperator, GridStep, Option<FilterCoupling>)> {
         let mut a = plant.a;
         let mut b = plant.b;
         if !grid.resolves_delay() {
@@ -308,21 +409,38 @@ impl Simulator {
             _ => 0.0,
         };
         let (h, tau) = (grid.step, grid.inner_delay());
-        let step = StepOperator::new(&a, &b, &plant.e, omega, h);
-        let grid_step = if grid.delay_inside_step() {
-            let first = StepOperator::new(&a, &b, &plant.e, omega, tau);
-            let rest = StepOperator::new(&a, &b, &plant.e, omega, h - tau);
-            GridStep::inner_delay(&step, [&first, &rest], &a, omega, h, tau).ok_or(
-                Error::InvalidParameter {
+        let coupling = config
+            .metrics
+            .comfort()
+            .then(|| FilterCoupling::new(&a, &b, plant));
+        let filter = coupling.as_ref();
+        let step = StepOperator::new(&a, &b, &plant.e, omega, h, filter);
+        let mut grid_step = if grid.delay_inside_step() {
+            let first = StepOperator::new(&a, &b, &plant.e, omega, tau, filter);
+            let rest = StepOperator::new(&a, &b, &plant.e, omega, h - tau, filter);
+            let mut grid_step = GridStep::inner_delay(&step, [&first, &rest], &a, omega, h, tau)
+                .ok_or(Error::InvalidParameter {
                     name: "g",
                     value: config.params.g,
                     reason: "the step with the delay inside it is singular at this gain",
-                },
-            )?
+                })?;
+            grid_step.filter =
+                filter.and_then(|c| FilterGridStep::inner_delay(&step, [&first, &rest], c, h, tau));
+            grid_step
         } else {
-            GridStep::new(&step, &a, omega, h)
+            let mut grid_step = GridStep::new(&step, &a, omega, h);
+            grid_step.filter = filter.and_then(|c| FilterGridStep::new(&step, c, h));
+            grid_step
         };
-        Ok((a, step, grid_step))
+        let params = &config.params;
+        grid_step.contact.limit = if params.k_t > 0.0 {
+            params.static_load(config.variant) / params.k_t
+        } else {
+            f64::INFINITY
+        };
+        grid_step.contact.start_time = config.start_time;
+        grid_step.holding = config.metrics.road_holding();
+        Ok((a, step, grid_step, coupling))
     }
 
     /// The configuration.
@@ -427,9 +545,10 @@ impl Simulator {
             _ => 0.0,
         };
         let quantized = key as f64 / PARTIAL_STEP_RESOLUTION * self.grid.step;
+        let coupling = self.coupling.as_ref();
         self.partial_steps
             .entry(key)
-            .or_insert_with(|| StepOperator::new(&a, &b, &e, omega, quantized))
+            .or_insert_with(|| StepOperator::new(&a, &b, &e, omega, quantized, coupling))
     }
 
     fn solver_input_column(&self) -> State {
@@ -602,10 +721,26 @@ impl Simulator {
                     let from = (self.committed_time, self.committed_state);
                     let x = self.integrate_within_step(k, from.0, from.1, next_node);
                     self.check_divergence(next_node, &x)?;
+                    let w_from = self.committed_filter;
+                    let w = self.filter_within_step(k, from, &w_from, next_node);
                     let anchor = self.integral.anchor;
-                    let (step_integral, at_end, last_piece) =
-                        self.integral_within_step(k, from, anchor, next_node, &x);
-                    self.commit_node(k + 1, next_node, x, step_integral, (at_end, last_piece));
+                    let mut holding = self.holding;
+                    let (step_integral, at_end, last_piece) = self.integral_within_step(
+                        k,
+                        from,
+                        &w_from,
+                        anchor,
+                        next_node,
+                        (&x, &w),
+                        &mut holding,
+                    );
+                    self.holding = holding;
+                    self.commit_node(
+                        k + 1,
+                        (next_node, x, w),
+                        step_integral,
+                        (at_end, last_piece),
+                    );
                 }
                 if self.snaps(t_end, self.committed_time) {
                     return self.finish_near_committed(t_end);
@@ -651,14 +786,14 @@ impl Simulator {
         crate::monotone::last_index_where(k, u64::MAX - 1, estimate, reached)
     }
 
-    /// Commits grid node k (time, state x) reached from a point inside
-    /// step k − 1; `step_integral`: `∫ y²` from the committed point to it.
+    /// Commits grid node k (time, state x, filter state w) reached from a
+    /// point inside step k − 1; `step_integral`: `∫ f` from the committed
+    /// point to it.
     fn commit_node(
         &mut self,
         k: u64,
-        time: f64,
-        x: State,
-        step_integral: [f64; 3],
+        (time, x, w): (f64, State, Filter),
+        step_integral: [f64; INTEGRALS],
         arrival: (time_average::Squares, RoadPiece),
     ) {
         let len = self.history.len() as u64;
@@ -666,9 +801,13 @@ impl Simulator {
         self.grid_index = k;
         self.committed_time = time;
         self.committed_state = x;
+        self.committed_filter = w;
         self.current_time = time;
         self.current_state = x;
-        self.restart_run_after_step(k, time, &x, step_integral, arrival);
+        if self.config.metrics.road_holding() {
+            self.holding.add_node(&x.into());
+        }
+        self.restart_run_after_step(k, (time, &x, &w), step_integral, arrival);
         self.road.release_before(time);
     }
 
@@ -705,7 +844,9 @@ impl Simulator {
         let plant = Plant::new(params, self.config.variant)?;
         crate::limits::check_rates(&params, Some(self.config.variant))?;
         self.config.params = params;
-        let (matrix, step, grid_step) = Self::operators(&plant, &self.config, &self.grid)?;
+        let (matrix, step, grid_step, coupling) =
+            Self::operators(&plant, &self.config, &self.grid)?;
+        self.coupling = coupling;
         self.plant = plant;
         self.solver_matrix = matrix;
         self.solver_matrix_norm = infinity_norm(&matrix);
@@ -724,10 +865,13 @@ impl Simulator {
     /// Runs from the current time for `duration` seconds and summarises.
     pub fn run_for(&mut self, duration: f64) -> Result<RunSummary> {
         self.advance_to(self.current_time + duration)?;
-        let rms = self.rms_now();
+        let outputs = self.outputs();
         Ok(RunSummary {
-            rms,
-            objective: rms.objective(&self.config.weights),
+            rms: outputs.rms,
+            objective: outputs.objective,
+            comfort: outputs.comfort,
+            rms_dynamic_tire_load_ratio: outputs.rms_dynamic_tire_load_ratio,
+            road_holding: outputs.road_holding,
         })
     }
 }
@@ -858,27 +1002,78 @@ mod tests {
     fn whole_steps_match_the_general_step_closely() {
         // The whole-step loop (node form of the delayed input, rotated road
         // phase) against one general step per node (Hermite form, sin/cos).
-        let cfg = SimulationConfig {
+        // With the W_k filter, its state and a_w integrals too (the filter's
+        // grid step against its general step), also with the delay inside
+        // the step.
+        let displaced = SimulationConfig {
             params: Params::with_controller(40000.0, 0.03),
             initial_state: State::new(0.01, 0.0, 0.0, 0.0, 0.0, 0.0),
             ..SimulationConfig::default()
         };
-        let mut fast = Simulator::new(cfg.clone()).unwrap();
-        let mut general = Simulator::new(cfg).unwrap();
-        for k in 0..3000u64 {
-            let to = general.grid_time(k + 1);
-            let from = (general.committed_time, general.committed_state);
-            let x = general.integrate_within_step(k, from.0, from.1, to);
-            let anchor = general.integral.anchor;
-            let (step_integral, at_end, piece) =
-                general.integral_within_step(k, from, anchor, to, &x);
-            general.commit_node(k + 1, to, x, step_integral, (at_end, piece));
+        let inner = SimulationConfig {
+            params: Params::with_controller(40000.0, 3.7e-5),
+            initial_state: State::new(0.01, 0.0, 0.0, 0.0, 0.002, 0.1),
+            ..SimulationConfig::default()
+        };
+        for (cfg, comfort) in [(displaced.clone(), false), (displaced, true), (inner, true)] {
+            let metrics = if comfort {
+                Metrics::Comfort
+            } else {
+                Metrics::RoadHolding
+            };
+            let cfg = SimulationConfig { metrics, ..cfg };
+            let mut fast = Simulator::new(cfg.clone()).unwrap();
+            let mut general = Simulator::new(cfg).unwrap();
+            for k in 0..3000u64 {
+                let to = general.grid_time(k + 1);
+                let from = (general.committed_time, general.committed_state);
+                let x = general.integrate_within_step(k, from.0, from.1, to);
+                let w_from = general.committed_filter;
+                let w = general.filter_within_step(k, from, &w_from, to);
+                let anchor = general.integral.anchor;
+                let mut holding = general.holding;
+                let (step_integral, at_end, piece) = general.integral_within_step(
+                    k,
+                    from,
+                    &w_from,
+                    anchor,
+                    to,
+                    (&x, &w),
+                    &mut holding,
+                );
+                general.holding = holding;
+                general.commit_node(k + 1, (to, x, w), step_integral, (at_end, piece));
+            }
+            fast.advance_to(general.committed_time).unwrap();
+            let scale = general.committed_state.amax();
+            assert!((fast.committed_state - general.committed_state).amax() < 1e-12 * scale);
+            let (a, b) = (fast.rms(), general.rms());
+            assert!(
+                (a.body_acceleration - b.body_acceleration).abs() < 1e-12 * b.body_acceleration
+            );
+            assert!((a.tire_deflection - b.tire_deflection).abs() < 1e-12 * b.tire_deflection);
+            let (a, b) = (fast.outputs(), general.outputs());
+            let (u, v) = (
+                a.road_holding.unwrap().max_suspension_deflection,
+                b.road_holding.unwrap().max_suspension_deflection,
+            );
+            assert!((u - v).abs() < 1e-12 * v, "{u} {v}");
+            if comfort {
+                let filter_scale = general.committed_filter.amax();
+                assert!(filter_scale > 0.0);
+                let difference = (fast.committed_filter - general.committed_filter).amax();
+                assert!(difference < 1e-12 * filter_scale, "{difference:e}");
+                let (a, b) = (a.comfort.unwrap(), b.comfort.unwrap());
+                let (u, v) = (
+                    a.rms_weighted_body_acceleration,
+                    b.rms_weighted_body_acceleration,
+                );
+                assert!((u - v).abs() < 1e-12 * v, "{u} {v}");
+                let (u, v) = (a.vibration_dose_value, b.vibration_dose_value);
+                assert!((u - v).abs() < 1e-12 * v, "{u} {v}");
+            } else {
+                assert_eq!(a.comfort, None);
+            }
         }
-        fast.advance_to(general.committed_time).unwrap();
-        let scale = general.committed_state.amax();
-        assert!((fast.committed_state - general.committed_state).amax() < 1e-12 * scale);
-        let (a, b) = (fast.rms(), general.rms());
-        assert!((a.body_acceleration - b.body_acceleration).abs() < 1e-12 * b.body_acceleration);
-        assert!((a.tire_deflection - b.tire_deflection).abs() < 1e-12 * b.tire_deflection);
     }
 }

@@ -4,6 +4,8 @@
 //! grid step in the column form the whole-step loop uses.
 
 use super::expm;
+use super::filter::{FilterCoupling, FilterGridStep, FilterRows};
+use super::holding::ContactCheck;
 use crate::metrics::RunningRms;
 use crate::model::{State, V_T, X_S, X_T};
 use crate::road::RoadPiece;
@@ -11,10 +13,10 @@ use nalgebra::{Matrix4, Matrix6, SMatrix, Vector2, Vector4};
 
 /// Dimension of the augmented system: plant (6), cubic delayed input (4),
 /// linear road (2), harmonic road (2).
-const AUGMENTED: usize = 14;
-const DELAY_INPUT: usize = 6;
-const LINEAR_ROAD: usize = 10;
-const HARMONIC_ROAD: usize = 12;
+pub(super) const AUGMENTED: usize = 14;
+pub(super) const DELAY_INPUT: usize = 6;
+pub(super) const LINEAR_ROAD: usize = 10;
+pub(super) const HARMONIC_ROAD: usize = 12;
 
 /// The exact map of one step of length δ:
 /// `X(a+δ) = Φ X(a) + Γ_u p + Γ_l q + Γ_h z`, where
@@ -26,15 +28,23 @@ pub(super) struct StepOperator {
     pub(super) delayed_input: SMatrix<f64, 6, 4>,
     pub(super) linear_road: SMatrix<f64, 6, 2>,
     pub(super) harmonic_road: SMatrix<f64, 6, 2>,
+    /// The rows of the W_k filter states over the same step, when the
+    /// comfort outputs are on ([`FilterRows`]).
+    pub(super) filter: Option<FilterRows>,
 }
 
 impl StepOperator {
+    /// The step of length `length` (s); with `coupling`, the W_k filter
+    /// rows too ([`FilterRows::new`]). The plant's matrices come from the
+    /// plant's own 14-dimensional exponential either way, so turning the
+    /// filter on does not change a bit of the plant's step.
     pub(super) fn new(
         a: &Matrix6<f64>,
         b: &State,
         e: &State,
         angular_frequency: f64,
         length: f64,
+        coupling: Option<&FilterCoupling>,
     ) -> Self {
         let mut m = SMatrix::<f64, AUGMENTED, AUGMENTED>::zeros();
         m.fixed_view_mut::<6, 6>(0, 0).copy_from(a);
@@ -53,6 +63,7 @@ impl StepOperator {
             delayed_input: exp.fixed_view::<6, 4>(0, DELAY_INPUT).into_owned(),
             linear_road: exp.fixed_view::<6, 2>(0, LINEAR_ROAD).into_owned(),
             harmonic_road: exp.fixed_view::<6, 2>(0, HARMONIC_ROAD).into_owned(),
+            filter: coupling.map(|c| FilterRows::new(&m, c, length)),
         }
     }
 
@@ -173,6 +184,14 @@ pub(super) struct GridStep {
     /// Columns of the 2×6 map from X to `[BA, SDD]` (row V_S of A, and
     /// `x_s − x_t`).
     pub(super) outputs: [[f64; 2]; 6],
+    /// The W_k filter's step, when the comfort outputs are on.
+    pub(super) filter: Option<FilterGridStep>,
+    /// The contact-loss test of every step (the limit is set by the
+    /// simulator; +∞ until then).
+    pub(super) contact: ContactCheck,
+    /// Whether the whole-step loop runs the road-holding test and the
+    /// largest |SDD| ([`super::Metrics::RoadHolding`]).
+    pub(super) holding: bool,
 }
 
 impl GridStep {
@@ -232,6 +251,7 @@ impl GridStep {
             delayed_input: solve * earlier,
             linear_road: solve * whole.linear_road,
             harmonic_road: solve * whole.harmonic_road,
+            filter: None,
         };
         Some(Self::from_matrices(
             &scaled.transition,
@@ -268,6 +288,14 @@ impl GridStep {
                 };
                 [a[(crate::model::V_S, j)], sdd]
             }),
+            filter: None,
+            contact: ContactCheck {
+                limit: f64::INFINITY,
+                angular_frequency,
+                start_time: 0.0,
+                step: h,
+            },
+            holding: false,
         }
     }
 
@@ -294,6 +322,15 @@ impl GridStep {
     pub(super) fn count(&self, rms: &mut RunningRms, x: &[f64; 6], road: f64) {
         let [ba, sdd] = self.ba_sdd(x);
         rms.add_values(ba, sdd, x[X_T] - road);
+    }
+
+    /// Adds `a_w²` and `a_w⁴` of the node with filter state w to `sums`
+    /// (nothing without the filter).
+    #[inline(always)]
+    pub(super) fn count_weighted(&self, w: &[f64; 8], sums: &mut [f64; 2]) {
+        if let Some(filter) = &self.filter {
+            filter.count(w, sums);
+        }
     }
 }
 

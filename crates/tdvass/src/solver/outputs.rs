@@ -2,9 +2,60 @@
 //! derivatives, and the summary of a run.
 
 use super::Simulator;
+use super::time_average::{Accumulated, WEIGHTED_FOURTH, WEIGHTED_SQUARE, rms_from_integral};
 use crate::metrics::RmsValues;
-use crate::model::{Performance, State, X_T};
+use crate::model::{Performance, State, X_S, X_T};
 use crate::road::RoadPiece;
+
+/// Ride comfort by ISO 2631-1:1997 (vertical whole-body vibration, W_k
+/// weighting of the body acceleration BA; see [`crate::comfort`]), present
+/// when [`super::SimulationConfig::comfort`] is on.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ComfortValues {
+    /// The frequency-weighted body acceleration a_w(t) (m/s²): BA through
+    /// W_k, the filter starting from rest at t_0.
+    pub weighted_body_acceleration: f64,
+    /// Its running RMS, the time average
+    /// `sqrt((1/(t − t_0)) ∫_{t_0}^{t} a_w² ds)` (m/s²; 0 at the start),
+    /// the a_w of ISO 2631-1 section 6.1 and of its comfort scale
+    /// ([`crate::comfort::comfort_reaction`]).
+    pub rms_weighted_body_acceleration: f64,
+    /// The vibration dose value `VDV = (∫_{t_0}^{t} a_w⁴ ds)^{1/4}`
+    /// (m/s^1.75), ISO 2631-1 section 6.3.2.
+    pub vibration_dose_value: f64,
+}
+
+/// Road holding and working space so far, kept with
+/// [`super::Metrics::RoadHolding`] (and [`super::Metrics::Comfort`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct RoadHolding {
+    /// The time without tire contact so far (s): the measure of the times
+    /// at which the dynamic tire load was below −W, crossings located
+    /// inside the steps (see `solver::holding`).
+    pub contact_loss_time: f64,
+    /// The largest |SDD| so far (m), over the grid nodes (and other
+    /// committed points) and now: the suspension working space used.
+    pub max_suspension_deflection: f64,
+    /// The first loss of tire contact, if any so far.
+    pub first_contact_loss: Option<ContactLoss>,
+}
+
+/// The first loss of tire contact: the first time at which the dynamic
+/// tire load `k_t (x_g − x_t)` fell below minus the static load
+/// ([`crate::model::Params::static_load`]). The linear model does not hold
+/// while the contact is lost; the simulation goes on, and front-ends warn
+/// once.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactLoss {
+    /// When (s).
+    pub time: f64,
+    /// The dynamic tire load then (N): minus the static load at a crossing
+    /// inside the run, the initial value when the run starts without
+    /// contact.
+    pub dynamic_tire_load: f64,
+    /// The static load W (N).
+    pub static_load: f64,
+}
 
 /// Every output of the model at one instant (the FMU's outputs).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -24,6 +75,21 @@ pub struct Outputs {
     pub rms: RmsValues,
     /// J of Eq. (6) from the running RMS values.
     pub objective: f64,
+    /// ISO 2631-1 ride comfort (`None` unless
+    /// [`super::SimulationConfig::comfort`] is on).
+    pub comfort: Option<ComfortValues>,
+    /// The dynamic tire load `k_t (x_g − x_t)` (N; `−k_t TDD`, positive
+    /// when the tire is compressed beyond its static load; there is no tire
+    /// damping).
+    pub dynamic_tire_load: f64,
+    /// `RMS(dynamic tire load) / W` (dimensionless): `k_t RMS(TDD) / W`
+    /// with the static load W ([`crate::model::Params::static_load`]).
+    /// At most 1/3 keeps the contact with 3σ confidence for a Gaussian
+    /// load.
+    pub rms_dynamic_tire_load_ratio: f64,
+    /// Road holding and working space (`None` below
+    /// [`super::Metrics::RoadHolding`]).
+    pub road_holding: Option<RoadHolding>,
 }
 
 /// First time derivatives of the outputs.
@@ -42,6 +108,18 @@ pub struct OutputDerivatives {
     pub rms: RmsValues,
     /// dJ/dt.
     pub objective: f64,
+    /// d/dt of the comfort outputs: `da_w/dt = c_w (A_w w + b_w BA)`, the
+    /// RMS rate as above, `dVDV/dt = a_w⁴ / (4 VDV³)` (0 where VDV = 0).
+    pub comfort: Option<ComfortValues>,
+    /// d/dt of the dynamic tire load, `k_t (dx_g/dt − v_t)` (N/s).
+    pub dynamic_tire_load: f64,
+    /// d/dt of the RMS dynamic tire load ratio (1/s).
+    pub rms_dynamic_tire_load_ratio: f64,
+    /// d/dt of road holding and working space: of the contact loss time 1
+    /// while the contact is lost, else 0; of the largest |SDD| (m/s)
+    /// `d|SDD|/dt` while |SDD| now is the largest and growing, else 0;
+    /// `first_contact_loss` is `None`.
+    pub road_holding: Option<RoadHolding>,
 }
 
 /// Summary of a finished run.
@@ -51,6 +129,14 @@ pub struct RunSummary {
     pub rms: RmsValues,
     /// J of Eq. (6).
     pub objective: f64,
+    /// ISO 2631-1 ride comfort at the end (`None` unless
+    /// [`super::SimulationConfig::comfort`] is on).
+    pub comfort: Option<ComfortValues>,
+    /// `RMS(dynamic tire load) / W` over the run (see [`Outputs`]).
+    pub rms_dynamic_tire_load_ratio: f64,
+    /// Road holding and working space over the run (`None` below
+    /// [`super::Metrics::RoadHolding`]).
+    pub road_holding: Option<RoadHolding>,
 }
 
 impl Simulator {
@@ -81,18 +167,80 @@ impl Simulator {
         let x = self.current_state;
         let road = self.road_piece_now().value(t);
         let (delayed, _) = self.delayed_tire_now();
-        let rms = self.rms_now();
+        let now = self.accumulated_now();
+        let duration = t - self.config.start_time;
+        let rms = rms_from_integral(now.integral, duration);
+        let performance = Performance::at(&self.plant, &x, road);
+        let k_t = self.config.params.k_t;
         let outputs = Outputs {
             time: t,
             state: self.plant.reported_state(&x),
-            performance: Performance::at(&self.plant, &x, road),
+            performance,
             road_displacement: road,
             control_force: self.config.params.effective_gain(self.config.variant) * delayed,
             rms,
             objective: rms.objective(&self.config.weights),
+            comfort: self.comfort_values(&now, duration),
+            dynamic_tire_load: k_t * (road - x[X_T]),
+            rms_dynamic_tire_load_ratio: k_t * rms.tire_deflection / self.static_load(),
+            road_holding: self.config.metrics.road_holding().then(|| RoadHolding {
+                contact_loss_time: now.holding.lost_steps as f64 * self.grid.step
+                    + now.holding.lost_time,
+                max_suspension_deflection: now
+                    .holding
+                    .max_deflection
+                    .max(performance.suspension_deflection.abs()),
+                first_contact_loss: now
+                    .holding
+                    .first_loss
+                    .map(|time| self.contact_loss_at(time)),
+            }),
         };
         self.outputs_cache = Some(outputs);
         outputs
+    }
+
+    /// The static tire load W (N) of the configured variant
+    /// ([`crate::model::Params::static_load`]).
+    pub fn static_load(&self) -> f64 {
+        self.config.params.static_load(self.config.variant)
+    }
+
+    /// The first loss of tire contact so far, if any (see [`ContactLoss`];
+    /// always `None` below [`super::Metrics::RoadHolding`]).
+    pub fn first_contact_loss(&mut self) -> Option<ContactLoss> {
+        self.outputs()
+            .road_holding
+            .and_then(|holding| holding.first_contact_loss)
+    }
+
+    fn contact_loss_at(&self, time: f64) -> ContactLoss {
+        let static_load = self.static_load();
+        let dynamic_tire_load = if time == self.config.start_time && self.start_load < -static_load
+        {
+            self.start_load
+        } else {
+            -static_load
+        };
+        ContactLoss {
+            time,
+            dynamic_tire_load,
+            static_load,
+        }
+    }
+
+    fn comfort_values(&self, now: &Accumulated, duration: f64) -> Option<ComfortValues> {
+        let coupling = self.coupling.as_ref()?;
+        let rms = if duration > 0.0 {
+            (now.integral[WEIGHTED_SQUARE].max(0.0) / duration).sqrt()
+        } else {
+            0.0
+        };
+        Some(ComfortValues {
+            weighted_body_acceleration: coupling.weighted(&now.filter),
+            rms_weighted_body_acceleration: rms,
+            vibration_dose_value: now.integral[WEIGHTED_FOURTH].max(0.0).sqrt().sqrt(),
+        })
     }
 
     /// Exact first time derivatives of the instantaneous outputs.
@@ -121,7 +269,45 @@ impl Simulator {
             suspension_deflection: rate(now.suspension_deflection, rms.suspension_deflection),
             tire_deflection: rate(now.tire_deflection, rms.tire_deflection),
         };
+        let outputs = self.outputs();
+        let accumulated = self.accumulated_now();
+        let comfort = match (&self.coupling, outputs.comfort) {
+            (Some(coupling), Some(values)) => {
+                let filter = accumulated.filter;
+                let a = values.weighted_body_acceleration;
+                let vdv = values.vibration_dose_value;
+                Some(ComfortValues {
+                    weighted_body_acceleration: coupling
+                        .weighted_rate(&filter, now.body_acceleration),
+                    rms_weighted_body_acceleration: rate(a, values.rms_weighted_body_acceleration),
+                    vibration_dose_value: if vdv > 0.0 {
+                        a.powi(4) / (4.0 * vdv.powi(3))
+                    } else {
+                        0.0
+                    },
+                })
+            }
+            _ => None,
+        };
+        let k_t = self.config.params.k_t;
+        let sdd_rate = dx[X_S] - dx[X_T];
+        let sdd = now.suspension_deflection;
+        let growing = sdd.signum() * sdd_rate;
+        let holding = accumulated.holding;
+        let in_contact = self.margin_at(t, &x, &piece)[0] >= 0.0;
         OutputDerivatives {
+            comfort,
+            dynamic_tire_load: k_t * (road_rate - dx[X_T]),
+            rms_dynamic_tire_load_ratio: k_t * rms_rate.tire_deflection / self.static_load(),
+            road_holding: self.config.metrics.road_holding().then_some(RoadHolding {
+                contact_loss_time: if in_contact { 0.0 } else { 1.0 },
+                max_suspension_deflection: if sdd.abs() >= holding.max_deflection && growing > 0.0 {
+                    growing
+                } else {
+                    0.0
+                },
+                first_contact_loss: None,
+            }),
             rms: rms_rate,
             objective: rms_rate.objective(&self.config.weights),
             state: self.plant.reported_state(&dx),

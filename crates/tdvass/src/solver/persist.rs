@@ -1,17 +1,29 @@
 //! Byte encoding of a whole [`Simulator`]: configuration and dynamic state
 //! (time, committed and current state, the delay history, the road
-//! generator, the RMS accumulators). Little-endian, position independent.
-//! Written and read with the one codec of [`crate::bytes`]. Framing
-//! (magic, version, checksum) is the caller's business; this layer
-//! refuses truncated or inconsistent input with an error, never a panic.
+//! generator, the RMS accumulators, the W_k filter state and its integrals,
+//! the road-holding and working-space accumulators). Little-endian,
+//! position independent. The bytes start with [`STATE_FORMAT_VERSION`];
+//! further framing (magic, checksum) is the caller's business. Written and
+//! read with the one codec of [`crate::bytes`]. This layer
+//! refuses truncated, foreign-version or inconsistent input with an error,
+//! never a panic.
 
-use super::{SimulationConfig, Simulator};
+use super::holding::Holding;
+use super::time_average::{INTEGRALS, WEIGHTED_FOURTH, WEIGHTED_SQUARE};
+use super::{Metrics, SimulationConfig, Simulator};
 use crate::bytes::{ByteReader, ByteWriter};
 use crate::error::{Error, Result};
 use crate::metrics::{RunningRms, Weights};
 use crate::model::{Params, State, Variant};
 use crate::road::{RandomRoad, RoadClass, RoadSpec, RoadState, RoadType};
 use std::sync::Arc;
+
+/// Version of the byte layout written by [`Simulator::to_bytes`] (the
+/// first u64), and the only one read. Version 2 added the metrics level, the
+/// W_k filter state, the integrals of a_w² and a_w⁴, and the road-holding
+/// and working-space accumulators; the bytes of version 1 had no version
+/// word (they begin with the body mass) and are refused.
+pub const STATE_FORMAT_VERSION: u64 = 2;
 
 fn write_random_road(w: &mut ByteWriter, r: &RandomRoad) {
     w.u64(r.class.code() as u64);
@@ -63,6 +75,7 @@ fn write_config(w: &mut ByteWriter, c: &SimulationConfig) {
     w.f64(c.weights.body_acceleration);
     w.f64(c.weights.suspension_deflection);
     w.f64(c.weights.tire_deflection);
+    w.u64(c.metrics.code());
 }
 
 fn read_config(r: &mut ByteReader) -> Result<SimulationConfig> {
@@ -116,6 +129,8 @@ fn read_config(r: &mut ByteReader) -> Result<SimulationConfig> {
         suspension_deflection: r.f64()?,
         tire_deflection: r.f64()?,
     };
+    let metrics = Metrics::from_code(r.u64()?)
+        .map_err(|e| Error::InvalidState(format!("metrics level: {e}")))?;
     Ok(SimulationConfig {
         params,
         variant,
@@ -124,6 +139,7 @@ fn read_config(r: &mut ByteReader) -> Result<SimulationConfig> {
         start_time,
         initial_state,
         weights,
+        metrics,
     })
 }
 
@@ -131,6 +147,7 @@ impl Simulator {
     /// Encodes the whole simulator.
     pub fn to_bytes(&self) -> Vec<u8> {
         let mut w = ByteWriter::default();
+        w.u64(STATE_FORMAT_VERSION);
         write_config(&mut w, &self.config);
         w.u64(self.grid_index);
         w.f64(self.committed_time);
@@ -147,6 +164,19 @@ impl Simulator {
         w.f64(integral.anchor_time);
         integral.anchor.value.iter().for_each(|&v| w.f64(v));
         integral.anchor.rate.iter().for_each(|&v| w.f64(v));
+        self.weighted.iter().for_each(|&v| w.f64(v));
+        self.committed_filter.iter().for_each(|&v| w.f64(v));
+        let holding = &self.holding;
+        w.f64(holding.max_deflection);
+        w.u64(holding.lost_steps);
+        w.f64(holding.lost_time);
+        match holding.first_loss {
+            Some(time) => {
+                w.u64(1);
+                w.f64(time);
+            }
+            None => w.u64(0),
+        }
         let road = self.road.dynamic_state();
         w.u128(road.word_position);
         w.u64(road.first_node);
@@ -181,8 +211,21 @@ impl Simulator {
     ///   snap tolerance ([`Simulator::snap_tolerance`]);
     /// - the road generator is consistent with `committed_time` (see
     ///   `Road::restore_dynamic_state`, with the horizon `t_{k+2}`).
+    ///
+    /// The comfort and road-holding accumulators must be consistent too:
+    /// finite; the filter state and the a_w integrals zero without the
+    /// filter; the largest |SDD| not below the committed point's; the time
+    /// without contact within the time run, with a first loss recorded
+    /// whenever there is such time, at a time between the start and the
+    /// committed point.
     pub fn from_bytes(bytes: &[u8]) -> Result<Simulator> {
         let mut r = ByteReader::new(bytes);
+        let version = r.u64()?;
+        if version != STATE_FORMAT_VERSION {
+            return Err(Error::InvalidState(format!(
+                "state format version {version}: only version {STATE_FORMAT_VERSION} is read"
+            )));
+        }
         let config = read_config(&mut r)?;
         let mut sim = Simulator::new(config)?;
         sim.grid_index = r.u64()?;
@@ -222,6 +265,27 @@ impl Simulator {
         for v in sim.integral.anchor.rate.iter_mut() {
             *v = r.f64()?;
         }
+        for v in sim.weighted.iter_mut() {
+            *v = r.f64()?;
+        }
+        for v in sim.committed_filter.iter_mut() {
+            *v = r.f64()?;
+        }
+        let initial_holding = sim.holding;
+        sim.holding = Holding {
+            max_deflection: r.f64()?,
+            lost_steps: r.u64()?,
+            lost_time: r.f64()?,
+            first_loss: match r.u64()? {
+                0 => None,
+                1 => Some(r.f64()?),
+                other => {
+                    return Err(Error::InvalidState(format!(
+                        "first contact loss tag {other}"
+                    )));
+                }
+            },
+        };
         let mut road = RoadState {
             word_position: r.u128()?,
             first_node: r.u64()?,
@@ -244,6 +308,14 @@ impl Simulator {
         }
         sim.check_times()?;
         sim.check_rms()?;
+        sim.check_comfort()?;
+        if sim.config.metrics.road_holding() {
+            sim.check_holding()?;
+        } else if sim.holding != initial_holding {
+            return Err(Error::InvalidState(
+                "road-holding accumulators moved, but road holding is off".into(),
+            ));
+        }
         let horizon = sim.grid_time(sim.grid_index.saturating_add(2));
         sim.road
             .restore_dynamic_state(&road, sim.committed_time, horizon)?;
@@ -296,6 +368,82 @@ impl Simulator {
         Ok(())
     }
 
+    /// The W_k accumulators of [`Simulator::from_bytes`]: finite, the node
+    /// sums not negative, and all zero without the filter.
+    fn check_comfort(&self) -> Result<()> {
+        let integral = &self.integral;
+        let weighted = [WEIGHTED_SQUARE, WEIGHTED_FOURTH];
+        let values: Vec<f64> = weighted
+            .iter()
+            .flat_map(|&i| {
+                [
+                    integral.closed[i],
+                    integral.anchor.value[i],
+                    integral.anchor.rate[i],
+                ]
+            })
+            .chain(self.weighted)
+            .chain(self.committed_filter.iter().copied())
+            .collect();
+        if let Some(bad) = values.iter().find(|v| !v.is_finite()) {
+            return Err(Error::InvalidState(format!(
+                "comfort (a_w) accumulator {bad} is not finite"
+            )));
+        }
+        if let Some(bad) = self.weighted.iter().find(|v| **v < 0.0) {
+            return Err(Error::InvalidState(format!(
+                "comfort (a_w) sum {bad} is negative"
+            )));
+        }
+        if self.coupling.is_none() && values.iter().any(|v| *v != 0.0) {
+            return Err(Error::InvalidState(
+                "comfort (a_w) accumulators are not zero, but the W_k filter is off".into(),
+            ));
+        }
+        debug_assert_eq!(INTEGRALS, 5);
+        Ok(())
+    }
+
+    /// The road-holding accumulators of [`Simulator::from_bytes`].
+    fn check_holding(&self) -> Result<()> {
+        let holding = &self.holding;
+        let x = self.committed_state;
+        let committed = (x[crate::model::X_S] - x[crate::model::X_T]).abs();
+        let deflection = holding.max_deflection;
+        if !(deflection.is_finite() && deflection >= committed) {
+            return Err(Error::InvalidState(format!(
+                "max suspension deflection {deflection} m is not finite or below the committed |SDD| {committed} m"
+            )));
+        }
+        let elapsed = self.committed_time - self.config.start_time;
+        let lost = holding.lost_steps as f64 * self.grid.step + holding.lost_time;
+        let tolerance = self.snap_tolerance(self.committed_time) + 1e-9 * elapsed.abs();
+        if holding.lost_steps > self.grid_index
+            || !(holding.lost_time.is_finite()
+                && holding.lost_time >= 0.0
+                && lost <= elapsed + tolerance)
+        {
+            return Err(Error::InvalidState(format!(
+                "contact loss time {lost} s ({} whole steps and {} s) does not fit in the {elapsed} s run",
+                holding.lost_steps, holding.lost_time
+            )));
+        }
+        match holding.first_loss {
+            None if lost > 0.0 => Err(Error::InvalidState(format!(
+                "contact loss time {lost} s without a first contact loss"
+            ))),
+            Some(time)
+                if !(time >= self.config.start_time && time <= self.committed_time + tolerance) =>
+            {
+                Err(Error::InvalidState(format!(
+                    "first contact loss at {time} s lies outside the run up to the committed_time {} s",
+                    self.committed_time
+                )))
+            }
+            _ => Ok(()),
+        }
+    }
+
     /// The time checks of [`Simulator::from_bytes`] on `grid_index`,
     /// `committed_time` and `current_time`.
     fn check_times(&self) -> Result<()> {
@@ -340,6 +488,7 @@ mod tests {
     /// (6 values), then `current_time`.
     fn grid_index_at(sim: &Simulator) -> usize {
         let mut w = ByteWriter::default();
+        w.u64(STATE_FORMAT_VERSION);
         write_config(&mut w, &sim.config);
         w.bytes.len()
     }
@@ -506,6 +655,84 @@ mod tests {
                 assert_eq!(restored.to_bytes(), ahead.to_bytes(), "{road:?} at {t}");
             }
         }
+    }
+
+    #[test]
+    fn comfort_and_holding_accumulators_inconsistent_with_the_run_are_refused() {
+        use crate::solver::Metrics;
+        let config = |metrics| SimulationConfig {
+            road: RoadSpec::Iso8608(RandomRoad {
+                class: RoadClass::H,
+                speed: 30.0,
+                ..RandomRoad::default()
+            }),
+            metrics,
+            ..SimulationConfig::default()
+        };
+        let mut sim = Simulator::new(config(Metrics::Comfort)).unwrap();
+        sim.advance_to(0.5).unwrap();
+        let holding = sim.holding;
+        assert!(holding.lost_steps > 0 && holding.first_loss.is_some());
+        let bytes = sim.to_bytes();
+        Simulator::from_bytes(&bytes).unwrap();
+        // Offsets from the end: the road state (input tag, the nodes with
+        // their count, first_node, word position), then the first loss (tag
+        // and time), the lost time, the lost steps, the max deflection, the
+        // 8 filter states and the 2 a_w sums.
+        let road = sim.road.dynamic_state();
+        let road_len = 16 + 8 + 8 + 8 * road.nodes.len() + 8;
+        let first_loss_at = bytes.len() - road_len - 16;
+        let lost_time_at = first_loss_at - 8;
+        let lost_steps_at = lost_time_at - 8;
+        let max_at = lost_steps_at - 8;
+        let filter_at = max_at - 8 * 8;
+        let sums_at = filter_at - 16;
+        assert_eq!(
+            bytes[lost_steps_at..lost_steps_at + 8],
+            holding.lost_steps.to_le_bytes()
+        );
+        for (at, value, words) in [
+            (sums_at, (-1.0f64).to_bits(), ["comfort", "negative"]),
+            (filter_at, f64::NAN.to_bits(), ["comfort", "NaN"]),
+            (
+                max_at,
+                0.0f64.to_bits(),
+                ["max suspension deflection", "below"],
+            ),
+            (
+                lost_steps_at,
+                sim.grid_index + 1,
+                ["contact loss time", "whole steps"],
+            ),
+            (lost_time_at, 1e3f64.to_bits(), ["contact loss time", "run"]),
+            (
+                first_loss_at + 8,
+                1e3f64.to_bits(),
+                ["first contact loss", "outside"],
+            ),
+        ] {
+            let mut forged = bytes.clone();
+            put(&mut forged, at, value);
+            refused(&forged, &words);
+        }
+        // No first loss recorded (tag 0, without its time).
+        let mut forged = bytes[..first_loss_at].to_vec();
+        forged.extend(0u64.to_le_bytes());
+        forged.extend(&bytes[first_loss_at + 16..]);
+        refused(&forged, &["contact loss time", "without a first"]);
+        // A foreign version.
+        let mut forged = bytes.clone();
+        put(&mut forged, 0, 1);
+        refused(&forged, &["format version 1"]);
+        // Filter state or holding accumulators where they are not kept.
+        let mut paper = Simulator::new(config(Metrics::Paper)).unwrap();
+        paper.advance_to(0.5).unwrap();
+        paper.committed_filter[3] = 1e-3;
+        refused(&paper.to_bytes(), &["comfort", "off"]);
+        paper.committed_filter[3] = 0.0;
+        Simulator::from_bytes(&paper.to_bytes()).unwrap();
+        paper.holding.lost_steps = 1;
+        refused(&paper.to_bytes(), &["road holding is off"]);
     }
 
     /// The bytes of `sim` with its random road state replaced.

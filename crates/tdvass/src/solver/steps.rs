@@ -3,6 +3,7 @@
 //! road breakpoints, and the steps that a road breakpoint splits, with
 //! their share of the RMS time integral.
 
+use super::filter::Filter;
 use super::kernel::{HarmonicPhase, HotState, LinearPiece, Segment, run_segment, within_bounds};
 use super::{PHASE_ANCHOR, Simulator};
 use crate::error::Result;
@@ -67,6 +68,9 @@ impl Simulator {
             k: first,
             slot: ((first + 1) % len as u64) as usize,
             rms: self.rms,
+            w: self.committed_filter.into(),
+            weighted: self.weighted,
+            holding: self.holding,
         };
         let mut diverged = None;
         while hot.k < last {
@@ -91,11 +95,14 @@ impl Simulator {
             }
             if hot.k > start {
                 self.grid_step.count(&mut hot.rms, &hot.x, hot.road.0[0]);
+                self.grid_step.count_weighted(&hot.w, &mut hot.weighted);
             }
         }
         self.rms = hot.rms;
+        self.weighted = hot.weighted;
+        self.holding = hot.holding;
         self.phase = Some((hot.k, hot.road.0));
-        self.set_committed_node(first, hot.k, hot.x);
+        self.set_committed_node(first, hot.k, hot.x, hot.w);
         match diverged {
             Some(x) => self.check_divergence(self.grid_time(hot.k + 1), &State::from(x)),
             None => Ok(()),
@@ -103,13 +110,14 @@ impl Simulator {
     }
 
     /// Records node k (reached by the whole-step loop from node `first`) as
-    /// the committed and current state.
-    fn set_committed_node(&mut self, first: u64, k: u64, x: [f64; 6]) {
+    /// the committed and current state, with its filter state w.
+    fn set_committed_node(&mut self, first: u64, k: u64, x: [f64; 6], w: [f64; 8]) {
         if k > first {
             let time = self.grid_time(k);
             self.grid_index = k;
             self.committed_time = time;
             self.committed_state = State::from(x);
+            self.committed_filter = Filter::from(w);
             self.current_time = time;
             self.current_state = self.committed_state;
             self.road.release_before(time);
@@ -130,6 +138,9 @@ impl Simulator {
         // Ring slot of node k + 1, which holds node k − m until overwritten.
         let mut slot = ((k + 1) % len as u64) as usize;
         let mut rms = self.rms;
+        let mut w: [f64; 8] = self.committed_filter.into();
+        let mut weighted = self.weighted;
+        let mut holding = self.holding;
         // A local copy: the compiler then knows that the history writes do
         // not change it.
         let op = self.grid_step.clone();
@@ -173,6 +184,9 @@ impl Simulator {
                     k,
                     slot,
                     rms,
+                    w,
+                    weighted,
+                    holding,
                 };
                 let segment = Segment {
                     op: &op,
@@ -182,6 +196,7 @@ impl Simulator {
                 };
                 let diverged = run_segment::<_, DELAY>(segment, &mut hot, before);
                 (x, k, slot, rms) = (hot.x, hot.k, hot.slot, hot.rms);
+                (w, weighted, holding) = (hot.w, hot.weighted, hot.holding);
                 if let Some(x_next) = diverged {
                     break self.check_divergence(self.grid_time(k + 1), &State::from(x_next));
                 }
@@ -194,11 +209,21 @@ impl Simulator {
                     self.road.piece(now)
                 };
                 op.count(&mut rms, &x, piece_now.value(now));
+                op.count_weighted(&w, &mut weighted);
                 if k != inside && self.coincide(end, now) {
                     // The node is a road breakpoint: x_g has a kink there,
                     // so the RMS run of nodes closes at it.
                     let after = self.piece_from(now);
-                    self.close_run_at_node(k, now, &State::from(x), &mut rms, &piece, &after);
+                    self.close_run_at_node(
+                        k,
+                        now,
+                        &State::from(x),
+                        &Filter::from(w),
+                        &mut rms,
+                        &mut weighted,
+                        &piece,
+                        &after,
+                    );
                 }
                 self.road.release_before(self.grid_time(k - 1));
                 piece_at_node = Some(piece_now);
@@ -208,11 +233,22 @@ impl Simulator {
             // its start, and the step is integrated piece by piece.
             let next_slot = if slot + 1 == len { 0 } else { slot + 1 };
             let node = State::from(x);
+            let node_filter = Filter::from(w);
             let piece_at_start = self.piece_from(t);
-            self.close_run_at_node(k, t, &node, &mut rms, &piece_at_start, &piece_at_start);
+            self.close_run_at_node(
+                k,
+                t,
+                &node,
+                &node_filter,
+                &mut rms,
+                &mut weighted,
+                &piece_at_start,
+                &piece_at_start,
+            );
             let anchor = self.integral.anchor;
-            let (x_end, step_integral, at_end, last_piece) =
-                self.integrate_split_step(k, t, node, anchor, to);
+            let mut step_holding = holding;
+            let (x_end, w_end, step_integral, at_end, last_piece) =
+                self.integrate_split_step(k, t, node, node_filter, anchor, to, &mut step_holding);
             let x_next: [f64; 6] = x_end.into();
             if (k + 1).is_multiple_of(PHASE_ANCHOR) {
                 self.road.release_before(t);
@@ -225,13 +261,25 @@ impl Simulator {
                 break Err(e);
             }
             self.history[slot] = [x_next[X_T], x_next[V_T]];
-            self.restart_run_after_step(k + 1, to, &x_end, step_integral, (at_end, last_piece));
+            if self.config.metrics.road_holding() {
+                holding = step_holding;
+                holding.add_node(&x_next);
+            }
+            self.restart_run_after_step(
+                k + 1,
+                (to, &x_end, &w_end),
+                step_integral,
+                (at_end, last_piece),
+            );
+            w = w_end.into();
             x = x_next;
             slot = next_slot;
             k += 1;
         };
         self.rms = rms;
-        self.set_committed_node(first, k, x);
+        self.weighted = weighted;
+        self.holding = holding;
+        self.set_committed_node(first, k, x, w);
         result
     }
 

@@ -21,46 +21,72 @@
 //! from the exact dense output at the piece ends. f' comes from the exact
 //! output derivatives, `d(y²)/dt = 2 y ẏ`.
 //!
+//! With the W_k filter on, `a_w²` and `a_w⁴` are integrated the same way
+//! (for the RMS of a_w and the vibration dose value): a_w is a state
+//! output of the filter, so it and its rate `ȧ_w = c_w (A_w w + b_w BA)`
+//! are continuous everywhere, also across road breakpoints. Without the
+//! filter these two integrals stay 0.
+//!
 //! With a delay shorter than the step (`0 < tau < h`), the delayed input's
 //! second derivative jumps inside every step (at `t_k + tau`), so f''' does
 //! too and the rule is third order there: the extra error is below
 //! `h⁴ |Δf'''| / 384` per step.
 
+use super::filter::Filter;
+use super::holding::{Holding, margin};
 use super::{Simulator, hermite};
 use crate::metrics::{RmsValues, RunningRms};
 use crate::model::{State, V_S, V_T, X_S, X_T};
 use crate::road::RoadPiece;
 use nalgebra::Vector4;
 
-/// `y²` and `d(y²)/dt` of BA, SDD, TDD at one instant.
+/// Number of time integrals kept: `BA²`, `SDD²`, `TDD²`, `a_w²`, `a_w⁴`.
+pub(crate) const INTEGRALS: usize = 5;
+/// Index of `a_w²` among the integrals.
+pub(crate) const WEIGHTED_SQUARE: usize = 3;
+/// Index of `a_w⁴` among the integrals.
+pub(crate) const WEIGHTED_FOURTH: usize = 4;
+
+/// The integrands `f` and their rates at one instant: `y²` of BA, SDD,
+/// TDD, and `a_w²`, `a_w⁴`.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub(crate) struct Squares {
-    /// `y²` (BA in (m/s²)², SDD and TDD in m²).
-    pub value: [f64; 3],
-    /// `d(y²)/dt = 2 y ẏ`.
-    pub rate: [f64; 3],
+    /// `f` (BA in (m/s²)², SDD and TDD in m², a_w² in (m/s²)², a_w⁴ in
+    /// (m/s²)⁴).
+    pub value: [f64; INTEGRALS],
+    /// `df/dt` (`2 y ẏ` for the squares, `4 a_w³ ȧ_w`).
+    pub rate: [f64; INTEGRALS],
 }
 
 impl Squares {
-    /// From the outputs `y` and their rates `ẏ`.
-    fn of(y: [f64; 3], rate: [f64; 3]) -> Squares {
-        Squares {
-            value: std::array::from_fn(|i| y[i] * y[i]),
-            rate: std::array::from_fn(|i| 2.0 * y[i] * rate[i]),
+    /// From the outputs `y` and their rates `ẏ`, and `[a_w, ȧ_w]`.
+    fn of(y: [f64; 3], rate: [f64; 3], weighted: [f64; 2]) -> Squares {
+        let [a, a_rate] = weighted;
+        let (square, square_rate) = (a * a, 2.0 * a * a_rate);
+        let mut value = [0.0; INTEGRALS];
+        let mut rates = [0.0; INTEGRALS];
+        for i in 0..3 {
+            value[i] = y[i] * y[i];
+            rates[i] = 2.0 * y[i] * rate[i];
         }
+        value[WEIGHTED_SQUARE] = square;
+        rates[WEIGHTED_SQUARE] = square_rate;
+        value[WEIGHTED_FOURTH] = square * square;
+        rates[WEIGHTED_FOURTH] = 2.0 * square * square_rate;
+        Squares { value, rate: rates }
     }
 }
 
 /// `∫_a^b f` over one smooth piece of signed length `b − a` from the values
 /// and rates at its ends: `(b − a)/2 (f_a + f_b) − (b − a)²/12 (f'_b − f'_a)`
 /// (exact for cubics; the error is `(b − a)⁵/720 max |f''''|`).
-pub(crate) fn corrected_trapezoid(length: f64, a: &Squares, b: &Squares) -> [f64; 3] {
+pub(crate) fn corrected_trapezoid(length: f64, a: &Squares, b: &Squares) -> [f64; INTEGRALS] {
     std::array::from_fn(|i| {
         0.5 * length * (a.value[i] + b.value[i]) - length * length / 12.0 * (b.rate[i] - a.rate[i])
     })
 }
 
-fn add3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+fn add(a: [f64; INTEGRALS], b: [f64; INTEGRALS]) -> [f64; INTEGRALS] {
     std::array::from_fn(|i| a[i] + b[i])
 }
 
@@ -68,8 +94,8 @@ fn add3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 /// grid nodes whose `Σ y²` the whole-step loop keeps.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct SquareIntegral {
-    /// `∫_{t_0}^{anchor_time} y² dt` for BA, SDD, TDD.
-    pub closed: [f64; 3],
+    /// `∫_{t_0}^{anchor_time} f dt` for BA², SDD², TDD², a_w², a_w⁴.
+    pub closed: [f64; INTEGRALS],
     /// Grid index of the step that holds the anchor (the anchor is node
     /// `anchor_index` itself whenever the run holds nodes).
     pub anchor_index: u64,
@@ -83,30 +109,54 @@ impl SquareIntegral {
     /// Starts at `t_0` with the squares there.
     pub fn new(start_time: f64, at_start: Squares) -> SquareIntegral {
         SquareIntegral {
-            closed: [0.0; 3],
+            closed: [0.0; INTEGRALS],
             anchor_index: 0,
             anchor_time: start_time,
             anchor: at_start,
         }
     }
 
-    /// `∫_{t_0}^{t_n} y²` where node `t_n` ends the run (`run` holds
-    /// `Σ f` over the nodes after the anchor up to n, `last` the squares at
-    /// `t_n` from the left). Without nodes in the run it is `closed`.
-    pub fn through_run(&self, h: f64, run: &RunningRms, last: &Squares) -> [f64; 3] {
+    /// `∫_{t_0}^{t_n} f` where node `t_n` ends the run (`run` holds
+    /// `Σ f` of BA, SDD, TDD over the nodes after the anchor up to n,
+    /// `weighted` those of a_w², a_w⁴, `last` the squares at `t_n` from the
+    /// left). Without nodes in the run it is `closed`.
+    pub fn through_run(
+        &self,
+        h: f64,
+        run: &RunningRms,
+        weighted: &[f64; 2],
+        last: &Squares,
+    ) -> [f64; INTEGRALS] {
         if run.samples == 0 {
             return self.closed;
         }
         std::array::from_fn(|i| {
-            let sum = 0.5 * self.anchor.value[i] + run.sums_of_squares[i] - 0.5 * last.value[i];
+            let sums = if i < 3 {
+                run.sums_of_squares[i]
+            } else {
+                weighted[i - 3]
+            };
+            let sum = 0.5 * self.anchor.value[i] + sums - 0.5 * last.value[i];
             self.closed[i] + h * sum - h * h / 12.0 * (last.rate[i] - self.anchor.rate[i])
         })
     }
 }
 
+/// What has accumulated from `t_0` to the current time.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Accumulated {
+    /// `∫ f` of BA², SDD², TDD², a_w², a_w⁴.
+    pub integral: [f64; INTEGRALS],
+    /// Road holding and working space (the largest |SDD| over the
+    /// committed points; the outputs add the current one).
+    pub holding: Holding,
+    /// The W_k filter state now (zero without the filter).
+    pub filter: Filter,
+}
+
 /// RMS values from `∫ y²` over a duration (0 for a zero duration; a
 /// rounding-negative integral counts as 0).
-pub(crate) fn rms_from_integral(integral: [f64; 3], duration: f64) -> RmsValues {
+pub(crate) fn rms_from_integral(integral: [f64; INTEGRALS], duration: f64) -> RmsValues {
     if duration <= 0.0 {
         return RmsValues::default();
     }
@@ -166,13 +216,15 @@ impl Simulator {
         }
     }
 
-    /// `y²` and its rate at time `t` of step k with state `x`, the road
-    /// given by `piece` (which side of a breakpoint is the caller's choice).
+    /// The integrands and their rates at time `t` of step k with state `x`
+    /// and filter state `w`, the road given by `piece` (which side of a
+    /// breakpoint is the caller's choice).
     pub(super) fn squares_at(
         &mut self,
         k: u64,
         t: f64,
         x: &State,
+        w: &Filter,
         from: (f64, State),
         piece: &RoadPiece,
     ) -> Squares {
@@ -188,33 +240,55 @@ impl Simulator {
             x[X_T] - road,
         ];
         let rate = [acceleration_rate, dx[X_S] - dx[X_T], dx[X_T] - road_rate];
-        Squares::of(y, rate)
+        let weighted = match &self.coupling {
+            Some(coupling) => [coupling.weighted(w), coupling.weighted_rate(w, y[0])],
+            None => [0.0; 2],
+        };
+        Squares::of(y, rate, weighted)
     }
 
-    /// `∫ y²` over `[from.0, to]` inside grid step k (state `x_to` at
-    /// `to`), split at road breakpoints, and the squares at `to` from the
-    /// left with the road piece they used; `at_from`: the squares at the
-    /// start from the right. A `to` before the start (by a snapped time
-    /// drift) is one piece with a negative length.
+    /// The contact margin `[g, g']` ([`super::holding::margin`]) at time `t`
+    /// with state `x`, the road given by `piece`.
+    pub(super) fn margin_at(&self, t: f64, x: &State, piece: &RoadPiece) -> [f64; 2] {
+        let x: [f64; 6] = (*x).into();
+        margin(
+            self.grid_step.contact.limit,
+            &x,
+            piece.value(t),
+            piece.slope(t),
+        )
+    }
+
+    /// `∫ f` over `[from.0, to]` inside grid step k (state `to_state` at
+    /// `to`: plant and filter), split at road breakpoints, and the squares
+    /// at `to` from the left with the road piece they used; `w_from`: the
+    /// filter state at the start, `at_from`: the squares there from the
+    /// right. The time without contact over the stretch is added to
+    /// `holding`. A `to` before the start (by a snapped time drift) is one
+    /// piece with a negative length (and no contact time).
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn integral_within_step(
         &mut self,
         k: u64,
         from: (f64, State),
+        w_from: &Filter,
         at_from: Squares,
         to: f64,
-        x_to: &State,
-    ) -> ([f64; 3], Squares, RoadPiece) {
-        let (mut start, mut at_start) = (from.0, at_from);
+        to_state: (&State, &Filter),
+        holding: &mut Holding,
+    ) -> ([f64; INTEGRALS], Squares, RoadPiece) {
+        let (x_to, w_to) = to_state;
+        let (mut start, mut at_start, mut x_start) = (from.0, at_from, from.1);
         if to <= start {
             let piece = self.road.piece(to);
-            let at_to = self.squares_at(k, to, x_to, from, &piece);
+            let at_to = self.squares_at(k, to, x_to, w_to, from, &piece);
             return (
                 corrected_trapezoid(to - start, &at_start, &at_to),
                 at_to,
                 piece,
             );
         }
-        let mut total = [0.0; 3];
+        let mut total = [0.0; INTEGRALS];
         loop {
             let piece = self.piece_from(start);
             let end = if piece.end() < to && !self.coincide(piece.end(), to) {
@@ -222,46 +296,62 @@ impl Simulator {
             } else {
                 to
             };
-            let x_end = if end == to {
-                *x_to
+            let (x_end, w_end) = if end == to {
+                (*x_to, *w_to)
             } else {
-                self.integrate_within_step(k, from.0, from.1, end)
+                (
+                    self.integrate_within_step(k, from.0, from.1, end),
+                    self.filter_within_step(k, from, w_from, end),
+                )
             };
-            let at_end = self.squares_at(k, end, &x_end, from, &piece);
-            total = add3(total, corrected_trapezoid(end - start, &at_start, &at_end));
+            let at_end = self.squares_at(k, end, &x_end, &w_end, from, &piece);
+            total = add(total, corrected_trapezoid(end - start, &at_start, &at_end));
+            if self.config.metrics.road_holding() {
+                let (a, b) = (
+                    self.margin_at(start, &x_start, &piece),
+                    self.margin_at(end, &x_end, &piece),
+                );
+                holding.add_interval(start, end - start, a, b);
+            }
             if end == to {
                 return (total, at_end, piece);
             }
             let next = self.piece_from(end);
-            at_start = self.squares_at(k, end, &x_end, from, &next);
-            start = end;
+            at_start = self.squares_at(k, end, &x_end, &w_end, from, &next);
+            (start, x_start) = (end, x_end);
         }
     }
 
-    /// Grid step k from node `t` (state x, squares `at_start` from the
-    /// right) to node `to`, split inside by road breakpoints: the end
-    /// state, `∫ y²` over the step piece by piece, and the squares at `to`
-    /// from the left with the last piece. The pieces are integrated one
-    /// after the other, each from the state the one before reached (the
-    /// same operations as one [`Self::integrate_within_step`] over the
-    /// step, so the end state is the same to the bit).
+    /// Grid step k from node `t` (state x, filter state w, squares
+    /// `at_start` from the right) to node `to`, split inside by road
+    /// breakpoints: the end state and filter state, `∫ f` over the step
+    /// piece by piece, and the squares at `to` from the left with the last
+    /// piece; the time without contact is added to `holding`. The pieces
+    /// are integrated one after the other, each from the state the one
+    /// before reached (the same operations as one
+    /// [`Self::integrate_within_step`] over the step, so the end state is
+    /// the same to the bit).
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn integrate_split_step(
         &mut self,
         k: u64,
         t: f64,
         x: State,
+        w: Filter,
         at_start: Squares,
         to: f64,
-    ) -> (State, [f64; 3], Squares, RoadPiece) {
+        holding: &mut Holding,
+    ) -> (State, Filter, [f64; INTEGRALS], Squares, RoadPiece) {
         if self.grid.delay_inside_step() {
             // The end node enters the delayed input of the whole step.
             let x_to = self.integrate_within_step(k, t, x, to);
+            let w_to = self.filter_within_step(k, (t, x), &w, to);
             let (integral, at_end, piece) =
-                self.integral_within_step(k, (t, x), at_start, to, &x_to);
-            return (x_to, integral, at_end, piece);
+                self.integral_within_step(k, (t, x), &w, at_start, to, (&x_to, &w_to), holding);
+            return (x_to, w_to, integral, at_end, piece);
         }
-        let mut total = [0.0; 3];
-        let (mut start, mut x_start, mut at) = (t, x, at_start);
+        let mut total = [0.0; INTEGRALS];
+        let (mut start, mut x_start, mut w_start, mut at) = (t, x, w, at_start);
         loop {
             let piece = self.piece_from(start);
             let end = if piece.end() < to && !self.coincide(piece.end(), to) {
@@ -270,21 +360,30 @@ impl Simulator {
                 to
             };
             let x_end = self.integrate_within_step(k, start, x_start, end);
-            let at_end = self.squares_at(k, end, &x_end, (start, x_start), &piece);
-            total = add3(total, corrected_trapezoid(end - start, &at, &at_end));
+            let w_end = self.filter_within_step(k, (start, x_start), &w_start, end);
+            let at_end = self.squares_at(k, end, &x_end, &w_end, (start, x_start), &piece);
+            total = add(total, corrected_trapezoid(end - start, &at, &at_end));
+            if self.config.metrics.road_holding() {
+                let (a, b) = (
+                    self.margin_at(start, &x_start, &piece),
+                    self.margin_at(end, &x_end, &piece),
+                );
+                holding.add_interval(start, end - start, a, b);
+            }
             if end == to {
-                return (x_end, total, at_end, piece);
+                return (x_end, w_end, total, at_end, piece);
             }
             let next = self.piece_from(end);
             at = self.across_breakpoint(at_end, end, &x_end, &piece, &next);
-            (start, x_start) = (end, x_end);
+            (start, x_start, w_start) = (end, x_end, w_end);
         }
     }
 
     /// The squares at a road breakpoint `t` (state x) on the side of the
     /// piece `after`, from those on the side of `before`: x_g is continuous
     /// there, so only the rates move, by the jump of the road slope
-    /// (`d TDD/dt` by its negative, `d BA/dt` through `e`).
+    /// (`d TDD/dt` by its negative, `d BA/dt` through `e`; a_w and its rate
+    /// are continuous).
     fn across_breakpoint(
         &self,
         before_side: Squares,
@@ -304,44 +403,72 @@ impl Simulator {
         squares
     }
 
-    /// `∫_{t_0} y²` up to the committed point (the end of the open run).
-    fn integral_to_committed(&mut self) -> ([f64; 3], Squares) {
+    /// `∫_{t_0} f` up to the committed point (the end of the open run).
+    fn integral_to_committed(&mut self) -> ([f64; INTEGRALS], Squares) {
         if self.rms.samples == 0 {
             return (self.integral.closed, self.integral.anchor);
         }
         let (k, t, x) = (self.grid_index, self.committed_time, self.committed_state);
+        let w = self.committed_filter;
         let piece = self.piece_from(t);
-        let at_node = self.squares_at(k, t, &x, (t, x), &piece);
+        let at_node = self.squares_at(k, t, &x, &w, (t, x), &piece);
         (
             self.integral
-                .through_run(self.grid.step, &self.rms, &at_node),
+                .through_run(self.grid.step, &self.rms, &self.weighted, &at_node),
             at_node,
         )
     }
 
-    /// `∫_{t_0}^{t} y² dt` at the current time t.
-    pub(super) fn square_integral_now(&mut self) -> [f64; 3] {
+    /// Everything accumulated from `t_0` to the current time t: `∫ f`, the
+    /// road-holding accumulators (with the stretch from the committed
+    /// point to t) and the filter state at t.
+    pub(super) fn accumulated_now(&mut self) -> Accumulated {
         let (base, at_committed) = self.integral_to_committed();
-        let (tc, xc) = (self.committed_time, self.committed_state);
+        let (tc, xc, wc) = (
+            self.committed_time,
+            self.committed_state,
+            self.committed_filter,
+        );
         let (t, x) = (self.current_time, self.current_state);
+        let mut holding = self.holding;
         if t == tc {
-            return base;
+            return Accumulated {
+                integral: base,
+                holding,
+                filter: wc,
+            };
         }
         if self.snaps(t, tc) {
             // A drift away from the committed point: its Taylor series,
             // `δ f + δ²/2 f'` (the next term, δ³/6 f'', is below 1e-30 of
             // the integral).
             let delta = t - tc;
-            return std::array::from_fn(|i| {
-                base[i] + delta * (at_committed.value[i] + 0.5 * delta * at_committed.rate[i])
-            });
+            let piece = self.piece_from(tc);
+            if self.config.metrics.road_holding() && self.margin_at(tc, &xc, &piece)[0] < 0.0 {
+                holding.lost_time += delta;
+            }
+            return Accumulated {
+                integral: std::array::from_fn(|i| {
+                    base[i] + delta * (at_committed.value[i] + 0.5 * delta * at_committed.rate[i])
+                }),
+                holding,
+                filter: self.filter_near_committed(delta),
+            };
         }
         let k = self.grid_index;
-        add3(
-            base,
-            self.integral_within_step(k, (tc, xc), at_committed, t, &x)
-                .0,
-        )
+        let w = self.filter_within_step(k, (tc, xc), &wc, t);
+        let (stretch, _, _) =
+            self.integral_within_step(k, (tc, xc), &wc, at_committed, t, (&x, &w), &mut holding);
+        Accumulated {
+            integral: add(base, stretch),
+            holding,
+            filter: w,
+        }
+    }
+
+    /// `∫_{t_0}^{t} f dt` at the current time t.
+    pub(super) fn square_integral_now(&mut self) -> [f64; INTEGRALS] {
+        self.accumulated_now().integral
     }
 
     /// The running RMS values at the current time.
@@ -350,78 +477,94 @@ impl Simulator {
         rms_from_integral(integral, self.current_time - self.config.start_time)
     }
 
-    /// Closes the open run at node k (time t, state x; `run`: its sums,
-    /// node k included) and starts a new one there: `left` and `right` are
-    /// the road pieces on either side of the node.
+    /// Closes the open run at node k (time t, state x, filter state w;
+    /// `run` and `weighted`: its sums, node k included) and starts a new
+    /// one there: `left` and `right` are the road pieces on either side of
+    /// the node.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn close_run_at_node(
         &mut self,
         k: u64,
         t: f64,
         x: &State,
+        w: &Filter,
         run: &mut RunningRms,
+        weighted: &mut [f64; 2],
         left: &RoadPiece,
         right: &RoadPiece,
     ) {
         let at_left = if run.samples > 0 || left == right {
-            Some(self.squares_at(k, t, x, (t, *x), left))
+            Some(self.squares_at(k, t, x, w, (t, *x), left))
         } else {
             None
         };
         if let (true, Some(at_left)) = (run.samples > 0, at_left) {
-            self.integral.closed = self.integral.through_run(self.grid.step, run, &at_left);
+            self.integral.closed =
+                self.integral
+                    .through_run(self.grid.step, run, weighted, &at_left);
         }
         let at_right = match at_left {
             Some(at) if left == right => at,
-            _ => self.squares_at(k, t, x, (t, *x), right),
+            _ => self.squares_at(k, t, x, w, (t, *x), right),
         };
         self.integral.anchor_index = k;
         self.integral.anchor_time = t;
         self.integral.anchor = at_right;
         *run = RunningRms::default();
+        *weighted = [0.0; 2];
     }
 
-    /// Starts a new run at node k (time t, state x) after `step_integral`
-    /// over the step that ends there was added to the closed part (the
-    /// history must already hold node k). `arrival`: the squares at the
-    /// node from the left and the road piece they used, which serve from
-    /// the right too when the node is not a road breakpoint.
+    /// Starts a new run at node k (time t, state x, filter state w) after
+    /// `step_integral` over the step that ends there was added to the
+    /// closed part (the history must already hold node k). `arrival`: the
+    /// squares at the node from the left and the road piece they used,
+    /// which serve from the right too when the node is not a road
+    /// breakpoint.
     pub(super) fn restart_run_after_step(
         &mut self,
         k: u64,
-        t: f64,
-        x: &State,
-        step_integral: [f64; 3],
+        (t, x, w): (f64, &State, &Filter),
+        step_integral: [f64; INTEGRALS],
         arrival: (Squares, RoadPiece),
     ) {
-        self.integral.closed = add3(self.integral.closed, step_integral);
+        self.integral.closed = add(self.integral.closed, step_integral);
         let piece = self.piece_from(t);
         let at_node = if piece == arrival.1 {
             arrival.0
         } else {
-            self.squares_at(k, t, x, (t, *x), &piece)
+            self.squares_at(k, t, x, w, (t, *x), &piece)
         };
         self.integral.anchor_index = k;
         self.integral.anchor_time = t;
         self.integral.anchor = at_node;
         self.rms = RunningRms::default();
+        self.weighted = [0.0; 2];
     }
 
     /// Before the external road input changes at the current time: closes
     /// the run there. Returns the time from which the new input applies:
     /// the committed point when the current time snaps to it (a time drift
     /// is not a different time), else the current time, which then becomes
-    /// the committed point.
+    /// the committed point (its filter state and road-holding accumulators
+    /// with it).
     pub(super) fn close_run_for_input(&mut self) -> f64 {
         let (tc, t) = (self.committed_time, self.current_time);
         if self.snaps(t, tc) {
             let (closed, _) = self.integral_to_committed();
             self.integral.closed = closed;
         } else {
-            self.integral.closed = self.square_integral_now();
+            let now = self.accumulated_now();
+            self.integral.closed = now.integral;
+            self.holding = now.holding;
+            if self.config.metrics.road_holding() {
+                self.holding.add_node(&self.current_state.into());
+            }
+            self.committed_filter = now.filter;
             self.committed_time = t;
             self.committed_state = self.current_state;
         }
         self.rms = RunningRms::default();
+        self.weighted = [0.0; 2];
         self.integral.anchor_index = self.grid_index;
         self.integral.anchor_time = self.committed_time;
         self.committed_time
@@ -431,8 +574,9 @@ impl Simulator {
     /// squares from the right, with the new input.
     pub(super) fn reanchor_after_input(&mut self) {
         let (k, t, x) = (self.grid_index, self.committed_time, self.committed_state);
+        let w = self.committed_filter;
         let piece = self.piece_from(t);
-        self.integral.anchor = self.squares_at(k, t, &x, (t, x), &piece);
+        self.integral.anchor = self.squares_at(k, t, &x, &w, (t, x), &piece);
     }
 
     /// The state at `committed_time + delta` for a `delta` within the snap
