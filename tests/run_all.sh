@@ -12,13 +12,13 @@ cd "$root"
 missing=()
 python3 -c "import venv, ensurepip" 2>/dev/null || missing+=(python3-venv)
 if command -v dpkg-query >/dev/null; then
-    for package in libtbb12 libclang-dev valgrind gcc g++ \
+    for package in libtbb12 libclang-dev valgrind gcc g++ libxml2-utils \
         gcc-mingw-w64-x86-64 gcc-aarch64-linux-gnu libc6-dev-arm64-cross wine64 qemu-user; do
         dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed" ||
             missing+=("$package")
     done
 else
-    echo "note: no dpkg-query; make sure libtbb12, libclang-dev, valgrind, gcc, g++, the MinGW-w64 and aarch64 cross compilers, wine64 and qemu-user (or your system's equivalents) are installed" >&2
+    echo "note: no dpkg-query; make sure libtbb12, libclang-dev, valgrind, gcc, g++, xmllint, the MinGW-w64 and aarch64 cross compilers, wine64 and qemu-user (or your system's equivalents) are installed" >&2
 fi
 if [ ${#missing[@]} -gt 0 ]; then
     echo "tests/run_all.sh needs these Debian packages: ${missing[*]}" >&2
@@ -43,9 +43,11 @@ echo "== cargo clippy"
 cargo clippy --workspace --all-targets -- -D warnings
 echo "== cargo test"
 cargo test --workspace --release
-echo "== fmu-build (the checked-in modelDescription must be current, then build the FMU)"
+echo "== fmu-build (the checked-in model descriptions must be current, then build both FMUs)"
 cargo run --release -p fmu-build -- --check
 cargo run --release -p fmu-build -- --all-platforms
+echo "== the FMI 3.0 model descriptions against the schema of the standard (xmllint)"
+bash tests/fmi3_schema.sh
 echo "== pytest (fmpy suite and examples)"
 cargo build --release --bin tdvass
 "$python" -m pytest tests/python -q

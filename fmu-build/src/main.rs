@@ -1,45 +1,111 @@
-//! Builds `target/fmu/tdvass.fmu` and refreshes the checked-in
-//! `modelDescription/modelDescription.xml`.
+//! Builds the FMI 2.0 FMU `target/fmu/tdvass.fmu` and the FMI 3.0 FMU
+//! `target/fmu/tdvass-fmi3.fmu`, and refreshes the checked-in
+//! `modelDescription/modelDescription.xml` (FMI 2.0) and
+//! `modelDescription/fmi3/modelDescription.xml` (FMI 3.0).
 //!
 //! ```text
 //! cargo run --release -p fmu-build                   # the host platform only
 //! cargo run --release -p fmu-build -- --all-platforms # linux64 + win64, and aarch64 Linux
-//! cargo run --release -p fmu-build -- --check        # fail if the checked-in copy is stale
+//! cargo run --release -p fmu-build -- --check        # fail if a checked-in copy is stale
 //! ```
 //!
-//! Without a flag the FMU carries the library of the host (Linux x86-64:
-//! `binaries/linux64/tdvass.so`, Windows x86-64: `binaries/win64/tdvass.dll`,
-//! macOS: `binaries/darwin64/tdvass.dylib`), built with the host's own
+//! Each FMU carries the shared library of its own crate (`tdvass-fmi2`,
+//! `tdvass-fmi3`) under the model identifier. Without a flag that is the
+//! library of the host (Linux x86-64: `binaries/linux64/tdvass.so` and
+//! `binaries/x86_64-linux/tdvass.so`, Windows x86-64: `binaries/win64/tdvass.dll`
+//! and `binaries/x86_64-windows/tdvass.dll`, macOS: `binaries/darwin64/tdvass.dylib`
+//! and `binaries/<arch>-darwin/tdvass.dylib`), built with the host's own
 //! toolchain. `--all-platforms` works on a Linux x86-64 host: it cross-builds
-//! the library for Windows x86-64 and Linux aarch64 (linkers set in
-//! `.cargo/config.toml`) and packs linux64 and win64. FMI 2.0 names no
-//! aarch64 platform, so that library stays in
-//! `target/aarch64-unknown-linux-gnu/release/` (tests run it; an FMI 3.0 FMU
-//! would carry it as `aarch64-linux`). A missing Rust target or cross
-//! toolchain stops the build before anything is compiled or packed, naming
-//! the `rustup target add` command or the Debian package that provides it.
+//! the libraries for Windows x86-64 and Linux aarch64 (linkers set in
+//! `.cargo/config.toml`); the FMI 2.0 FMU packs linux64 and win64, the
+//! FMI 3.0 FMU `x86_64-linux`, `x86_64-windows` and `aarch64-linux`. FMI 2.0
+//! names no aarch64 platform, so its aarch64 library stays in
+//! `target/aarch64-unknown-linux-gnu/release/` (tests run it). A missing
+//! Rust target or cross toolchain stops the build before anything is
+//! compiled or packed, naming the `rustup target add` command or the Debian
+//! package that provides it.
 //!
-//! The description and documentation come from the library
-//! ([`tdvass_fmi2::description`]), generated from the variable table.
+//! The descriptions and documentation come from the libraries
+//! ([`tdvass_fmi2::description`], [`tdvass_fmi3::description`]), generated
+//! from the variable table.
 
 use std::fs;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
-use tdvass_fmi2::description::{documentation_html, model_description_xml};
+use tdvass_fmi2::MODEL_IDENTIFIER;
 use tdvass_fmi2::markdown::{BEGIN_MARKER, END_MARKER, splice_into};
-use tdvass_fmi2::{MODEL_IDENTIFIER, guid};
-
-/// The library target of the FMU crate (`tdvass-fmi2`): cargo names its
-/// shared library after it (`libtdvass_fmi2.so`, `tdvass_fmi2.dll`), and
-/// the FMU holds it under the model identifier (`tdvass.so`, `tdvass.dll`).
-const LIBRARY_NAME: &str = "tdvass_fmi2";
 use zip::write::SimpleFileOptions;
 use zip::{CompressionMethod, DateTime, ZipArchive, ZipWriter};
 
-const CHECKED_IN: &str = "modelDescription/modelDescription.xml";
 /// The README, whose FMU variable table is generated.
 const README: &str = "README.md";
+
+/// The FMI versions of the FMU.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum FmiVersion {
+    Fmi2,
+    Fmi3,
+}
+
+/// One FMU of the build: its crate, its archive and its generated files.
+#[derive(Debug, Clone)]
+struct Fmu {
+    version: FmiVersion,
+    /// The cargo package whose shared library the FMU carries.
+    package: &'static str,
+    /// Its library target: cargo names the shared library after it
+    /// (`libtdvass_fmi2.so`, `tdvass_fmi3.dll`), and the FMU holds it under
+    /// the model identifier (`tdvass.so`, `tdvass.dll`).
+    library: &'static str,
+    /// The archive's file name in `target/fmu/`.
+    file_name: &'static str,
+    /// The checked-in copy of the model description.
+    checked_in: &'static str,
+    /// `modelDescription.xml`.
+    description: String,
+    /// `documentation/index.html`.
+    documentation: String,
+    /// How the description identifies the interface (`GUID ...`,
+    /// `instantiationToken ...`), for messages.
+    identity: String,
+}
+
+impl Fmu {
+    /// Both FMUs, FMI 2.0 first.
+    fn all() -> [Fmu; 2] {
+        [
+            Fmu {
+                version: FmiVersion::Fmi2,
+                package: "tdvass-fmi2",
+                library: "tdvass_fmi2",
+                file_name: "tdvass.fmu",
+                checked_in: "modelDescription/modelDescription.xml",
+                description: tdvass_fmi2::description::model_description_xml(),
+                documentation: tdvass_fmi2::description::documentation_html(),
+                identity: format!("GUID {}", tdvass_fmi2::guid()),
+            },
+            Fmu {
+                version: FmiVersion::Fmi3,
+                package: "tdvass-fmi3",
+                library: "tdvass_fmi3",
+                file_name: "tdvass-fmi3.fmu",
+                checked_in: "modelDescription/fmi3/modelDescription.xml",
+                description: tdvass_fmi3::description::model_description_xml(),
+                documentation: tdvass_fmi3::description::documentation_html(),
+                identity: format!("instantiationToken {}", tdvass_fmi3::instantiation_token()),
+            },
+        ]
+    }
+
+    /// `FMI 2.0` or `FMI 3.0`, for messages.
+    fn label(&self) -> &'static str {
+        match self.version {
+            FmiVersion::Fmi2 => "FMI 2.0",
+            FmiVersion::Fmi3 => "FMI 3.0",
+        }
+    }
+}
 
 type Result<T> = std::result::Result<T, String>;
 
@@ -127,20 +193,21 @@ struct Requirement {
     debian_package: &'static str,
 }
 
-/// One platform of the shared library.
+/// One platform of the shared libraries.
 #[derive(Debug, Clone, PartialEq, Eq)]
 struct Platform {
     /// FMI 2.0 platform folder (`binaries/<name>/` in the FMU); `None` when
     /// FMI 2.0 has no name for the platform (built and tested, not packed).
     fmi2_folder: Option<&'static str>,
+    /// FMI 3.0 platform tuple (`binaries/<arch>-<sys>/` in the FMU).
+    fmi3_folder: &'static str,
     /// Human-readable name, for messages.
     label: &'static str,
     /// Rust target triple of a cross build; `None` builds for the host into
     /// `target/release/`.
     cross_target: Option<&'static str>,
-    /// The file name cargo gives the library (`libtdvass_fmi2.so`,
-    /// `tdvass_fmi2.dll`).
-    built_file: String,
+    /// What cargo puts before the library name (`lib` except on Windows).
+    prefix: &'static str,
     /// The extension of the library inside the FMU (`so`, `dll`, `dylib`).
     extension: &'static str,
     /// The machine code the built file must contain.
@@ -151,40 +218,91 @@ struct Platform {
 }
 
 impl Platform {
-    /// The library's path inside the FMU, `None` if it is not packed.
-    fn fmu_entry(&self) -> Option<String> {
-        self.fmi2_folder
+    /// The platform folder of `version`, `None` if that version names none.
+    fn folder(&self, version: FmiVersion) -> Option<&'static str> {
+        match version {
+            FmiVersion::Fmi2 => self.fmi2_folder,
+            FmiVersion::Fmi3 => Some(self.fmi3_folder),
+        }
+    }
+
+    /// The library's path inside the FMU of `version`, `None` if it is not
+    /// packed.
+    fn fmu_entry(&self, version: FmiVersion) -> Option<String> {
+        self.folder(version)
             .map(|folder| format!("binaries/{folder}/{MODEL_IDENTIFIER}.{}", self.extension))
     }
 
-    /// Where cargo writes the library.
-    fn built_path(&self, target: &Path) -> PathBuf {
+    /// The file name cargo gives the library target `library`
+    /// (`libtdvass_fmi2.so`, `tdvass_fmi3.dll`).
+    fn built_file(&self, library: &str) -> String {
+        format!("{}{library}.{}", self.prefix, self.extension)
+    }
+
+    /// Where cargo writes the library target `library`.
+    fn built_path(&self, target: &Path, library: &str) -> PathBuf {
         match self.cross_target {
             Some(triple) => target.join(triple).join("release"),
             None => target.join("release"),
         }
-        .join(&self.built_file)
+        .join(self.built_file(library))
     }
 }
 
 /// The host platform for an operating system and architecture as
 /// [`std::env::consts`] names them, `Err` when FMI 2.0 names no platform for it.
 fn host_platform(os: &str, arch: &str) -> Result<Platform> {
-    let (fmi2_folder, label, prefix, extension, format) = match (os, arch) {
+    let (fmi2_folder, fmi3_folder, label, prefix, extension, format) = match (os, arch) {
         ("linux", "x86_64") => (
             "linux64",
+            "x86_64-linux",
             "Linux x86-64",
             "lib",
             "so",
             BinaryFormat::ElfX86_64,
         ),
-        ("linux", "x86") => ("linux32", "Linux x86", "lib", "so", BinaryFormat::ElfX86),
-        ("windows", "x86_64") => ("win64", "Windows x86-64", "", "dll", BinaryFormat::PeX86_64),
-        ("windows", "x86") => ("win32", "Windows x86", "", "dll", BinaryFormat::PeX86),
-        // FMI 2.0 has one macOS folder; importers use it for Apple silicon too.
-        ("macos", "x86_64" | "aarch64") => {
-            ("darwin64", "macOS", "lib", "dylib", BinaryFormat::MachO)
-        }
+        ("linux", "x86") => (
+            "linux32",
+            "x86-linux",
+            "Linux x86",
+            "lib",
+            "so",
+            BinaryFormat::ElfX86,
+        ),
+        ("windows", "x86_64") => (
+            "win64",
+            "x86_64-windows",
+            "Windows x86-64",
+            "",
+            "dll",
+            BinaryFormat::PeX86_64,
+        ),
+        ("windows", "x86") => (
+            "win32",
+            "x86-windows",
+            "Windows x86",
+            "",
+            "dll",
+            BinaryFormat::PeX86,
+        ),
+        // FMI 2.0 has one macOS folder; importers use it for Apple silicon
+        // too. FMI 3.0 names the architecture.
+        ("macos", "x86_64") => (
+            "darwin64",
+            "x86_64-darwin",
+            "macOS",
+            "lib",
+            "dylib",
+            BinaryFormat::MachO,
+        ),
+        ("macos", "aarch64") => (
+            "darwin64",
+            "aarch64-darwin",
+            "macOS",
+            "lib",
+            "dylib",
+            BinaryFormat::MachO,
+        ),
         _ => {
             return Err(format!(
                 "FMI 2.0 defines no platform folder for {arch} {os}; build on Linux, \
@@ -194,9 +312,10 @@ fn host_platform(os: &str, arch: &str) -> Result<Platform> {
     };
     Ok(Platform {
         fmi2_folder: Some(fmi2_folder),
+        fmi3_folder,
         label,
         cross_target: None,
-        built_file: format!("{prefix}{LIBRARY_NAME}.{extension}"),
+        prefix,
         extension,
         format,
         requirements: &[],
@@ -208,8 +327,8 @@ const WINDOWS_TARGET: &str = "x86_64-pc-windows-gnu";
 /// The Linux aarch64 cross build.
 const AARCH64_TARGET: &str = "aarch64-unknown-linux-gnu";
 
-/// Every platform of `--all-platforms`, from a Linux x86-64 host: linux64
-/// (host), win64 and aarch64 Linux (cross).
+/// Every platform of `--all-platforms`, from a Linux x86-64 host: Linux
+/// x86-64 (host), Windows x86-64 and Linux aarch64 (cross).
 fn all_platforms() -> Result<Vec<Platform>> {
     let host = host_platform(std::env::consts::OS, std::env::consts::ARCH)?;
     if host.fmi2_folder != Some("linux64") {
@@ -223,9 +342,10 @@ fn all_platforms() -> Result<Vec<Platform>> {
         host,
         Platform {
             fmi2_folder: Some("win64"),
+            fmi3_folder: "x86_64-windows",
             label: "Windows x86-64",
             cross_target: Some(WINDOWS_TARGET),
-            built_file: format!("{LIBRARY_NAME}.dll"),
+            prefix: "",
             extension: "dll",
             format: BinaryFormat::PeX86_64,
             requirements: &[Requirement {
@@ -235,9 +355,10 @@ fn all_platforms() -> Result<Vec<Platform>> {
         },
         Platform {
             fmi2_folder: None,
+            fmi3_folder: "aarch64-linux",
             label: "Linux aarch64",
             cross_target: Some(AARCH64_TARGET),
-            built_file: format!("lib{LIBRARY_NAME}.so"),
+            prefix: "lib",
             extension: "so",
             format: BinaryFormat::ElfAarch64,
             requirements: &[
@@ -321,15 +442,22 @@ fn missing_requirements(root: &Path, platforms: &[Platform]) -> Vec<String> {
     missing
 }
 
-/// Builds the library for `platform` (release, library only) and returns its
-/// bytes, checked to be machine code of that platform.
-fn build_library(root: &Path, platform: &Platform) -> Result<Vec<u8>> {
+/// Builds the library of `fmu` for `platform` (release, library only) and
+/// returns its bytes, checked to be machine code of that platform. Each
+/// crate is built by a cargo run of its own, so that the FMI 2.0 library is
+/// built exactly as without the FMI 3.0 one.
+fn build_library(root: &Path, platform: &Platform, fmu: &Fmu) -> Result<Vec<u8>> {
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
-    let mut args = vec!["build", "--release", "-p", "tdvass-fmi2", "--lib"];
+    let mut args = vec!["build", "--release", "-p", fmu.package, "--lib"];
     if let Some(triple) = platform.cross_target {
         args.extend(["--target", triple]);
     }
-    eprintln!("fmu-build: {} cargo {}", platform.label, args.join(" "));
+    eprintln!(
+        "fmu-build: {} {} cargo {}",
+        fmu.label(),
+        platform.label,
+        args.join(" ")
+    );
     let status = Command::new(&cargo)
         .args(&args)
         .current_dir(root)
@@ -337,11 +465,12 @@ fn build_library(root: &Path, platform: &Platform) -> Result<Vec<u8>> {
         .map_err(|e| format!("cannot run {}: {e}", cargo.to_string_lossy()))?;
     if !status.success() {
         return Err(format!(
-            "cargo build of the library for {} failed ({status})",
+            "cargo build of the {} library for {} failed ({status})",
+            fmu.label(),
             platform.label
         ));
     }
-    let library = platform.built_path(&target_dir(root));
+    let library = platform.built_path(&target_dir(root), fmu.library);
     let bytes = fs::read(&library).map_err(|e| {
         format!(
             "the shared library {} was not built: {e}",
@@ -420,30 +549,32 @@ struct CheckedIn {
     current: Option<String>,
 }
 
-/// The checked-in copies: the model description, and the variable table in
-/// README.md (between its markers).
-fn checked_in(root: &Path, description: &str) -> Result<Vec<CheckedIn>> {
+/// The checked-in copies: the model description of each FMU, and the
+/// variable table in README.md (between its markers).
+fn checked_in(root: &Path, fmus: &[Fmu]) -> Result<Vec<CheckedIn>> {
     let read = |path: &str| fs::read_to_string(root.join(path)).ok();
     let readme = read(README).ok_or(format!("{README} cannot be read"))?;
     let readme_expected = splice_into(&readme).ok_or(format!(
         "{README} lacks the lines `{BEGIN_MARKER}` and `{END_MARKER}` around the variable table"
     ))?;
-    Ok(vec![
-        CheckedIn {
-            path: CHECKED_IN,
-            expected: description.to_string(),
-            current: read(CHECKED_IN),
-        },
-        CheckedIn {
-            path: README,
-            expected: readme_expected,
-            current: Some(readme),
-        },
-    ])
+    let mut copies: Vec<CheckedIn> = fmus
+        .iter()
+        .map(|fmu| CheckedIn {
+            path: fmu.checked_in,
+            expected: fmu.description.clone(),
+            current: read(fmu.checked_in),
+        })
+        .collect();
+    copies.push(CheckedIn {
+        path: README,
+        expected: readme_expected,
+        current: Some(readme),
+    });
+    Ok(copies)
 }
 
-fn check_only(root: &Path, description: &str) -> Result<()> {
-    for copy in checked_in(root, description)? {
+fn check_only(root: &Path, fmus: &[Fmu]) -> Result<()> {
+    for copy in checked_in(root, fmus)? {
         let current = copy.current.as_deref().ok_or(format!(
             "{} cannot be read; run `cargo run --release -p fmu-build` and commit it",
             copy.path
@@ -461,14 +592,48 @@ fn check_only(root: &Path, description: &str) -> Result<()> {
             ));
         }
     }
-    eprintln!(
-        "fmu-build: {CHECKED_IN} and the variable table of {README} are up to date (GUID {})",
-        guid()
-    );
+    for fmu in fmus {
+        eprintln!(
+            "fmu-build: {} is up to date ({} {})",
+            fmu.checked_in,
+            fmu.label(),
+            fmu.identity
+        );
+    }
+    eprintln!("fmu-build: the variable table of {README} is up to date");
     Ok(())
 }
 
-fn build(root: &Path, description: &str, platforms: &[Platform]) -> Result<()> {
+/// Writes `fmu` with `binaries` (path in the archive, bytes) into
+/// `out_dir`, and returns its path.
+fn pack(out_dir: &Path, fmu: &Fmu, binaries: &[(String, Vec<u8>)]) -> Result<PathBuf> {
+    let mut entries: Vec<(&str, &[u8], u32)> =
+        vec![("modelDescription.xml", fmu.description.as_bytes(), 0o644)];
+    for (name, bytes) in binaries {
+        entries.push((name.as_str(), bytes, 0o755));
+    }
+    entries.push((
+        "documentation/index.html",
+        fmu.documentation.as_bytes(),
+        0o644,
+    ));
+    let path = out_dir.join(fmu.file_name);
+    // Written beside, checked, then renamed: an interrupted run never leaves
+    // a truncated FMU under the final name.
+    let partial = out_dir.join(format!("{}.partial", fmu.file_name));
+    write_fmu(&partial, &entries)?;
+    check_fmu(&partial, &entries)?;
+    fs::rename(&partial, &path).map_err(|e| {
+        format!(
+            "cannot rename {} to {}: {e}",
+            partial.display(),
+            path.display()
+        )
+    })?;
+    Ok(path)
+}
+
+fn build(root: &Path, fmus: &[Fmu], platforms: &[Platform]) -> Result<()> {
     let missing = missing_requirements(root, platforms);
     if !missing.is_empty() {
         return Err(format!(
@@ -476,46 +641,34 @@ fn build(root: &Path, description: &str, platforms: &[Platform]) -> Result<()> {
             missing.join("; ")
         ));
     }
-    // Every platform is built before anything is packed: a failed build
+    // Every library is built before anything is packed: a failed build
     // leaves no FMU with some of its platforms.
-    let mut binaries = Vec::new();
+    let mut binaries: Vec<Vec<(String, Vec<u8>)>> = vec![Vec::new(); fmus.len()];
     for platform in platforms {
-        let bytes = build_library(root, platform)?;
-        let location = platform.built_path(&target_dir(root));
-        match platform.fmu_entry() {
-            Some(entry) => binaries.push((entry, bytes)),
-            None => eprintln!(
-                "fmu-build: {} library (not in the FMI 2.0 FMU): {}",
-                platform.label,
-                location.display()
-            ),
+        for (fmu, packed) in fmus.iter().zip(binaries.iter_mut()) {
+            let bytes = build_library(root, platform, fmu)?;
+            match platform.fmu_entry(fmu.version) {
+                Some(entry) => packed.push((entry, bytes)),
+                None => eprintln!(
+                    "fmu-build: {} library (not in the {} FMU): {}",
+                    platform.label,
+                    fmu.label(),
+                    platform
+                        .built_path(&target_dir(root), fmu.library)
+                        .display()
+                ),
+            }
         }
     }
-    let documentation = documentation_html();
-    let mut entries: Vec<(&str, &[u8], u32)> =
-        vec![("modelDescription.xml", description.as_bytes(), 0o644)];
-    for (name, bytes) in &binaries {
-        entries.push((name.as_str(), bytes, 0o755));
-    }
-    entries.push(("documentation/index.html", documentation.as_bytes(), 0o644));
     let out_dir = target_dir(root).join("fmu");
     fs::create_dir_all(&out_dir)
         .map_err(|e| format!("cannot create {}: {e}", out_dir.display()))?;
-    let fmu = out_dir.join(format!("{MODEL_IDENTIFIER}.fmu"));
-    // Written beside, checked, then renamed: an interrupted run never leaves
-    // a truncated FMU under the final name.
-    let partial = out_dir.join(format!("{MODEL_IDENTIFIER}.fmu.partial"));
-    write_fmu(&partial, &entries)?;
-    check_fmu(&partial, &entries)?;
-    fs::rename(&partial, &fmu).map_err(|e| {
-        format!(
-            "cannot rename {} to {}: {e}",
-            partial.display(),
-            fmu.display()
-        )
-    })?;
+    let mut written = Vec::new();
+    for (fmu, packed) in fmus.iter().zip(&binaries) {
+        written.push(pack(&out_dir, fmu, packed)?);
+    }
     let mut refreshed = Vec::new();
-    for copy in checked_in(root, description)? {
+    for copy in checked_in(root, fmus)? {
         if copy.current.as_deref() != Some(copy.expected.as_str()) {
             let path = root.join(copy.path);
             if let Some(dir) = path.parent() {
@@ -527,16 +680,22 @@ fn build(root: &Path, description: &str, platforms: &[Platform]) -> Result<()> {
             refreshed.push(copy.path);
         }
     }
+    for ((fmu, packed), path) in fmus.iter().zip(&binaries).zip(&written) {
+        eprintln!(
+            "fmu-build: wrote {} ({} bytes; {}; {} {})",
+            path.display(),
+            fs::metadata(path).map(|m| m.len()).unwrap_or(0),
+            packed
+                .iter()
+                .map(|(name, _)| name.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
+            fmu.label(),
+            fmu.identity
+        );
+    }
     eprintln!(
-        "fmu-build: wrote {} ({} bytes; {}; GUID {}); refreshed: {}",
-        fmu.display(),
-        fs::metadata(&fmu).map(|m| m.len()).unwrap_or(0),
-        binaries
-            .iter()
-            .map(|(name, _)| name.as_str())
-            .collect::<Vec<_>>()
-            .join(", "),
-        guid(),
+        "fmu-build: refreshed: {}",
         if refreshed.is_empty() {
             "nothing".to_string()
         } else {
@@ -549,9 +708,9 @@ fn build(root: &Path, description: &str, platforms: &[Platform]) -> Result<()> {
 /// What the command line asks for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Mode {
-    /// Build the FMU for the host platform.
+    /// Build the FMUs for the host platform.
     Host,
-    /// Build every platform (linux64, win64, aarch64 Linux).
+    /// Build every platform (Linux x86-64, Windows x86-64, Linux aarch64).
     AllPlatforms,
     /// Only check the checked-in copies.
     Check,
@@ -569,14 +728,12 @@ fn main() -> ExitCode {
         }
     };
     let root = workspace_root();
-    let description = model_description_xml();
+    let fmus = Fmu::all();
     let result = match mode {
-        Mode::Check => check_only(&root, &description),
+        Mode::Check => check_only(&root, &fmus),
         Mode::Host => host_platform(std::env::consts::OS, std::env::consts::ARCH)
-            .and_then(|host| build(&root, &description, &[host])),
-        Mode::AllPlatforms => {
-            all_platforms().and_then(|platforms| build(&root, &description, &platforms))
-        }
+            .and_then(|host| build(&root, &fmus, &[host])),
+        Mode::AllPlatforms => all_platforms().and_then(|platforms| build(&root, &fmus, &platforms)),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -592,46 +749,65 @@ mod tests {
     use super::*;
 
     #[test]
-    fn host_platforms_use_the_fmi2_folder_and_library_name_of_the_host() {
+    fn host_platforms_use_the_folders_and_library_names_of_the_host() {
         let cases = [
             (
                 "linux",
                 "x86_64",
                 "binaries/linux64/tdvass.so",
+                "binaries/x86_64-linux/tdvass.so",
                 "libtdvass_fmi2.so",
             ),
             (
                 "windows",
                 "x86_64",
                 "binaries/win64/tdvass.dll",
+                "binaries/x86_64-windows/tdvass.dll",
                 "tdvass_fmi2.dll",
             ),
             (
                 "windows",
                 "x86",
                 "binaries/win32/tdvass.dll",
+                "binaries/x86-windows/tdvass.dll",
                 "tdvass_fmi2.dll",
             ),
             (
                 "macos",
                 "aarch64",
                 "binaries/darwin64/tdvass.dylib",
+                "binaries/aarch64-darwin/tdvass.dylib",
                 "libtdvass_fmi2.dylib",
             ),
             (
                 "macos",
                 "x86_64",
                 "binaries/darwin64/tdvass.dylib",
+                "binaries/x86_64-darwin/tdvass.dylib",
                 "libtdvass_fmi2.dylib",
             ),
         ];
-        for (os, arch, entry, built) in cases {
+        for (os, arch, fmi2_entry, fmi3_entry, built) in cases {
             let platform = host_platform(os, arch).unwrap();
-            assert_eq!(platform.fmu_entry().as_deref(), Some(entry), "{os} {arch}");
-            assert_eq!(platform.built_file, built, "{os} {arch}");
             assert_eq!(
-                platform.built_path(Path::new("t")),
+                platform.fmu_entry(FmiVersion::Fmi2).as_deref(),
+                Some(fmi2_entry),
+                "{os} {arch}"
+            );
+            assert_eq!(
+                platform.fmu_entry(FmiVersion::Fmi3).as_deref(),
+                Some(fmi3_entry),
+                "{os} {arch}"
+            );
+            assert_eq!(platform.built_file("tdvass_fmi2"), built, "{os} {arch}");
+            assert_eq!(
+                platform.built_path(Path::new("t"), "tdvass_fmi2"),
                 Path::new("t/release").join(built)
+            );
+            assert_eq!(
+                platform.built_file("tdvass_fmi3"),
+                built.replace("fmi2", "fmi3"),
+                "{os} {arch}"
             );
         }
         let error = host_platform("linux", "aarch64").unwrap_err();
@@ -643,11 +819,13 @@ mod tests {
 
     #[test]
     #[cfg(all(target_os = "linux", target_arch = "x86_64"))]
-    fn all_platforms_pack_linux64_and_win64_and_build_aarch64() {
+    fn all_platforms_pack_linux64_and_win64_for_fmi2_and_all_three_for_fmi3() {
         let platforms = all_platforms().unwrap();
-        let entries: Vec<Option<String>> = platforms.iter().map(Platform::fmu_entry).collect();
+        let entries = |version| -> Vec<Option<String>> {
+            platforms.iter().map(|p| p.fmu_entry(version)).collect()
+        };
         assert_eq!(
-            entries,
+            entries(FmiVersion::Fmi2),
             [
                 Some("binaries/linux64/tdvass.so".to_string()),
                 Some("binaries/win64/tdvass.dll".to_string()),
@@ -655,9 +833,62 @@ mod tests {
             ]
         );
         assert_eq!(
-            platforms[2].built_path(Path::new("t")),
+            entries(FmiVersion::Fmi3),
+            [
+                Some("binaries/x86_64-linux/tdvass.so".to_string()),
+                Some("binaries/x86_64-windows/tdvass.dll".to_string()),
+                Some("binaries/aarch64-linux/tdvass.so".to_string()),
+            ]
+        );
+        assert_eq!(
+            platforms[2].built_path(Path::new("t"), "tdvass_fmi2"),
             Path::new("t/aarch64-unknown-linux-gnu/release/libtdvass_fmi2.so")
         );
+        assert_eq!(
+            platforms[1].built_path(Path::new("t"), "tdvass_fmi3"),
+            Path::new("t/x86_64-pc-windows-gnu/release/tdvass_fmi3.dll")
+        );
+    }
+
+    #[test]
+    fn each_fmu_has_its_crate_archive_and_checked_in_description() {
+        let [fmi2, fmi3] = Fmu::all();
+        assert_eq!(
+            (fmi2.package, fmi2.library, fmi2.file_name, fmi2.checked_in),
+            (
+                "tdvass-fmi2",
+                "tdvass_fmi2",
+                "tdvass.fmu",
+                "modelDescription/modelDescription.xml"
+            )
+        );
+        assert_eq!(
+            (fmi3.package, fmi3.library, fmi3.file_name, fmi3.checked_in),
+            (
+                "tdvass-fmi3",
+                "tdvass_fmi3",
+                "tdvass-fmi3.fmu",
+                "modelDescription/fmi3/modelDescription.xml"
+            )
+        );
+        assert!(fmi2.description.contains(r#"fmiVersion="2.0""#));
+        assert!(fmi3.description.contains(r#"fmiVersion="3.0""#));
+        assert!(fmi3.identity.contains(&tdvass_fmi3::instantiation_token()));
+        // The package names the library target that cargo builds.
+        for fmu in [&fmi2, &fmi3] {
+            let manifest = fs::read_to_string(
+                workspace_root()
+                    .join("crates")
+                    .join(fmu.package)
+                    .join("Cargo.toml"),
+            )
+            .unwrap();
+            assert!(
+                manifest.contains(&format!("name = \"{}\"", fmu.library)),
+                "{}",
+                fmu.package
+            );
+        }
     }
 
     /// The linkers that fmu-build looks for are the ones cargo is told to use.
@@ -685,9 +916,10 @@ mod tests {
     fn missing_targets_and_toolchains_are_named_with_their_install_command() {
         let platform = Platform {
             fmi2_folder: Some("win64"),
+            fmi3_folder: "x86_64-windows",
             label: "Windows x86-64",
             cross_target: Some("x86_64-unknown-none-such"),
-            built_file: "tdvass_fmi2.dll".to_string(),
+            prefix: "",
             extension: "dll",
             format: BinaryFormat::PeX86_64,
             requirements: &[Requirement {

@@ -1,0 +1,285 @@
+//! `documentation/index.html` of the FMI 3.0 FMU, generated from the one
+//! variable table and the declarations of the model description.
+
+use super::{
+    CO_SIMULATION_CAPABILITIES, MODEL_DESCRIPTION, XmlResult, XmlWriter, enumerations, finish,
+    value_text,
+};
+use crate::types::{Fmi3Type, fmi3_type};
+use crate::{
+    DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, LOG_CATEGORIES, MODEL_IDENTIFIER,
+    MODEL_NAME, instantiation_token,
+};
+use quick_xml::Writer;
+use quick_xml::events::{BytesText, Event};
+use std::io::Cursor;
+use tdvass_fmu::variables::{ALL_VARIABLES, Causality, Dimension, Variable};
+
+fn text_element(w: &mut XmlWriter, name: &str, text: &str) -> XmlResult {
+    w.create_element(name)
+        .write_text_content(BytesText::new(text))?;
+    Ok(())
+}
+
+fn paragraph(w: &mut XmlWriter, text: &str) -> XmlResult {
+    text_element(w, "p", text)
+}
+
+fn list(w: &mut XmlWriter, items: &[&str]) -> XmlResult {
+    w.create_element("ul").write_inner_content(|w| {
+        for item in items {
+            text_element(w, "li", item)?;
+        }
+        Ok(())
+    })?;
+    Ok(())
+}
+
+fn table(w: &mut XmlWriter, header: &[&str], rows: &[Vec<String>]) -> XmlResult {
+    w.create_element("table").write_inner_content(|w| {
+        w.create_element("tr").write_inner_content(|w| {
+            for h in header {
+                text_element(w, "th", h)?;
+            }
+            Ok(())
+        })?;
+        for row in rows {
+            w.create_element("tr").write_inner_content(|w| {
+                for cell in row {
+                    text_element(w, "td", cell)?;
+                }
+                Ok(())
+            })?;
+        }
+        Ok(())
+    })?;
+    Ok(())
+}
+
+/// The FMI 3.0 type of `v` in words: `Float64`, `Enumeration Variant`,
+/// `Float64 [root_count][2]`.
+fn type_text(v: &Variable) -> String {
+    let mut text = fmi3_type(v).as_str().to_string();
+    if let (Fmi3Type::Enumeration, Some(e)) = (fmi3_type(v), v.enumeration) {
+        text.push(' ');
+        text.push_str(e.type_name);
+    }
+    if !v.dimensions.is_empty() {
+        text.push(' ');
+        for d in v.dimensions {
+            match d {
+                Dimension::Fixed(size) => text.push_str(&format!("[{size}]")),
+                Dimension::Structural(name) => text.push_str(&format!("[{name}]")),
+            }
+        }
+    }
+    text
+}
+
+fn variable_row(v: &Variable) -> Vec<String> {
+    let unit = match (v.unit(), v.display_unit) {
+        (Some(u), Some(d)) => format!("{u} (shown in {d})"),
+        (Some(u), None) => u.to_string(),
+        (None, _) => "-".to_string(),
+    };
+    let start = match (v.start, v.enumeration) {
+        (Some(s), Some(e)) => {
+            let code = s as i32;
+            let item = e.items.iter().find(|i| i.value == code);
+            match item {
+                Some(item) => format!("{} ({code})", item.name),
+                None => code.to_string(),
+            }
+        }
+        (Some(s), None) => value_text(v, s),
+        (None, _) if v.causality == Causality::Independent => "startTime".into(),
+        (None, _) => "calculated".into(),
+    };
+    let mut kind = format!("{}, {}", v.causality.as_str(), v.variability.as_str());
+    if v.intermediate_update {
+        kind.push_str(", intermediateUpdate");
+    }
+    vec![
+        v.name.to_string(),
+        v.vr.to_string(),
+        type_text(v),
+        kind,
+        start,
+        unit,
+        v.range.describe(),
+        v.description.to_string(),
+    ]
+}
+
+/// The complete `documentation/index.html` of the FMI 3.0 FMU.
+pub fn documentation_html() -> String {
+    let mut w = Writer::new_with_indent(Cursor::new(Vec::new()), b' ', 2);
+    let write = |w: &mut XmlWriter| -> XmlResult {
+        w.write_event(Event::DocType(BytesText::from_escaped("html")))?;
+        w.create_element("html")
+            .with_attribute(("lang", "en"))
+            .write_inner_content(|w| {
+                w.create_element("head").write_inner_content(|w| {
+                    w.create_element("meta")
+                        .with_attribute(("charset", "utf-8"))
+                        .write_empty()?;
+                    text_element(w, "title", &format!("{MODEL_NAME} FMI 3.0 FMU"))?;
+                    text_element(
+                        w,
+                        "style",
+                        "body{font-family:sans-serif;max-width:70em;margin:auto;padding:1em}table{border-collapse:collapse}td,th{border:1px solid #bbb;padding:0.2em 0.5em;text-align:left;vertical-align:top}",
+                    )
+                })?;
+                w.create_element("body").write_inner_content(write_body)?;
+                Ok(())
+            })?;
+        Ok(())
+    };
+    write(&mut w).expect("writing to memory cannot fail");
+    finish(w)
+}
+
+fn write_body(w: &mut XmlWriter) -> XmlResult {
+    text_element(w, "h1", &format!("{MODEL_NAME}: FMI 3.0 Co-Simulation FMU"))?;
+    paragraph(w, MODEL_DESCRIPTION)?;
+    paragraph(
+        w,
+        &format!(
+            "modelIdentifier {MODEL_IDENTIFIER}, instantiationToken {} (a hash of the variable names, value references, types, causalities, variabilities, enumeration types and array dimensions), version {}.",
+            instantiation_token(),
+            env!("CARGO_PKG_VERSION")
+        ),
+    )?;
+    paragraph(
+        w,
+        "The model, its variables, value references, units, ranges and start values are those of the FMI 2.0 FMU of the same build (tdvass.fmu), from the same variable table. FMI 3.0 adds named enumerations for the integer settings, the rightmost characteristic roots as an array sized by a structural parameter, intermediate update with early return, and adjoint derivatives.",
+    )?;
+
+    text_element(w, "h2", "The model")?;
+    paragraph(
+        w,
+        "State X = [x_s, v_s, x_h, v_h, x_t, v_t]: body, annular absorber and wheel displacements and velocities. The plant is dX/dt = A X + b x_t(t - tau) + e x_g(t) (Eq. 2 of the paper). TDVASS feeds the delayed wheel displacement back as the control force u = g x_t(t - tau); PVASS is the same structure with g = 0; CS is the conventional 2-DOF quarter car, for which x_h and v_h mirror x_t and v_t. The outputs are the states, BA = d2x_s/dt2, SDD = x_s - x_t, TDD = x_t - x_g, their running RMS values from the start time and the objective J (Eq. 6).",
+    )?;
+    paragraph(
+        w,
+        "Integration: the precise integration method of the paper on an internal grid anchored at the start time, whose step divides tau exactly and is at most max_internal_step. Results do not depend on how the importer splits time into communication steps (except with road = input, where the input changes at communication points or intermediate updates).",
+    )?;
+
+    text_element(w, "h2", "Variables")?;
+    let rows: Vec<Vec<String>> = ALL_VARIABLES.iter().map(variable_row).collect();
+    table(
+        w,
+        &[
+            "name",
+            "value reference",
+            "FMI 3.0 type",
+            "causality, variability",
+            "start",
+            "unit",
+            "range",
+            "meaning",
+        ],
+        &rows,
+    )?;
+    paragraph(
+        w,
+        "Parameters are fixed (settable before the end of initialization) unless tunable. Values outside the range, NaN or infinite are refused with fmi3Error naming the variable and value. The independent variable time is read with fmi3GetFloat64 and never set; it starts at the startTime of fmi3EnterInitializationMode.",
+    )?;
+
+    text_element(w, "h3", "Enumerations")?;
+    paragraph(
+        w,
+        "Read and written with fmi3GetInt64 and fmi3SetInt64; the item values are the integer codes of the FMI 2.0 FMU.",
+    )?;
+    for e in enumerations() {
+        let users: Vec<&str> = ALL_VARIABLES
+            .iter()
+            .filter(|v| v.enumeration.is_some_and(|u| u.type_name == e.type_name))
+            .map(|v| v.name)
+            .collect();
+        text_element(
+            w,
+            "h4",
+            &format!("{} (variable {})", e.type_name, users.join(", ")),
+        )?;
+        let rows: Vec<Vec<String>> = e
+            .items
+            .iter()
+            .map(|i| {
+                vec![
+                    i.name.to_string(),
+                    i.value.to_string(),
+                    i.description.to_string(),
+                ]
+            })
+            .collect();
+        table(w, &["item", "value", "meaning"], &rows)?;
+    }
+
+    text_element(w, "h3", "Arrays")?;
+    for v in ALL_VARIABLES.iter().filter(|v| !v.dimensions.is_empty()) {
+        paragraph(
+            w,
+            &format!(
+                "{}: {}, serialized row-major (the last index varies fastest). {}",
+                v.name,
+                type_text(v),
+                v.description
+            ),
+        )?;
+    }
+    paragraph(
+        w,
+        "A structural parameter that sizes an array can only be changed in Configuration Mode (fmi3EnterConfigurationMode after instantiation); its start value is the size an importer that ignores structural parameters sees.",
+    )?;
+
+    text_element(w, "h2", "Co-Simulation capabilities")?;
+    let rows: Vec<Vec<String>> = CO_SIMULATION_CAPABILITIES
+        .iter()
+        .map(|(name, value)| vec![name.to_string(), value.to_string()])
+        .collect();
+    table(w, &["attribute", "value"], &rows)?;
+
+    text_element(w, "h2", "Intermediate update")?;
+    list(
+        w,
+        &[
+            "When the importer passes an intermediateUpdate callback to fmi3InstantiateCoSimulation, fmi3DoStep calls it at internal grid nodes, thinned by the tunable parameter intermediate_update_interval (s of simulated time between two calls; 0 = at every node).",
+            "Inside the callback the outputs (intermediateUpdate = true) can be read, and the input x_g (intermediateUpdate = true) can be set: setting it at every node makes a road fed by the importer as accurate as a built-in one. This replaces the input derivatives of FMI 2.0.",
+            "When the importer allowed early return at instantiation and asks for it from the callback, fmi3DoStep returns at that node with earlyReturn = true and lastSuccessfulTime the time of the node; the next step starts there. The FMU never returns early on its own.",
+        ],
+    )?;
+
+    text_element(w, "h2", "Model structure")?;
+    paragraph(
+        w,
+        "Dependencies are value references. Only tire_deflection and road_displacement depend directly on the input x_g at communication points (with a factor fixed by road); the initial values of the outputs and calculated parameters depend on the parameters named in ModelStructure, and rightmost_roots also on root_count.",
+    )?;
+
+    text_element(w, "h2", "Default experiment")?;
+    paragraph(
+        w,
+        &format!(
+            "startTime {DEFAULT_START_TIME} s, stopTime {DEFAULT_STOP_TIME} s, stepSize {DEFAULT_STEP_SIZE} s. With the start values (TDVASS, g = 5386 N/m, tau = 0.2 ms, harmonic road 0.05 sin 5t, from rest) the running RMS outputs at t = 15 s reproduce the TDVASS row of the paper's Table 2: BA 0.3068 m/s2, SDD 0.0388 m, TDD 0.6251 mm; variant = CS and PVASS give the other rows."
+        ),
+    )?;
+
+    text_element(w, "h2", "Logging")?;
+    let categories: Vec<String> = LOG_CATEGORIES
+        .iter()
+        .map(|(name, description)| format!("{name}: {description}"))
+        .collect();
+    let categories: Vec<&str> = categories.iter().map(String::as_str).collect();
+    list(w, &categories)?;
+
+    text_element(w, "h2", "References")?;
+    list(
+        w,
+        &[
+            "Mechanism of time-delay feedback control of suspension damping with an annular vibration-absorbing structure (the source paper: model Eq. 1-2, objective Eq. 6, precise integration section 4.1, Table 1 parameters, Table 2 results).",
+            "ISO 8608: Mechanical vibration - Road surface profiles - Reporting of measured data.",
+            "Functional Mock-up Interface Specification, version 3.0.",
+        ],
+    )?;
+    Ok(())
+}

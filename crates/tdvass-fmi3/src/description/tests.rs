@@ -1,0 +1,444 @@
+use super::*;
+use quick_xml::Reader;
+use std::collections::{HashMap, HashSet};
+use tdvass_fmu::variables::{Initial, ROAD_CLASS_ITEMS, ROAD_ITEMS, VARIABLES, VARIANT_ITEMS};
+
+/// One element: its name, its attributes and the index of its parent.
+#[derive(Debug)]
+struct Element {
+    name: String,
+    attributes: HashMap<String, String>,
+    parent: Option<usize>,
+}
+
+impl Element {
+    fn get(&self, key: &str) -> Option<&str> {
+        self.attributes.get(key).map(String::as_str)
+    }
+
+    fn attr(&self, key: &str) -> &str {
+        self.get(key)
+            .unwrap_or_else(|| panic!("<{}> has no `{key}`: {:?}", self.name, self.attributes))
+    }
+}
+
+/// Every element in document order.
+fn elements(xml: &str) -> Vec<Element> {
+    let mut reader = Reader::from_str(xml);
+    let mut out: Vec<Element> = Vec::new();
+    let mut open: Vec<usize> = Vec::new();
+    loop {
+        let event = reader.read_event().expect("well-formed XML");
+        let (e, empty) = match event {
+            Event::Start(e) => (e, false),
+            Event::Empty(e) => (e, true),
+            Event::End(_) => {
+                open.pop();
+                continue;
+            }
+            Event::Eof => break,
+            _ => continue,
+        };
+        let attributes = e
+            .attributes()
+            .map(|a| {
+                let a = a.unwrap();
+                (
+                    a.key.0.to_string(),
+                    a.normalized_value(quick_xml::XmlVersion::Implicit1_0)
+                        .unwrap()
+                        .into_owned(),
+                )
+            })
+            .collect();
+        out.push(Element {
+            name: e.name().0.to_string(),
+            attributes,
+            parent: open.last().copied(),
+        });
+        if !empty {
+            open.push(out.len() - 1);
+        }
+    }
+    out
+}
+
+/// The children of the first element called `parent`.
+fn children<'a>(els: &'a [Element], parent: &str) -> Vec<&'a Element> {
+    let at = els.iter().position(|e| e.name == parent).unwrap();
+    els.iter().filter(|e| e.parent == Some(at)).collect()
+}
+
+fn vr_list_of(text: &str) -> Vec<u32> {
+    text.split_whitespace()
+        .map(|s| s.parse().unwrap())
+        .collect()
+}
+
+#[test]
+fn root_co_simulation_and_experiment() {
+    let els = elements(&model_description_xml());
+    let root = &els[0];
+    assert_eq!(root.name, "fmiModelDescription");
+    assert_eq!(root.attr("fmiVersion"), "3.0");
+    assert_eq!(root.attr("modelName"), "TDVASS");
+    assert_eq!(root.attr("instantiationToken"), instantiation_token());
+    assert_eq!(root.attr("variableNamingConvention"), "flat");
+    assert!(root.get("guid").is_none());
+    let top: Vec<&str> = children(&els, "fmiModelDescription")
+        .iter()
+        .map(|e| e.name.as_str())
+        .collect();
+    assert_eq!(
+        top,
+        [
+            "CoSimulation",
+            "UnitDefinitions",
+            "TypeDefinitions",
+            "LogCategories",
+            "DefaultExperiment",
+            "ModelVariables",
+            "ModelStructure"
+        ]
+    );
+    let cs = els.iter().find(|e| e.name == "CoSimulation").unwrap();
+    assert_eq!(cs.attr("modelIdentifier"), "tdvass");
+    assert_eq!(cs.attributes.len(), 1 + CO_SIMULATION_CAPABILITIES.len());
+    for (flag, value) in CO_SIMULATION_CAPABILITIES {
+        assert_eq!(cs.attr(flag), value, "{flag}");
+    }
+    for flag in [
+        "canHandleVariableCommunicationStepSize",
+        "canGetAndSetFMUState",
+        "canSerializeFMUState",
+        "providesDirectionalDerivatives",
+        "providesAdjointDerivatives",
+        "providesIntermediateUpdate",
+        "canReturnEarlyAfterIntermediateUpdate",
+    ] {
+        assert_eq!(cs.attr(flag), "true", "{flag}");
+    }
+    assert_eq!(cs.attr("maxOutputDerivativeOrder"), "1");
+    assert_eq!(cs.attr("hasEventMode"), "false");
+    let experiment = els.iter().find(|e| e.name == "DefaultExperiment").unwrap();
+    assert_eq!(experiment.attr("startTime"), "0");
+    assert_eq!(experiment.attr("stopTime"), "15");
+    assert_eq!(experiment.attr("stepSize"), "0.001");
+    let categories: Vec<(&str, &str)> = children(&els, "LogCategories")
+        .iter()
+        .map(|e| (e.attr("name"), e.attr("description")))
+        .collect();
+    assert_eq!(categories, LOG_CATEGORIES);
+}
+
+#[test]
+fn every_variable_has_the_values_of_the_table() {
+    let els = elements(&model_description_xml());
+    let vars = children(&els, "ModelVariables");
+    assert_eq!(vars.len(), ALL_VARIABLES.len());
+    // Exactly one independent variable: a Float64 in s without start or
+    // initial.
+    let independent: Vec<&&Element> = vars
+        .iter()
+        .filter(|e| e.get("causality") == Some("independent"))
+        .collect();
+    assert_eq!(independent.len(), 1);
+    let time = independent[0];
+    assert_eq!(time.name, "Float64");
+    assert_eq!(time.attr("name"), "time");
+    assert_eq!(time.attr("variability"), "continuous");
+    assert_eq!(time.attr("unit"), "s");
+    assert!(time.get("start").is_none() && time.get("initial").is_none());
+    for (v, el) in ALL_VARIABLES.iter().zip(&vars) {
+        assert_eq!(el.name, fmi3_type(v).as_str(), "{}", v.name);
+        assert_eq!(el.attr("name"), v.name);
+        assert_eq!(el.attr("valueReference"), v.vr.to_string());
+        assert_eq!(el.attr("description"), v.description);
+        assert_eq!(el.attr("causality"), v.causality.as_str());
+        assert_eq!(el.attr("variability"), v.variability.as_str());
+        assert_eq!(el.get("initial"), v.initial().map(Initial::as_str));
+        assert_eq!(el.get("unit"), v.unit().filter(|_| v.enumeration.is_none()));
+        assert_eq!(el.get("displayUnit"), v.display_unit);
+        let declared = match (v.enumeration, v.quantity.type_definition()) {
+            (Some(e), _) => Some(e.type_name),
+            (None, Some((name, _, _))) => Some(name),
+            (None, None) => None,
+        };
+        assert_eq!(el.get("declaredType"), declared, "{}", v.name);
+        let parse = |s: &str| s.parse::<f64>().unwrap();
+        assert_eq!(el.get("start").map(parse), v.start, "{}", v.name);
+        let (min, max) = v.range.bounds();
+        assert_eq!(el.get("min").map(parse), min, "{}", v.name);
+        assert_eq!(el.get("max").map(parse), max, "{}", v.name);
+        assert_eq!(
+            el.get("intermediateUpdate"),
+            v.intermediate_update.then_some("true"),
+            "{}",
+            v.name
+        );
+        if fmi3_type(v) != Fmi3Type::Float64 {
+            for key in ["start", "min", "max"] {
+                if let Some(text) = el.get(key) {
+                    assert!(!text.contains('.'), "{} {key}={text}", v.name);
+                }
+            }
+        }
+    }
+    let vrs: HashSet<&str> = vars.iter().map(|e| e.attr("valueReference")).collect();
+    assert_eq!(vrs.len(), vars.len());
+    // The FMI 2.0 variables keep their names and value references.
+    for v in VARIABLES {
+        assert!(
+            vars.iter()
+                .any(|e| e.attr("name") == v.name && e.attr("valueReference") == v.vr.to_string())
+        );
+    }
+}
+
+#[test]
+fn enumerations_types_and_units_are_declared() {
+    let els = elements(&model_description_xml());
+    let types = children(&els, "TypeDefinitions");
+    let units: HashMap<&str, usize> = els
+        .iter()
+        .enumerate()
+        .filter(|(_, e)| e.name == "Unit")
+        .map(|(i, e)| (e.attr("name"), i))
+        .collect();
+    for t in types.iter().filter(|t| t.name == "Float64Type") {
+        assert!(units.contains_key(t.attr("unit")), "{}", t.attr("unit"));
+    }
+    let declared: HashSet<&str> = types.iter().map(|t| t.attr("name")).collect();
+    assert_eq!(declared.len(), types.len());
+    for v in children(&els, "ModelVariables") {
+        if let Some(name) = v.get("declaredType") {
+            assert!(declared.contains(name), "{name}");
+        }
+        if let Some(unit) = v.get("unit") {
+            assert!(units.contains_key(unit), "{unit}");
+        }
+        if let Some(display) = v.get("displayUnit") {
+            let unit = units[v.attr("unit")];
+            assert!(
+                els.iter().any(|e| e.parent == Some(unit)
+                    && e.name == "DisplayUnit"
+                    && e.attr("name") == display),
+                "{display}"
+            );
+        }
+    }
+    assert_eq!(
+        enumerations()
+            .iter()
+            .map(|e| e.type_name)
+            .collect::<Vec<_>>(),
+        ["Variant", "Road", "RoadClass"]
+    );
+    for e in [&VARIANT_ITEMS, &ROAD_ITEMS, &ROAD_CLASS_ITEMS] {
+        let at = els
+            .iter()
+            .position(|t| t.name == "EnumerationType" && t.attr("name") == e.type_name)
+            .unwrap_or_else(|| panic!("no EnumerationType {}", e.type_name));
+        let items: Vec<(&str, i32, &str)> = els
+            .iter()
+            .filter(|i| i.parent == Some(at))
+            .map(|i| {
+                assert_eq!(i.name, "Item");
+                (
+                    i.attr("name"),
+                    i.attr("value").parse().unwrap(),
+                    i.attr("description"),
+                )
+            })
+            .collect();
+        let expected: Vec<(&str, i32, &str)> = e
+            .items
+            .iter()
+            .map(|i| (i.name, i.value, i.description))
+            .collect();
+        assert_eq!(items, expected);
+    }
+    let tdd = children(&els, "ModelVariables")
+        .into_iter()
+        .find(|e| e.attr("name") == "tire_deflection")
+        .unwrap();
+    assert_eq!(tdd.attr("displayUnit"), "mm");
+    assert_eq!(tdd.attr("unit"), "m");
+    let variant = children(&els, "ModelVariables")
+        .into_iter()
+        .find(|e| e.attr("name") == "variant")
+        .unwrap();
+    assert_eq!(variant.name, "Enumeration");
+    assert_eq!(variant.attr("declaredType"), "Variant");
+    assert_eq!(variant.attr("start"), "3");
+}
+
+#[test]
+fn arrays_have_their_dimensions() {
+    let els = elements(&model_description_xml());
+    let at = |name: &str| {
+        els.iter()
+            .position(|e| e.parent.is_some() && e.get("name") == Some(name))
+            .unwrap()
+    };
+    let dimensions = |i: usize| -> Vec<&Element> {
+        els.iter()
+            .filter(|e| e.parent == Some(i) && e.name == "Dimension")
+            .collect()
+    };
+    let root_count = &els[at("root_count")];
+    assert_eq!(root_count.name, "UInt64");
+    assert_eq!(root_count.attr("causality"), "structuralParameter");
+    assert!(root_count.attr("start").parse::<u64>().unwrap() > 0);
+    let roots = dimensions(at("rightmost_roots"));
+    assert_eq!(roots.len(), 2);
+    assert_eq!(
+        roots[0].attributes,
+        HashMap::from([(
+            "valueReference".to_string(),
+            root_count.attr("valueReference").to_string()
+        )])
+    );
+    assert_eq!(
+        roots[1].attributes,
+        HashMap::from([("start".to_string(), "2".to_string())])
+    );
+    for v in ALL_VARIABLES {
+        assert_eq!(
+            dimensions(at(v.name)).len(),
+            v.dimensions.len(),
+            "{}",
+            v.name
+        );
+    }
+    // Every Dimension refers to a UInt64 structural parameter with a
+    // positive start.
+    for d in els.iter().filter(|e| e.name == "Dimension") {
+        if let Some(vr) = d.get("valueReference") {
+            let p = els
+                .iter()
+                .find(|e| e.name == "UInt64" && e.get("valueReference") == Some(vr))
+                .unwrap();
+            assert_eq!(p.attr("causality"), "structuralParameter");
+            assert!(p.attr("start").parse::<u64>().unwrap() > 0);
+        }
+    }
+}
+
+#[test]
+fn model_structure_lists_outputs_and_initial_unknowns_by_value_reference() {
+    let els = elements(&model_description_xml());
+    let structure = children(&els, "ModelStructure");
+    let outputs: Vec<&Element> = structure
+        .iter()
+        .copied()
+        .filter(|e| e.name == "Output")
+        .collect();
+    let initial: Vec<&Element> = structure
+        .iter()
+        .copied()
+        .filter(|e| e.name == "InitialUnknown")
+        .collect();
+    assert_eq!(outputs.len() + initial.len(), structure.len());
+    // Outputs first, in ModelVariables order.
+    assert!(
+        structure[..outputs.len()]
+            .iter()
+            .all(|e| e.name == "Output")
+    );
+    let expected_outputs: Vec<String> = ALL_VARIABLES
+        .iter()
+        .filter(|v| v.causality == Causality::Output)
+        .map(|v| v.vr.to_string())
+        .collect();
+    let listed: Vec<&str> = outputs.iter().map(|e| e.attr("valueReference")).collect();
+    assert_eq!(listed, expected_outputs);
+    assert_eq!(outputs.len(), 15);
+    let expected_initial: Vec<String> = ALL_VARIABLES
+        .iter()
+        .filter(|v| is_initial_unknown(v))
+        .map(|v| v.vr.to_string())
+        .collect();
+    let listed: Vec<&str> = initial.iter().map(|e| e.attr("valueReference")).collect();
+    assert_eq!(listed, expected_initial);
+    assert_eq!(initial.len(), 18);
+
+    let by_vr = |vr: u32| ALL_VARIABLES.iter().find(|v| v.vr == vr).unwrap();
+    let x_g = by_name("x_g").unwrap().vr;
+    for o in &outputs {
+        let deps = vr_list_of(o.attr("dependencies"));
+        // At communication points outputs depend directly on the input only.
+        assert!(deps.iter().all(|&d| d == x_g), "{:?}", o.attributes);
+        let kinds = o.get("dependenciesKind").unwrap_or("");
+        assert_eq!(kinds.split_whitespace().count(), deps.len());
+        let v = by_vr(o.attr("valueReference").parse().unwrap());
+        assert_eq!(deps, output_dependencies(v));
+    }
+    let tdd = outputs
+        .iter()
+        .find(|e| e.attr("valueReference") == by_name("tire_deflection").unwrap().vr.to_string())
+        .unwrap();
+    assert_eq!(tdd.attr("dependencies"), x_g.to_string());
+    assert_eq!(tdd.attr("dependenciesKind"), "fixed");
+    let x_s = outputs
+        .iter()
+        .find(|e| e.attr("valueReference") == by_name("x_s").unwrap().vr.to_string())
+        .unwrap();
+    assert_eq!(x_s.attr("dependencies"), "");
+    assert!(x_s.get("dependenciesKind").is_none());
+
+    // Initial dependencies are knowns of initialization mode: inputs and
+    // variables with initial = exact; ascending, each once.
+    for u in &initial {
+        let deps = vr_list_of(u.attr("dependencies"));
+        assert!(deps.windows(2).all(|w| w[0] < w[1]), "{deps:?}");
+        for d in &deps {
+            let known = by_vr(*d);
+            assert!(
+                known.causality == Causality::Input || known.initial() == Some(Initial::Exact),
+                "{}",
+                known.name
+            );
+        }
+        let v = by_vr(u.attr("valueReference").parse().unwrap());
+        assert_eq!(deps, initial_dependencies(v));
+    }
+    let roots = initial
+        .iter()
+        .find(|e| e.attr("valueReference") == by_name("rightmost_roots").unwrap().vr.to_string())
+        .unwrap();
+    assert!(vr_list_of(roots.attr("dependencies")).contains(&by_name("root_count").unwrap().vr));
+}
+
+#[test]
+fn documentation_describes_every_variable_and_capability() {
+    let html = documentation_html();
+    assert!(html.starts_with("<!DOCTYPE html>"));
+    elements(html.trim_start_matches("<!DOCTYPE html>"));
+    assert!(html.contains("FMI 3.0 Co-Simulation FMU"));
+    assert!(html.contains(&instantiation_token()));
+    assert!(html.contains("<td>time</td>"));
+    for v in ALL_VARIABLES {
+        assert!(html.contains(&format!("<td>{}</td>", v.name)), "{}", v.name);
+    }
+    for e in enumerations() {
+        for item in e.items {
+            assert!(
+                html.contains(&format!("<td>{}</td>", item.name)),
+                "{}",
+                item.name
+            );
+        }
+    }
+    for (flag, _) in CO_SIMULATION_CAPABILITIES {
+        assert!(html.contains(&format!("<td>{flag}</td>")), "{flag}");
+    }
+    assert!(html.contains("Float64 [root_count][2]"));
+    assert!(html.contains("0.3068"));
+}
+
+#[test]
+fn output_is_deterministic() {
+    assert_eq!(model_description_xml(), model_description_xml());
+    assert_eq!(documentation_html(), documentation_html());
+}

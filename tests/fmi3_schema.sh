@@ -1,0 +1,59 @@
+#!/usr/bin/env bash
+# Validates the FMI 3.0 model descriptions against the official XML schema
+# of the standard (modelica/fmi-standard, release v3.0.2) with xmllint.
+#
+#   tests/fmi3_schema.sh            the checked-in modelDescription/fmi3/modelDescription.xml
+#                                   and, when it was built, the one inside
+#                                   target/fmu/tdvass-fmi3.fmu
+#   tests/fmi3_schema.sh FILE...    these files
+#
+# The schema is taken from FMI3_SCHEMA_DIR (a directory holding
+# fmi3ModelDescription.xsd and the files it includes) or, without it, cloned
+# once with git into target/fmi-standard-v3.0.2 and checked to be the
+# release's commit. Needs xmllint (Debian: libxml2-utils) and git.
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$root"
+release=v3.0.2
+release_commit=b8778deaf5b746ba4a2f6c155d53f8a33eebbd33
+if ! command -v xmllint >/dev/null; then
+    echo "tests/fmi3_schema.sh needs xmllint: apt-get install libxml2-utils" >&2
+    exit 1
+fi
+target="${CARGO_TARGET_DIR:-target}"
+case "$target" in /*) ;; *) target="$root/$target" ;; esac
+if [ -n "${FMI3_SCHEMA_DIR:-}" ]; then
+    schema_dir="$FMI3_SCHEMA_DIR"
+else
+    clone="$target/fmi-standard-$release"
+    if [ ! -d "$clone/.git" ]; then
+        rm -rf "$clone"
+        git clone --quiet --depth 1 --branch "$release" \
+            https://github.com/modelica/fmi-standard.git "$clone"
+    fi
+    commit="$(git -C "$clone" rev-parse HEAD)"
+    if [ "$commit" != "$release_commit" ]; then
+        echo "$clone is at $commit, not $release ($release_commit); remove it and run again" >&2
+        exit 1
+    fi
+    schema_dir="$clone/schema"
+fi
+schema="$schema_dir/fmi3ModelDescription.xsd"
+if [ ! -f "$schema" ]; then
+    echo "no fmi3ModelDescription.xsd in $schema_dir" >&2
+    exit 1
+fi
+files=("$@")
+scratch=""
+if [ ${#files[@]} -eq 0 ]; then
+    files=(modelDescription/fmi3/modelDescription.xml)
+    fmu="$target/fmu/tdvass-fmi3.fmu"
+    if [ -f "$fmu" ]; then
+        scratch="$(mktemp -d)"
+        trap 'rm -rf "$scratch"' EXIT
+        python3 -c 'import sys, zipfile; sys.stdout.buffer.write(zipfile.ZipFile(sys.argv[1]).read("modelDescription.xml"))' \
+            "$fmu" >"$scratch/modelDescription.xml"
+        files+=("$scratch/modelDescription.xml")
+    fi
+fi
+xmllint --noout --schema "$schema" "${files[@]}"
