@@ -8,14 +8,13 @@
 #   tests/fmi3_schema.sh FILE...    these files
 #
 # The schema is taken from FMI3_SCHEMA_DIR (a directory holding
-# fmi3ModelDescription.xsd and the files it includes) or, without it, cloned
-# once with git into target/fmi-standard-v3.0.2 and checked to be the
-# release's commit. Needs xmllint (Debian: libxml2-utils) and git.
+# fmi3ModelDescription.xsd and the files it includes) or, without it, from
+# the copy of the standard's schema that fmpy ships (fmpy/schema/fmi3) in
+# the test environment of tests/python_env.sh. Needs xmllint (Debian:
+# libxml2-utils).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
-release=v3.0.2
-release_commit=b8778deaf5b746ba4a2f6c155d53f8a33eebbd33
 if ! command -v xmllint >/dev/null; then
     echo "tests/fmi3_schema.sh needs xmllint: apt-get install libxml2-utils" >&2
     exit 1
@@ -25,18 +24,8 @@ case "$target" in /*) ;; *) target="$root/$target" ;; esac
 if [ -n "${FMI3_SCHEMA_DIR:-}" ]; then
     schema_dir="$FMI3_SCHEMA_DIR"
 else
-    clone="$target/fmi-standard-$release"
-    if [ ! -d "$clone/.git" ]; then
-        rm -rf "$clone"
-        git clone --quiet --depth 1 --branch "$release" \
-            https://github.com/modelica/fmi-standard.git "$clone"
-    fi
-    commit="$(git -C "$clone" rev-parse HEAD)"
-    if [ "$commit" != "$release_commit" ]; then
-        echo "$clone is at $commit, not $release ($release_commit); remove it and run again" >&2
-        exit 1
-    fi
-    schema_dir="$clone/schema"
+    python="$(tests/python_env.sh)"
+    schema_dir="$("$python" -c 'import os, fmpy; print(os.path.join(os.path.dirname(fmpy.__file__), "schema", "fmi3"))')"
 fi
 schema="$schema_dir/fmi3ModelDescription.xsd"
 if [ ! -f "$schema" ]; then
