@@ -442,6 +442,9 @@ pub struct Variable {
     /// FMI 3.0: may be read (outputs) or set (the input) inside an
     /// intermediate update.
     pub intermediate_update: bool,
+    /// Only the FMI 3.0 FMU has it (these follow the common variables in
+    /// the table, so FMI 2.0's `ModelVariables` are a prefix of it).
+    pub fmi3_only: bool,
 }
 
 impl Variable {
@@ -474,7 +477,7 @@ impl Variable {
     /// Whether the variable exists in `version` (the FMI 3.0 additions
     /// follow the common variables in the table).
     pub fn is_in(&self, version: FmiVersion) -> bool {
-        version == FmiVersion::Fmi3 || self.vr < FIRST_FMI3_ONLY_VR
+        version == FmiVersion::Fmi3 || !self.fmi3_only
     }
 
     const fn display(mut self, unit: &'static str) -> Variable {
@@ -561,6 +564,7 @@ const fn parameter(
         enumeration: None,
         dimensions: &[],
         intermediate_update: false,
+        fmi3_only: false,
     }
 }
 
@@ -589,6 +593,7 @@ const fn output(
         enumeration: None,
         dimensions: &[],
         intermediate_update: true,
+        fmi3_only: false,
     }
 }
 
@@ -616,6 +621,7 @@ const fn calculated(
         enumeration: None,
         dimensions: &[],
         intermediate_update: false,
+        fmi3_only: false,
     }
 }
 
@@ -627,13 +633,11 @@ const SPECTRUM_DEPENDENCIES: &[&str] = &[
 ];
 const ROAD_DEPENDENCIES: &[&str] = &["road", "road_amplitude", "road_angular_frequency", "x_g"];
 
-/// The value reference of the first variable that only FMI 3.0 has; the
-/// FMI 3.0 additions follow the common variables at the end of [`TABLE`].
-pub const FIRST_FMI3_ONLY_VR: u32 = 49;
-
+/// How many variables both versions have: the FMI 3.0 additions follow
+/// them at the end of [`TABLE`].
 const fn common_count(table: &[Variable]) -> usize {
     let mut i = 0;
-    while i < table.len() && table[i].vr < FIRST_FMI3_ONLY_VR {
+    while i < table.len() && !table[i].fmi3_only {
         i += 1;
     }
     i
@@ -968,6 +972,7 @@ const TABLE: &[Variable] = &[
         enumeration: None,
         dimensions: &[],
         intermediate_update: true,
+        fmi3_only: false,
     },
     output(
         "x_s",
@@ -1137,8 +1142,10 @@ const TABLE: &[Variable] = &[
         Calculated::Stable,
         "spectral_abscissa < 0 (asymptotically stable)",
     ),
-    // FMI 3.0 only (value references from FIRST_FMI3_ONLY_VR on).
-    parameter(
+    // FMI 3.0 only, from here to the end.
+    Variable {
+        fmi3_only: true,
+        ..parameter(
         "intermediate_update_interval",
         49,
         Tunable,
@@ -1147,7 +1154,8 @@ const TABLE: &[Variable] = &[
         Range::AtLeast(0.0),
         real!(intermediate_update_interval),
         "FMI 3.0: simulated time between two intermediate updates inside a step, at internal grid nodes (0 = at every node); used when the master passes an intermediateUpdate callback",
-    ),
+        )
+    },
     Variable {
         name: "root_count",
         vr: 50,
@@ -1164,9 +1172,11 @@ const TABLE: &[Variable] = &[
         enumeration: None,
         dimensions: &[],
         intermediate_update: false,
+        fmi3_only: true,
     },
     Variable {
         dimensions: &[Dimension::Structural("root_count"), Dimension::Fixed(2)],
+        fmi3_only: true,
         ..calculated(
             "rightmost_roots",
             51,
@@ -1191,6 +1201,7 @@ const TABLE: &[Variable] = &[
         enumeration: None,
         dimensions: &[],
         intermediate_update: false,
+        fmi3_only: true,
     },
 ];
 

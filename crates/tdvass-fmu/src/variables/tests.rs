@@ -277,3 +277,12 @@ fn partials_of_the_outputs() {
         0.0
     );
 }
+
+#[test]
+fn the_fmi3_additions_follow_the_common_variables() {
+    let first = ALL_VARIABLES.iter().position(|v| v.fmi3_only).unwrap();
+    assert!(ALL_VARIABLES[first..].iter().all(|v| v.fmi3_only));
+    assert_eq!(VARIABLES.len(), first);
+    assert!(VARIABLES.iter().all(|v| v.is_in(FmiVersion::Fmi2)));
+    assert!(!ALL_VARIABLES[first].is_in(FmiVersion::Fmi2));
+}
