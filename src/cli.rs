@@ -9,12 +9,12 @@ use std::fmt::Write as _;
 use std::io::{IsTerminal as _, Write as _};
 use std::time::{Duration, Instant};
 use tdvass::analysis::frf::{frequency_response, peaks_hz};
-use tdvass::analysis::optimize::{Problem, Target, optimize};
+use tdvass::analysis::optimize::{Objective, Problem, TIRE_LOAD_RATIO_LIMIT, Target, optimize};
 use tdvass::analysis::pso::{Bounds, PsoSettings};
 use tdvass::analysis::spectrum::StableReport;
 use tdvass::analysis::stability::{StabilityReport, stability_map};
 use tdvass::error::{Error, Result};
-use tdvass::solver::Simulator;
+use tdvass::solver::{ComfortValues, Metrics, Outputs, RoadHolding, SimulationConfig, Simulator};
 
 /// Wall time after which `simulate` reports its progress on standard error.
 const PROGRESS_AFTER: Duration = Duration::from_secs(2);
@@ -315,6 +315,15 @@ impl SimulationProgress {
     }
 }
 
+/// The comfort and road-holding outputs of a run at the
+/// [`Metrics::Comfort`] level.
+fn metric_outputs(o: &Outputs) -> (ComfortValues, RoadHolding) {
+    (
+        o.comfort.expect("simulate runs at the comfort level"),
+        o.road_holding.expect("simulate runs at the comfort level"),
+    )
+}
+
 fn simulate_command(a: SimulateArgs) -> Result<String> {
     let variant = parse_variant(&a.variant)?;
     let params = a.model.params();
@@ -326,7 +335,11 @@ fn simulate_command(a: SimulateArgs) -> Result<String> {
             reason: "must be finite and >= 0",
         });
     }
-    let config = a.run.config(params, variant)?;
+    let config = SimulationConfig {
+        // Every metric: ISO 2631-1 comfort, road holding, working space.
+        metrics: Metrics::Comfort,
+        ..a.run.config(params, variant)?
+    };
     let road = config.road.clone();
     let mut sim = Simulator::new(config)?;
     if duration / a.run.max_internal_step > MAX_SIMULATE_STEPS {
@@ -353,7 +366,7 @@ fn simulate_command(a: SimulateArgs) -> Result<String> {
         let write_error = |e: std::io::Error| io_error("writing", path, &e);
         writeln!(
             csv,
-            "time,x_s,v_s,x_h,v_h,x_t,v_t,body_acceleration,suspension_deflection,tire_deflection,road_displacement,control_force"
+            "time,x_s,v_s,x_h,v_h,x_t,v_t,body_acceleration,suspension_deflection,tire_deflection,road_displacement,control_force,weighted_body_acceleration,dynamic_tire_load,contact_loss_time,max_suspension_deflection"
         )
         .map_err(write_error)?;
         let rows = (duration / a.output_interval).floor() as u64;
@@ -361,9 +374,10 @@ fn simulate_command(a: SimulateArgs) -> Result<String> {
             sim.advance_to((i as f64 * a.output_interval).min(duration))?;
             let o = sim.outputs();
             let s = o.state;
+            let (comfort, holding) = metric_outputs(&o);
             writeln!(
                 csv,
-                "{},{},{},{},{},{},{},{},{},{},{},{}",
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
                 o.time,
                 s[0],
                 s[1],
@@ -375,7 +389,11 @@ fn simulate_command(a: SimulateArgs) -> Result<String> {
                 o.performance.suspension_deflection,
                 o.performance.tire_deflection,
                 o.road_displacement,
-                o.control_force
+                o.control_force,
+                comfort.weighted_body_acceleration,
+                o.dynamic_tire_load,
+                holding.contact_loss_time,
+                holding.max_suspension_deflection
             )
             .map_err(write_error)?;
             progress.update(o.time);
@@ -391,6 +409,14 @@ fn simulate_command(a: SimulateArgs) -> Result<String> {
     sim.advance_to(duration)?;
     progress.finish();
     let o = sim.outputs();
+    let (comfort, holding) = metric_outputs(&o);
+    if let Some(loss) = holding.first_contact_loss {
+        eprintln!(
+            "warning: the tire leaves the road at t = {} s (dynamic tire load {} N below minus the static load {} N): the linear model no longer holds from there; contact_loss_time = {} s",
+            loss.time, loss.dynamic_tire_load, loss.static_load, holding.contact_loss_time
+        );
+    }
+    let reaction = tdvass::comfort::comfort_reaction(comfort.rms_weighted_body_acceleration)?;
     if a.json {
         let mut value = json!({
             "variant": variant.name(),
@@ -399,6 +425,14 @@ fn simulate_command(a: SimulateArgs) -> Result<String> {
             "rms_suspension_deflection": o.rms.suspension_deflection,
             "rms_tire_deflection": o.rms.tire_deflection,
             "objective": o.objective,
+            "weighted_body_acceleration": comfort.weighted_body_acceleration,
+            "rms_weighted_body_acceleration": comfort.rms_weighted_body_acceleration,
+            "comfort_reaction": reaction,
+            "vibration_dose_value": comfort.vibration_dose_value,
+            "dynamic_tire_load": o.dynamic_tire_load,
+            "rms_dynamic_tire_load_ratio": o.rms_dynamic_tire_load_ratio,
+            "contact_loss_time": holding.contact_loss_time,
+            "max_suspension_deflection": holding.max_suspension_deflection,
         });
         for (name, parameter) in params.named_values() {
             value[name] = parameter.into();
@@ -407,14 +441,19 @@ fn simulate_command(a: SimulateArgs) -> Result<String> {
         return Ok(value.to_string());
     }
     Ok(format!(
-        "{} on the {}, {} s from rest\n  RMS body acceleration      {:.4} m/s^2\n  RMS suspension deflection  {:.4} m\n  RMS tire deflection        {:.4} mm\n  objective J                {:.6}\n",
+        "{} on the {}, {} s from rest\n  RMS body acceleration      {:.4} m/s^2\n  RMS suspension deflection  {:.4} m\n  RMS tire deflection        {:.4} mm\n  objective J                {:.6}\n  ISO 2631-1 a_w             {:.4} m/s^2 ({reaction})\n  vibration dose value       {:.4} m/s^1.75\n  RMS tire load / static     {:.4}\n  time without tire contact  {:.4} s\n  max suspension deflection  {:.4} mm\n",
         variant.label(),
         a.run.road_note(),
         duration,
         o.rms.body_acceleration,
         o.rms.suspension_deflection,
         o.rms.tire_deflection * 1e3,
-        o.objective
+        o.objective,
+        comfort.rms_weighted_body_acceleration,
+        comfort.vibration_dose_value,
+        o.rms_dynamic_tire_load_ratio,
+        holding.contact_loss_time,
+        holding.max_suspension_deflection * 1e3
     ))
 }
 
@@ -467,6 +506,7 @@ fn optimize_command(a: OptimizeArgs) -> Result<String> {
     let base = a.run.config(a.model.params(), target.variant())?;
     a.run.warn_past_road_end(&base.road);
     let mut problem = Problem::new(target, base, a.run.duration);
+    problem.objective = parse_objective(&a)?;
     if target == Target::Controller {
         problem.bounds = controller_bounds(&a)?;
     }
@@ -478,9 +518,12 @@ fn optimize_command(a: OptimizeArgs) -> Result<String> {
     };
     let bar = indicatif::ProgressBar::new(a.iterations as u64);
     bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{bar:40} {pos}/{len} iterations, best J {msg} [{elapsed_precise}]",
-        )
+        indicatif::ProgressStyle::with_template(match problem.objective {
+            Objective::Paper => "{bar:40} {pos}/{len} iterations, best J {msg} [{elapsed_precise}]",
+            Objective::Comfort { .. } => {
+                "{bar:40} {pos}/{len} iterations, best score {msg} [{elapsed_precise}]"
+            }
+        })
         .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     let progress = |iteration: usize, best: f64| {
@@ -491,6 +534,29 @@ fn optimize_command(a: OptimizeArgs) -> Result<String> {
     bar.finish_and_clear();
     let mut value = report.to_json();
     value["road_note"] = a.run.road_note().into();
+    value["objective_function"] = problem.objective.name().into();
+    let evaluation = problem.comfort_evaluation(&report.swarm.best_position);
+    if let (
+        Objective::Comfort {
+            travel_limit,
+            static_deflection_limit,
+        },
+        Some(e),
+    ) = (problem.objective, evaluation)
+    {
+        value["limits"] = json!({
+            "rms_dynamic_tire_load_ratio": TIRE_LOAD_RATIO_LIMIT,
+            "max_suspension_deflection": travel_limit,
+            "static_deflection": static_deflection_limit,
+        });
+        value["best_evaluation"] = json!({
+            "rms_weighted_body_acceleration": e.rms_weighted_body_acceleration,
+            "rms_dynamic_tire_load_ratio": e.rms_dynamic_tire_load_ratio,
+            "max_suspension_deflection": e.max_suspension_deflection,
+            "static_deflection": e.static_deflection,
+            "feasible": e.feasible,
+        });
+    }
     if a.json {
         return Ok(value.to_string());
     }
@@ -503,9 +569,13 @@ fn optimize_command(a: OptimizeArgs) -> Result<String> {
         },
         a.run.road_note()
     );
+    let score = match problem.objective {
+        Objective::Paper => "J",
+        Objective::Comfort { .. } => "score",
+    };
     let _ = writeln!(
         out,
-        "  best: {} = {:.6}, {} = {:.6}, J = {:.6} ({} evaluations)",
+        "  best: {} = {:.6}, {} = {:.6}, {score} = {:.6} ({} evaluations)",
         names[0],
         report.swarm.best_position[0],
         names[1],
@@ -513,13 +583,28 @@ fn optimize_command(a: OptimizeArgs) -> Result<String> {
         report.swarm.best_value,
         report.swarm.evaluations
     );
+    if let (Objective::Comfort { .. }, Some(e)) = (problem.objective, evaluation) {
+        let _ = writeln!(
+            out,
+            "  comfort objective: a_w = {:.4} m/s^2, RMS tire load / static = {:.4} (<= 1/3), max |SDD| = {:.4} m, static deflection = {:.4} m; {}",
+            e.rms_weighted_body_acceleration,
+            e.rms_dynamic_tire_load_ratio,
+            e.max_suspension_deflection,
+            e.static_deflection,
+            if e.feasible {
+                "every constraint holds"
+            } else {
+                "a constraint is violated (the least violating candidate found)"
+            }
+        );
+    }
     for p in &report.paper {
         let j = p
             .objective
             .map_or("unstable or invalid".to_string(), |j| format!("{j:.6}"));
         let _ = writeln!(
             out,
-            "  {}: {} = {}, {} = {}, J = {j}",
+            "  {}: {} = {}, {} = {}, {score} = {j}",
             p.label, names[0], p.position[0], names[1], p.position[1]
         );
     }

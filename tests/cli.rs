@@ -547,3 +547,105 @@ fn the_cli_refuses_the_runaway_inputs_the_fmu_refuses_with_the_same_message() {
         );
     }
 }
+
+#[test]
+fn simulate_reports_the_field_metrics_and_the_csv_bounds_the_working_space() {
+    let csv = temporary("metrics.csv");
+    let csv_path = csv.to_str().unwrap();
+    let run = tdvass_json(&[
+        "simulate",
+        "--road",
+        "iso8608",
+        "--road-class",
+        "E",
+        "--duration",
+        "1",
+        "--output",
+        csv_path,
+        "--output-interval",
+        "0.0001",
+    ]);
+    for key in [
+        "weighted_body_acceleration",
+        "rms_weighted_body_acceleration",
+        "vibration_dose_value",
+        "dynamic_tire_load",
+        "rms_dynamic_tire_load_ratio",
+        "contact_loss_time",
+        "max_suspension_deflection",
+    ] {
+        assert!(run[key].is_f64(), "`{key}` missing in {run}");
+    }
+    let a_w = run["rms_weighted_body_acceleration"].as_f64().unwrap();
+    assert!(a_w > 0.0 && a_w < run["rms_body_acceleration"].as_f64().unwrap());
+    assert!(run["comfort_reaction"].is_string());
+    // The dynamic tire load ratio is k_t RMS(TDD) over the static load.
+    let static_load = (345.0 + 4.05 + 40.5) * 9.80665;
+    let ratio = 190000.0 * run["rms_tire_deflection"].as_f64().unwrap() / static_load;
+    let reported = run["rms_dynamic_tire_load_ratio"].as_f64().unwrap();
+    assert!(
+        (reported - ratio).abs() <= 1e-12 * ratio,
+        "{reported} {ratio}"
+    );
+    // The CSV rows are the internal grid nodes: the largest |SDD| over them
+    // is the running maximum.
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let column = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (sdd, max) = (
+        column("suspension_deflection"),
+        column("max_suspension_deflection"),
+    );
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 10001);
+    let over_rows = rows.iter().map(|r| r[sdd].abs()).fold(0.0, f64::max);
+    let running = run["max_suspension_deflection"].as_f64().unwrap();
+    assert_eq!(rows.last().unwrap()[max], running);
+    assert!(
+        (over_rows - running).abs() <= 1e-12 * running,
+        "{over_rows} over the CSV rows, {running} reported"
+    );
+    let _ = std::fs::remove_file(&csv);
+}
+
+#[test]
+fn the_comfort_objective_keeps_its_constraints_at_its_optimum() {
+    let run = tdvass_json(&[
+        "optimize",
+        "absorber",
+        "--objective",
+        "comfort",
+        "--road",
+        "iso8608",
+        "--particles",
+        "8",
+        "--iterations",
+        "6",
+        "--duration",
+        "5",
+    ]);
+    assert_eq!(run["objective_function"], "comfort");
+    let e = &run["best_evaluation"];
+    assert_eq!(e["feasible"], true, "{run}");
+    assert!(e["rms_dynamic_tire_load_ratio"].as_f64().unwrap() <= 1.0 / 3.0);
+    assert!(
+        e["max_suspension_deflection"].as_f64().unwrap()
+            <= run["limits"]["max_suspension_deflection"].as_f64().unwrap()
+    );
+    assert!(
+        e["static_deflection"].as_f64().unwrap()
+            <= run["limits"]["static_deflection"].as_f64().unwrap()
+    );
+    assert_eq!(
+        run["objective"].as_f64(),
+        e["rms_weighted_body_acceleration"].as_f64()
+    );
+    // Not the degenerate design that disconnects the body.
+    assert!(run["best"]["k_h"].as_f64().unwrap() > 1000.0, "{run}");
+    assert!(
+        failure(&["optimize", "absorber", "--objective", "softest"]).contains("paper or comfort")
+    );
+}

@@ -2,7 +2,9 @@
 //! and the parsing of names (variant, road, target).
 
 use clap::{Args, CommandFactory, Parser, Subcommand};
-use tdvass::analysis::optimize::{CONTROLLER_DELAY_RANGE, CONTROLLER_GAIN_RANGE, Target};
+use tdvass::analysis::optimize::{
+    CONTROLLER_DELAY_RANGE, CONTROLLER_GAIN_RANGE, DEFAULT_TRAVEL_LIMIT, Objective, Target,
+};
 use tdvass::error::{Error, Result};
 use tdvass::metrics::Weights;
 use tdvass::model::{Params, State, Variant};
@@ -380,6 +382,19 @@ pub(super) struct OptimizeArgs {
     /// Controller only: upper bound of the delay tau (s).
     #[arg(long, default_value_t = CONTROLLER_DELAY_RANGE[1])]
     pub(super) tau_max: f64,
+    /// paper (J of Eq. (6)) or comfort (ISO 2631-1 a_w subject to RMS
+    /// dynamic tire load ratio <= 1/3, max |SDD| <= --travel-limit and
+    /// static deflection <= --static-deflection-limit). Any case.
+    #[arg(long, default_value = "paper")]
+    pub(super) objective: String,
+    /// Comfort objective: the largest admissible |SDD| (m).
+    #[arg(long, default_value_t = DEFAULT_TRAVEL_LIMIT)]
+    pub(super) travel_limit: f64,
+    /// Comfort objective: the largest admissible static deflection of the
+    /// springs between body and wheel (m) [default: the Table 1 design's,
+    /// 0.7427 m]
+    #[arg(long)]
+    pub(super) static_deflection_limit: Option<f64>,
     /// Print one JSON object.
     #[arg(long)]
     pub(super) json: bool,
@@ -414,6 +429,47 @@ pub(super) struct MapArgs {
 
 pub(super) fn parse_variant(name: &str) -> Result<Variant> {
     name.parse()
+}
+
+/// The objective of `optimize`, with its limits (each finite and > 0).
+pub(super) fn parse_objective(a: &OptimizeArgs) -> Result<Objective> {
+    match a.objective.trim().to_ascii_lowercase().as_str() {
+        "paper" => Ok(Objective::Paper),
+        "comfort" => {
+            let Objective::Comfort {
+                static_deflection_limit: table1,
+                ..
+            } = Objective::comfort()
+            else {
+                unreachable!("the comfort objective")
+            };
+            let limits = [
+                ("travel_limit", a.travel_limit),
+                (
+                    "static_deflection_limit",
+                    a.static_deflection_limit.unwrap_or(table1),
+                ),
+            ];
+            for (name, value) in limits {
+                if !(value.is_finite() && value > 0.0) {
+                    return Err(Error::InvalidParameter {
+                        name,
+                        value,
+                        reason: "must be finite and > 0",
+                    });
+                }
+            }
+            Ok(Objective::Comfort {
+                travel_limit: limits[0].1,
+                static_deflection_limit: limits[1].1,
+            })
+        }
+        _ => Err(Error::UnknownName {
+            what: "objective",
+            given: a.objective.clone(),
+            expected: "paper or comfort (any case)",
+        }),
+    }
 }
 
 pub(super) fn parse_target(name: &str) -> Result<Target> {

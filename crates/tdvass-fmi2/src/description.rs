@@ -547,8 +547,13 @@ mod tests {
         let initial_at = els.iter().position(|e| e.0 == "InitialUnknowns").unwrap();
         let outputs: Vec<_> = els[outputs_at + 1..initial_at].iter().collect();
         let initial: Vec<_> = els[initial_at + 1..].iter().collect();
-        assert_eq!(outputs.len(), 15);
-        assert_eq!(initial.len(), 17);
+        let count = |c: Causality| VARIABLES.iter().filter(|v| v.causality == c).count();
+        assert_eq!(outputs.len(), count(Causality::Output));
+        assert_eq!(outputs.len(), 22);
+        assert_eq!(
+            initial.len(),
+            count(Causality::Output) + count(Causality::CalculatedParameter)
+        );
         let x_g = index_of("x_g").unwrap().to_string();
         let tdd = index_of("tire_deflection").unwrap().to_string();
         let o = outputs.iter().find(|e| e.1["index"] == tdd).unwrap();

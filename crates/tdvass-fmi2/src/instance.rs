@@ -829,4 +829,58 @@ mod tests {
         assert_eq!(log.borrow().last().unwrap().0, Status::Fatal);
         assert!(i.run(Function::Reset, |i| i.reset()).is_err());
     }
+
+    /// PVASS on an ISO 8608 road at 30 m/s for 2 s: class H loses the tire
+    /// contact (one warning, naming time, variable and value, and a growing
+    /// `contact_loss_time`), class A does not.
+    #[test]
+    fn a_loss_of_tire_contact_is_logged_once() {
+        for (class, loses) in [(8, true), (1, false)] {
+            let (mut i, log) = new_instance(false);
+            i.run(Function::SetInteger, |i| {
+                i.set_integer(
+                    &[vr("variant"), vr("road"), vr("road_class")],
+                    &[2, 2, class],
+                )
+            })
+            .unwrap();
+            i.run(Function::SetReal, |i| {
+                i.set_real(&[vr("vehicle_speed")], &[30.0])
+            })
+            .unwrap();
+            i.run(Function::EnterInitializationMode, |i| {
+                i.enter_initialization_mode()
+            })
+            .unwrap();
+            i.run(Function::ExitInitializationMode, |i| {
+                i.exit_initialization_mode()
+            })
+            .unwrap();
+            let mut t = 0.0;
+            for _ in 0..200 {
+                i.run(Function::DoStep, |i| i.do_step(t, 0.01)).unwrap();
+                t += 0.01;
+            }
+            let warnings: Vec<_> = log
+                .borrow()
+                .iter()
+                .filter(|(s, _, m)| *s == Status::Warning && m.contains("leaves the road"))
+                .map(|(_, _, m)| m.clone())
+                .collect();
+            let lost = get(&mut i, "contact_loss_time");
+            if loses {
+                assert_eq!(warnings.len(), 1, "{warnings:?}");
+                assert!(
+                    warnings[0].starts_with("fmi2DoStep: the tire leaves the road at t = ")
+                        && warnings[0].contains("`dynamic_tire_load` = -"),
+                    "{}",
+                    warnings[0]
+                );
+                assert!(lost > 0.0 && lost < 2.0, "{lost}");
+            } else {
+                assert!(warnings.is_empty(), "{warnings:?}");
+                assert_eq!(lost, 0.0);
+            }
+        }
+    }
 }

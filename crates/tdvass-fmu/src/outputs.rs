@@ -19,6 +19,13 @@ pub enum OutputId {
     RmsSuspensionDeflection,
     RmsTireDeflection,
     Objective,
+    WeightedBodyAcceleration,
+    RmsWeightedBodyAcceleration,
+    VibrationDoseValue,
+    DynamicTireLoad,
+    RmsDynamicTireLoadRatio,
+    ContactLossTime,
+    MaxSuspensionDeflection,
 }
 
 /// A "known" of `fmi2GetDirectionalDerivative`: the input `x_g` or a
@@ -39,6 +46,8 @@ pub struct Linearization {
     pub conventional: bool,
     /// `road = 0`: the applied road is the input.
     pub road_is_input: bool,
+    /// Tire stiffness k_t (N/m): the dynamic tire load is `k_t (x_g − x_t)`.
+    pub tire_stiffness: f64,
     /// `(g, tau)` when the control force is `g (x_t − tau v_t)` of the current
     /// state (delay folded into the plant); `None` when it acts on the delayed
     /// history only (or there is no control).
@@ -59,6 +68,21 @@ impl OutputId {
             OutputId::RmsSuspensionDeflection => o.rms.suspension_deflection,
             OutputId::RmsTireDeflection => o.rms.tire_deflection,
             OutputId::Objective => o.objective,
+            OutputId::DynamicTireLoad => o.dynamic_tire_load,
+            OutputId::RmsDynamicTireLoadRatio => o.rms_dynamic_tire_load_ratio,
+            // The FMU's simulator keeps every metric; NaN (refused as
+            // non-finite) would say it does not.
+            OutputId::WeightedBodyAcceleration => {
+                o.comfort.map_or(f64::NAN, |c| c.weighted_body_acceleration)
+            }
+            OutputId::RmsWeightedBodyAcceleration => o
+                .comfort
+                .map_or(f64::NAN, |c| c.rms_weighted_body_acceleration),
+            OutputId::VibrationDoseValue => o.comfort.map_or(f64::NAN, |c| c.vibration_dose_value),
+            OutputId::ContactLossTime => o.road_holding.map_or(f64::NAN, |r| r.contact_loss_time),
+            OutputId::MaxSuspensionDeflection => o
+                .road_holding
+                .map_or(f64::NAN, |r| r.max_suspension_deflection),
         }
     }
 
@@ -76,12 +100,27 @@ impl OutputId {
             OutputId::RmsSuspensionDeflection => d.rms.suspension_deflection,
             OutputId::RmsTireDeflection => d.rms.tire_deflection,
             OutputId::Objective => d.objective,
+            OutputId::DynamicTireLoad => d.dynamic_tire_load,
+            OutputId::RmsDynamicTireLoadRatio => d.rms_dynamic_tire_load_ratio,
+            OutputId::WeightedBodyAcceleration => {
+                d.comfort.map_or(f64::NAN, |c| c.weighted_body_acceleration)
+            }
+            OutputId::RmsWeightedBodyAcceleration => d
+                .comfort
+                .map_or(f64::NAN, |c| c.rms_weighted_body_acceleration),
+            OutputId::VibrationDoseValue => d.comfort.map_or(f64::NAN, |c| c.vibration_dose_value),
+            OutputId::ContactLossTime => d.road_holding.map_or(f64::NAN, |r| r.contact_loss_time),
+            OutputId::MaxSuspensionDeflection => d
+                .road_holding
+                .map_or(f64::NAN, |r| r.max_suspension_deflection),
         }
     }
 
     /// The exact partial derivative with respect to `known` at the current
-    /// point. The running RMS values and J are integrals over the past: their
-    /// partials with respect to the current state and input are 0.
+    /// point. The running RMS values, J, VDV, the contact loss time and the
+    /// running maximum are functionals of the past, and a_w is a state of
+    /// the strictly proper W_k filter: their partials with respect to the
+    /// current plant state and input are 0.
     pub fn partial(self, known: Known, lin: &Linearization) -> f64 {
         let indicator = |b: bool| if b { 1.0 } else { 0.0 };
         match (self, known) {
@@ -99,6 +138,12 @@ impl OutputId {
             }
             (OutputId::TireDeflection, Known::State(j)) => indicator(j == X_T),
             (OutputId::TireDeflection, Known::RoadInput) => -indicator(lin.road_is_input),
+            (OutputId::DynamicTireLoad, Known::State(j)) => {
+                -lin.tire_stiffness * indicator(j == X_T)
+            }
+            (OutputId::DynamicTireLoad, Known::RoadInput) => {
+                lin.tire_stiffness * indicator(lin.road_is_input)
+            }
             (OutputId::RoadDisplacement, Known::RoadInput) => indicator(lin.road_is_input),
             (OutputId::ControlForce, Known::State(j)) => match lin.instantaneous_control {
                 Some((g, _)) if j == X_T => g,

@@ -75,6 +75,8 @@ pub struct SlaveState {
     pub earlier_input: Option<(f64, f64)>,
     /// The hold warning of [`Slave::do_step`] was logged.
     pub hold_warned: bool,
+    /// The first loss of tire contact was logged.
+    pub contact_warned: bool,
     /// Start time from `the experiment set-up` (s).
     pub start_time: f64,
     /// Stop time from `the experiment set-up`, if defined (s).
@@ -99,6 +101,7 @@ impl SlaveState {
             previous_input: None,
             earlier_input: None,
             hold_warned: false,
+            contact_warned: false,
             start_time: crate::DEFAULT_START_TIME,
             stop_time: None,
             last_successful_time: crate::DEFAULT_START_TIME,

@@ -14,7 +14,7 @@
 //! The payload is the FMU-level state ([`SlaveState`]): the phase, every
 //! setting (by value reference, so the layout follows the variable table),
 //! input slope and its origin, the last two input values (for
-//! `input_extrapolation`), the hold-warning flag, start and stop time, last successful time, the terminate
+//! `input_extrapolation`), the hold-warning and contact-loss flags, start and stop time, last successful time, the terminate
 //! flag, then [`Simulator::to_bytes`] (time, solver state, the delay
 //! history, the road generator, the RMS accumulators, the configuration).
 //! All numbers are little-endian; floats are stored as their bit patterns,
@@ -164,6 +164,7 @@ fn encode_payload(model: &SlaveState) -> Vec<u8> {
         w.f64(value);
     }
     w.u8(model.hold_warned as u8);
+    w.u8(model.contact_warned as u8);
     w.f64(model.start_time);
     w.u8(model.stop_time.is_some() as u8);
     w.f64(model.stop_time.unwrap_or(0.0));
@@ -256,6 +257,7 @@ fn decode_payload(bytes: &[u8]) -> Result<SlaveState, FmiError> {
     }
     let [previous_input, earlier_input] = inputs;
     let hold_warned = r.flag("hold warning logged")?;
+    let contact_warned = r.flag("contact loss logged")?;
     let start_time = r.finite("the start time")?;
     let stop_defined = r.flag("stop time defined")?;
     let stop = r.f64("the stop time")?;
@@ -323,6 +325,7 @@ fn decode_payload(bytes: &[u8]) -> Result<SlaveState, FmiError> {
         previous_input,
         earlier_input,
         hold_warned,
+        contact_warned,
         start_time,
         stop_time,
         last_successful_time,

@@ -174,6 +174,13 @@ pub const UNITS: &[UnitDefinition] = &[
         base: &[("s", -1)],
         display: &[],
     },
+    // ISO 2631-1's vibration dose value: the exponent of s is not an
+    // integer, so no BaseUnit can state it.
+    UnitDefinition {
+        name: "m/s1.75",
+        base: &[],
+        display: &[],
+    },
 ];
 
 /// Physical quantity of a Real variable: its `TypeDefinitions` entry
@@ -193,11 +200,13 @@ pub enum Quantity {
     AngularFrequency,
     Frequency,
     Rate,
+    /// ISO 2631-1 vibration dose value (m/s^1.75).
+    VibrationDose,
 }
 
 impl Quantity {
     /// Every quantity that has a type definition, in declaration order.
-    pub const TYPED: [Quantity; 11] = [
+    pub const TYPED: [Quantity; 12] = [
         Quantity::Mass,
         Quantity::Stiffness,
         Quantity::Damping,
@@ -209,6 +218,7 @@ impl Quantity {
         Quantity::AngularFrequency,
         Quantity::Frequency,
         Quantity::Rate,
+        Quantity::VibrationDose,
     ];
 
     /// `(type name, quantity, unit)` of the `SimpleType`, `None` when dimensionless.
@@ -226,6 +236,7 @@ impl Quantity {
             Quantity::AngularFrequency => ("AngularFrequency", "AngularFrequency", "rad/s"),
             Quantity::Frequency => ("Frequency", "Frequency", "Hz"),
             Quantity::Rate => ("GrowthRate", "GrowthRate", "1/s"),
+            Quantity::VibrationDose => ("VibrationDose", "VibrationDose", "m/s1.75"),
         })
     }
 
@@ -966,7 +977,7 @@ const TABLE: &[Variable] = &[
         start: Some(0.0),
         range: Range::Finite,
         access: real!(x_g),
-        description: "Road displacement when road = 0 (linearly extrapolated with the slope from fmi2SetRealInputDerivatives)",
+        description: "Road displacement when road = 0 (over a step: held, or extrapolated with an FMI 2.0 input derivative or by input_extrapolation; FMI 3.0: settable in intermediate updates)",
         feedthrough: &[],
         initial_dependencies: &[],
         enumeration: None,
@@ -1142,6 +1153,70 @@ const TABLE: &[Variable] = &[
         Calculated::Stable,
         "spectral_abscissa < 0 (asymptotically stable)",
     ),
+    output(
+        "weighted_body_acceleration",
+        53,
+        Q::Acceleration,
+        OutputId::WeightedBodyAcceleration,
+        "ISO 2631-1 W_k frequency-weighted body acceleration a_w(t): BA through the standard's filter (band limits 0.4 and 100 Hz, acceleration-velocity transition 12.5 Hz, upward step 2.37/3.35 Hz), integrated exactly with the plant; the filter starts from rest at t0",
+        &[],
+        &[],
+    ),
+    output(
+        "rms_weighted_body_acceleration",
+        54,
+        Q::Acceleration,
+        OutputId::RmsWeightedBodyAcceleration,
+        "Running RMS of a_w, the time average sqrt(integral of a_w^2 dt / (t - t0)): ISO 2631-1's a_w; below 0.315 m/s2 not uncomfortable, 0.315-0.63 a little uncomfortable, 0.5-1 fairly uncomfortable, 0.8-1.6 uncomfortable, 1.25-2.5 very uncomfortable, above 2 extremely uncomfortable",
+        &[],
+        &[],
+    ),
+    output(
+        "vibration_dose_value",
+        55,
+        Q::VibrationDose,
+        OutputId::VibrationDoseValue,
+        "ISO 2631-1 vibration dose value VDV = (integral of a_w^4 dt from t0)^(1/4)",
+        &[],
+        &[],
+    ),
+    output(
+        "dynamic_tire_load",
+        56,
+        Q::Force,
+        OutputId::DynamicTireLoad,
+        "Dynamic tire load k_t (x_g - x_t) = -k_t TDD (no tire damping); below minus the static load the tire would leave the road",
+        &["x_g"],
+        &["k_t", "road", "road_amplitude", "road_angular_frequency", "x_t_start", "x_g"],
+    ),
+    output(
+        "rms_dynamic_tire_load_ratio",
+        57,
+        Q::Dimensionless,
+        OutputId::RmsDynamicTireLoadRatio,
+        "Running RMS of the dynamic tire load over the static load (m_s + m_h + m_t) g0, CS (m_s + m_t) g0, g0 = 9.80665 m/s2; at most 1/3 keeps the contact with 3-sigma confidence",
+        &[],
+        &[],
+    ),
+    output(
+        "contact_loss_time",
+        58,
+        Q::Time,
+        OutputId::ContactLossTime,
+        "Accumulated time with the dynamic tire load below minus the static load (the tire would leave the road; the linear model no longer holds there); crossings located inside the internal steps; the first one is logged as a warning",
+        &[],
+        &[],
+    ),
+    output(
+        "max_suspension_deflection",
+        59,
+        Q::Length,
+        OutputId::MaxSuspensionDeflection,
+        "Running maximum of |SDD| (suspension working space used), exact at the internal grid nodes and the current time",
+        &[],
+        &["x_s_start", "x_t_start"],
+    )
+    .display("mm"),
     // FMI 3.0 only, from here to the end.
     Variable {
         fmi3_only: true,

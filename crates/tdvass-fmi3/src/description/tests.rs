@@ -353,7 +353,7 @@ fn model_structure_lists_outputs_and_initial_unknowns_by_value_reference() {
         .collect();
     let listed: Vec<&str> = outputs.iter().map(|e| e.attr("valueReference")).collect();
     assert_eq!(listed, expected_outputs);
-    assert_eq!(outputs.len(), 15);
+    assert_eq!(outputs.len(), 22);
     let expected_initial: Vec<String> = ALL_VARIABLES
         .iter()
         .filter(|v| is_initial_unknown(v))
@@ -361,7 +361,7 @@ fn model_structure_lists_outputs_and_initial_unknowns_by_value_reference() {
         .collect();
     let listed: Vec<&str> = initial.iter().map(|e| e.attr("valueReference")).collect();
     assert_eq!(listed, expected_initial);
-    assert_eq!(initial.len(), 18);
+    assert_eq!(initial.len(), 25);
 
     let by_vr = |vr: u32| ALL_VARIABLES.iter().find(|v| v.vr == vr).unwrap();
     let x_g = by_name("x_g").unwrap().vr;

@@ -134,6 +134,7 @@ impl Slave {
             body_acceleration_row: row,
             conventional: variant == Variant::Cs,
             road_is_input: self.state.settings.road_is_input(),
+            tire_stiffness: params.k_t,
             instantaneous_control,
         })
     }

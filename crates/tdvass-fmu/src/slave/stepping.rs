@@ -125,6 +125,17 @@ impl Slave {
             Ok(()) => match limits::non_finite_output(&sim.outputs()) {
                 None => {
                     self.state.last_successful_time = sim.time();
+                    let loss = sim.first_contact_loss();
+                    if let Some(loss) = loss.filter(|_| !self.state.contact_warned) {
+                        self.state.contact_warned = true;
+                        self.warning(format!(
+                            "{}: the tire leaves the road at t = {} s: `dynamic_tire_load` = {} N is below minus the static load {} N, so the linear model no longer holds from there (the simulation goes on; `contact_loss_time` accumulates the time without contact)",
+                            self.call("DoStep"),
+                            loss.time,
+                            loss.dynamic_tire_load,
+                            loss.static_load
+                        ));
+                    }
                     Ok(Status::Ok)
                 }
                 Some((name, value)) => {

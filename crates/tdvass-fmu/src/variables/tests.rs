@@ -178,7 +178,7 @@ fn every_variable_is_readable_and_settings_round_trip() {
         .iter()
         .filter(|v| v.causality == Causality::Output)
         .collect();
-    assert_eq!(outputs.len(), 15);
+    assert_eq!(outputs.len(), 22);
     assert!(
         outputs
             .iter()
@@ -251,9 +251,22 @@ fn partials_of_the_outputs() {
         body_acceleration_row: [1.0, 2.0, 3.0, 4.0, 5.0, 6.0],
         conventional: true,
         road_is_input: true,
+        tire_stiffness: 7.0,
         instantaneous_control: Some((10.0, 0.5)),
     };
     assert_eq!(OutputId::State(X_H).partial(Known::State(X_T), &lin), 1.0);
+    assert_eq!(
+        OutputId::DynamicTireLoad.partial(Known::State(X_T), &lin),
+        -7.0
+    );
+    assert_eq!(
+        OutputId::DynamicTireLoad.partial(Known::RoadInput, &lin),
+        7.0
+    );
+    assert_eq!(
+        OutputId::WeightedBodyAcceleration.partial(Known::State(X_S), &lin),
+        0.0
+    );
     assert_eq!(OutputId::State(X_H).partial(Known::State(X_H), &lin), 0.0);
     assert_eq!(
         OutputId::BodyAcceleration.partial(Known::State(V_H), &lin),
