@@ -1,0 +1,184 @@
+use super::*;
+use crate::road::RandomRoad;
+
+fn bits(sim: &mut Simulator) -> Vec<u64> {
+    let o = sim.outputs();
+    let mut v: Vec<f64> = o.state.iter().copied().collect();
+    v.extend([
+        o.performance.body_acceleration,
+        o.performance.suspension_deflection,
+        o.performance.tire_deflection,
+        o.road_displacement,
+        o.control_force,
+        o.rms.body_acceleration,
+        o.rms.suspension_deflection,
+        o.rms.tire_deflection,
+        o.objective,
+        o.time,
+    ]);
+    v.extend(sim.committed_state.iter().copied());
+    v.extend(sim.rms.sums_of_squares);
+    v.push(sim.rms.samples as f64);
+    v.into_iter().map(f64::to_bits).collect()
+}
+
+fn configs() -> Vec<SimulationConfig> {
+    let base = SimulationConfig::default();
+    vec![
+        base.clone(),
+        SimulationConfig {
+            variant: Variant::Pvass,
+            ..base.clone()
+        },
+        SimulationConfig {
+            params: Params::with_controller(40000.0, 0.03),
+            initial_state: State::new(0.01, 0.0, 0.0, 0.0, 0.0, 0.0),
+            ..base.clone()
+        },
+        SimulationConfig {
+            params: Params::with_controller(2528.0, 1.28e-4),
+            road: RoadSpec::Iso8608(RandomRoad::default()),
+            ..base.clone()
+        },
+        SimulationConfig {
+            road: RoadSpec::PaperCompatible {
+                road: RandomRoad::default(),
+                sample_interval: 0.1,
+            },
+            ..base.clone()
+        },
+        // Delays inside one step, on the harmonic and a linear road.
+        SimulationConfig {
+            params: Params::with_controller(40000.0, 3.7e-5),
+            initial_state: State::new(0.01, 0.0, 0.0, 0.0, 0.002, 0.1),
+            ..base.clone()
+        },
+        SimulationConfig {
+            params: Params::with_controller(6000.0, 2e-6),
+            road: RoadSpec::Iso8608(RandomRoad::default()),
+            ..base
+        },
+    ]
+}
+
+#[test]
+fn any_split_gives_bit_identical_results() {
+    // Splits that cut the whole-step loop at phase anchors, before the
+    // history starts, in the middle of anchor segments, and step by step.
+    for cfg in configs() {
+        let stops: Vec<f64> = (1..=40).map(|i| i as f64 * 0.0517).collect();
+        let mut reference = Vec::new();
+        let mut sim = Simulator::new(cfg.clone()).unwrap();
+        for &t in &stops {
+            sim.advance_to(t).unwrap();
+            reference.push(bits(&mut sim));
+        }
+        let mut one_by_one = Simulator::new(cfg.clone()).unwrap();
+        let h = one_by_one.grid().step;
+        let mut i = 0;
+        for (stop, expected) in stops.iter().zip(&reference) {
+            loop {
+                let t = (i + 1) as f64 * h * 0.73;
+                if t >= *stop {
+                    break;
+                }
+                one_by_one.advance_to(t).unwrap();
+                i += 1;
+            }
+            one_by_one.advance_to(*stop).unwrap();
+            assert_eq!(&bits(&mut one_by_one), expected, "{:?}", cfg.road);
+        }
+        let mut cut = Simulator::new(cfg.clone()).unwrap();
+        for t in [h * 1023.0, h * 1024.0, h * 1025.5, h * 3000.0] {
+            cut.advance_to(t).unwrap();
+        }
+        cut.advance_to(stops[39]).unwrap();
+        assert_eq!(&bits(&mut cut), reference.last().unwrap());
+    }
+}
+
+#[test]
+fn restored_simulator_continues_bit_identically_inside_a_segment() {
+    for cfg in configs() {
+        let mut sim = Simulator::new(cfg).unwrap();
+        let h = sim.grid().step;
+        // Node 1500 lies inside the second phase-anchor segment.
+        sim.advance_to(1500.3 * h).unwrap();
+        let mut restored = Simulator::from_bytes(&sim.to_bytes()).unwrap();
+        for t in [2047.0 * h, 2048.0 * h, 5000.5 * h, 0.9] {
+            sim.advance_to(t).unwrap();
+            restored.advance_to(t).unwrap();
+            assert_eq!(bits(&mut sim), bits(&mut restored));
+        }
+    }
+}
+
+#[test]
+fn whole_steps_match_the_general_step_closely() {
+    // The whole-step loop (node form of the delayed input, rotated road
+    // phase) against one general step per node (Hermite form, sin/cos).
+    // With the W_k filter, its state and a_w integrals too (the filter's
+    // grid step against its general step), also with the delay inside
+    // the step.
+    let displaced = SimulationConfig {
+        params: Params::with_controller(40000.0, 0.03),
+        initial_state: State::new(0.01, 0.0, 0.0, 0.0, 0.0, 0.0),
+        ..SimulationConfig::default()
+    };
+    let inner = SimulationConfig {
+        params: Params::with_controller(40000.0, 3.7e-5),
+        initial_state: State::new(0.01, 0.0, 0.0, 0.0, 0.002, 0.1),
+        ..SimulationConfig::default()
+    };
+    for (cfg, comfort) in [(displaced.clone(), false), (displaced, true), (inner, true)] {
+        let metrics = if comfort {
+            Metrics::Comfort
+        } else {
+            Metrics::RoadHolding
+        };
+        let cfg = SimulationConfig { metrics, ..cfg };
+        let mut fast = Simulator::new(cfg.clone()).unwrap();
+        let mut general = Simulator::new(cfg).unwrap();
+        for k in 0..3000u64 {
+            let to = general.grid_time(k + 1);
+            let from = (general.committed_time, general.committed_state);
+            let x = general.integrate_within_step(k, from.0, from.1, to);
+            let w_from = general.committed_filter;
+            let w = general.filter_within_step(k, from, &w_from, to);
+            let anchor = general.integral.anchor;
+            let mut holding = general.holding;
+            let (step_integral, at_end, piece) =
+                general.integral_within_step(k, from, &w_from, anchor, to, (&x, &w), &mut holding);
+            general.holding = holding;
+            general.commit_node(k + 1, (to, x, w), step_integral, (at_end, piece));
+        }
+        fast.advance_to(general.committed_time).unwrap();
+        let scale = general.committed_state.amax();
+        assert!((fast.committed_state - general.committed_state).amax() < 1e-12 * scale);
+        let (a, b) = (fast.rms(), general.rms());
+        assert!((a.body_acceleration - b.body_acceleration).abs() < 1e-12 * b.body_acceleration);
+        assert!((a.tire_deflection - b.tire_deflection).abs() < 1e-12 * b.tire_deflection);
+        let (a, b) = (fast.outputs(), general.outputs());
+        let (u, v) = (
+            a.road_holding.unwrap().max_suspension_deflection,
+            b.road_holding.unwrap().max_suspension_deflection,
+        );
+        assert!((u - v).abs() < 1e-12 * v, "{u} {v}");
+        if comfort {
+            let filter_scale = general.committed_filter.amax();
+            assert!(filter_scale > 0.0);
+            let difference = (fast.committed_filter - general.committed_filter).amax();
+            assert!(difference < 1e-12 * filter_scale, "{difference:e}");
+            let (a, b) = (a.comfort.unwrap(), b.comfort.unwrap());
+            let (u, v) = (
+                a.rms_weighted_body_acceleration,
+                b.rms_weighted_body_acceleration,
+            );
+            assert!((u - v).abs() < 1e-12 * v, "{u} {v}");
+            let (u, v) = (a.vibration_dose_value, b.vibration_dose_value);
+            assert!((u - v).abs() < 1e-12 * v, "{u} {v}");
+        } else {
+            assert_eq!(a.comfort, None);
+        }
+    }
+}

@@ -1,0 +1,217 @@
+use super::*;
+
+#[test]
+fn host_platforms_use_the_folders_and_library_names_of_the_host() {
+    let cases = [
+        (
+            "linux",
+            "x86_64",
+            "binaries/linux64/tdvass.so",
+            "binaries/x86_64-linux/tdvass.so",
+            "libtdvass_fmi2.so",
+        ),
+        (
+            "windows",
+            "x86_64",
+            "binaries/win64/tdvass.dll",
+            "binaries/x86_64-windows/tdvass.dll",
+            "tdvass_fmi2.dll",
+        ),
+        (
+            "windows",
+            "x86",
+            "binaries/win32/tdvass.dll",
+            "binaries/x86-windows/tdvass.dll",
+            "tdvass_fmi2.dll",
+        ),
+        (
+            "macos",
+            "aarch64",
+            "binaries/darwin64/tdvass.dylib",
+            "binaries/aarch64-darwin/tdvass.dylib",
+            "libtdvass_fmi2.dylib",
+        ),
+        (
+            "macos",
+            "x86_64",
+            "binaries/darwin64/tdvass.dylib",
+            "binaries/x86_64-darwin/tdvass.dylib",
+            "libtdvass_fmi2.dylib",
+        ),
+    ];
+    for (os, arch, fmi2_entry, fmi3_entry, built) in cases {
+        let platform = host_platform(os, arch).unwrap();
+        assert_eq!(
+            platform.fmu_entry(FmiVersion::Fmi2).as_deref(),
+            Some(fmi2_entry),
+            "{os} {arch}"
+        );
+        assert_eq!(
+            platform.fmu_entry(FmiVersion::Fmi3).as_deref(),
+            Some(fmi3_entry),
+            "{os} {arch}"
+        );
+        assert_eq!(platform.built_file("tdvass_fmi2"), built, "{os} {arch}");
+        assert_eq!(
+            platform.built_path(Path::new("t"), "tdvass_fmi2"),
+            Path::new("t/release").join(built)
+        );
+        assert_eq!(
+            platform.built_file("tdvass_fmi3"),
+            built.replace("fmi2", "fmi3"),
+            "{os} {arch}"
+        );
+    }
+    let error = host_platform("linux", "aarch64").unwrap_err();
+    assert!(
+        error.contains("no platform folder for aarch64 linux"),
+        "{error}"
+    );
+}
+
+#[test]
+#[cfg(all(target_os = "linux", target_arch = "x86_64"))]
+fn all_platforms_pack_linux64_and_win64_for_fmi2_and_all_three_for_fmi3() {
+    let platforms = all_platforms().unwrap();
+    let entries = |version| -> Vec<Option<String>> {
+        platforms.iter().map(|p| p.fmu_entry(version)).collect()
+    };
+    assert_eq!(
+        entries(FmiVersion::Fmi2),
+        [
+            Some("binaries/linux64/tdvass.so".to_string()),
+            Some("binaries/win64/tdvass.dll".to_string()),
+            None,
+        ]
+    );
+    assert_eq!(
+        entries(FmiVersion::Fmi3),
+        [
+            Some("binaries/x86_64-linux/tdvass.so".to_string()),
+            Some("binaries/x86_64-windows/tdvass.dll".to_string()),
+            Some("binaries/aarch64-linux/tdvass.so".to_string()),
+        ]
+    );
+    assert_eq!(
+        platforms[2].built_path(Path::new("t"), "tdvass_fmi2"),
+        Path::new("t/aarch64-unknown-linux-gnu/release/libtdvass_fmi2.so")
+    );
+    assert_eq!(
+        platforms[1].built_path(Path::new("t"), "tdvass_fmi3"),
+        Path::new("t/x86_64-pc-windows-gnu/release/tdvass_fmi3.dll")
+    );
+}
+
+#[test]
+fn each_fmu_has_its_crate_archive_and_checked_in_description() {
+    let [fmi2, fmi3] = Fmu::all();
+    assert_eq!(
+        (fmi2.package, fmi2.library, fmi2.file_name, fmi2.checked_in),
+        (
+            "tdvass-fmi2",
+            "tdvass_fmi2",
+            "tdvass.fmu",
+            "modelDescription/modelDescription.xml"
+        )
+    );
+    assert_eq!(
+        (fmi3.package, fmi3.library, fmi3.file_name, fmi3.checked_in),
+        (
+            "tdvass-fmi3",
+            "tdvass_fmi3",
+            "tdvass-fmi3.fmu",
+            "modelDescription/fmi3/modelDescription.xml"
+        )
+    );
+    assert!(fmi2.description.contains(r#"fmiVersion="2.0""#));
+    assert!(fmi3.description.contains(r#"fmiVersion="3.0""#));
+    assert!(fmi3.identity.contains(&tdvass_fmi3::instantiation_token()));
+    // The package names the library target that cargo builds.
+    for fmu in [&fmi2, &fmi3] {
+        let manifest = fs::read_to_string(
+            workspace_root()
+                .join("crates")
+                .join(fmu.package)
+                .join("Cargo.toml"),
+        )
+        .unwrap();
+        assert!(
+            manifest.contains(&format!("name = \"{}\"", fmu.library)),
+            "{}",
+            fmu.package
+        );
+    }
+}
+
+/// The linkers that fmu-build looks for are the ones cargo is told to use.
+#[test]
+#[cfg(all(target_os = "linux", target_arch = "x86_64"))]
+fn cross_linkers_match_the_cargo_configuration() {
+    let config = fs::read_to_string(workspace_root().join(".cargo/config.toml")).unwrap();
+    for platform in all_platforms().unwrap() {
+        let Some(triple) = platform.cross_target else {
+            continue;
+        };
+        let section = config
+            .split("\n[")
+            .find(|s| s.starts_with(&format!("target.{triple}]")))
+            .unwrap_or_else(|| panic!("no [target.{triple}] in .cargo/config.toml"));
+        let linker = platform.requirements[0].file;
+        assert!(
+            section.contains(&format!("linker = \"{linker}\"")),
+            "[target.{triple}] must set linker = \"{linker}\""
+        );
+    }
+}
+
+#[test]
+fn missing_targets_and_toolchains_are_named_with_their_install_command() {
+    let platform = Platform {
+        fmi2_folder: Some("win64"),
+        fmi3_folder: "x86_64-windows",
+        label: "Windows x86-64",
+        cross_target: Some("x86_64-unknown-none-such"),
+        prefix: "",
+        extension: "dll",
+        format: BinaryFormat::PeX86_64,
+        requirements: &[Requirement {
+            file: "no-such-linker-gcc",
+            debian_package: "gcc-no-such",
+        }],
+    };
+    let missing = missing_requirements(&workspace_root(), &[platform]);
+    assert_eq!(missing.len(), 2, "{missing:?}");
+    assert!(missing[0].contains("`rustup target add x86_64-unknown-none-such`"));
+    assert!(missing[1].contains("`apt-get install gcc-no-such`"));
+    // The host needs nothing beyond its own toolchain.
+    let host = host_platform(std::env::consts::OS, std::env::consts::ARCH).unwrap();
+    assert!(missing_requirements(&workspace_root(), &[host]).is_empty());
+}
+
+#[test]
+fn binary_formats_are_read_from_the_headers() {
+    let mut elf = vec![0u8; 64];
+    elf[..4].copy_from_slice(b"\x7fELF");
+    elf[18] = 62;
+    assert_eq!(BinaryFormat::of(&elf), Some(BinaryFormat::ElfX86_64));
+    elf[18] = 183;
+    assert_eq!(BinaryFormat::of(&elf), Some(BinaryFormat::ElfAarch64));
+    elf[18] = 40; // 32-bit ARM: not a platform of the FMU
+    assert_eq!(BinaryFormat::of(&elf), None);
+    let mut pe = vec![0u8; 0x100];
+    pe[..2].copy_from_slice(b"MZ");
+    pe[0x3c] = 0x80;
+    pe[0x80..0x84].copy_from_slice(b"PE\0\0");
+    pe[0x84..0x86].copy_from_slice(&0x8664u16.to_le_bytes());
+    assert_eq!(BinaryFormat::of(&pe), Some(BinaryFormat::PeX86_64));
+    pe[0x80] = b'X';
+    assert_eq!(BinaryFormat::of(&pe), None);
+    pe[0x3c..0x40].copy_from_slice(&u32::MAX.to_le_bytes()); // past the end
+    assert_eq!(BinaryFormat::of(&pe), None);
+    assert_eq!(
+        BinaryFormat::of(&0xfeed_facfu32.to_le_bytes()),
+        Some(BinaryFormat::MachO)
+    );
+    assert_eq!(BinaryFormat::of(b"MZ"), None);
+    assert_eq!(BinaryFormat::of(b""), None);
+}
