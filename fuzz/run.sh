@@ -4,7 +4,7 @@
 # libfuzzer-sys with the system C++ compiler), replays the regression
 # inputs, then fuzzes.
 #
-#   fuzz/run.sh TARGET SECONDS [libFuzzer flags...]   TARGET: deserialize | api_sequence
+#   fuzz/run.sh TARGET SECONDS [libFuzzer flags...]   TARGET: deserialize | api_sequence | api_sequence_fmi3
 #   fuzz/run.sh build                                  only build
 #
 # The corpus grows in fuzz/corpus/TARGET (only the checked-in seed-* files

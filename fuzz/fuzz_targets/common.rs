@@ -94,6 +94,10 @@ impl<'a> Bytes<'a> {
     pub fn is_empty(&self) -> bool {
         self.data.is_empty()
     }
+    /// How many bytes are left.
+    pub fn remaining(&self) -> usize {
+        self.data.len()
+    }
     pub fn u8(&mut self) -> u8 {
         match self.data.split_first() {
             Some((&b, rest)) => {

@@ -1,7 +1,7 @@
 """Fixtures of the robustness suite: the real shared library through ctypes.
 
-The library is taken from the built FMU (see fmi2.py); build it first with
-`cargo run --release -p fmu-build`.
+The libraries are taken from the built FMUs (see fmi2.py and fmi3.py);
+build them first with `cargo run --release -p fmu-build`.
 """
 
 import sys
@@ -13,6 +13,7 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import fmi2  # noqa: E402
+import fmi3  # noqa: E402
 
 
 @pytest.fixture(scope="session")
@@ -59,6 +60,47 @@ def initialized(make):
 
     def new(stop=15.0, **values):
         inst = make()
+        inst.initialize(stop=stop, **values)
+        return inst
+
+    return new
+
+
+# ------------------------------------------------------------------ FMI 3.0
+
+
+@pytest.fixture(scope="session")
+def lib3():
+    try:
+        return fmi3.load()
+    except FileNotFoundError as e:
+        pytest.fail(str(e))
+
+
+@pytest.fixture
+def make3(lib3):
+    """Factory of FMI 3.0 instances, all freed at the end of the test (which
+    also checks that freeing works in whatever state the test left them)."""
+    made = []
+
+    def new(**kwargs):
+        inst = fmi3.Instance(lib3, **kwargs)
+        made.append(inst)
+        return inst
+
+    yield new
+    for inst in made:
+        inst.free()
+    # The process is alive and the library still answers.
+    assert lib3.fmi3GetVersion() == b"3.0"
+
+
+@pytest.fixture
+def initialized3(make3):
+    """An FMI 3.0 instance in Step Mode at t = 0 (default experiment, stop 15 s)."""
+
+    def new(stop=15.0, instance=None, **values):
+        inst = make3(**(instance or {}))
         inst.initialize(stop=stop, **values)
         return inst
 

@@ -266,6 +266,17 @@ impl Instance {
         Ok(Status::Ok)
     }
 
+    /// `fmi3SetFMUState`. An FMU state does not hold Configuration Mode:
+    /// restoring one taken after instantiation ends it (the instance is
+    /// then in the restored state, where every variable is accessible).
+    pub fn set_fmu_state(&mut self, handle: usize) -> Result<Status, FmiError> {
+        let status = self.slave.set_fmu_state(handle)?;
+        if self.slave.phase() != Phase::Instantiated {
+            self.configuration = false;
+        }
+        Ok(status)
+    }
+
     /// `fmi3Reset`: back to Instantiated with every start value.
     pub fn reset(&mut self) -> Result<Status, FmiError> {
         self.configuration = false;

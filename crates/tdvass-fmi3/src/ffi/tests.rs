@@ -458,6 +458,27 @@ fn serialized_states_of_the_fmi2_fmu_are_refused_and_own_states_restore() {
 }
 
 #[test]
+fn restoring_a_step_mode_state_in_configuration_mode_leaves_configuration_mode() {
+    let instance = start(None, false, &[], &[]);
+    assert_eq!(step(instance, 0.0, 0.1).0, 0);
+    let x_s = get(instance, "x_s");
+    let mut state: fmi3FMUState = std::ptr::null_mut();
+    // SAFETY: a live instance and an out-pointer to a local.
+    unsafe {
+        assert_eq!(fmi3GetFMUState(instance, &mut state), 0);
+        assert_eq!(fmi3Reset(instance), 0);
+        assert_eq!(fmi3EnterConfigurationMode(instance), 0);
+        assert_eq!(fmi3SetFMUState(instance, state), 0);
+        // Step Mode: Configuration Mode has ended.
+        assert_eq!(fmi3ExitConfigurationMode(instance), status(Status::Error));
+    }
+    // Every variable is accessible again, and the run goes on.
+    assert_eq!(get(instance, "x_s"), x_s);
+    assert_eq!(step(instance, 0.1, 0.1).0, 0);
+    free(instance);
+}
+
+#[test]
 fn model_exchange_and_wrong_tokens_are_refused() {
     // SAFETY: valid strings, no callbacks.
     unsafe {
