@@ -545,9 +545,10 @@ def test_deserialize_bit_flipped(serialized, position):
     refused_state(inst, bytes(flipped), "")
 
 
-@pytest.mark.parametrize("version", [1, 3])
+@pytest.mark.parametrize("version", [1, 2, 4])
 def test_deserialize_wrong_version(serialized, version):
-    # Version 1 states (before the RMS time integral) and unknown versions.
+    # Version 1 and 2 states (before the RMS time integral, before the FMI
+    # 3.0 settings and the metrics) and unknown versions.
     inst, data = serialized
     refused_state(inst, data[:8] + version.to_bytes(4, "little") + data[12:], f"format version {version} is not supported")
 

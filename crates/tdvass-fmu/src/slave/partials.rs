@@ -96,7 +96,7 @@ impl Slave {
     fn check_seed(seed: &[f64]) -> Result<(), FmiError> {
         match seed.iter().find(|v| !v.is_finite()) {
             Some(bad) => Err(FmiError::error(format!(
-                "invalid seed value {bad} in dvKnown: must be finite"
+                "invalid seed value {bad}: must be finite"
             ))),
             None => Ok(()),
         }
