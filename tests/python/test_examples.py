@@ -102,9 +102,62 @@ def test_example_quick(script, tmp_path, example_env):
 # ---------------------------------------------------------------------------
 # numbers that must keep matching the paper (and the notes' corrections)
 # ---------------------------------------------------------------------------
+# the field metrics (FMU outputs, and the scripts' CSV columns)
+FIELD = ["rms_weighted_body_acceleration", "vibration_dose_value", "rms_dynamic_tire_load_ratio",
+         "contact_loss_time", "max_suspension_deflection"]
+K_T, G0 = 190000.0, 9.80665
+STATIC_LOAD = {"cs": (345.0 + 40.5) * G0, "pvass": (345.0 + 4.05 + 40.5) * G0, "tdvass": (345.0 + 4.05 + 40.5) * G0}
+# ISO 2631-1 comfort reactions by the lower bound of a_w (m/s^2)
+COMFORT = [(2.0, "extremely uncomfortable"), (1.25, "very uncomfortable"), (0.8, "uncomfortable"),
+           (0.5, "fairly uncomfortable"), (0.315, "a little uncomfortable"), (0.0, "not uncomfortable")]
+
+
+def _reaction(a_w: float) -> str:
+    return next(name for lower, name in COMFORT if a_w >= lower)
+
+
+def _check_field_rows(rows: list[dict], variant_of) -> None:
+    """Rows of a CSV with the paper's RMS columns and the field metrics: the tire load
+    ratio is k_t RMS(TDD) / static load (no tire damping), and the rest is consistent."""
+    assert rows
+    for r in rows:
+        v = variant_of(r)
+        ba, sdd, tdd_mm = (float(r[k]) for k in ("rms_body_acceleration", "rms_suspension_deflection",
+                                                   "rms_tire_deflection_mm"))
+        a_w, vdv, ratio, lost, max_sdd = (float(r[k]) for k in FIELD)
+        assert np.isfinite([a_w, vdv, ratio, lost, max_sdd]).all(), r
+        assert ratio == pytest.approx(K_T * 1e-3 * tdd_mm / STATIC_LOAD[v], rel=1e-6), r
+        # W_k stays below 1.06 at every frequency: a_w cannot exceed the unweighted RMS by more
+        assert 0.0 < a_w < 1.06 * ba, r
+        assert vdv > 0.0 and lost >= 0.0, r
+        assert max_sdd >= sdd, r
+
+
 def _table2(out: Path, text: str) -> None:
     m = re.search(r"largest relative difference from the paper: ([\d.]+) %", text)
     assert m and float(m.group(1)) < 0.5, text
+    data = np.genfromtxt(out / "table2.csv", delimiter=",", names=True)
+    for v in ("cs", "pvass", "tdvass"):
+        # dynamic tire load = k_t (x_g - x_t) = -k_t TDD, at every sample
+        assert np.allclose(data[f"{v}_dynamic_tire_load"], -K_T * data[f"{v}_tire_deflection"],
+                           rtol=1e-6, atol=1e-6)
+        assert np.abs(data[f"{v}_weighted_body_acceleration"]).max() > 0.05
+    fields = {}
+    for line in text.splitlines():
+        m = re.match(r"(CS|PVASS|TDVASS)\s+((?:[\d.]+\s+){5})(\D.*)$", line)
+        if m:
+            fields[m.group(1).lower()] = ([float(x) for x in m.group(2).split()], m.group(3).strip())
+    assert set(fields) == {"cs", "pvass", "tdvass"}, text
+    for v, ((a_w, vdv, ratio, lost, max_sdd), reaction) in fields.items():
+        assert reaction == _reaction(a_w), (v, a_w, reaction)
+        # the running max of |SDD| is taken on the internal grid, which holds the CSV's samples
+        sampled = np.abs(data[f"{v}_suspension_deflection"]).max()
+        assert sampled <= max_sdd + 5e-5 and max_sdd < 1.02 * sampled, (v, max_sdd, sampled)
+        # the harmonic road keeps the tire well on the road
+        assert lost == 0.0 and 0.0 < ratio < 1.0 / 3.0, (v, ratio, lost)
+        assert vdv > 0.0
+    # the absorber and the controller make the ride calmer, in the weighted sense too
+    assert fields["tdvass"][0][0] < fields["pvass"][0][0] < fields["cs"][0][0], text
 
 
 def _table3(out: Path, text: str) -> None:
@@ -119,6 +172,8 @@ def _table3(out: Path, text: str) -> None:
             # the paper-compatible road reproduces Table 3; the true ISO 8608 road is much rougher
             assert abs(compat - ref[k]) < 0.25 * ref[k], (v, key, compat, ref[k])
             assert iso > 1.5 * compat, (v, key, iso, compat)
+    _check_field_rows(rows, lambda r: r["variant"])
+    assert text.count("field metrics (not in the paper)") == 2, text
 
 
 def _stability_verification(out: Path, text: str) -> None:
@@ -154,6 +209,9 @@ def _sweep_dask(out: Path, text: str) -> None:
     rows = list(csv.DictReader(open(out / "sweep_dask.csv")))
     assert len(rows) >= 6 and all(not r["error"] for r in rows), text
     assert all(np.isfinite(float(r["objective"])) for r in rows)
+    codes = {"1": "cs", "2": "pvass", "3": "tdvass"}
+    _check_field_rows(rows, lambda r: codes[r["variant"]])
+    assert "field metrics, mean +- sd" in text, text
 
 
 CHECKS = {
