@@ -194,7 +194,49 @@ def _frequency_response(out: Path, text: str) -> None:
 
 
 def _pso(out: Path, text: str) -> None:
+    import json
+
     assert text.count("PSO optimum:") == 3, text
+    data = json.loads((out / "pso.json").read_text())
+    runs, designs = data["runs"], data["absorber_designs"]
+    limits = designs["limits"]
+    assert limits["rms_dynamic_tire_load_ratio"] == pytest.approx(1.0 / 3.0)
+    assert limits["max_suspension_deflection"] == 0.08
+    design = {(e["road"], e["design"]): e for e in designs["designs"]}
+    assert len(design) == 6
+    for road in ("iso8608", "harmonic"):
+        paper, comfort = runs[f"absorber_{road}_paper"], runs[f"absorber_{road}_comfort"]
+        assert paper.get("objective_function", "paper") == "paper"
+        assert comfort["objective_function"] == "comfort" and comfort["limits"] == limits
+        best = comfort["best_evaluation"]
+        # the optimum, simulated again by `tdvass simulate`, gives what the optimiser reported
+        e = design[(road, "comfort optimum")]
+        assert (e["k_h"], e["c_h"]) == (comfort["best"]["k_h"], comfort["best"]["c_h"])
+        for key in ("rms_weighted_body_acceleration", "rms_dynamic_tire_load_ratio", "max_suspension_deflection",
+                    "static_deflection"):
+            assert e[key] == pytest.approx(best[key], rel=1e-9), (road, key)
+        assert e["feasible"] == best["feasible"]
+        # the static deflection limit keeps the comfort optimum off the degenerate edge...
+        assert best["static_deflection"] <= limits["static_deflection"], comfort
+        assert comfort["best"]["k_h"] >= designs["k_h_min"] > 6000.0, comfort
+        # ...where the paper objective goes: softer than the limit allows
+        p = design[(road, "paper optimum")]
+        assert p["static_deflection"] > limits["static_deflection"], p
+        assert paper["best"]["k_h"] < comfort["best"]["k_h"], (paper["best"], comfort["best"])
+    # ISO 8608 road: every constraint holds at the comfort optimum, and it scores a_w
+    comfort = runs["absorber_iso8608_comfort"]
+    best = comfort["best_evaluation"]
+    assert best["feasible"] is True, comfort
+    assert best["rms_dynamic_tire_load_ratio"] <= limits["rms_dynamic_tire_load_ratio"], comfort
+    assert best["max_suspension_deflection"] <= limits["max_suspension_deflection"], comfort
+    assert comfort["objective"] == best["rms_weighted_body_acceleration"], comfort
+    # harmonic road from rest: no absorber keeps the travel limit; reported as such
+    best = runs["absorber_harmonic_comfort"]["best_evaluation"]
+    assert best["feasible"] is False and best["max_suspension_deflection"] > limits["max_suspension_deflection"]
+    assert design[("harmonic", "Table 1 point")]["max_suspension_deflection"] == pytest.approx(0.126, abs=0.002)
+    assert design[("iso8608", "Table 1 point")]["limit_ratios"]["static_deflection"] == pytest.approx(1.0)
+    assert "no candidate met every constraint; this is the least-violating one found" in text, text
+    assert text.count("every constraint holds") == 1, text
 
 
 def _plot_result(out: Path, text: str) -> None:
