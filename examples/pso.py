@@ -261,10 +261,13 @@ def main() -> None:
                      f"a_w = {comfort['rms_weighted_body_acceleration']:.4f} m/s^2 "
                      f"(Table 1 point {t1['rms_weighted_body_acceleration']:.4f}, "
                      f"{'feasible' if t1['feasible'] else 'infeasible'}): {verdict}")
+        if abs(comfort["limit_ratios"]["static_deflection"] - 1.0) < 1e-3:
+            lines.append(f"    the static deflection limit is active (k_h = {k_h_min:.0f} N/m): a softer absorber spring "
+                         "would ride more comfortably, at the cost of more static sag")
         if not comfort["feasible"]:
             lines.append(f"    max |SDD| = {comfort['max_suspension_deflection']:.4f} m against the limit "
                          f"{limits['max_suspension_deflection']:g} m (Table 1 point: {t1['max_suspension_deflection']:.4f} m): "
-                         "from rest, no absorber in the box keeps the travel limit on this road")
+                         "from rest, the swarm found no absorber in the box that keeps the travel limit on this road")
     lines += ["",
               "notes: the paper's PSO optimum is not reproduced. The absorber minimiser of J runs to the edge of",
               "the box (k_h, c_h -> 0 decouples the body from the wheel: BA -> 0 while SDD absorbs the road, and",

@@ -216,9 +216,10 @@ def _pso(out: Path, text: str) -> None:
                     "static_deflection"):
             assert e[key] == pytest.approx(best[key], rel=1e-9), (road, key)
         assert e["feasible"] == best["feasible"]
-        # the static deflection limit keeps the comfort optimum off the degenerate edge...
-        assert best["static_deflection"] <= limits["static_deflection"], comfort
-        assert comfort["best"]["k_h"] >= designs["k_h_min"] > 6000.0, comfort
+        # the static deflection limit keeps the comfort optimum off the degenerate edge (to rounding:
+        # where no candidate is feasible, the least-violating one may sit on the limit's far side by an ulp)...
+        assert best["static_deflection"] <= limits["static_deflection"] * (1 + 1e-12), comfort
+        assert comfort["best"]["k_h"] >= designs["k_h_min"] * (1 - 1e-12) and designs["k_h_min"] > 6000.0, comfort
         # ...where the paper objective goes: softer than the limit allows
         p = design[(road, "paper optimum")]
         assert p["static_deflection"] > limits["static_deflection"], p
@@ -229,6 +230,7 @@ def _pso(out: Path, text: str) -> None:
     assert best["feasible"] is True, comfort
     assert best["rms_dynamic_tire_load_ratio"] <= limits["rms_dynamic_tire_load_ratio"], comfort
     assert best["max_suspension_deflection"] <= limits["max_suspension_deflection"], comfort
+    assert best["static_deflection"] <= limits["static_deflection"], comfort
     assert comfort["objective"] == best["rms_weighted_body_acceleration"], comfort
     # harmonic road from rest: no absorber keeps the travel limit; reported as such
     best = runs["absorber_harmonic_comfort"]["best_evaluation"]
