@@ -55,6 +55,40 @@ STABILITY_POINTS = [
     ("A6*", -40000.0, 0.4, False),
 ]
 
+# The field metrics the FMU computes besides the paper's RMS values (running
+# outputs, read at the end of a run; the scripts' CSV columns have the same
+# names): ISO 2631-1 W_k-weighted RMS body acceleration a_w, vibration dose
+# value, RMS dynamic tire load / static load, time without tire contact, max |SDD|
+FIELD_METRICS = {
+    "rms_weighted_body_acceleration": "a_w (m/s^2)",
+    "vibration_dose_value": "VDV (m/s^1.75)",
+    "rms_dynamic_tire_load_ratio": "tire load ratio",
+    "contact_loss_time": "contact loss (s)",
+    "max_suspension_deflection": "max |SDD| (m)",
+}
+FIELD_OUTPUTS = list(FIELD_METRICS)
+TIRE_LOAD_RATIO_LIMIT = 1.0 / 3.0  # RMS dynamic tire load <= static / 3: contact kept at 3 sigma
+G0 = 9.80665  # standard gravity, m/s^2
+
+# ISO 2631-1 (Annex C) comfort reactions by the lower bound of a_w (m/s^2); the
+# standard's bands overlap, a value is given the harshest band it reaches
+COMFORT_BANDS = [(2.0, "extremely uncomfortable"), (1.25, "very uncomfortable"), (0.8, "uncomfortable"),
+                 (0.5, "fairly uncomfortable"), (0.315, "a little uncomfortable")]
+
+
+def comfort_reaction(a_w: float) -> str:
+    """The ISO 2631-1 comfort reaction to a weighted RMS acceleration a_w (m/s^2)."""
+    return next((name for lower, name in COMFORT_BANDS if a_w >= lower), "not uncomfortable")
+
+
+def static_deflection(variant: str, k_h: float = TABLE1["k_h"], k_s: float = TABLE1["k_s"]) -> float:
+    """Static deflection (m) of the springs between body and wheel under the weight above
+    them: m_s g0/k_s + (m_s + m_h) g0/k_h (CS: m_s g0/k_s)."""
+    m_s, m_h = TABLE1["m_s"], TABLE1["m_h"]
+    sag = m_s * G0 / k_s
+    return sag if variant == "cs" else sag + (m_s + m_h) * G0 / k_h
+
+
 # ISO 8608 roughness Gq(n0) by class, m^3
 ISO_GQ = {c: 16e-6 * 4 ** i for i, c in enumerate("ABCDEFGH")}
 N0 = 0.1  # reference spatial frequency, 1/m
@@ -291,6 +325,11 @@ def rms_row(result: dict) -> tuple[float, float, float]:
     return (float(result["rms_body_acceleration"][-1]),
             float(result["rms_suspension_deflection"][-1]),
             1e3 * float(result["rms_tire_deflection"][-1]))
+
+
+def field_row(result: dict) -> tuple[float, ...]:
+    """The FIELD_METRICS values from the FMU's running outputs at the end."""
+    return tuple(float(result[name][-1]) for name in FIELD_OUTPUTS)
 
 
 def pct(ours: float, paper: float) -> str:

@@ -1,7 +1,9 @@
 """Monte Carlo over road seeds (or a (g, tau) grid) of the FMU with fmpy on dask.distributed.
 
 Every task runs the FMU with fmpy on a dask worker and returns the RMS values
-and J of Eq. (6); the client gathers them into one CSV and a plot.
+and J of Eq. (6), and the field metrics (ISO 2631-1 W_k-weighted a_w,
+vibration dose value, RMS dynamic tire load / static load, contact loss time,
+max |SDD|); the client gathers them into one CSV and a plot.
 
 - `--mode seeds` (default): road seeds 1..N x CS / PVASS / TDVASS on a random
   road (`--road iso8608` = FMU road 2, the correct ISO 8608 road, default;
@@ -39,7 +41,8 @@ ROAD_CODES = {"harmonic": 1, "iso8608": 2, "paper": 3}
 ROAD_NAMES = {1: "harmonic road 0.05 sin 5t", 2: "ISO 8608 class C road, 20 m/s",
               3: "paper-compatible class C road, 20 m/s"}
 FIELDS = ["road", "road_seed", "variant", "g", "tau", "rms_body_acceleration", "rms_suspension_deflection",
-          "rms_tire_deflection_mm", "objective", "spectral_abscissa", "error", "worker", "seconds"]
+          "rms_tire_deflection_mm", "objective", *C.FIELD_OUTPUTS, "spectral_abscissa", "error", "worker",
+          "seconds"]
 
 
 # ---------------------------------------------------------------------------
@@ -79,7 +82,9 @@ def run_batch(fmu_bytes: bytes, digest: str, duration: float, jobs: list[dict]) 
                       "vars": {v.name: v for v in md.modelVariables}}
     entry = cache[key]
     md, variables = entry["md"], entry["vars"]
-    outputs = ["rms_body_acceleration", "rms_suspension_deflection", "rms_tire_deflection", "objective"]
+    outputs = ["rms_body_acceleration", "rms_suspension_deflection", "rms_tire_deflection", "objective",
+               "rms_weighted_body_acceleration", "vibration_dose_value", "rms_dynamic_tire_load_ratio",
+               "contact_loss_time", "max_suspension_deflection"]
     out_vrs = [variables[n].valueReference for n in outputs]
 
     rows = []
@@ -123,6 +128,7 @@ def run_batch(fmu_bytes: bytes, digest: str, duration: float, jobs: list[dict]) 
                 pass
             entry["slave"] = None
         row = dict(job)
+        row.update(zip(outputs[4:], values[4:]))
         row.update({"rms_body_acceleration": values[0], "rms_suspension_deflection": values[1],
                     "rms_tire_deflection_mm": 1e3 * values[2], "objective": values[3],
                     "spectral_abscissa": sa, "error": error, "worker": where,
@@ -341,6 +347,20 @@ def main() -> None:
                 vals = np.array([r[key] for r in rows if r["variant"] == code])
                 line += f"  {C.METRICS_ASCII[k]} {vals.mean():.4f} +- {vals.std(ddof=1):.4f} [{C.TABLE3[v][k]}]"
             lines.append(line)
+        lines.append("field metrics, mean +- sd (comfort: ISO 2631-1 at the mean a_w):")
+        for v, code in C.VARIANTS.items():
+            vals = np.array([[r[key] for key in C.FIELD_OUTPUTS] for r in rows if r["variant"] == code])
+            m, sd = vals.mean(axis=0), vals.std(axis=0, ddof=1)
+            lines.append(f"  {C.LABELS[v]:<7}" + "".join(f"  {h} {a:.4f} +- {b:.4f}"
+                                                          for h, a, b in zip(C.FIELD_METRICS.values(), m, sd))
+                         + f"  ({C.comfort_reaction(m[0])})")
+        counts = []
+        for v, code in C.VARIANTS.items():
+            runs = [r for r in rows if r["variant"] == code]
+            over = sum(r["rms_dynamic_tire_load_ratio"] > C.TIRE_LOAD_RATIO_LIMIT for r in runs)
+            lost = sum(r["contact_loss_time"] > 0 for r in runs)
+            counts.append(f"{C.LABELS[v]} {over} / {lost}")
+        lines.append("runs with RMS tire load ratio > 1/3 / with contact loss: " + ", ".join(counts))
         plot_seeds(rows, args, nworkers, elapsed, out)
     else:
         good = [r for r in rows if not r["error"] and r["spectral_abscissa"] < 0]
@@ -349,6 +369,11 @@ def main() -> None:
                      f"tau in [0, {args.tau_max:g}] s: {len(good)} of {len(rows)} points stable")
         if best:
             lines.append(f"smallest J = {best['objective']:.6f} at g = {best['g']:.0f} N/m, tau = {best['tau']:.4g} s")
+            calm = min(good, key=lambda r: r["rms_weighted_body_acceleration"])
+            lines.append(f"smallest a_w = {calm['rms_weighted_body_acceleration']:.4f} m/s^2 "
+                         f"({C.comfort_reaction(calm['rms_weighted_body_acceleration'])}) at g = {calm['g']:.0f} N/m, "
+                         f"tau = {calm['tau']:.4g} s (tire load ratio {calm['rms_dynamic_tire_load_ratio']:.3f}, "
+                         f"max |SDD| {calm['max_suspension_deflection']:.4f} m)")
         plot_grid(rows, args, nworkers, elapsed, out)
     C.write_summary(out, "sweep_dask", "\n".join(lines))
 
