@@ -7,6 +7,9 @@ agreement table is printed at the end (and written to
 target/interop/summary.json).
 """
 
+import json
+import os
+import subprocess
 import sys
 from pathlib import Path
 
@@ -16,6 +19,10 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import interop  # noqa: E402
+from interop import REPO_ROOT  # noqa: E402
+
+FMI_CRATE = "0.8.0"  # pinned in interop-fmi-rs/Cargo.toml
+CARGO_TEST = ["cargo", "test", "--workspace", "--release"]  # as in tests/run_all.sh
 
 
 @pytest.fixture(scope="session")
@@ -70,6 +77,32 @@ def grid_reference(fmu_file, fmpy_reference):
         return times, rows, rates
 
     return get
+
+
+@pytest.fixture(scope="session")
+def fmi_rs():
+    """The interop-fmi-rs executable: $TDVASS_INTEROP_FMI_RS, or cargo's.
+
+    The `cargo test --workspace --release` step of tests/run_all.sh builds
+    it for the crate's integration test; asking the same command for its
+    artifacts rebuilds nothing, where `cargo build -p interop-fmi-rs` would
+    resolve the dependencies' features differently and recompile some.
+    Keep CARGO_TEST in step with run_all.sh.
+    """
+    override = os.environ.get("TDVASS_INTEROP_FMI_RS")
+    if override:
+        return override
+    done = subprocess.run(
+        CARGO_TEST + ["--no-run", "--message-format=json-render-diagnostics"],
+        cwd=REPO_ROOT, capture_output=True, text=True,
+    )
+    assert done.returncode == 0, done.stderr
+    for line in done.stdout.splitlines():
+        message = json.loads(line)
+        if (message.get("reason") == "compiler-artifact" and message["target"]["name"] == "interop-fmi-rs"
+                and message["target"]["kind"] == ["bin"] and not message["profile"]["test"]):
+            return message["executable"]
+    pytest.fail("cargo built no interop-fmi-rs executable")
 
 
 def pytest_terminal_summary(terminalreporter):

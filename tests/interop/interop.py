@@ -205,6 +205,87 @@ def input_road_table(fmu: Path, experiment: Experiment) -> np.ndarray:
     return table
 
 
+# ------------------------------------------------------------------ FMI 3.0 reference
+
+
+def fmi3_path() -> Path:
+    """The FMI 3.0 FMU built next to the FMI 2.0 one: target/fmu/tdvass-fmi3.fmu."""
+    return fmu_path().with_name("tdvass-fmi3.fmu")
+
+
+def replay3(fmu: Path, experiment: Experiment, times, outputs=OUTPUTS) -> np.ndarray:
+    """fmpy's FMU3Slave (FMI 3.0 FMU) stepped through `times` after 0, with
+    the experiment's start values (Enumerations by their integer codes) and,
+    for a source, the same Jacobi connection as `replay`."""
+    from fmpy import extract, read_model_description
+    from fmpy.fmi3 import FMU3Slave
+
+    md = read_model_description(str(fmu))
+    var = {v.name: v for v in md.modelVariables}
+    setters = {"Enumeration": "setInt64", "Int64": "setInt64", "Int32": "setInt32", "Float64": "setFloat64"}
+    stop = float(times[-1])
+    with tempfile.TemporaryDirectory(prefix="tdvass-interop-") as unzipdir:
+        extract(str(fmu), unzipdir=unzipdir)
+
+        def start(name, values):
+            slave = FMU3Slave(guid=md.guid, unzipDirectory=unzipdir, modelIdentifier="tdvass", instanceName=name)
+            slave.instantiate()
+            for key, value in values.items():
+                getattr(slave, setters[var[key].type])([var[key].valueReference], [value])
+            slave.enterInitializationMode(startTime=0.0, stopTime=stop)
+            slave.exitInitializationMode()
+            return slave
+
+        sink = start("sink", experiment.start_values)
+        source = start("source", experiment.source) if experiment.source is not None else None
+        out_vrs = [var[n].valueReference for n in outputs]
+        x_g, road = var["x_g"].valueReference, var["road_displacement"].valueReference
+        rows = np.empty((len(times), len(outputs)))
+        t = 0.0
+        try:
+            for k, t_next in enumerate(times):
+                t_next = float(t_next)
+                if source is not None:
+                    sink.setFloat64([x_g], source.getFloat64([road]))
+                    _, terminate, early, last = source.doStep(t, t_next - t)
+                    assert not (terminate or early) and last == t_next, (terminate, early, last)
+                _, terminate, early, last = sink.doStep(t, t_next - t)
+                assert not (terminate or early) and last == t_next, (terminate, early, last)
+                rows[k] = sink.getFloat64(out_vrs)
+                t = t_next
+        finally:
+            for slave in (sink, source):
+                if slave is not None:
+                    slave.terminate()
+                    slave.freeInstance()
+    return rows
+
+
+def simulate_fmu3(fmu: Path, experiment: Experiment, outputs=OUTPUTS) -> tuple[np.ndarray, np.ndarray]:
+    """`fmpy.simulate_fmu` of the FMI 3.0 FMU as Co-Simulation, as
+    `simulate_fmu`: (times, rows) after the start; the input road is the
+    FMI 3.0 source's road_displacement on fmpy's grid, as an input table."""
+    import fmpy
+
+    input_table = None
+    if experiment.source is not None:
+        source = Experiment("source", experiment.stop_time, experiment.source)
+        times = fmpy_grid(experiment.stop_time, experiment.step_size)
+        input_table = np.zeros(len(times) + 1, dtype=[("time", np.double), ("x_g", np.double)])
+        input_table["time"][1:] = times
+        input_table["x_g"][1:] = replay3(fmu, source, times, outputs=["road_displacement"])[:, 0]
+    result = fmpy.simulate_fmu(
+        str(fmu),
+        fmi_type="CoSimulation",
+        start_values=dict(experiment.start_values),
+        stop_time=experiment.stop_time,
+        output_interval=experiment.step_size,
+        input=input_table,
+        output=outputs,
+    )
+    return result["time"][1:], np.column_stack([result[n][1:] for n in outputs])
+
+
 # ------------------------------------------------------------------ comparison
 
 

@@ -5,7 +5,6 @@ must equal fmpy's bit for bit.
 """
 
 import json
-import os
 import subprocess
 
 import numpy as np
@@ -13,36 +12,9 @@ import pytest
 from fmpy.util import read_csv
 
 import interop
-from interop import EXPERIMENTS, OUTPUTS, REPO_ROOT
+from interop import EXPERIMENTS, OUTPUTS
 
-FMI_CRATE = "0.8.0"  # pinned in interop-fmi-rs/Cargo.toml
-CARGO_TEST = ["cargo", "test", "--workspace", "--release"]  # as in tests/run_all.sh
-
-
-@pytest.fixture(scope="session")
-def fmi_rs():
-    """The interop-fmi-rs executable: $TDVASS_INTEROP_FMI_RS, or cargo's.
-
-    The `cargo test --workspace --release` step of tests/run_all.sh builds
-    it for the crate's integration test; asking the same command for its
-    artifacts rebuilds nothing, where `cargo build -p interop-fmi-rs` would
-    resolve the dependencies' features differently and recompile some.
-    Keep CARGO_TEST in step with run_all.sh.
-    """
-    override = os.environ.get("TDVASS_INTEROP_FMI_RS")
-    if override:
-        return override
-    done = subprocess.run(
-        CARGO_TEST + ["--no-run", "--message-format=json-render-diagnostics"],
-        cwd=REPO_ROOT, capture_output=True, text=True,
-    )
-    assert done.returncode == 0, done.stderr
-    for line in done.stdout.splitlines():
-        message = json.loads(line)
-        if (message.get("reason") == "compiler-artifact" and message["target"]["name"] == "interop-fmi-rs"
-                and message["target"]["kind"] == ["bin"] and not message["profile"]["test"]):
-            return message["executable"]
-    pytest.fail("cargo built no interop-fmi-rs executable")
+from conftest import FMI_CRATE
 
 
 @pytest.mark.parametrize("name", list(EXPERIMENTS))

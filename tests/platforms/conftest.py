@@ -9,6 +9,11 @@ Platforms and how the harness runs there:
            has no aarch64 platform folder, so it is not in the FMU), under
            qemu-user (`qemu-aarch64 -L /usr/aarch64-linux-gnu`)
 
+The FMI 3.0 FMU (tdvass-fmi3.fmu) carries all three, under the platform
+tuples x86_64-linux, x86_64-windows and aarch64-linux; harness3.c runs them
+under the same runners (the `platforms3` and `results3` fixtures, results
+in target/platforms/fmi3/).
+
 Build everything first with `cargo run --release -p fmu-build -- --all-platforms`.
 """
 
@@ -35,6 +40,12 @@ HARNESS_VARIABLES = {
     "variant": 1, "g": 10, "tau": 11, "road": 12, "road_class": 15, "road_seed": 18, "x_s": 31,
 }
 
+# The same for harness3.c (FMI 3.0): name -> (value reference, element).
+HARNESS3_VARIABLES = {
+    "variant": (1, "Enumeration"), "road": (12, "Enumeration"), "road_class": (15, "Enumeration"),
+    "road_seed": (18, "Int32"),
+}
+
 # Largest relative difference to the linux64 run that the tests accept.
 RELATIVE_TOLERANCE = 1e-12
 
@@ -53,6 +64,8 @@ def target_dir() -> Path:
 
 WORK = target_dir() / "platforms"
 FMU = target_dir() / "fmu" / "tdvass.fmu"
+FMU3 = target_dir() / "fmu" / "tdvass-fmi3.fmu"
+INCLUDE = HERE.parent / "include"  # fmi3_types.h
 BUILD_HINT = "build it with `cargo run --release -p fmu-build -- --all-platforms`"
 
 
@@ -108,10 +121,12 @@ class Platform:
     library: Path
     runner: list[str]  # prefix of the command that runs the harness
     executable: str  # the harness's file name
+    source: str = "harness.c"
+    work: Path = WORK
 
     @property
     def dir(self) -> Path:
-        return WORK / self.name
+        return self.work / self.name
 
     def host_path(self, path: Path) -> str:
         """`path` as the harness sees it (wine maps / to drive Z:)."""
@@ -122,7 +137,7 @@ class Platform:
 
 def extracted(fmu: zipfile.ZipFile, entry: str, name: str) -> Path:
     if entry not in fmu.namelist():
-        pytest.fail(f"{FMU} has no {entry}; {BUILD_HINT}")
+        pytest.fail(f"{fmu.filename} has no {entry}; {BUILD_HINT}")
     path = WORK / "binaries" / name
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_bytes(fmu.read(entry))
@@ -162,8 +177,8 @@ def build_harness(platform: Platform) -> Path:
     platform.dir.mkdir(parents=True, exist_ok=True)
     compiler = require_tool(platform.compiler[0], platform.compiler_package)
     executable = platform.dir / platform.executable
-    run([compiler, "-O2", "-std=c11", "-Wall", "-Wextra", "-Werror", "-o", str(executable),
-         str(HERE / "harness.c"), *platform.compiler[1:]])
+    run([compiler, "-O2", "-std=c11", "-Wall", "-Wextra", "-Werror", f"-I{INCLUDE}", "-o", str(executable),
+         str(HERE / platform.source), *platform.compiler[1:]])
     if platform.name == "win64":
         # The stand-in for bcryptprimitives.dll, which Debian's wine lacks
         # (see bcryptprimitives_shim.c): beside the harness, never in the FMU.
@@ -219,6 +234,79 @@ def results(platforms, description):
         assert re.search(r"^harness: \d+ outputs x 15000 steps", result.stdout, re.M), result.stdout
         _results[name] = Results(name, out)
         return _results[name]
+
+    return get
+
+
+# ------------------------------------------------------------------ FMI 3.0
+
+
+@pytest.fixture(scope="session")
+def fmu3() -> zipfile.ZipFile:
+    if not FMU3.is_file():
+        pytest.fail(f"{FMU3} not found; {BUILD_HINT}")
+    return zipfile.ZipFile(FMU3)
+
+
+@pytest.fixture(scope="session")
+def description3(fmu3) -> Description:
+    """The instantiationToken (as `guid`) and Float64 outputs of the FMI 3.0 FMU."""
+    root = ET.fromstring(fmu3.read("modelDescription.xml"))
+    variables, outputs = {}, []
+    for variable in root.find("ModelVariables"):
+        vr = int(variable.get("valueReference"))
+        variables[variable.get("name")] = (vr, variable.tag)
+        if variable.get("causality") == "output" and variable.tag == "Float64" and variable.find("Dimension") is None:
+            outputs.append(vr)
+    for name, expected in HARNESS3_VARIABLES.items():
+        assert variables.get(name) == expected, f"harness3.c sets `{name}` as {expected}"
+    assert outputs, "the description declares no Float64 output"
+    return Description(root.get("instantiationToken"), outputs, {n: vr for n, (vr, _) in variables.items()})
+
+
+@pytest.fixture(scope="session")
+def platforms3(fmu3) -> dict[str, Platform]:
+    """The FMI 3.0 binaries under the FMI 2.0 platforms' names and runners."""
+    work = WORK / "fmi3"
+    return {
+        "linux64": Platform("linux64", ["gcc", "-ldl"], "gcc",
+                            extracted(fmu3, "binaries/x86_64-linux/tdvass.so", "fmi3/x86_64-linux/tdvass.so"),
+                            [], "harness3", "harness3.c", work),
+        "win64": Platform("win64", ["x86_64-w64-mingw32-gcc", "-static"], "gcc-mingw-w64-x86-64",
+                          extracted(fmu3, "binaries/x86_64-windows/tdvass.dll", "fmi3/x86_64-windows/tdvass.dll"),
+                          [require_tool(str(WINE), "wine64")], "harness3.exe", "harness3.c", work),
+        "aarch64": Platform("aarch64", ["aarch64-linux-gnu-gcc", "-ldl"], "gcc-aarch64-linux-gnu",
+                            extracted(fmu3, "binaries/aarch64-linux/tdvass.so", "fmi3/aarch64-linux/tdvass.so"),
+                            [require_tool("qemu-aarch64", "qemu-user"), "-L", str(AARCH64_SYSROOT)],
+                            "harness3", "harness3.c", work),
+    }
+
+
+_results3: dict[str, Results] = {}
+
+
+@pytest.fixture(scope="session")
+def results3(platforms3, description3):
+    """As `results`, for harness3.c and the FMI 3.0 binaries."""
+
+    def get(name: str) -> Results:
+        if name in _results3:
+            return _results3[name]
+        platform = platforms3[name]
+        linux64_state = get("linux64").dir / "state.bin" if name != "linux64" else None
+        executable = build_harness(platform)
+        out = platform.dir / "out"
+        shutil.rmtree(out, ignore_errors=True)
+        out.mkdir(parents=True)
+        state_in = linux64_state or out / "state.bin"
+        command = [*platform.runner, str(executable), platform.host_path(platform.library),
+                   description3.guid, ",".join(map(str, description3.outputs)),
+                   platform.host_path(out), platform.host_path(state_in)]
+        env = wine_environment() if name == "win64" else None
+        result = run(command, env=env, cwd=platform.dir)
+        assert re.search(r"^harness3: \d+ outputs x 15000 steps", result.stdout, re.M), result.stdout
+        _results3[name] = Results(name, out)
+        return _results3[name]
 
     return get
 

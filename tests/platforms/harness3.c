@@ -1,0 +1,366 @@
+/*
+ * Platform-neutral harness of the tdvass FMI 3.0 library (Co-Simulation),
+ * the counterpart of harness.c: compiled natively for x86_64-linux, with
+ * MinGW-w64 for x86_64-windows (run under wine) and with the aarch64 GNU
+ * toolchain for aarch64-linux (run under qemu-user), each run loads that
+ * platform's binary of tdvass-fmi3.fmu. The FMI 3.0 types are declared in
+ * tests/include/fmi3_types.h.
+ *
+ *   harness3 LIB TOKEN OUTPUT_VRS OUT_DIR STATE_IN
+ *
+ *   LIB         the library (binaries/<platform tuple>/tdvass.so or .dll)
+ *   TOKEN       the instantiationToken of the FMU's modelDescription.xml
+ *   OUTPUT_VRS  comma-separated value references of the Float64 outputs
+ *   OUT_DIR     folder of the result files (must exist)
+ *   STATE_IN    a serialized FMU state written by another run (state.bin of
+ *               the x86_64-linux run): restored and continued
+ *
+ * Result files, as harness.c's (CSV, 17 significant digits):
+ *   default.csv       the default experiment (TDVASS, harmonic road, 0..15 s,
+ *                     1 ms communication steps), from t = 0
+ *   iso_c_cs.csv      CS on the ISO 8608 class C road, seed 7 (Enumerations
+ *                     set with fmi3SetInt64, the seed with fmi3SetInt32)
+ *   roundtrip.csv     default experiment to 5 s, fmi3GetFMUState, serialize,
+ *                     free the instance, deserialize into a new instance,
+ *                     fmi3SetFMUState, continue to 15 s (rows after 5 s)
+ *   state.bin         the serialized state at 5 s of that run
+ *   restored.csv      STATE_IN deserialized into a new instance, continued
+ *   intermediate.csv  the default experiment's first INTERMEDIATE_STEPS
+ *                     steps with an intermediate-update callback that reads
+ *                     every output at every internal node it is called at:
+ *                     time,<outputs> per call
+ *
+ * Exit code 0 when every file was written; 1 (message on stderr) when a call
+ * did not return fmi3OK or fmi3DoStep did not reach the end of its step.
+ */
+#define __USE_MINGW_ANSI_STDIO 1 /* C99 printf on Windows: exact %.17g */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#ifdef _WIN32
+#include <windows.h>
+#else
+#include <dlfcn.h>
+#endif
+
+#include "fmi3_types.h"
+
+static struct {
+    fmi3InstantiateCoSimulationTYPE InstantiateCoSimulation;
+    fmi3FreeInstanceTYPE FreeInstance;
+    fmi3EnterInitializationModeTYPE EnterInitializationMode;
+    fmi3ExitInitializationModeTYPE ExitInitializationMode;
+    fmi3TerminateTYPE Terminate;
+    fmi3GetFloat64TYPE GetFloat64;
+    fmi3SetInt32TYPE SetInt32;
+    fmi3SetInt64TYPE SetInt64;
+    fmi3GetFMUStateTYPE GetFMUState;
+    fmi3SetFMUStateTYPE SetFMUState;
+    fmi3FreeFMUStateTYPE FreeFMUState;
+    fmi3SerializedFMUStateSizeTYPE SerializedFMUStateSize;
+    fmi3SerializeFMUStateTYPE SerializeFMUState;
+    fmi3DeserializeFMUStateTYPE DeserializeFMUState;
+    fmi3DoStepTYPE DoStep;
+} fmi;
+
+/* Value references of the parameters the harness sets (the tests check
+ * these names against modelDescription.xml). */
+enum { VR_VARIANT = 1, VR_ROAD = 12, VR_ROAD_CLASS = 15, VR_ROAD_SEED = 18 };
+enum { VARIANT_CS = 1, ROAD_ISO8608 = 2, ROAD_CLASS_C = 3 };
+
+#define STEP 1e-3               /* communication step, s */
+#define STEPS 15000             /* 15 s, the DefaultExperiment */
+#define SAVE_AT_STEP 5000       /* the state is saved at 5 s */
+#define INTERMEDIATE_STEPS 100  /* steps run with the intermediate-update callback */
+#define MAX_OUTPUTS 64
+
+static const char *token;
+static fmi3ValueReference outputs[MAX_OUTPUTS];
+static size_t n_outputs;
+static char last_message[1024];
+
+static void logger(fmi3InstanceEnvironment env, fmi3Status status, fmi3String category,
+                   fmi3String message) {
+    (void)env;
+    (void)status;
+    (void)category;
+    snprintf(last_message, sizeof last_message, "%s", message);
+}
+
+static void fail(const char *what, int line) {
+    fprintf(stderr, "harness3.c:%d: %s (last message: %s)\n", line, what, last_message);
+    exit(1);
+}
+
+#define REQUIRE_OK(expr)                                                       \
+    do {                                                                       \
+        if ((expr) != fmi3OK) fail(#expr " did not return fmi3OK", __LINE__); \
+    } while (0)
+
+static void *symbol(void *library, const char *name) {
+#ifdef _WIN32
+    void *address = (void *)GetProcAddress((HMODULE)library, name);
+#else
+    void *address = dlsym(library, name);
+#endif
+    if (!address) {
+        fprintf(stderr, "the library does not export %s\n", name);
+        exit(2);
+    }
+    return address;
+}
+
+static void load(const char *path) {
+#ifdef _WIN32
+    void *library = (void *)LoadLibraryExA(path, NULL, LOAD_WITH_ALTERED_SEARCH_PATH);
+    if (!library) {
+        fprintf(stderr, "LoadLibraryEx %s failed: error %lu\n", path, GetLastError());
+        exit(2);
+    }
+#else
+    void *library = dlopen(path, RTLD_NOW | RTLD_LOCAL);
+    if (!library) {
+        fprintf(stderr, "dlopen: %s\n", dlerror());
+        exit(2);
+    }
+#endif
+#define SYM(field, name) memcpy(&fmi.field, &(void *){symbol(library, name)}, sizeof(void *))
+    SYM(InstantiateCoSimulation, "fmi3InstantiateCoSimulation");
+    SYM(FreeInstance, "fmi3FreeInstance");
+    SYM(EnterInitializationMode, "fmi3EnterInitializationMode");
+    SYM(ExitInitializationMode, "fmi3ExitInitializationMode");
+    SYM(Terminate, "fmi3Terminate");
+    SYM(GetFloat64, "fmi3GetFloat64");
+    SYM(SetInt32, "fmi3SetInt32");
+    SYM(SetInt64, "fmi3SetInt64");
+    SYM(GetFMUState, "fmi3GetFMUState");
+    SYM(SetFMUState, "fmi3SetFMUState");
+    SYM(FreeFMUState, "fmi3FreeFMUState");
+    SYM(SerializedFMUStateSize, "fmi3SerializedFMUStateSize");
+    SYM(SerializeFMUState, "fmi3SerializeFMUState");
+    SYM(DeserializeFMUState, "fmi3DeserializeFMUState");
+    SYM(DoStep, "fmi3DoStep");
+#undef SYM
+}
+
+static FILE *open_file(const char *dir, const char *name, const char *mode) {
+    char path[4096];
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    FILE *file = fopen(path, mode);
+    if (!file) {
+        fprintf(stderr, "cannot open %s\n", path);
+        exit(2);
+    }
+    return file;
+}
+
+/* ------------------------------------------------------- good experiments */
+
+/* The instance and, while the callback runs, where it writes. */
+typedef struct {
+    fmi3Instance instance;
+    FILE *csv;
+    long calls;
+} Environment;
+
+static void write_values(FILE *csv, fmi3Instance c, double time) {
+    fmi3Float64 values[MAX_OUTPUTS];
+    REQUIRE_OK(fmi.GetFloat64(c, outputs, n_outputs, values, n_outputs));
+    fprintf(csv, "%.17g", time);
+    for (size_t i = 0; i < n_outputs; i++) fprintf(csv, ",%.17g", values[i]);
+    fprintf(csv, "\n");
+}
+
+/* Reads every output at every internal node (Intermediate Update Mode). */
+static void intermediate_update(fmi3InstanceEnvironment env, fmi3Float64 time, fmi3Boolean set_requested,
+                                fmi3Boolean get_allowed, fmi3Boolean step_finished,
+                                fmi3Boolean can_return_early, fmi3Boolean *early_return_requested,
+                                fmi3Float64 *early_return_time) {
+    (void)set_requested;
+    (void)step_finished;
+    (void)can_return_early;
+    (void)early_return_time;
+    Environment *e = env;
+    *early_return_requested = false;
+    e->calls++;
+    if (get_allowed && e->csv) write_values(e->csv, e->instance, time);
+}
+
+/* Int64 (Enumerations) and Int32 parameters set before initialization. */
+typedef struct {
+    size_t count;
+    fmi3ValueReference vrs[3];
+    fmi3Int64 values[3];
+    fmi3Int32 seed; /* road_seed, when > 0 */
+} Parameters;
+
+static const Parameters defaults = {0, {0}, {0}, 0};
+
+static fmi3Instance initialized(const char *name, const Parameters *parameters, Environment *env) {
+    fmi3Instance c = fmi.InstantiateCoSimulation(
+        name, token, NULL, false, false, false, false, env ? outputs : NULL, env ? n_outputs : 0,
+        env, logger, env ? intermediate_update : NULL);
+    if (!c) fail("fmi3InstantiateCoSimulation returned NULL", __LINE__);
+    if (env) env->instance = c;
+    if (parameters->count)
+        REQUIRE_OK(fmi.SetInt64(c, parameters->vrs, parameters->count, parameters->values,
+                                parameters->count));
+    if (parameters->seed > 0) {
+        const fmi3ValueReference vr = VR_ROAD_SEED;
+        REQUIRE_OK(fmi.SetInt32(c, &vr, 1, &parameters->seed, 1));
+    }
+    REQUIRE_OK(fmi.EnterInitializationMode(c, false, 0.0, 0.0, true, STEPS * STEP));
+    REQUIRE_OK(fmi.ExitInitializationMode(c));
+    return c;
+}
+
+static void write_header(FILE *csv) {
+    fprintf(csv, "time");
+    for (size_t i = 0; i < n_outputs; i++) fprintf(csv, ",%u", (unsigned)outputs[i]);
+    fprintf(csv, "\n");
+}
+
+/* Communication steps `from` .. `to - 1`, a row after each (when csv). */
+static void run_steps(fmi3Instance c, FILE *csv, int from, int to) {
+    for (int k = from; k < to; k++) {
+        fmi3Boolean event = true, terminate = true, early = true;
+        fmi3Float64 last = -1.0;
+        REQUIRE_OK(fmi.DoStep(c, k * STEP, STEP, true, &event, &terminate, &early, &last));
+        if (event || terminate || early || last != k * STEP + STEP)
+            fail("fmi3DoStep did not complete its step", __LINE__);
+        if (csv) write_values(csv, c, (k + 1) * STEP);
+    }
+}
+
+static void finish(fmi3Instance c) {
+    REQUIRE_OK(fmi.Terminate(c));
+    fmi.FreeInstance(c);
+}
+
+static void experiment(const char *dir, const char *file, const Parameters *parameters) {
+    FILE *csv = open_file(dir, file, "wb");
+    write_header(csv);
+    fmi3Instance c = initialized(file, parameters, NULL);
+    write_values(csv, c, 0.0);
+    run_steps(c, csv, 0, STEPS);
+    finish(c);
+    fclose(csv);
+}
+
+/* Deserializes `bytes` into a new, initialized instance and continues it
+ * from SAVE_AT_STEP to the end. */
+static void continue_from(const char *dir, const char *file, const fmi3Byte *bytes, size_t size) {
+    fmi3Instance c = initialized(file, &defaults, NULL);
+    fmi3FMUState state = NULL;
+    REQUIRE_OK(fmi.DeserializeFMUState(c, bytes, size, &state));
+    REQUIRE_OK(fmi.SetFMUState(c, state));
+    REQUIRE_OK(fmi.FreeFMUState(c, &state));
+    if (state) fail("fmi3FreeFMUState left the state pointer set", __LINE__);
+    FILE *csv = open_file(dir, file, "wb");
+    write_header(csv);
+    run_steps(c, csv, SAVE_AT_STEP, STEPS);
+    fclose(csv);
+    finish(c);
+}
+
+/* The serialized state of the default experiment at SAVE_AT_STEP; the
+ * instance that wrote it is freed before returning. */
+static fmi3Byte *saved_state(size_t *size) {
+    fmi3Instance c = initialized("save", &defaults, NULL);
+    run_steps(c, NULL, 0, SAVE_AT_STEP);
+    fmi3FMUState state = NULL;
+    REQUIRE_OK(fmi.GetFMUState(c, &state));
+    REQUIRE_OK(fmi.SerializedFMUStateSize(c, state, size));
+    fmi3Byte *bytes = malloc(*size);
+    if (!bytes) fail("out of memory", __LINE__);
+    REQUIRE_OK(fmi.SerializeFMUState(c, state, bytes, *size));
+    REQUIRE_OK(fmi.FreeFMUState(c, &state));
+    finish(c);
+    return bytes;
+}
+
+static fmi3Byte *read_file(const char *path, size_t *size) {
+    FILE *file = fopen(path, "rb");
+    if (!file) {
+        fprintf(stderr, "cannot open %s\n", path);
+        exit(2);
+    }
+    size_t capacity = 1 << 16;
+    fmi3Byte *bytes = malloc(capacity);
+    *size = 0;
+    size_t n;
+    while (bytes && (n = fread(bytes + *size, 1, capacity - *size, file)) > 0) {
+        *size += n;
+        if (*size == capacity) bytes = realloc(bytes, capacity *= 2);
+    }
+    if (!bytes) fail("out of memory", __LINE__);
+    fclose(file);
+    return bytes;
+}
+
+/* The default experiment's first steps with the callback reading outputs. */
+static long intermediate(const char *dir) {
+    Environment env = {NULL, NULL, 0};
+    env.csv = open_file(dir, "intermediate.csv", "wb");
+    write_header(env.csv);
+    fmi3Instance c = initialized("intermediate", &defaults, &env);
+    run_steps(c, NULL, 0, INTERMEDIATE_STEPS);
+    finish(c);
+    fclose(env.csv);
+    return env.calls;
+}
+
+/* ------------------------------------------------------------------- main */
+
+static void parse_outputs(const char *list) {
+    const char *p = list;
+    while (*p) {
+        char *end;
+        unsigned long vr = strtoul(p, &end, 10);
+        if (end == p || n_outputs == MAX_OUTPUTS) {
+            fprintf(stderr, "bad OUTPUT_VRS `%s`\n", list);
+            exit(2);
+        }
+        outputs[n_outputs++] = (fmi3ValueReference)vr;
+        p = *end == ',' ? end + 1 : end;
+    }
+    if (n_outputs == 0) {
+        fprintf(stderr, "OUTPUT_VRS is empty\n");
+        exit(2);
+    }
+}
+
+int main(int argc, char **argv) {
+    if (argc != 6) {
+        fprintf(stderr, "usage: %s LIB TOKEN OUTPUT_VRS OUT_DIR STATE_IN\n", argv[0]);
+        return 2;
+    }
+    load(argv[1]);
+    token = argv[2];
+    parse_outputs(argv[3]);
+    const char *dir = argv[4];
+
+    experiment(dir, "default.csv", &defaults);
+    static const Parameters iso_c_cs = {
+        3, {VR_VARIANT, VR_ROAD, VR_ROAD_CLASS}, {VARIANT_CS, ROAD_ISO8608, ROAD_CLASS_C}, 7};
+    experiment(dir, "iso_c_cs.csv", &iso_c_cs);
+
+    size_t size = 0;
+    fmi3Byte *state = saved_state(&size);
+    FILE *file = open_file(dir, "state.bin", "wb");
+    if (fwrite(state, 1, size, file) != size) fail("cannot write state.bin", __LINE__);
+    fclose(file);
+    continue_from(dir, "roundtrip.csv", state, size);
+    free(state);
+
+    size_t foreign_size = 0;
+    fmi3Byte *foreign = read_file(argv[5], &foreign_size);
+    continue_from(dir, "restored.csv", foreign, foreign_size);
+    free(foreign);
+
+    long calls = intermediate(dir);
+    printf("harness3: %zu outputs x %d steps, state of %zu bytes, %ld intermediate updates, results in %s\n",
+           n_outputs, STEPS, size, calls, dir);
+    return 0;
+}
