@@ -36,10 +36,6 @@ for target in x86_64-pc-windows-gnu aarch64-unknown-linux-gnu; do
         exit 1
     fi
 done
-if [[ "$(fmi-sim --version 2>&1 || true)" != *"fmi-sim 0.7.0"* ]]; then
-    echo "tests/run_all.sh needs fmi-sim 0.7.0 (an FMI 3.0 importer of the interop tests): cargo install fmi-sim --version 0.7.0 --locked" >&2
-    exit 1
-fi
 python="$(tests/python_env.sh)"
 echo "== cargo fmt --check"
 cargo fmt --all -- --check
@@ -82,7 +78,7 @@ for target in deserialize api_sequence api_sequence_fmi3; do
     fi
 done
 [ "$failed" = 0 ]
-echo "== interop (fmpy API and CLI, libcosim, ecos, fmutool -check, Rust fmi crate and fmi-sim)"
+echo "== interop (fmpy API and CLI, libcosim, ecos, fmutool -check, Rust fmi crate; fmi-sim when installed)"
 # tests/interop/test_fmi_rs.py takes the interop-fmi-rs executable that the
 # cargo test step built (its CARGO_TEST repeats that step's flags).
 "$python" -m pytest tests/interop -q
