@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Builds the command line tool (target/release/tdvass) and the FMU
-# (target/fmu/tdvass.fmu), then runs the FMU's default experiment (TDVASS on
+# Builds the command line tool (target/release/tdvass) and the FMUs
+# (target/fmu/tdvass.fmu, FMI 2.0, and target/fmu/tdvass-fmi3.fmu, FMI 3.0),
+# then runs the FMI 2.0 the FMU's default experiment (TDVASS on
 # the harmonic road, 15 s) through fmpy, printing the Table 2 TDVASS row.
 # Python: the small quick-start set (fmpy, numpy, matplotlib) in .venv.
 set -euo pipefail
@@ -9,7 +10,7 @@ cd "$root"
 python="$(tests/python_env.sh quickstart)"
 echo "== building the command line tool (target/release/tdvass)"
 cargo build --release -p tdvass-cli --bin tdvass
-echo "== building the FMU (target/fmu/tdvass.fmu)"
+echo "== building the FMUs (target/fmu/tdvass.fmu, target/fmu/tdvass-fmi3.fmu)"
 cargo run --release -p fmu-build
 echo "== the FMU's default experiment through fmpy"
 "$python" examples/default_experiment.py target/fmu/tdvass.fmu
