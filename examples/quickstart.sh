@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Builds the command line tool (target/release/tdvass) and the FMUs
 # (target/fmu/tdvass.fmu, FMI 2.0, and target/fmu/tdvass-fmi3.fmu, FMI 3.0),
-# then runs the FMI 2.0 the FMU's default experiment (TDVASS on
+# then runs the FMI 2.0 FMU's default experiment (TDVASS on
 # the harmonic road, 15 s) through fmpy, printing the Table 2 TDVASS row.
 # Python: the small quick-start set (fmpy, numpy, matplotlib) in .venv.
 set -euo pipefail
