@@ -7,20 +7,11 @@ use crate::{
     DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, FMI_VERSION, LOG_CATEGORIES,
     MODEL_IDENTIFIER, MODEL_NAME, guid,
 };
-use quick_xml::Writer;
 use quick_xml::events::{BytesDecl, BytesText, Event};
-use std::io::Cursor;
-
-type XmlWriter = Writer<Cursor<Vec<u8>>>;
-type XmlResult = std::io::Result<()>;
-
-/// One-line description of the model.
-pub const MODEL_DESCRIPTION: &str = "Quarter-car suspension with an annular vibration-absorbing structure and time-delay feedback of the tire displacement (TDVASS), with the conventional (CS) and uncontrolled absorber (PVASS) suspensions for comparison";
-
-/// Short number formatting: Rust's shortest round-trip representation.
-fn number(v: f64) -> String {
-    format!("{v}")
-}
+pub use tdvass_fmu::markup::MODEL_DESCRIPTION;
+use tdvass_fmu::markup::{
+    XmlResult, XmlWriter, finish, html_page, list, number, paragraph, table, text_element, writer,
+};
 
 fn start_text(v: &Variable) -> Option<String> {
     v.start.map(|s| match v.var_type() {
@@ -184,15 +175,9 @@ fn write_model_structure(w: &mut XmlWriter) -> XmlResult {
     Ok(())
 }
 
-fn finish(w: XmlWriter) -> String {
-    let mut text = String::from_utf8(w.into_inner().into_inner()).expect("quick-xml writes UTF-8");
-    text.push('\n');
-    text
-}
-
 /// The complete `modelDescription.xml`.
 pub fn model_description_xml() -> String {
-    let mut w = Writer::new_with_indent(Cursor::new(Vec::new()), b' ', 2);
+    let mut w = writer();
     let write = |w: &mut XmlWriter| -> XmlResult {
         w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
         let guid = guid();
@@ -256,47 +241,6 @@ pub fn model_description_xml() -> String {
 
 // ------------------------------------------------------------ documentation
 
-fn text_element(w: &mut XmlWriter, name: &str, text: &str) -> XmlResult {
-    w.create_element(name)
-        .write_text_content(BytesText::new(text))?;
-    Ok(())
-}
-
-fn paragraph(w: &mut XmlWriter, text: &str) -> XmlResult {
-    text_element(w, "p", text)
-}
-
-fn list(w: &mut XmlWriter, items: &[&str]) -> XmlResult {
-    w.create_element("ul").write_inner_content(|w| {
-        for item in items {
-            text_element(w, "li", item)?;
-        }
-        Ok(())
-    })?;
-    Ok(())
-}
-
-fn table(w: &mut XmlWriter, header: &[&str], rows: &[Vec<String>]) -> XmlResult {
-    w.create_element("table").write_inner_content(|w| {
-        w.create_element("tr").write_inner_content(|w| {
-            for h in header {
-                text_element(w, "th", h)?;
-            }
-            Ok(())
-        })?;
-        for row in rows {
-            w.create_element("tr").write_inner_content(|w| {
-                for cell in row {
-                    text_element(w, "td", cell)?;
-                }
-                Ok(())
-            })?;
-        }
-        Ok(())
-    })?;
-    Ok(())
-}
-
 fn variable_row(v: &Variable) -> Vec<String> {
     let range = v.range.describe();
     let unit = match (v.unit(), v.display_unit) {
@@ -319,30 +263,7 @@ fn variable_row(v: &Variable) -> Vec<String> {
 
 /// The complete `documentation/index.html`.
 pub fn documentation_html() -> String {
-    let mut w = Writer::new_with_indent(Cursor::new(Vec::new()), b' ', 2);
-    let write = |w: &mut XmlWriter| -> XmlResult {
-        w.write_event(Event::DocType(BytesText::from_escaped("html")))?;
-        w.create_element("html")
-            .with_attribute(("lang", "en"))
-            .write_inner_content(|w| {
-                w.create_element("head").write_inner_content(|w| {
-                    w.create_element("meta")
-                        .with_attribute(("charset", "utf-8"))
-                        .write_empty()?;
-                    text_element(w, "title", &format!("{MODEL_NAME} FMU"))?;
-                    text_element(
-                        w,
-                        "style",
-                        "body{font-family:sans-serif;max-width:70em;margin:auto;padding:1em}table{border-collapse:collapse}td,th{border:1px solid #bbb;padding:0.2em 0.5em;text-align:left;vertical-align:top}",
-                    )
-                })?;
-                w.create_element("body").write_inner_content(write_body)?;
-                Ok(())
-            })?;
-        Ok(())
-    };
-    write(&mut w).expect("writing to memory cannot fail");
-    finish(w)
+    html_page(&format!("{MODEL_NAME} FMU"), write_body)
 }
 
 fn write_body(w: &mut XmlWriter) -> XmlResult {

@@ -13,18 +13,12 @@ use crate::{
     DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, FMI_VERSION, LOG_CATEGORIES,
     MODEL_IDENTIFIER, MODEL_NAME, instantiation_token,
 };
-use quick_xml::Writer;
 use quick_xml::events::{BytesDecl, Event};
-use std::io::Cursor;
+pub use tdvass_fmu::markup::MODEL_DESCRIPTION;
+use tdvass_fmu::markup::{XmlResult, XmlWriter, finish, number, writer};
 use tdvass_fmu::variables::{
     ALL_VARIABLES, Causality, Dimension, Enumeration, Quantity, UNITS, Variable, by_name,
 };
-
-type XmlWriter = Writer<Cursor<Vec<u8>>>;
-type XmlResult = std::io::Result<()>;
-
-/// One-line description of the model.
-pub const MODEL_DESCRIPTION: &str = "Quarter-car suspension with an annular vibration-absorbing structure and time-delay feedback of the tire displacement (TDVASS), with the conventional (CS) and uncontrolled absorber (PVASS) suspensions for comparison";
 
 /// The attributes of the `CoSimulation` element after `modelIdentifier`,
 /// in the order written: the capabilities the C interface provides.
@@ -48,11 +42,6 @@ pub const CO_SIMULATION_CAPABILITIES: [(&str, &str); 14] = [
     ("hasEventMode", "false"),
     ("providesEvaluateDiscreteStates", "false"),
 ];
-
-/// Short number formatting: Rust's shortest round-trip representation.
-fn number(v: f64) -> String {
-    format!("{v}")
-}
 
 /// A value of `v` as its FMI 3.0 type writes it (integers without a
 /// fraction).
@@ -282,15 +271,9 @@ fn write_model_structure(w: &mut XmlWriter) -> XmlResult {
     Ok(())
 }
 
-fn finish(w: XmlWriter) -> String {
-    let mut text = String::from_utf8(w.into_inner().into_inner()).expect("quick-xml writes UTF-8");
-    text.push('\n');
-    text
-}
-
 /// The complete FMI 3.0 `modelDescription.xml`.
 pub fn model_description_xml() -> String {
-    let mut w = Writer::new_with_indent(Cursor::new(Vec::new()), b' ', 2);
+    let mut w = writer();
     let write = |w: &mut XmlWriter| -> XmlResult {
         w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
         let token = instantiation_token();

@@ -25,6 +25,8 @@
 //!   snapshots, partials). Every method returns `Result<_, FmiError>`.
 //! - [`phase`]: the life-cycle phase each front-end's state table checks.
 //! - [`markdown`]: the variable table as Markdown for the README.
+//! - [`markup`]: what the model descriptions and documentation pages of
+//!   every FMI version write alike (quick-xml).
 //! - [`pointers`]: instance handles, array and string arguments of the C
 //!   interfaces (the crate's only `unsafe`, shared by every FMI version).
 //!
@@ -38,6 +40,7 @@
 
 pub mod limits;
 pub mod markdown;
+pub mod markup;
 pub mod outputs;
 pub mod phase;
 pub mod pointers;

@@ -1,60 +1,16 @@
 //! `documentation/index.html` of the FMI 3.0 FMU, generated from the one
 //! variable table and the declarations of the model description.
 
-use super::{
-    CO_SIMULATION_CAPABILITIES, MODEL_DESCRIPTION, XmlResult, XmlWriter, enumerations, finish,
-    value_text,
-};
+use super::{CO_SIMULATION_CAPABILITIES, enumerations, value_text};
 use crate::types::{Fmi3Type, fmi3_type};
 use crate::{
     DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, LOG_CATEGORIES, MODEL_IDENTIFIER,
     MODEL_NAME, instantiation_token,
 };
-use quick_xml::Writer;
-use quick_xml::events::{BytesText, Event};
-use std::io::Cursor;
+use tdvass_fmu::markup::{
+    MODEL_DESCRIPTION, XmlResult, XmlWriter, html_page, list, paragraph, table, text_element,
+};
 use tdvass_fmu::variables::{ALL_VARIABLES, Causality, Dimension, Variable};
-
-fn text_element(w: &mut XmlWriter, name: &str, text: &str) -> XmlResult {
-    w.create_element(name)
-        .write_text_content(BytesText::new(text))?;
-    Ok(())
-}
-
-fn paragraph(w: &mut XmlWriter, text: &str) -> XmlResult {
-    text_element(w, "p", text)
-}
-
-fn list(w: &mut XmlWriter, items: &[&str]) -> XmlResult {
-    w.create_element("ul").write_inner_content(|w| {
-        for item in items {
-            text_element(w, "li", item)?;
-        }
-        Ok(())
-    })?;
-    Ok(())
-}
-
-fn table(w: &mut XmlWriter, header: &[&str], rows: &[Vec<String>]) -> XmlResult {
-    w.create_element("table").write_inner_content(|w| {
-        w.create_element("tr").write_inner_content(|w| {
-            for h in header {
-                text_element(w, "th", h)?;
-            }
-            Ok(())
-        })?;
-        for row in rows {
-            w.create_element("tr").write_inner_content(|w| {
-                for cell in row {
-                    text_element(w, "td", cell)?;
-                }
-                Ok(())
-            })?;
-        }
-        Ok(())
-    })?;
-    Ok(())
-}
 
 /// The FMI 3.0 type of `v` in words: `Float64`, `Enumeration Variant`,
 /// `Float64 [root_count][2]`.
@@ -113,30 +69,7 @@ fn variable_row(v: &Variable) -> Vec<String> {
 
 /// The complete `documentation/index.html` of the FMI 3.0 FMU.
 pub fn documentation_html() -> String {
-    let mut w = Writer::new_with_indent(Cursor::new(Vec::new()), b' ', 2);
-    let write = |w: &mut XmlWriter| -> XmlResult {
-        w.write_event(Event::DocType(BytesText::from_escaped("html")))?;
-        w.create_element("html")
-            .with_attribute(("lang", "en"))
-            .write_inner_content(|w| {
-                w.create_element("head").write_inner_content(|w| {
-                    w.create_element("meta")
-                        .with_attribute(("charset", "utf-8"))
-                        .write_empty()?;
-                    text_element(w, "title", &format!("{MODEL_NAME} FMI 3.0 FMU"))?;
-                    text_element(
-                        w,
-                        "style",
-                        "body{font-family:sans-serif;max-width:70em;margin:auto;padding:1em}table{border-collapse:collapse}td,th{border:1px solid #bbb;padding:0.2em 0.5em;text-align:left;vertical-align:top}",
-                    )
-                })?;
-                w.create_element("body").write_inner_content(write_body)?;
-                Ok(())
-            })?;
-        Ok(())
-    };
-    write(&mut w).expect("writing to memory cannot fail");
-    finish(w)
+    html_page(&format!("{MODEL_NAME} FMI 3.0 FMU"), write_body)
 }
 
 fn write_body(w: &mut XmlWriter) -> XmlResult {
