@@ -112,12 +112,11 @@ def instantiation_token() -> str:
 
 
 def exported_functions() -> list[str]:
-    """Every fmi3 function ffi.rs exports (plain functions and the two
-    macros that generate the unused getter/setter types and the refused
-    functions)."""
+    """Every fmi3 function ffi.rs exports (plain functions and the macros
+    that generate the getters and setters and the refused functions)."""
     source = FFI_RS.read_text()
     names = re.findall(r'pub (?:unsafe )?extern "C" fn (fmi3\w+)', source)
-    for getter, setter in re.findall(r"unused_type!\(\s*(fmi3\w+),\s*(fmi3\w+)", source):
+    for getter, setter in re.findall(r"(?:unused_type|accessors)!\(\s*(fmi3\w+),\s*(fmi3\w+)", source):
         names += [getter, setter]
     names += re.findall(r"^refused!\((fmi3\w+)", source, re.M)
     return sorted(names)

@@ -431,10 +431,10 @@ fn setter<T>(
     })
 }
 
-/// Getters and setters of the types no variable has: only an empty call
-/// succeeds; every value reference is refused, naming its type.
-macro_rules! unused_type {
-    ($get:ident, $set:ident, $t:ty, $vt:expr) => {
+/// `fmi3Get<Type>` and `fmi3Set<Type>` of one value type: the arrays go to
+/// `$get_op` / `$set_op` through [`getter`] / [`setter`].
+macro_rules! accessors {
+    ($get:ident, $set:ident, $t:ty, $vt:expr, $get_op:expr, $set_op:expr) => {
         #[unsafe(no_mangle)]
         pub unsafe extern "C" fn $get(
             instance: fmi3Instance,
@@ -450,7 +450,7 @@ macro_rules! unused_type {
                 nValueReferences,
                 values,
                 nValues,
-                |i, vrs, _| i.no_variable_of(vrs, $vt),
+                $get_op,
             )
         }
 
@@ -469,9 +469,24 @@ macro_rules! unused_type {
                 nValueReferences,
                 values,
                 nValues,
-                |i, vrs, _| i.no_variable_of(vrs, $vt),
+                $set_op,
             )
         }
+    };
+}
+
+/// Getters and setters of the types no variable has: only an empty call
+/// succeeds; every value reference is refused, naming its type.
+macro_rules! unused_type {
+    ($get:ident, $set:ident, $t:ty, $vt:expr) => {
+        accessors!(
+            $get,
+            $set,
+            $t,
+            $vt,
+            |i: &mut Instance, vrs: &[u32], _: &mut [$t]| i.no_variable_of(vrs, $vt),
+            |i: &mut Instance, vrs: &[u32], _: &[$t]| i.no_variable_of(vrs, $vt)
+        );
     };
 }
 
@@ -488,202 +503,53 @@ unused_type!(fmi3GetUInt16, fmi3SetUInt16, fmi3UInt16, ValueType::UInt16);
 unused_type!(fmi3GetUInt32, fmi3SetUInt32, fmi3UInt32, ValueType::UInt32);
 unused_type!(fmi3GetString, fmi3SetString, fmi3String, ValueType::String);
 
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3GetFloat64(
-    instance: fmi3Instance,
-    valueReferences: *const fmi3ValueReference,
-    nValueReferences: size_t,
-    values: *mut fmi3Float64,
-    nValues: size_t,
-) -> fmi3Status {
-    getter(
-        instance,
-        ValueType::Float64,
-        valueReferences,
-        nValueReferences,
-        values,
-        nValues,
-        Instance::get_float64,
-    )
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3SetFloat64(
-    instance: fmi3Instance,
-    valueReferences: *const fmi3ValueReference,
-    nValueReferences: size_t,
-    values: *const fmi3Float64,
-    nValues: size_t,
-) -> fmi3Status {
-    setter(
-        instance,
-        ValueType::Float64,
-        valueReferences,
-        nValueReferences,
-        values,
-        nValues,
-        Instance::set_float64,
-    )
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3GetInt32(
-    instance: fmi3Instance,
-    valueReferences: *const fmi3ValueReference,
-    nValueReferences: size_t,
-    values: *mut fmi3Int32,
-    nValues: size_t,
-) -> fmi3Status {
-    getter(
-        instance,
-        ValueType::Int32,
-        valueReferences,
-        nValueReferences,
-        values,
-        nValues,
-        Instance::get_int32,
-    )
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3SetInt32(
-    instance: fmi3Instance,
-    valueReferences: *const fmi3ValueReference,
-    nValueReferences: size_t,
-    values: *const fmi3Int32,
-    nValues: size_t,
-) -> fmi3Status {
-    setter(
-        instance,
-        ValueType::Int32,
-        valueReferences,
-        nValueReferences,
-        values,
-        nValues,
-        Instance::set_int32,
-    )
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3GetInt64(
-    instance: fmi3Instance,
-    valueReferences: *const fmi3ValueReference,
-    nValueReferences: size_t,
-    values: *mut fmi3Int64,
-    nValues: size_t,
-) -> fmi3Status {
-    getter(
-        instance,
-        ValueType::Int64,
-        valueReferences,
-        nValueReferences,
-        values,
-        nValues,
-        Instance::get_int64,
-    )
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3SetInt64(
-    instance: fmi3Instance,
-    valueReferences: *const fmi3ValueReference,
-    nValueReferences: size_t,
-    values: *const fmi3Int64,
-    nValues: size_t,
-) -> fmi3Status {
-    setter(
-        instance,
-        ValueType::Int64,
-        valueReferences,
-        nValueReferences,
-        values,
-        nValues,
-        Instance::set_int64,
-    )
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3GetUInt64(
-    instance: fmi3Instance,
-    valueReferences: *const fmi3ValueReference,
-    nValueReferences: size_t,
-    values: *mut fmi3UInt64,
-    nValues: size_t,
-) -> fmi3Status {
-    getter(
-        instance,
-        ValueType::UInt64,
-        valueReferences,
-        nValueReferences,
-        values,
-        nValues,
-        Instance::get_uint64,
-    )
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3SetUInt64(
-    instance: fmi3Instance,
-    valueReferences: *const fmi3ValueReference,
-    nValueReferences: size_t,
-    values: *const fmi3UInt64,
-    nValues: size_t,
-) -> fmi3Status {
-    setter(
-        instance,
-        ValueType::UInt64,
-        valueReferences,
-        nValueReferences,
-        values,
-        nValues,
-        Instance::set_uint64,
-    )
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3GetBoolean(
-    instance: fmi3Instance,
-    valueReferences: *const fmi3ValueReference,
-    nValueReferences: size_t,
-    values: *mut fmi3Boolean,
-    nValues: size_t,
-) -> fmi3Status {
-    getter(
-        instance,
-        ValueType::Boolean,
-        valueReferences,
-        nValueReferences,
-        values,
-        nValues,
-        |i, vrs, out| {
-            let mut flags = vec![false; out.len()];
-            let s = i.get_boolean(vrs, &mut flags)?;
-            for (o, f) in out.iter_mut().zip(flags) {
-                *o = if f { FMI3_TRUE } else { FMI3_FALSE };
-            }
-            Ok(s)
-        },
-    )
-}
-
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi3SetBoolean(
-    instance: fmi3Instance,
-    valueReferences: *const fmi3ValueReference,
-    nValueReferences: size_t,
-    values: *const fmi3Boolean,
-    nValues: size_t,
-) -> fmi3Status {
-    setter(
-        instance,
-        ValueType::Boolean,
-        valueReferences,
-        nValueReferences,
-        values,
-        nValues,
-        |i, vrs, values| i.set_boolean(vrs, &bools_from(values)),
-    )
-}
+accessors!(
+    fmi3GetFloat64,
+    fmi3SetFloat64,
+    fmi3Float64,
+    ValueType::Float64,
+    Instance::get_float64,
+    Instance::set_float64
+);
+accessors!(
+    fmi3GetInt32,
+    fmi3SetInt32,
+    fmi3Int32,
+    ValueType::Int32,
+    Instance::get_int32,
+    Instance::set_int32
+);
+accessors!(
+    fmi3GetInt64,
+    fmi3SetInt64,
+    fmi3Int64,
+    ValueType::Int64,
+    Instance::get_int64,
+    Instance::set_int64
+);
+accessors!(
+    fmi3GetUInt64,
+    fmi3SetUInt64,
+    fmi3UInt64,
+    ValueType::UInt64,
+    Instance::get_uint64,
+    Instance::set_uint64
+);
+accessors!(
+    fmi3GetBoolean,
+    fmi3SetBoolean,
+    fmi3Boolean,
+    ValueType::Boolean,
+    |i: &mut Instance, vrs: &[u32], out: &mut [fmi3Boolean]| {
+        let mut flags = vec![false; out.len()];
+        let s = i.get_boolean(vrs, &mut flags)?;
+        for (o, f) in out.iter_mut().zip(flags) {
+            *o = if f { FMI3_TRUE } else { FMI3_FALSE };
+        }
+        Ok(s)
+    },
+    |i: &mut Instance, vrs: &[u32], values: &[fmi3Boolean]| i.set_boolean(vrs, &bools_from(values))
+);
 
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3GetBinary(
