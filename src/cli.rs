@@ -342,13 +342,13 @@ fn simulate_command(a: SimulateArgs) -> Result<String> {
     };
     let road = config.road.clone();
     let mut sim = Simulator::new(config)?;
-    if duration / a.run.max_internal_step > MAX_SIMULATE_STEPS {
+    if duration / sim.grid().step > MAX_SIMULATE_STEPS {
         return Err(Error::InvalidParameter {
             name: "duration",
             value: duration,
             reason: "the run would need more than the limit of 1e10 internal steps \
-                     (duration / max_internal_step; 1e6 s at the default 1e-4 s step, \
-                     minutes of wall time): shorten it or raise --max-internal-step",
+                     (duration / internal step; minutes of wall time or more): shorten \
+                     it, loosen --tolerance or raise --max-internal-step",
         });
     }
     a.run.warn_past_road_end(&road);
@@ -438,6 +438,7 @@ fn simulate_command(a: SimulateArgs) -> Result<String> {
             value[name] = parameter.into();
         }
         a.run.record(&mut value)?;
+        value["internal_step"] = sim.grid().step.into();
         return Ok(value.to_string());
     }
     Ok(format!(

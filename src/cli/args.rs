@@ -9,7 +9,7 @@ use tdvass::error::{Error, Result};
 use tdvass::metrics::Weights;
 use tdvass::model::{Params, State, Variant};
 use tdvass::road::{RandomRoad, RoadClass, RoadSpec};
-use tdvass::solver::{DEFAULT_MAX_INTERNAL_STEP, Metrics, SimulationConfig};
+use tdvass::solver::{DEFAULT_TOLERANCE, Metrics, SimulationConfig};
 
 /// Accepted `--road` values (case-insensitive), for error messages.
 pub(super) const ROAD_NAMES: &str = "harmonic, iso8608 (alias iso), paper or file:PATH (any case)";
@@ -161,8 +161,13 @@ pub(super) struct RunArgs {
     /// Paper-compatible road: noise hold interval D (s).
     #[arg(long, default_value_t = 0.1)]
     pub(super) road_sample_interval: f64,
-    /// Upper bound of the internal integration step (s).
-    #[arg(long, default_value_t = DEFAULT_MAX_INTERNAL_STEP)]
+    /// Relative accuracy of every reported metric (1e-12 to 0.1): it sets
+    /// the internal step.
+    #[arg(long, default_value_t = DEFAULT_TOLERANCE)]
+    pub(super) tolerance: f64,
+    /// Optional upper bound of the internal integration step (s; 0 = none,
+    /// the tolerance alone sets the step).
+    #[arg(long, default_value_t = 0.0)]
     pub(super) max_internal_step: f64,
     /// Weight z1 of RMS(BA) in J.
     #[arg(long, default_value_t = 0.4)]
@@ -219,6 +224,7 @@ impl RunArgs {
             params,
             variant,
             road: self.road_spec()?,
+            tolerance: self.tolerance,
             max_internal_step: self.max_internal_step,
             start_time: 0.0,
             initial_state: State::zeros(),
@@ -257,6 +263,7 @@ impl RunArgs {
         value["road_cutoff_frequency"] = self.road_cutoff_frequency.into();
         value["road_seed"] = self.road_seed.into();
         value["road_sample_interval"] = self.road_sample_interval.into();
+        value["tolerance"] = self.tolerance.into();
         value["max_internal_step"] = self.max_internal_step.into();
         value["w_ba"] = self.w_ba.into();
         value["w_sdd"] = self.w_sdd.into();

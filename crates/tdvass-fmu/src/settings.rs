@@ -7,7 +7,7 @@ use crate::variables::{ALL_VARIABLES, Access};
 use tdvass::metrics::Weights;
 use tdvass::model::{Params, State, Variant};
 use tdvass::road::{RandomRoad, RoadClass, RoadSpec, RoadType};
-use tdvass::solver::{Metrics, SimulationConfig};
+use tdvass::solver::{DEFAULT_TOLERANCE, Metrics, SimulationConfig};
 
 /// Every setting of an instance: the parameters and the input. Start values
 /// come from [`ALL_VARIABLES`] ([`Settings::default`]).
@@ -27,6 +27,10 @@ pub struct Settings {
     pub road_seed: i32,
     pub road_sample_interval: f64,
     pub max_internal_step: f64,
+    /// The relative tolerance of the experiment: the master's, when it
+    /// defines one, else the DefaultExperiment's ([`DEFAULT_TOLERANCE`]).
+    /// No variable: it comes from `the experiment set-up`.
+    pub tolerance: f64,
     /// The weights of J (Eq. (6)).
     pub weights: Weights,
     /// `road = 0`: 0 holds `x_g` over a communication step, 1 extrapolates
@@ -70,6 +74,7 @@ impl Settings {
             road_seed: 0,
             road_sample_interval: 0.0,
             max_internal_step: 0.0,
+            tolerance: DEFAULT_TOLERANCE,
             weights: Weights {
                 body_acceleration: 0.0,
                 suspension_deflection: 0.0,
@@ -160,6 +165,7 @@ impl Settings {
             params: self.params(),
             variant: self.variant()?,
             road: self.road_spec()?,
+            tolerance: self.tolerance,
             max_internal_step: self.max_internal_step,
             start_time,
             initial_state: State::from(self.initial_state),

@@ -211,8 +211,10 @@ impl Slave {
 
     // ------------------------------------------------------------- life cycle
 
-    /// `SetupExperiment`. The tolerance is ignored: the integration is
-    /// exact up to rounding for the internal step `max_internal_step`.
+    /// `SetupExperiment`. A defined tolerance becomes the relative
+    /// accuracy of the run (it sets the internal step; see
+    /// `tdvass::solver::accuracy`); an undefined one means the
+    /// DefaultExperiment's, [`tdvass::solver::DEFAULT_TOLERANCE`].
     pub fn setup_experiment(
         &mut self,
         tolerance: Option<f64>,
@@ -231,12 +233,9 @@ impl Slave {
                 "invalid stopTime {stop}: must be finite and >= startTime {start_time}"
             )));
         }
-        if let Some(tol) = tolerance {
-            self.event(format!(
-                "{}: tolerance {tol} ignored (accuracy is set by max_internal_step)",
-                self.call("SetupExperiment")
-            ));
-        }
+        let tolerance = tolerance.unwrap_or(tdvass::solver::DEFAULT_TOLERANCE);
+        tdvass::solver::accuracy::check_tolerance(tolerance)?;
+        self.state.settings.tolerance = tolerance;
         self.state.start_time = start_time;
         self.state.stop_time = stop_time;
         self.state.last_successful_time = start_time;
@@ -262,9 +261,10 @@ impl Slave {
         } else {
             0.0
         };
-        let step = DelayGrid::new(tau, config.max_internal_step)?.step;
+        let choice = Simulator::choose_step(&config)?;
+        let step = DelayGrid::new(tau, choice.step_bound)?.step;
         limits::check_time_resolution("startTime", m.start_time, step)?;
-        let mut sim = Simulator::new(config)?;
+        let mut sim = Simulator::with_choice(config, choice)?;
         if m.settings.road_is_input() {
             sim.set_road_input(m.settings.x_g, m.input_slope)?;
         }
@@ -292,10 +292,11 @@ impl Slave {
         self.state.terminate_requested = false;
         let s = &self.state.settings;
         self.event(format!(
-            "{}: variant {}, road {}, internal step {} s ({}), start {} s, stop {}",
+            "{}: variant {}, road {}, tolerance {}, internal step {} s ({}), start {} s, stop {}",
             self.call("ExitInitializationMode"),
             s.variant,
             s.road,
+            s.tolerance,
             grid.step,
             if grid.delay_inside_step() {
                 "delay inside the step".to_string()

@@ -3,7 +3,7 @@
 //! ```text
 //! offset  size  content
 //! 0       8     magic "TDVASSFS"
-//! 8       4     format version (u32 LE), currently 2
+//! 8       4     format version (u32 LE), currently 4
 //! 12      4     GUID length n (u32 LE)
 //! 16      n     GUID of the FMU that wrote the state (ASCII)
 //! 16+n    8     payload length (u64 LE)
@@ -14,7 +14,7 @@
 //! The payload is the FMU-level state ([`SlaveState`]): the phase, every
 //! setting (by value reference, so the layout follows the variable table),
 //! input slope and its origin, the last two input values (for
-//! `input_extrapolation`), the hold-warning and contact-loss flags, start and stop time, last successful time, the terminate
+//! `input_extrapolation`), the hold-warning and contact-loss flags, start and stop time, the tolerance, last successful time, the terminate
 //! flag, then [`Simulator::to_bytes`] (time, solver state, the delay
 //! history, the road generator, the RMS accumulators, the configuration).
 //! All numbers are little-endian; floats are stored as their bit patterns,
@@ -40,10 +40,11 @@ pub const MAGIC: &[u8; 8] = b"TDVASSFS";
 /// version 3 the FMI 3.0 settings (`intermediate_update_interval`,
 /// `root_count`) and the simulator's own versioned bytes with the
 /// comfort, road-holding and working-space accumulators; older states are
-/// refused. Both FMI versions write the
+/// refused; version 4 the experiment's tolerance (after the stop time) and
+/// the simulator's step bound. Both FMI versions write the
 /// same format; the header's token (the FMI 2.0 GUID or the FMI 3.0
 /// instantiation token) keeps a state of one from being read by the other.
-pub const FORMAT_VERSION: u32 = 3;
+pub const FORMAT_VERSION: u32 = 4;
 /// Longest GUID accepted in a header.
 const MAX_GUID_LEN: usize = 64;
 /// Most internal steps between the start and a restored state (2^52: node
@@ -168,6 +169,7 @@ fn encode_payload(model: &SlaveState) -> Vec<u8> {
     w.f64(model.start_time);
     w.u8(model.stop_time.is_some() as u8);
     w.f64(model.stop_time.unwrap_or(0.0));
+    w.f64(model.settings.tolerance);
     w.f64(model.last_successful_time);
     w.u8(model.terminate_requested as u8);
     match &model.sim {
@@ -244,7 +246,7 @@ fn decode_payload(bytes: &[u8]) -> Result<SlaveState, FmiError> {
     let phase = Phase::from_code(code)
         .filter(|s| *s != Phase::Fatal)
         .ok_or_else(|| invalid(format_args!("phase code {code}")))?;
-    let settings = decode_settings(&mut r)?;
+    let mut settings = decode_settings(&mut r)?;
     let input_slope = r.finite("the input slope")?;
     let input_pending = r.flag("input pending")?;
     let input_slope_given = r.flag("input slope given")?;
@@ -271,6 +273,9 @@ fn decode_payload(bytes: &[u8]) -> Result<SlaveState, FmiError> {
     } else {
         None
     };
+    let tolerance = r.f64("the tolerance")?;
+    tdvass::solver::accuracy::check_tolerance(tolerance).map_err(invalid)?;
+    settings.tolerance = tolerance;
     let last_successful_time = r.finite("the last successful time")?;
     let terminate_requested = r.flag("terminate requested")?;
     let mut sim = if r.flag("simulator present")? {

@@ -862,10 +862,10 @@ const TABLE: &[Variable] = &[
         20,
         Fixed,
         Q::Time,
-        1e-4,
-        Range::Positive,
+        0.0,
+        Range::AtLeast(0.0),
         real!(max_internal_step),
-        "Upper bound of the internal integration step (> 0); the step divides tau exactly when tau is longer",
+        "Optional upper bound of the internal integration step (0 = none); the step itself follows from the tolerance (the master's, else the DefaultExperiment's 1e-6, relative, of every output metric) and divides tau exactly when tau is longer",
     ),
     parameter(
         "w_ba",

@@ -6,13 +6,13 @@
 #![allow(unsafe_code)]
 
 use super::filter::{FilterGridStep, filter_combine};
-use super::holding::{Holding, check_step, margin};
+use super::holding::{Holding, check_step, deflection, margin};
 use super::operators::{GridStep, add6, combine2, combine4, combine6};
 use super::{DIVERGENCE_BOUNDS, Simulator};
 use crate::comfort::WK_STATES;
 use crate::error::Result;
 use crate::metrics::RunningRms;
-use crate::model::{V_T, X_S, X_T};
+use crate::model::{V_T, X_T};
 
 /// Whether every state component is within its divergence bound (false
 /// for NaN), with one branch for the whole state.
@@ -179,9 +179,8 @@ pub(super) fn segment<
     } = *hot;
     let filter = if FILTER { op.filter.as_ref() } else { None };
     let contact = op.contact;
-    // In a register: the largest |SDD| of the nodes.
-    let mut max_deflection = holding.max_deflection;
     let mut edge = margin(contact.limit, &x, road.displacement(), road.rate(op));
+    let mut bend = deflection(&x);
     let mut diverged = None;
     // Node k, where the segment starts, was counted in the RMS sums already;
     // each later node is counted in the step that leaves it.
@@ -243,8 +242,10 @@ pub(super) fn segment<
             if let Some(loss) = check_step(contact, k, edge, next_edge) {
                 holding.add_step(loss);
             }
-            max_deflection = max_deflection.max((x_next[X_S] - x_next[X_T]).abs());
+            let next_bend = deflection(&x_next);
+            holding.add_deflection(contact.step, bend, next_bend);
             edge = next_edge;
+            bend = next_bend;
         }
         // SAFETY: slot < len, as above.
         unsafe { *history.get_unchecked_mut(slot) = [x_next[X_T], x_next[V_T]] };
@@ -252,7 +253,6 @@ pub(super) fn segment<
         slot = next_slot;
         k += 1;
     }
-    holding.max_deflection = max_deflection;
     *hot = HotState {
         x,
         road,

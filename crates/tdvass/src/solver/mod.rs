@@ -45,6 +45,7 @@
 //! `persist` (the byte form), `expm` (the 2^N exponential); this file holds
 //! the configuration, the `Simulator` and its general step.
 
+pub mod accuracy;
 pub mod expm;
 mod filter;
 mod grid;
@@ -72,8 +73,7 @@ pub use persist::STATE_FORMAT_VERSION;
 use std::collections::HashMap;
 use time_average::{INTEGRALS, SquareIntegral};
 
-/// Default upper bound of the internal step (s).
-pub const DEFAULT_MAX_INTERNAL_STEP: f64 = 1e-4;
+pub use accuracy::{DEFAULT_TOLERANCE, StepChoice};
 /// Most grid nodes of delay history kept (8 M nodes, 64 MiB); a delay
 /// needing more is refused.
 pub const MAX_HISTORY_NODES: u64 = 1 << 23;
@@ -123,7 +123,11 @@ pub struct SimulationConfig {
     pub variant: Variant,
     /// The road.
     pub road: RoadSpec,
-    /// Upper bound of the internal step (s).
+    /// Relative accuracy of every reported metric: it sets the internal
+    /// step (see [`accuracy`]; [`DEFAULT_TOLERANCE`] by default).
+    pub tolerance: f64,
+    /// Optional upper bound of the internal step (s); 0 = none, the
+    /// tolerance alone sets the step.
     pub max_internal_step: f64,
     /// Start time t_0 (s).
     pub start_time: f64,
@@ -199,7 +203,8 @@ impl Default for SimulationConfig {
             params: Params::default(),
             variant: Variant::Tdvass,
             road: RoadSpec::paper_harmonic(),
-            max_internal_step: DEFAULT_MAX_INTERNAL_STEP,
+            tolerance: DEFAULT_TOLERANCE,
+            max_internal_step: 0.0,
             start_time: 0.0,
             initial_state: State::zeros(),
             weights: Weights::default(),
@@ -256,6 +261,8 @@ pub struct Simulator {
     holding: Holding,
     /// The dynamic tire load at the start (N).
     start_load: f64,
+    /// How the internal step came from the tolerance.
+    step_choice: StepChoice,
 }
 
 impl Simulator {
@@ -267,10 +274,53 @@ impl Simulator {
 
     /// Validates the configuration and places the system at its initial
     /// state. Besides each value and the numerical limits of
-    /// [`crate::limits::check_config`], it checks that the internal step
-    /// `h` resolves times near the start: `|start_time| <= 2^42 h`
-    /// ([`Self::MAX_START_TIME_IN_STEPS`]).
+    /// [`crate::limits::check_config`], it checks the tolerance and
+    /// chooses the internal step from it ([`accuracy::choose_step`]), and
+    /// checks that the internal step `h` resolves times near the start:
+    /// `|start_time| <= 2^42 h` ([`Self::MAX_START_TIME_IN_STEPS`]).
     pub fn new(config: SimulationConfig) -> Result<Simulator> {
+        let choice = Self::choose_step(&config)?;
+        Self::with_choice(config, choice)
+    }
+
+    /// Checks `config` as [`Self::new`] does and chooses its internal step
+    /// from the tolerance ([`accuracy::choose_step`]).
+    pub fn choose_step(config: &SimulationConfig) -> Result<StepChoice> {
+        let plant = Self::validate(config)?;
+        accuracy::choose_step(&plant, config)
+    }
+
+    /// [`Self::new`] with the step already chosen by [`Self::choose_step`]
+    /// for the same configuration.
+    pub fn with_choice(config: SimulationConfig, choice: StepChoice) -> Result<Simulator> {
+        let mut sim = Self::with_step_bound(config, choice.step_bound)?;
+        sim.step_choice = choice;
+        Ok(sim)
+    }
+
+    /// As [`Self::new`], with the internal step bound given (a restored
+    /// state keeps the step it was saved with).
+    pub(crate) fn with_step_bound(config: SimulationConfig, step_bound: f64) -> Result<Simulator> {
+        let plant = Self::validate(&config)?;
+        accuracy::check_tolerance(config.tolerance)?;
+        accuracy::check_max_internal_step(config.max_internal_step)?;
+        let grid = DelayGrid::new(Self::resolved_delay(&config), step_bound)?;
+        let mut sim = Self::with_grid(config, plant, grid)?;
+        sim.step_choice.step_bound = step_bound;
+        Ok(sim)
+    }
+
+    /// The delay the grid resolves: tau with the controller, else 0.
+    fn resolved_delay(config: &SimulationConfig) -> f64 {
+        if config.variant.has_control() {
+            config.params.tau
+        } else {
+            0.0
+        }
+    }
+
+    /// The plant of a configuration whose every value is checked.
+    fn validate(config: &SimulationConfig) -> Result<Plant> {
         let plant = Plant::new(config.params, config.variant)?;
         if !config.start_time.is_finite() {
             return Err(Error::InvalidTime {
@@ -309,17 +359,20 @@ impl Simulator {
             &config.initial_state,
             &config.weights,
         )?;
-        let tau = if config.variant.has_control() {
-            config.params.tau
-        } else {
-            0.0
-        };
-        let grid = DelayGrid::new(tau, config.max_internal_step)?;
+        Ok(plant)
+    }
+
+    /// The simulator of a checked configuration on the given grid.
+    pub(crate) fn with_grid(
+        config: SimulationConfig,
+        plant: Plant,
+        grid: DelayGrid,
+    ) -> Result<Simulator> {
         if config.start_time.abs() > grid.step * Self::MAX_START_TIME_IN_STEPS {
             return Err(Error::InvalidTime {
                 name: "start_time",
                 value: config.start_time,
-                reason: "|start_time| must be at most 2^42 internal steps (max_internal_step, or less to divide tau) so that node times resolve the step",
+                reason: "|start_time| must be at most 2^42 internal steps (the step the tolerance sets, max_internal_step, or less to divide tau) so that node times resolve the step",
             });
         }
         let road = Road::new(&config.road, config.start_time)?;
@@ -356,6 +409,12 @@ impl Simulator {
             weighted: [0.0; 2],
             holding: Holding::new(0.0, 1.0, start_time),
             start_load: 0.0,
+            step_choice: StepChoice {
+                step_bound: grid.step,
+                model_step: f64::NAN,
+                probe_error: f64::NAN,
+                probe_rounds: 0,
+            },
             config,
         };
         let piece = sim.piece_from(start_time);
@@ -456,6 +515,12 @@ impl Simulator {
     /// The internal grid (step and delay in steps).
     pub fn grid(&self) -> DelayGrid {
         self.grid
+    }
+
+    /// How the internal step came from the tolerance (the model's step,
+    /// the probe's estimate; see [`accuracy`]).
+    pub fn step_choice(&self) -> StepChoice {
+        self.step_choice
     }
 
     /// Current time (s).
@@ -879,6 +944,20 @@ impl Simulator {
 /// Simulates `config` from its start for `duration` seconds.
 pub fn simulate(config: SimulationConfig, duration: f64) -> Result<RunSummary> {
     Simulator::new(config)?.run_for(duration)
+}
+
+#[cfg(test)]
+impl SimulationConfig {
+    /// This configuration at the fixed internal step of 1e-4 s that some
+    /// unit tests count in (the tolerance at its loosest, so the bound sets
+    /// the step).
+    pub(crate) fn at_fixed_step(self) -> SimulationConfig {
+        SimulationConfig {
+            tolerance: accuracy::MAX_TOLERANCE,
+            max_internal_step: 1e-4,
+            ..self
+        }
+    }
 }
 
 #[cfg(test)]

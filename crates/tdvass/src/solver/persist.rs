@@ -10,7 +10,7 @@
 
 use super::holding::Holding;
 use super::time_average::{INTEGRALS, WEIGHTED_FOURTH, WEIGHTED_SQUARE};
-use super::{Metrics, SimulationConfig, Simulator};
+use super::{Metrics, SimulationConfig, Simulator, accuracy};
 use crate::bytes::{ByteReader, ByteWriter};
 use crate::error::{Error, Result};
 use crate::metrics::{RunningRms, Weights};
@@ -22,8 +22,10 @@ use std::sync::Arc;
 /// first u64), and the only one read. Version 2 added the metrics level, the
 /// W_k filter state, the integrals of a_w² and a_w⁴, and the road-holding
 /// and working-space accumulators; the bytes of version 1 had no version
-/// word (they begin with the body mass) and are refused.
-pub const STATE_FORMAT_VERSION: u64 = 2;
+/// word (they begin with the body mass) and are refused. Version 3 added
+/// the tolerance and the internal step bound it gave (a restored simulator
+/// keeps its step without probing again).
+pub const STATE_FORMAT_VERSION: u64 = 3;
 
 fn write_random_road(w: &mut ByteWriter, r: &RandomRoad) {
     w.u64(r.class.code() as u64);
@@ -69,6 +71,7 @@ fn write_config(w: &mut ByteWriter, c: &SimulationConfig) {
             w.f64s(&flat);
         }
     }
+    w.f64(c.tolerance);
     w.f64(c.max_internal_step);
     w.f64(c.start_time);
     c.initial_state.iter().for_each(|&v| w.f64(v));
@@ -118,6 +121,7 @@ fn read_config(r: &mut ByteReader) -> Result<SimulationConfig> {
         }
         None => return Err(Error::InvalidState(format!("unknown road kind {code}"))),
     };
+    let tolerance = r.f64()?;
     let max_internal_step = r.f64()?;
     let start_time = r.f64()?;
     let mut initial_state = State::zeros();
@@ -135,6 +139,7 @@ fn read_config(r: &mut ByteReader) -> Result<SimulationConfig> {
         params,
         variant,
         road,
+        tolerance,
         max_internal_step,
         start_time,
         initial_state,
@@ -149,6 +154,7 @@ impl Simulator {
         let mut w = ByteWriter::default();
         w.u64(STATE_FORMAT_VERSION);
         write_config(&mut w, &self.config);
+        w.f64(self.step_choice.step_bound);
         w.u64(self.grid_index);
         w.f64(self.committed_time);
         self.committed_state.iter().for_each(|&v| w.f64(v));
@@ -227,7 +233,19 @@ impl Simulator {
             )));
         }
         let config = read_config(&mut r)?;
-        let mut sim = Simulator::new(config)?;
+        let step_bound = r.f64()?;
+        let floor = if config.max_internal_step > 0.0 {
+            accuracy::SMALLEST_STEP.min(config.max_internal_step)
+        } else {
+            accuracy::SMALLEST_STEP
+        };
+        if !(step_bound >= floor && step_bound <= accuracy::LARGEST_STEP) {
+            return Err(Error::InvalidState(format!(
+                "internal step bound {step_bound} s outside [{floor}, {}] s",
+                accuracy::LARGEST_STEP
+            )));
+        }
+        let mut sim = Simulator::with_step_bound(config, step_bound)?;
         sim.grid_index = r.u64()?;
         sim.committed_time = r.f64()?;
         for v in sim.committed_state.iter_mut() {
@@ -490,6 +508,7 @@ mod tests {
         let mut w = ByteWriter::default();
         w.u64(STATE_FORMAT_VERSION);
         write_config(&mut w, &sim.config);
+        w.f64(sim.step_choice.step_bound);
         w.bytes.len()
     }
 
@@ -521,7 +540,7 @@ mod tests {
 
     /// A simulator at 0.0623 s on the harmonic road: grid node 623.
     fn running() -> Simulator {
-        let mut sim = Simulator::new(SimulationConfig::default()).unwrap();
+        let mut sim = Simulator::new(SimulationConfig::default().at_fixed_step()).unwrap();
         sim.advance_to(0.0623).unwrap();
         assert_eq!((sim.grid_index, sim.committed_time), (623, 0.0623));
         sim
@@ -829,7 +848,7 @@ mod tests {
             let j = sim.last_node_until(t_end);
             assert!(j >= k && j < u64::MAX, "{j}");
         }
-        let mut sim = Simulator::new(SimulationConfig::default()).unwrap();
+        let mut sim = Simulator::new(SimulationConfig::default().at_fixed_step()).unwrap();
         sim.config.start_time = 1e22;
         sim.committed_time = 1e22;
         sim.current_time = 1e22;

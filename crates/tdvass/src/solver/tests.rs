@@ -90,7 +90,9 @@ fn any_split_gives_bit_identical_results() {
         }
         let mut cut = Simulator::new(cfg.clone()).unwrap();
         for t in [h * 1023.0, h * 1024.0, h * 1025.5, h * 3000.0] {
-            cut.advance_to(t).unwrap();
+            if t < stops[39] {
+                cut.advance_to(t).unwrap();
+            }
         }
         cut.advance_to(stops[39]).unwrap();
         assert_eq!(&bits(&mut cut), reference.last().unwrap());
@@ -105,7 +107,7 @@ fn restored_simulator_continues_bit_identically_inside_a_segment() {
         // Node 1500 lies inside the second phase-anchor segment.
         sim.advance_to(1500.3 * h).unwrap();
         let mut restored = Simulator::from_bytes(&sim.to_bytes()).unwrap();
-        for t in [2047.0 * h, 2048.0 * h, 5000.5 * h, 0.9] {
+        for t in [2047.0 * h, 2048.0 * h, 5000.5 * h, 5000.5 * h + 0.9] {
             sim.advance_to(t).unwrap();
             restored.advance_to(t).unwrap();
             assert_eq!(bits(&mut sim), bits(&mut restored));
@@ -136,7 +138,7 @@ fn whole_steps_match_the_general_step_closely() {
         } else {
             Metrics::RoadHolding
         };
-        let cfg = SimulationConfig { metrics, ..cfg };
+        let cfg = SimulationConfig { metrics, ..cfg }.at_fixed_step();
         let mut fast = Simulator::new(cfg.clone()).unwrap();
         let mut general = Simulator::new(cfg).unwrap();
         for k in 0..3000u64 {
@@ -154,7 +156,8 @@ fn whole_steps_match_the_general_step_closely() {
         }
         fast.advance_to(general.committed_time).unwrap();
         let scale = general.committed_state.amax();
-        assert!((fast.committed_state - general.committed_state).amax() < 1e-12 * scale);
+        let difference = (fast.committed_state - general.committed_state).amax();
+        assert!(difference < 1e-12 * scale, "{difference:e} of {scale:e}");
         let (a, b) = (fast.rms(), general.rms());
         assert!((a.body_acceleration - b.body_acceleration).abs() < 1e-12 * b.body_acceleration);
         assert!((a.tire_deflection - b.tire_deflection).abs() < 1e-12 * b.tire_deflection);

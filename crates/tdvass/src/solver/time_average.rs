@@ -33,7 +33,7 @@
 //! `h⁴ |Δf'''| / 384` per step.
 
 use super::filter::Filter;
-use super::holding::{Holding, margin};
+use super::holding::{Holding, deflection, margin};
 use super::{Simulator, hermite};
 use crate::metrics::{RmsValues, RunningRms};
 use crate::model::{State, V_S, V_T, X_S, X_T};
@@ -312,6 +312,11 @@ impl Simulator {
                     self.margin_at(end, &x_end, &piece),
                 );
                 holding.add_interval(start, end - start, a, b);
+                holding.add_deflection(
+                    end - start,
+                    deflection(&x_start.into()),
+                    deflection(&x_end.into()),
+                );
             }
             if end == to {
                 return (total, at_end, piece);
@@ -369,6 +374,11 @@ impl Simulator {
                     self.margin_at(end, &x_end, &piece),
                 );
                 holding.add_interval(start, end - start, a, b);
+                holding.add_deflection(
+                    end - start,
+                    deflection(&x_start.into()),
+                    deflection(&x_end.into()),
+                );
             }
             if end == to {
                 return (x_end, w_end, total, at_end, piece);
@@ -634,7 +644,7 @@ mod tests {
     use super::*;
     use crate::model::{Params, Performance, Variant};
     use crate::road::{RandomRoad, RoadSpec};
-    use crate::solver::{SimulationConfig, simulate};
+    use crate::solver::{DelayRegime, SimulationConfig, simulate};
 
     /// Gauss–Legendre nodes on [0, 1] and weights (5 points: exact for
     /// degree 9).
@@ -738,6 +748,12 @@ mod tests {
     fn time_average_matches_an_independent_quadrature() {
         for (name, cfg) in configs() {
             // An end time off the grid: the partial last step counts too.
+            // The quadrature's own accuracy: a tolerance well below the
+            // bound asked here.
+            let cfg = SimulationConfig {
+                tolerance: 1e-11,
+                ..cfg
+            };
             let t_end = 1.234_567;
             let mut sim = Simulator::new(cfg.clone()).unwrap();
             sim.advance_to(t_end).unwrap();
@@ -761,7 +777,7 @@ mod tests {
 
     #[test]
     fn rms_is_zero_at_the_start_and_continuous_in_time() {
-        let mut sim = Simulator::new(SimulationConfig::default()).unwrap();
+        let mut sim = Simulator::new(SimulationConfig::default().at_fixed_step()).unwrap();
         assert_eq!(sim.rms(), RmsValues::default());
         sim.advance_to(0.5).unwrap();
         let h = sim.grid.step;
@@ -781,23 +797,29 @@ mod tests {
 
     #[test]
     fn objective_is_continuous_across_a_change_of_the_internal_grid() {
-        // tau = 2e-4 runs on h = 1e-4 (2 steps per delay); a hair more
-        // needs 3 steps per delay, h = 6.67e-5.
+        // With the step bound 1e-3 s: tau just below 1e-3 lies inside the
+        // step, 1e-3 is one whole step, 2e-3 two, and a hair more needs
+        // three steps of 6.67e-4 s.
         let at = |tau: f64| {
             let cfg = SimulationConfig {
                 params: Params::with_controller(5386.0, tau),
+                max_internal_step: 1e-3,
                 ..SimulationConfig::default()
             };
-            let steps = Simulator::new(cfg.clone()).unwrap().grid().delay_steps();
-            (simulate(cfg, 15.0).unwrap().objective, steps)
+            let regime = Simulator::new(cfg.clone()).unwrap().grid().regime;
+            (simulate(cfg, 15.0).unwrap().objective, regime)
         };
-        let (j_at, two) = at(2e-4);
-        let (j_after, three) = at(2e-4 * (1.0 + 1e-9));
-        assert_eq!((two, three), (2, 3));
-        assert!(
-            (j_at - j_after).abs() < 1e-9 * j_at,
-            "{j_at} against {j_after}"
-        );
+        let (j_inside, inside) = at(1e-3 * (1.0 - 1e-9));
+        let (j_one, one) = at(1e-3);
+        let (j_two, two) = at(2e-3);
+        let (j_three, three) = at(2e-3 * (1.0 + 1e-9));
+        assert!(matches!(inside, DelayRegime::InsideStep { .. }), "{inside:?}");
+        assert_eq!(one, DelayRegime::WholeSteps { m: 1 });
+        assert_eq!(two, DelayRegime::WholeSteps { m: 2 });
+        assert_eq!(three, DelayRegime::WholeSteps { m: 3 });
+        for (a, b) in [(j_inside, j_one), (j_two, j_three)] {
+            assert!((a - b).abs() < 1e-9 * a, "{a} against {b}");
+        }
     }
 
     #[test]

@@ -1,0 +1,330 @@
+//! The internal step from the tolerance: an error model gives a first step,
+//! a step-doubling probe checks it and refines it where it is not enough.
+//!
+//! **What is not exact.** The step map of Eq. (23) is exact for the plant
+//! and for every road piece (a sine, or a straight line between
+//! breakpoints), so only three things depend on the internal step h:
+//! 1. the delayed input `u = g x_t(t − tau)`: the cubic Hermite interpolant
+//!    of `x_t` between history nodes is off by at most
+//!    `h⁴/384 max|x_t⁗|`; the force error `g h⁴/384 |x_t⁗|` moves the
+//!    outputs in proportion to it;
+//! 2. the time averages: the corrected trapezoid of `y²` (see
+//!    `time_average`) is off by `h⁴/720 [f‴]` per run of nodes, and a road
+//!    breakpoint ends a run;
+//! 3. the located extrema and crossings (max |SDD|, the contact-loss
+//!    time): the cubic Hermite interpolant of SDD and of the contact margin
+//!    over a step is off by `h⁴/384 max|y⁗|`.
+//!
+//! The road itself is represented exactly. Each term is fourth order in h,
+//! with a fourth derivative of a response that moves at the model's own
+//! time scales, so the relative error of every metric behaves as
+//! `ε(h) ≈ C (ω h)⁴`:
+//! - ω is the fastest rate of the plant, bounded without an eigenvalue
+//!   solve: for `ẍ = −M⁻¹K x − M⁻¹C ẋ` every eigenvalue satisfies
+//!   `|λ|² <= κ + γ |λ|`, with `κ = ‖M⁻¹K‖_∞` and `γ = ‖M⁻¹C‖_∞` read off
+//!   the velocity rows of A (with the feedback folded in), so
+//!   `|λ| <= γ + √κ` ([`fastest_rate`]); the harmonic road's ω when larger;
+//! - C grows with the road's roughness, because each breakpoint of a
+//!   piecewise-linear road is a jump of `x_g'` that the wheel turns into a
+//!   jump of `x_t‴`: [`ROUGHNESS_SMOOTH`] for the harmonic road,
+//!   [`ROUGHNESS_SPARSE`] for roads with breakpoints at least 10 ms apart
+//!   (paper-compatible, measured profiles, the input), [`ROUGHNESS_DENSE`]
+//!   for the ISO 8608 road (a breakpoint every millisecond).
+//!
+//! The constants were measured: relative differences of every metric
+//! against a run at h = 1e-5 s (TDVASS, Table 1, 15 s; the test
+//! `accuracy_tolerance.rs` checks the result over the whole grid of cases).
+//! On the harmonic road at ω = 5 the worst metric (RMS TDD) is 1.7e-8 at
+//! h = 3e-3 (`(ω h)⁴` = 0.23 with the bound ω = 228 rad/s), at ω = 60
+//! 1.7e-7; on the paper-compatible road 7.4e-7; on ISO 8608 4.1e-7 at
+//! h = 1e-3 (CS: 1.6e-6). So `h_0 = (tol / C)^{1/4} / ω`.
+//!
+//! **The ladder.** h is taken from `Δ / n` (n a whole number): Δ is the
+//! spacing of the road's breakpoints for the ISO 8608 and paper-compatible
+//! roads, so that every breakpoint falls on a node and no step is split,
+//! else [`LARGEST_STEP`]. The step is then a function of a whole number,
+//! the same on every platform.
+//!
+//! **The probe.** Step doubling checks the choice after the fact: two runs
+//! of [`PROBE_DURATION`] from the configured start (the start transient
+//! included), at h and at the next finer step h' (about h / 2, on the
+//! same ladder and delay grid), estimate the error of the coarse one as
+//! `|RMS_h − RMS_h'| / (1 − (h'/h)⁴)` for BA, SDD and TDD, and the same
+//! for the largest |SDD| (located inside the steps). Where it
+//! exceeds [`PROBE_SAFETY`] × tol, n grows by the factor
+//! `1.1 (ε / (PROBE_SAFETY tol))^{1/4}` (at least by one) and the probe
+//! runs again, at most [`PROBE_ROUNDS`] times. Where the first estimate is
+//! well below the tolerance (the model's bound on ω is a bound, often
+//! several times the fastest mode that matters), the same formula gives a
+//! longer step (by at most [`MAX_COARSENING`]), and one more probe confirms
+//! it; if it fails, the step that passed is kept. A probe that diverges (an unstable
+//! (g, tau)) or has no response to measure leaves the model's step. The
+//! external road input (road = 0) is not known in advance: its step is the
+//! model's alone.
+//!
+//! **Delay regimes.** The step bound then goes to [`super::DelayGrid`],
+//! which keeps the three regimes (folded, inside the step, whole steps of
+//! `h = tau / m`). Each is accurate to the tolerance, so J(tau) is
+//! continuous across the regime changes to within the tolerance.
+
+use super::{DelayGrid, Metrics, SimulationConfig, Simulator};
+use crate::error::{Error, Result};
+use crate::model::{Plant, V_H, V_S, V_T, X_H, X_S, X_T};
+use crate::road::{ISO_NODE_INTERVAL, RoadSpec};
+
+/// Default relative tolerance of every reported metric.
+pub const DEFAULT_TOLERANCE: f64 = 1e-6;
+/// Loosest tolerance accepted: beyond it the numbers would mean little.
+pub const MAX_TOLERANCE: f64 = 0.1;
+/// Tightest tolerance accepted: below it rounding, not the step, sets the
+/// error of a 15 s run.
+pub const MIN_TOLERANCE: f64 = 1e-12;
+/// Largest internal step (s).
+pub const LARGEST_STEP: f64 = 0.01;
+/// Smallest internal step a tolerance may ask for (s); a tolerance that
+/// needs less is refused (the work of a run would pass every limit).
+pub const SMALLEST_STEP: f64 = 1e-6;
+/// Simulated time of each probe run (s).
+pub const PROBE_DURATION: f64 = 0.5;
+/// The probe accepts a step whose estimated error is at most this fraction
+/// of the tolerance.
+pub const PROBE_SAFETY: f64 = 0.5;
+/// Most rounds of the probe.
+pub const PROBE_ROUNDS: usize = 6;
+/// Largest factor by which the probe may lengthen the model's step.
+pub const MAX_COARSENING: f64 = 8.0;
+/// `C` of the harmonic road.
+pub const ROUGHNESS_SMOOTH: f64 = 1e-6;
+/// `C` of roads whose breakpoints are at least 10 ms apart.
+pub const ROUGHNESS_SPARSE: f64 = 1e-5;
+/// `C` of the ISO 8608 road (a breakpoint every millisecond).
+pub const ROUGHNESS_DENSE: f64 = 1e-3;
+
+/// Checks a tolerance: finite, within [`MIN_TOLERANCE`], [`MAX_TOLERANCE`].
+pub fn check_tolerance(tolerance: f64) -> Result<()> {
+    if !tolerance.is_finite() || tolerance <= 0.0 {
+        return Err(Error::InvalidParameter {
+            name: "tolerance",
+            value: tolerance,
+            reason: "the relative tolerance must be finite and > 0",
+        });
+    }
+    if tolerance > MAX_TOLERANCE {
+        return Err(Error::InvalidParameter {
+            name: "tolerance",
+            value: tolerance,
+            reason: "the relative tolerance must be at most 0.1 to mean anything",
+        });
+    }
+    if tolerance < MIN_TOLERANCE {
+        return Err(Error::InvalidParameter {
+            name: "tolerance",
+            value: tolerance,
+            reason: "the relative tolerance must be at least 1e-12: below it rounding, not the step, sets the error",
+        });
+    }
+    Ok(())
+}
+
+/// Checks `max_internal_step`: 0 (no bound) or finite and > 0.
+pub fn check_max_internal_step(bound: f64) -> Result<()> {
+    if !(bound.is_finite() && bound >= 0.0) {
+        return Err(Error::InvalidParameter {
+            name: "max_internal_step",
+            value: bound,
+            reason: "must be finite and >= 0 (0 = no bound: the tolerance sets the step)",
+        });
+    }
+    Ok(())
+}
+
+/// The bound `γ + √κ` (1/s) on the plant's eigenvalues (module docs), from
+/// the solver matrix (A with the feedback folded in).
+pub fn fastest_rate(plant: &Plant) -> f64 {
+    let mut a = plant.a;
+    for row in 0..6 {
+        a[(row, X_T)] += plant.b[row];
+    }
+    let (mut stiffness, mut damping) = (0.0f64, 0.0f64);
+    for row in [V_S, V_H, V_T] {
+        let k: f64 = [X_S, X_H, X_T].iter().map(|&c| a[(row, c)].abs()).sum();
+        let c: f64 = [V_S, V_H, V_T].iter().map(|&c| a[(row, c)].abs()).sum();
+        stiffness = stiffness.max(k);
+        damping = damping.max(c);
+    }
+    damping + stiffness.sqrt()
+}
+
+/// The spacing Δ of the ladder `Δ / n` (s): the road's breakpoint spacing
+/// where it has one of its own, else [`LARGEST_STEP`].
+fn ladder_base(road: &RoadSpec) -> f64 {
+    match road {
+        RoadSpec::Iso8608(_) => ISO_NODE_INTERVAL,
+        RoadSpec::PaperCompatible {
+            sample_interval, ..
+        } if *sample_interval <= LARGEST_STEP * 100.0 => *sample_interval,
+        _ => LARGEST_STEP,
+    }
+}
+
+/// The roughness constant C of the error model for this road.
+fn roughness(road: &RoadSpec) -> f64 {
+    match road {
+        RoadSpec::Harmonic { .. } => ROUGHNESS_SMOOTH,
+        RoadSpec::Iso8608(_) => ROUGHNESS_DENSE,
+        _ => ROUGHNESS_SPARSE,
+    }
+}
+
+/// What the step choice found.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepChoice {
+    /// The bound of the internal step handed to the delay grid (s).
+    pub step_bound: f64,
+    /// The model's first step `h_0` (s), before the ladder.
+    pub model_step: f64,
+    /// The coarse run's error estimated by the last probe (relative; NaN
+    /// when no probe ran).
+    pub probe_error: f64,
+    /// Probe rounds run.
+    pub probe_rounds: usize,
+}
+
+/// The step on the ladder `base / n` with `n` at least `n_min`, capped by
+/// `max_internal_step` (when > 0).
+fn ladder_step(base: f64, n: f64, max_internal_step: f64) -> f64 {
+    let h = base / n;
+    if max_internal_step > 0.0 {
+        h.min(max_internal_step)
+    } else {
+        h
+    }
+}
+
+/// The internal step bound for `config` (module docs): the error model's
+/// step on the ladder, refined by the probe.
+pub fn choose_step(plant: &Plant, config: &SimulationConfig) -> Result<StepChoice> {
+    check_tolerance(config.tolerance)?;
+    check_max_internal_step(config.max_internal_step)?;
+    let tolerance = config.tolerance;
+    let mut rate = fastest_rate(plant);
+    if let RoadSpec::Harmonic {
+        angular_frequency, ..
+    } = config.road
+    {
+        rate = rate.max(angular_frequency.abs());
+    }
+    let model_step = (tolerance / roughness(&config.road)).powf(0.25) / rate.max(1.0);
+    let base = ladder_base(&config.road);
+    let mut n = (base / model_step)
+        .ceil()
+        .max((base / LARGEST_STEP).ceil())
+        .max(1.0);
+    let too_fine = |n: f64| base / n < SMALLEST_STEP;
+    let refuse = || Error::InvalidParameter {
+        name: "tolerance",
+        value: tolerance,
+        reason: "the relative tolerance needs an internal step below 1e-6 s, beyond the work limit",
+    };
+    let capped = config.max_internal_step > 0.0 && config.max_internal_step <= SMALLEST_STEP;
+    if too_fine(n) && !capped {
+        return Err(refuse());
+    }
+    let mut choice = StepChoice {
+        step_bound: ladder_step(base, n, config.max_internal_step),
+        model_step,
+        probe_error: f64::NAN,
+        probe_rounds: 0,
+    };
+    if matches!(config.road, RoadSpec::Input) {
+        return Ok(choice);
+    }
+    let coarsest = (base / LARGEST_STEP).ceil().max(1.0);
+    let allowed = PROBE_SAFETY * tolerance;
+    // The last step the probe accepted, while a coarser one is tried.
+    let mut accepted: Option<f64> = None;
+    while choice.probe_rounds < PROBE_ROUNDS {
+        let coarse = ladder_step(base, n, config.max_internal_step);
+        let fine = ladder_step(base, 2.0 * n, config.max_internal_step);
+        if fine >= coarse {
+            // max_internal_step caps both: nothing to refine.
+            break;
+        }
+        choice.probe_rounds += 1;
+        let Some(error) = probe_error(plant, config, coarse, fine)? else {
+            break;
+        };
+        choice.probe_error = error;
+        // `n` for which the error would be `allowed` (ε ∝ h⁴ = (Δ/n)⁴),
+        // with a margin of 10 %.
+        let needed = n * (error / allowed).powf(0.25) * 1.1;
+        if error <= allowed {
+            if accepted.is_some() {
+                break;
+            }
+            let coarser = needed.ceil().max(coarsest).max((n / MAX_COARSENING).ceil());
+            if coarser >= n {
+                break;
+            }
+            accepted = Some(n);
+            n = coarser;
+        } else if let Some(previous) = accepted {
+            // The coarser step failed its check: back to the one that passed.
+            n = previous;
+            break;
+        } else {
+            n = needed.ceil().max(n + 1.0);
+            if too_fine(n) && !capped {
+                return Err(refuse());
+            }
+        }
+    }
+    choice.step_bound = ladder_step(base, n, config.max_internal_step);
+    Ok(choice)
+}
+
+/// The estimated relative error of the RMS values of a run at step bound
+/// `coarse` (module docs), from two runs of [`PROBE_DURATION`]; `None`
+/// when it cannot be measured (divergence, no response).
+fn probe_error(
+    plant: &Plant,
+    config: &SimulationConfig,
+    coarse: f64,
+    fine: f64,
+) -> Result<Option<f64>> {
+    let tau = if config.variant.has_control() {
+        config.params.tau
+    } else {
+        0.0
+    };
+    let (coarse_grid, fine_grid) = (DelayGrid::new(tau, coarse)?, DelayGrid::new(tau, fine)?);
+    let ratio = (fine_grid.step / coarse_grid.step).powi(4);
+    if ratio >= 1.0 {
+        return Ok(None);
+    }
+    let probe = SimulationConfig {
+        metrics: Metrics::RoadHolding,
+        ..config.clone()
+    };
+    let run = |grid: DelayGrid| -> Option<[f64; 4]> {
+        let mut sim = Simulator::with_grid(probe.clone(), plant.clone(), grid).ok()?;
+        let summary = sim.run_for(PROBE_DURATION).ok()?;
+        Some([
+            summary.rms.body_acceleration,
+            summary.rms.suspension_deflection,
+            summary.rms.tire_deflection,
+            summary.road_holding?.max_suspension_deflection,
+        ])
+    };
+    let (Some(a), Some(b)) = (run(coarse_grid), run(fine_grid)) else {
+        return Ok(None);
+    };
+    let mut error: Option<f64> = None;
+    for i in 0..a.len() {
+        if b[i] > 0.0 && b[i].is_finite() && a[i].is_finite() {
+            let relative = (a[i] - b[i]).abs() / b[i] / (1.0 - ratio);
+            error = Some(error.map_or(relative, |e| e.max(relative)));
+        }
+    }
+    Ok(error)
+}
