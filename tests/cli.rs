@@ -287,7 +287,8 @@ fn simulate_json_records_every_parameter_of_the_run() {
         ("k_h", Value::from(6000.0)),
         ("m_s", Value::from(345.0)),
         ("duration", Value::from(0.5)),
-        ("max_internal_step", Value::from(1e-4)),
+        ("tolerance", Value::from(1e-6)),
+        ("max_internal_step", Value::from(0.0)),
     ];
     for (key, value_expected) in expected {
         assert_eq!(value[key], value_expected, "key {key}");
@@ -587,8 +588,10 @@ fn simulate_reports_the_field_metrics_and_the_csv_bounds_the_working_space() {
         (reported - ratio).abs() <= 1e-12 * ratio,
         "{reported} {ratio}"
     );
-    // The CSV rows are the internal grid nodes: the largest |SDD| over them
-    // is the running maximum.
+    // The CSV rows sample every 0.1 ms: the running maximum, located inside
+    // the internal steps (to the tolerance, 1e-6), is above the largest
+    // |SDD| over them by at most what that sampling can miss,
+    // `(5e-5 s)² |SDD''| / 2`, some 6e-6 relative with the 20 Hz wheel hop.
     let text = std::fs::read_to_string(&csv).unwrap();
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
@@ -605,7 +608,7 @@ fn simulate_reports_the_field_metrics_and_the_csv_bounds_the_working_space() {
     let running = run["max_suspension_deflection"].as_f64().unwrap();
     assert_eq!(rows.last().unwrap()[max], running);
     assert!(
-        (over_rows - running).abs() <= 1e-12 * running,
+        running >= over_rows * (1.0 - 1e-6) && running <= over_rows * (1.0 + 1e-5),
         "{over_rows} over the CSV rows, {running} reported"
     );
     let _ = std::fs::remove_file(&csv);

@@ -8,6 +8,7 @@ use crate::{
     MODEL_IDENTIFIER, MODEL_NAME, guid,
 };
 use quick_xml::events::{BytesDecl, BytesText, Event};
+use tdvass::solver::DEFAULT_TOLERANCE;
 pub use tdvass_fmu::markup::MODEL_DESCRIPTION;
 use tdvass_fmu::markup::{
     XmlResult, XmlWriter, finish, html_page, list, number, paragraph, table, text_element, writer,
@@ -218,6 +219,7 @@ pub fn model_description_xml() -> String {
                 w.create_element("DefaultExperiment")
                     .with_attribute(("startTime", number(DEFAULT_START_TIME).as_str()))
                     .with_attribute(("stopTime", number(DEFAULT_STOP_TIME).as_str()))
+                    .with_attribute(("tolerance", number(DEFAULT_TOLERANCE).as_str()))
                     .with_attribute(("stepSize", number(DEFAULT_STEP_SIZE).as_str()))
                     .write_empty()?;
                 w.create_element("ModelVariables")
@@ -289,7 +291,7 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
     )?;
     paragraph(
         w,
-        "Integration: the precise (fine) integration method of the paper (section 4.1) on an internal grid anchored at the start time, whose step divides tau exactly and is at most max_internal_step. The delayed wheel displacement is a cubic Hermite interpolant of the stored history, the road is exact over each internal step. Results do not depend on how the master splits time into communication steps (except with road = 0, where the input changes at communication points).",
+        "Integration: the precise (fine) integration method of the paper (section 4.1) on an internal grid anchored at the start time. The tolerance (relative, of every output metric: the master's from fmi2SetupExperiment when it defines one, else the DefaultExperiment's 1e-6) sets the internal step, from an error model checked by a step-doubling probe; the step divides tau exactly when tau is longer and is at most max_internal_step when that is > 0. The delayed wheel displacement is a cubic Hermite interpolant of the stored history, the road is exact over each internal step. Results do not depend on how the master splits time into communication steps (except with road = 0, where the input changes at communication points).",
     )?;
     text_element(w, "h3", "Static gain of the controlled suspension")?;
     paragraph(

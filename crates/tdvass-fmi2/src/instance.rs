@@ -429,7 +429,7 @@ mod tests {
             Err(Status::Error)
         );
         assert!(log.borrow().last().unwrap().2.contains("road_class"));
-        for (name, bad) in [("tau", -1.0), ("g", f64::NAN), ("max_internal_step", 0.0)] {
+        for (name, bad) in [("tau", -1.0), ("g", f64::NAN), ("max_internal_step", -1e-4)] {
             assert!(
                 i.run(Function::SetReal, |i| i.set_real(&[vr(name)], &[bad]))
                     .is_err()

@@ -14,6 +14,7 @@ use crate::{
     MODEL_IDENTIFIER, MODEL_NAME, instantiation_token,
 };
 use quick_xml::events::{BytesDecl, Event};
+use tdvass::solver::DEFAULT_TOLERANCE;
 pub use tdvass_fmu::markup::MODEL_DESCRIPTION;
 use tdvass_fmu::markup::{XmlResult, XmlWriter, finish, number, writer};
 use tdvass_fmu::variables::{
@@ -306,6 +307,7 @@ pub fn model_description_xml() -> String {
                 w.create_element("DefaultExperiment")
                     .with_attribute(("startTime", number(DEFAULT_START_TIME).as_str()))
                     .with_attribute(("stopTime", number(DEFAULT_STOP_TIME).as_str()))
+                    .with_attribute(("tolerance", number(DEFAULT_TOLERANCE).as_str()))
                     .with_attribute(("stepSize", number(DEFAULT_STEP_SIZE).as_str()))
                     .write_empty()?;
                 w.create_element("ModelVariables")

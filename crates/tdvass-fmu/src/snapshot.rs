@@ -471,7 +471,7 @@ mod tests {
                 "{cut}: {e}"
             );
         }
-        for version in [1, 2, 4] {
+        for version in [1, 2, 3, 5] {
             let mut other = bytes.clone();
             other[8] = version;
             assert!(err(&other).contains(&format!("format version {version}")));

@@ -1212,7 +1212,7 @@ const TABLE: &[Variable] = &[
         59,
         Q::Length,
         OutputId::MaxSuspensionDeflection,
-        "Running maximum of |SDD| (suspension working space used), exact at the internal grid nodes and the current time",
+        "Running maximum of |SDD| (suspension working space used), located inside the internal steps from the dense output (within the tolerance)",
         &[],
         &["x_s_start", "x_t_start"],
     )

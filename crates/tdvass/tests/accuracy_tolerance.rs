@@ -59,20 +59,86 @@ fn cases() -> Vec<Case> {
     vec![
         case("CS harmonic 5", Cs, harmonic(0.05, 5.0), 0.0, 0.0),
         case("PVASS harmonic 30", Pvass, harmonic(0.01, 30.0), 0.0, 0.0),
-        case("TDVASS harmonic 5", Tdvass, harmonic(0.05, 5.0), 5386.0, 2e-4),
-        case("TDVASS harmonic 60", Tdvass, harmonic(0.005, 60.0), 5386.0, 2e-4),
-        case("TDVASS harmonic 60, tau 0.05", Tdvass, harmonic(0.005, 60.0), 2000.0, 0.05),
-        case("TDVASS harmonic, g < 0", Tdvass, harmonic(0.05, 5.0), -3000.0, 0.01),
-        case("TDVASS harmonic, tau 0", Tdvass, harmonic(0.05, 5.0), 5386.0, 0.0),
+        case(
+            "TDVASS harmonic 5",
+            Tdvass,
+            harmonic(0.05, 5.0),
+            5386.0,
+            2e-4,
+        ),
+        case(
+            "TDVASS harmonic 60",
+            Tdvass,
+            harmonic(0.005, 60.0),
+            5386.0,
+            2e-4,
+        ),
+        case(
+            "TDVASS harmonic 60, tau 0.05",
+            Tdvass,
+            harmonic(0.005, 60.0),
+            2000.0,
+            0.05,
+        ),
+        case(
+            "TDVASS harmonic, g < 0",
+            Tdvass,
+            harmonic(0.05, 5.0),
+            -3000.0,
+            0.01,
+        ),
+        case(
+            "TDVASS harmonic, tau 0",
+            Tdvass,
+            harmonic(0.05, 5.0),
+            5386.0,
+            0.0,
+        ),
         case("CS ISO A 5 m/s", Cs, iso(RoadClass::A, 5.0), 0.0, 0.0),
-        case("PVASS ISO C 20 m/s", Pvass, iso(RoadClass::C, 20.0), 0.0, 0.0),
-        case("TDVASS ISO B 10 m/s", Tdvass, iso(RoadClass::B, 10.0), 5386.0, 2e-4),
-        case("TDVASS ISO D 30 m/s", Tdvass, iso(RoadClass::D, 30.0), 2528.0, 1.28e-4),
-        case("TDVASS ISO E 20 m/s, tau 0.02", Tdvass, iso(RoadClass::E, 20.0), 4000.0, 0.02),
-        case("TDVASS ISO C, g < 0, tau 0.0123", Tdvass, iso(RoadClass::C, 20.0), -2000.0, 0.0123),
+        case(
+            "PVASS ISO C 20 m/s",
+            Pvass,
+            iso(RoadClass::C, 20.0),
+            0.0,
+            0.0,
+        ),
+        case(
+            "TDVASS ISO B 10 m/s",
+            Tdvass,
+            iso(RoadClass::B, 10.0),
+            5386.0,
+            2e-4,
+        ),
+        case(
+            "TDVASS ISO D 30 m/s",
+            Tdvass,
+            iso(RoadClass::D, 30.0),
+            2528.0,
+            1.28e-4,
+        ),
+        case(
+            "TDVASS ISO E 20 m/s, tau 0.02",
+            Tdvass,
+            iso(RoadClass::E, 20.0),
+            4000.0,
+            0.02,
+        ),
+        case(
+            "TDVASS ISO C, g < 0, tau 0.0123",
+            Tdvass,
+            iso(RoadClass::C, 20.0),
+            -2000.0,
+            0.0123,
+        ),
         case("CS paper road", Cs, paper_road(), 0.0, 0.0),
         case("TDVASS paper road", Tdvass, paper_road(), 2528.0, 1.28e-4),
-        case("TDVASS paper road, tau 0.05", Tdvass, paper_road(), 3000.0, 0.05),
+        case(
+            "TDVASS paper road, tau 0.05",
+            Tdvass,
+            paper_road(),
+            3000.0,
+            0.05,
+        ),
     ]
 }
 
@@ -175,7 +241,8 @@ fn the_largest_deflection_matches_a_dense_sampling() {
         let mut sampled = 0.0f64;
         let samples = 80_000;
         for i in 1..=samples {
-            sim.advance_to(DURATION * i as f64 / samples as f64).unwrap();
+            sim.advance_to(DURATION * i as f64 / samples as f64)
+                .unwrap();
             sampled = sampled.max(sim.outputs().performance.suspension_deflection.abs());
         }
         let located = sim
@@ -198,8 +265,7 @@ fn a_tolerance_out_of_range_is_refused_with_its_value() {
             tolerance: bad,
             ..SimulationConfig::default()
         })
-        .err()
-        .expect("refused");
+        .expect_err("refused");
         let message = error.to_string();
         assert!(
             message.contains("`tolerance`") && message.contains(&bad.to_string()),
@@ -211,8 +277,7 @@ fn a_tolerance_out_of_range_is_refused_with_its_value() {
         max_internal_step: -1.0,
         ..SimulationConfig::default()
     })
-    .err()
-    .expect("refused")
+    .expect_err("refused")
     .to_string();
     assert!(error.contains("`max_internal_step`"), "{error}");
 }

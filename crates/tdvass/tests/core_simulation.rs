@@ -5,6 +5,7 @@ mod common;
 use common::{Lcg, fft, rk4_method_of_steps};
 use tdvass::model::{PAPER_G2, PAPER_TAU2, Params, Plant, State, Variant, X_T};
 use tdvass::road::{ISO_NODE_INTERVAL, RandomRoad, Road, RoadClass, RoadSpec};
+use tdvass::solver::accuracy::{LARGEST_STEP, MAX_TOLERANCE};
 use tdvass::solver::{Outputs, SimulationConfig, Simulator, simulate};
 use tdvass::{Error, metrics::RmsValues};
 
@@ -244,6 +245,8 @@ fn fourth_order_convergence_against_rk4_method_of_steps() {
         let cfg = SimulationConfig {
             params,
             initial_state: x0,
+            // The bound sets the step: the tolerance at its loosest.
+            tolerance: MAX_TOLERANCE,
             max_internal_step: params.tau / m as f64,
             ..SimulationConfig::default()
         };
@@ -402,7 +405,7 @@ fn tiny_delays_are_continuous_with_zero_and_huge_delays_are_refused() {
         "{err}"
     );
     let err = Simulator::new(SimulationConfig {
-        max_internal_step: 0.0,
+        max_internal_step: -1e-4,
         ..SimulationConfig::default()
     })
     .unwrap_err();
@@ -602,6 +605,8 @@ fn start_times_the_internal_step_does_not_resolve_are_refused() {
     for start_time in [1e15, -1e15, 4.4e8 * 1.01, 1e300] {
         let err = Simulator::new(SimulationConfig {
             start_time,
+            tolerance: MAX_TOLERANCE,
+            max_internal_step: 1e-4,
             ..SimulationConfig::default()
         })
         .unwrap_err();
@@ -611,15 +616,17 @@ fn start_times_the_internal_step_does_not_resolve_are_refused() {
         );
         assert!(err.to_string().contains("max_internal_step"), "{err}");
     }
-    // A larger internal step resolves the same start; a late start within
-    // the limit steps normally.
-    Simulator::new(SimulationConfig {
+    // A larger internal step resolves a later start (the loosest tolerance
+    // gives the largest step, 0.01 s here); a late start within the limit
+    // steps normally.
+    let late = Simulator::new(SimulationConfig {
         params: Params::with_controller(PAPER_G2, 0.0),
-        start_time: 1e15,
-        max_internal_step: 1e4,
+        start_time: 4e10,
+        tolerance: MAX_TOLERANCE,
         ..SimulationConfig::default()
     })
     .unwrap();
+    assert_eq!(late.grid().step, LARGEST_STEP);
     let mut sim = Simulator::new(SimulationConfig {
         start_time: 4e8,
         ..SimulationConfig::default()

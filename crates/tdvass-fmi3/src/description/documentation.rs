@@ -95,7 +95,7 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
     )?;
     paragraph(
         w,
-        "Integration: the precise integration method of the paper on an internal grid anchored at the start time, whose step divides tau exactly and is at most max_internal_step. Results do not depend on how the importer splits time into communication steps (except with road = input, where the input changes at communication points or intermediate updates).",
+        "Integration: the precise integration method of the paper on an internal grid anchored at the start time. The tolerance (relative, of every output metric: the master's from fmi3EnterInitializationMode when it defines one, else the DefaultExperiment's 1e-6) sets the internal step, from an error model checked by a step-doubling probe; the step divides tau exactly when tau is longer and is at most max_internal_step when that is > 0. Results do not depend on how the importer splits time into communication steps (except with road = input, where the input changes at communication points or intermediate updates).",
     )?;
 
     text_element(w, "h2", "Variables")?;

@@ -154,6 +154,9 @@ fn free(instance: fmi3Instance) {
     unsafe { fmi3FreeInstance(instance) };
 }
 
+/// The internal step bound of the tests that count internal nodes (0.1 ms).
+const FINE: &[(&str, f64)] = &[("max_internal_step", 1e-4)];
+
 const OUTPUTS: [&str; 4] = [
     "rms_body_acceleration",
     "rms_suspension_deflection",
@@ -189,12 +192,12 @@ fn the_default_experiment_reproduces_the_library_run() {
 #[test]
 fn intermediate_updates_see_what_communication_points_there_would_see() {
     let mut master = Master::default();
-    let instance = start(Some(&mut master), false, &[], &[]);
+    let instance = start(Some(&mut master), false, &[], FINE);
     assert_eq!(step(instance, 0.0, 0.01), (0, false, 0.01));
     // Every internal node strictly inside the step: 0.1 ms .. 9.9 ms.
     assert_eq!(master.seen.len(), 99);
     assert!(master.statuses.iter().all(|&s| s == 0));
-    let reference = start(None, false, &[], &[]);
+    let reference = start(None, false, &[], FINE);
     let mut t = 0.0;
     for &(time, inside) in &master.seen {
         assert_eq!(step(reference, t, time - t).0, 0);
@@ -216,7 +219,10 @@ fn the_interval_thins_the_updates() {
         Some(&mut master),
         false,
         &[],
-        &[("intermediate_update_interval", 1e-3)],
+        &[
+            ("intermediate_update_interval", 1e-3),
+            ("max_internal_step", 1e-4),
+        ],
     );
     assert_eq!(step(instance, 0.0, 0.01).0, 0);
     let times: Vec<f64> = master.seen.iter().map(|s| s.0).collect();
@@ -233,14 +239,14 @@ fn early_return_stops_at_the_node_and_the_run_continues_exactly() {
         return_at: Some(4.05e-3),
         ..Default::default()
     };
-    let instance = start(Some(&mut master), true, &[], &[]);
+    let instance = start(Some(&mut master), true, &[], FINE);
     let (s, early, last) = step(instance, 0.0, 0.01);
     assert_eq!((s, early), (0, true));
     assert!((last - 4.1e-3).abs() < 1e-12, "lastSuccessfulTime {last}");
     assert_eq!(get(instance, "time"), last);
     // The master goes on from there.
     assert_eq!(step(instance, last, 0.01 - last), (0, false, 0.01));
-    let reference = start(None, false, &[], &[]);
+    let reference = start(None, false, &[], FINE);
     assert_eq!(step(reference, 0.0, 0.01).0, 0);
     for name in OUTPUTS {
         let (a, b) = (get(instance, name), get(reference, name));
@@ -274,12 +280,17 @@ fn a_road_set_at_every_node_is_as_accurate_as_the_built_in_one() {
         ..Default::default()
     };
     // Road 0 (input), x_g extrapolated from the last three values.
-    let instance = start(Some(&mut master), false, &[("road", 0)], &[]);
+    let instance = start(Some(&mut master), false, &[("road", 0)], FINE);
     // SAFETY: a live instance, arrays of one element.
     unsafe {
         assert_eq!(fmi3Reset(instance), 0);
         assert_eq!(
             fmi3SetInt64(instance, [vr("road")].as_ptr(), 1, [0i64].as_ptr(), 1),
+            0
+        );
+        let bound = [vr("max_internal_step")];
+        assert_eq!(
+            fmi3SetFloat64(instance, bound.as_ptr(), 1, [1e-4].as_ptr(), 1),
             0
         );
         let mode = [vr("input_extrapolation")];
@@ -290,7 +301,7 @@ fn a_road_set_at_every_node_is_as_accurate_as_the_built_in_one() {
         );
         assert_eq!(fmi3ExitInitializationMode(instance), 0);
     }
-    let built_in = start(None, false, &[], &[]);
+    let built_in = start(None, false, &[], FINE);
     let mut t = 0.0;
     for _ in 0..300 {
         assert_eq!(step(instance, t, 0.01).0, 0);

@@ -79,8 +79,7 @@ impl Holding {
     /// `[SDD, SDD']` at its ends ([`deflection`]) to the largest |SDD|.
     #[inline(always)]
     pub fn add_deflection(&mut self, length: f64, a: [f64; 2], b: [f64; 2]) {
-        let bound =
-            a[0].abs().max(b[0].abs()) + HERMITE_BOUND * length * (a[1].abs() + b[1].abs());
+        let bound = a[0].abs().max(b[0].abs()) + HERMITE_BOUND * length * (a[1].abs() + b[1].abs());
         if bound > self.max_deflection {
             self.max_deflection = self.max_deflection.max(largest_magnitude(length, a, b));
         }

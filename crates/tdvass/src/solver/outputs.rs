@@ -33,8 +33,8 @@ pub struct RoadHolding {
     /// at which the dynamic tire load was below −W, crossings located
     /// inside the steps (see `solver::holding`).
     pub contact_loss_time: f64,
-    /// The largest |SDD| so far (m), over the grid nodes (and other
-    /// committed points) and now: the suspension working space used.
+    /// The largest |SDD| so far (m), located inside the steps (see
+    /// `solver::holding`), and now: the suspension working space used.
     pub max_suspension_deflection: f64,
     /// The first loss of tire contact, if any so far.
     pub first_contact_loss: Option<ContactLoss>,

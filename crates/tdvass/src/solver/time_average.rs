@@ -813,7 +813,10 @@ mod tests {
         let (j_one, one) = at(1e-3);
         let (j_two, two) = at(2e-3);
         let (j_three, three) = at(2e-3 * (1.0 + 1e-9));
-        assert!(matches!(inside, DelayRegime::InsideStep { .. }), "{inside:?}");
+        assert!(
+            matches!(inside, DelayRegime::InsideStep { .. }),
+            "{inside:?}"
+        );
         assert_eq!(one, DelayRegime::WholeSteps { m: 1 });
         assert_eq!(two, DelayRegime::WholeSteps { m: 2 });
         assert_eq!(three, DelayRegime::WholeSteps { m: 3 });
