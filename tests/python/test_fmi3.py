@@ -118,6 +118,12 @@ def vrs(md, *names):
     return [by_name[n] for n in names]
 
 
+def fine_grid(md, fmu):
+    """Internal nodes every 0.1 ms (`max_internal_step`), which the
+    intermediate-update tests count."""
+    fmu.setFloat64(vrs(md, "max_internal_step"), [1e-4])
+
+
 def test_intermediate_updates_through_fmpy(md3, unzip3):
     seen = []
     holder = {}
@@ -131,6 +137,7 @@ def test_intermediate_updates_through_fmpy(md3, unzip3):
     callback = fmi3IntermediateUpdateCallback(update)
     fmu = slave(md3, unzip3, intermediateUpdate=update)
     holder["fmu"] = fmu
+    fine_grid(md3, fmu)
     fmu.enterInitializationMode(startTime=0.0)
     fmu.exitInitializationMode()
     fmu.doStep(0.0, 0.005)
@@ -139,6 +146,7 @@ def test_intermediate_updates_through_fmpy(md3, unzip3):
     del callback
     assert len(seen) == 49, [t for t, _ in seen][:5]
     reference = slave(md3, unzip3)
+    fine_grid(md3, reference)
     reference.enterInitializationMode(startTime=0.0)
     reference.exitInitializationMode()
     t = 0.0
@@ -161,6 +169,7 @@ def test_early_return_through_fmpy(md3, unzip3):
             early_return_requested[0] = True
 
     fmu = slave(md3, unzip3, intermediateUpdate=update, earlyReturnAllowed=True)
+    fine_grid(md3, fmu)
     fmu.enterInitializationMode(startTime=0.0)
     fmu.exitInitializationMode()
     _, terminate, early, last = fmu.doStep(0.0, 0.01)
@@ -172,6 +181,7 @@ def test_early_return_through_fmpy(md3, unzip3):
     fmu.terminate()
     fmu.freeInstance()
     reference = slave(md3, unzip3)
+    fine_grid(md3, reference)
     reference.enterInitializationMode(startTime=0.0)
     reference.exitInitializationMode()
     reference.doStep(0.0, 0.01)

@@ -67,10 +67,11 @@
 //! `h = tau / m`). Each is accurate to the tolerance, so J(tau) is
 //! continuous across the regime changes to within the tolerance.
 
-use super::{DelayGrid, Metrics, SimulationConfig, Simulator};
+use super::{DelayGrid, SimulationConfig, Simulator};
 use crate::error::{Error, Result};
 use crate::model::{Plant, V_H, V_S, V_T, X_H, X_S, X_T};
 use crate::road::{ISO_NODE_INTERVAL, RoadSpec};
+use nalgebra::{Matrix6, Schur};
 
 /// Default relative tolerance of every reported metric.
 pub const DEFAULT_TOLERANCE: f64 = 1e-6;
@@ -94,11 +95,13 @@ pub const PROBE_ROUNDS: usize = 6;
 /// Largest factor by which the probe may lengthen the model's step.
 pub const MAX_COARSENING: f64 = 8.0;
 /// `C` of the harmonic road.
-pub const ROUGHNESS_SMOOTH: f64 = 1e-6;
+pub const ROUGHNESS_SMOOTH: f64 = 1e-4;
 /// `C` of roads whose breakpoints are at least 10 ms apart.
-pub const ROUGHNESS_SPARSE: f64 = 1e-5;
+pub const ROUGHNESS_SPARSE: f64 = 1e-3;
 /// `C` of the ISO 8608 road (a breakpoint every millisecond).
-pub const ROUGHNESS_DENSE: f64 = 1e-3;
+pub const ROUGHNESS_DENSE: f64 = 2e-2;
+/// Most QR sweeps of the Schur form that finds the plant's eigenvalues.
+const SCHUR_ITERATIONS: usize = 200;
 
 /// Checks a tolerance: finite, within [`MIN_TOLERANCE`], [`MAX_TOLERANCE`].
 pub fn check_tolerance(tolerance: f64) -> Result<()> {
@@ -140,11 +143,8 @@ pub fn check_max_internal_step(bound: f64) -> Result<()> {
 
 /// The bound `γ + √κ` (1/s) on the plant's eigenvalues (module docs), from
 /// the solver matrix (A with the feedback folded in).
-pub fn fastest_rate(plant: &Plant) -> f64 {
-    let mut a = plant.a;
-    for row in 0..6 {
-        a[(row, X_T)] += plant.b[row];
-    }
+pub fn rate_bound(plant: &Plant) -> f64 {
+    let a = folded_matrix(plant);
     let (mut stiffness, mut damping) = (0.0f64, 0.0f64);
     for row in [V_S, V_H, V_T] {
         let k: f64 = [X_S, X_H, X_T].iter().map(|&c| a[(row, c)].abs()).sum();
@@ -153,6 +153,33 @@ pub fn fastest_rate(plant: &Plant) -> f64 {
         damping = damping.max(c);
     }
     damping + stiffness.sqrt()
+}
+
+/// The plant matrix with the delayed feedback folded in (`u = g x_t`).
+fn folded_matrix(plant: &Plant) -> Matrix6<f64> {
+    let mut a = plant.a;
+    for row in 0..6 {
+        a[(row, X_T)] += plant.b[row];
+    }
+    a
+}
+
+/// The fastest oscillation of the plant (rad/s): the largest |λ| among its
+/// complex eigenvalues (feedback folded in), the rate at which the
+/// response's derivatives grow. Real modes are left out: they are
+/// overdamped, and the probe sees what they add. Where the Schur form does
+/// not converge in [`SCHUR_ITERATIONS`], the bound [`rate_bound`].
+pub fn fastest_oscillation(plant: &Plant) -> f64 {
+    let a = folded_matrix(plant);
+    match Schur::try_new(a, f64::EPSILON, SCHUR_ITERATIONS) {
+        Some(schur) => schur
+            .complex_eigenvalues()
+            .iter()
+            .filter(|λ| λ.im != 0.0)
+            .map(|λ| λ.norm())
+            .fold(0.0, f64::max),
+        None => rate_bound(plant),
+    }
 }
 
 /// The spacing Δ of the ladder `Δ / n` (s): the road's breakpoint spacing
@@ -183,15 +210,15 @@ pub struct StepChoice {
     pub step_bound: f64,
     /// The model's first step `h_0` (s), before the ladder.
     pub model_step: f64,
-    /// The coarse run's error estimated by the last probe (relative; NaN
-    /// when no probe ran).
+    /// The estimated relative error of the accepted step, from the last
+    /// probe that ran at it (NaN when none did).
     pub probe_error: f64,
     /// Probe rounds run.
     pub probe_rounds: usize,
 }
 
-/// The step on the ladder `base / n` with `n` at least `n_min`, capped by
-/// `max_internal_step` (when > 0).
+/// The step on the ladder `base / n`, capped by `max_internal_step` (when
+/// > 0).
 fn ladder_step(base: f64, n: f64, max_internal_step: f64) -> f64 {
     let h = base / n;
     if max_internal_step > 0.0 {
@@ -202,34 +229,46 @@ fn ladder_step(base: f64, n: f64, max_internal_step: f64) -> f64 {
 }
 
 /// The internal step bound for `config` (module docs): the error model's
-/// step on the ladder, refined by the probe.
+/// step on the ladder, checked and refined by the probe.
 pub fn choose_step(plant: &Plant, config: &SimulationConfig) -> Result<StepChoice> {
+    Ok(choose(plant, config)?.0)
+}
+
+/// [`choose_step`], with the coarse simulator of the probe that accepted
+/// the step, as it was before the probe ran (the run itself, when it can
+/// be used as it is).
+pub(super) fn choose(
+    plant: &Plant,
+    config: &SimulationConfig,
+) -> Result<(StepChoice, Option<Simulator>)> {
     check_tolerance(config.tolerance)?;
     check_max_internal_step(config.max_internal_step)?;
     let tolerance = config.tolerance;
-    let mut rate = fastest_rate(plant);
+    let allowed = PROBE_SAFETY * tolerance;
+    let mut rate = fastest_oscillation(plant);
     if let RoadSpec::Harmonic {
         angular_frequency, ..
     } = config.road
     {
         rate = rate.max(angular_frequency.abs());
     }
-    let model_step = (tolerance / roughness(&config.road)).powf(0.25) / rate.max(1.0);
+    let model_step = (allowed / roughness(&config.road)).powf(0.25) / rate.max(1.0);
     let base = ladder_base(&config.road);
-    let mut n = (base / model_step)
-        .ceil()
-        .max((base / LARGEST_STEP).ceil())
-        .max(1.0);
-    let too_fine = |n: f64| base / n < SMALLEST_STEP;
-    let refuse = || Error::InvalidParameter {
-        name: "tolerance",
-        value: tolerance,
-        reason: "the relative tolerance needs an internal step below 1e-6 s, beyond the work limit",
-    };
+    let coarsest = (base / LARGEST_STEP).ceil().max(1.0);
+    let mut n = (base / model_step).ceil().max(coarsest);
     let capped = config.max_internal_step > 0.0 && config.max_internal_step <= SMALLEST_STEP;
-    if too_fine(n) && !capped {
-        return Err(refuse());
-    }
+    let check_work = |n: f64| {
+        if base / n < SMALLEST_STEP && !capped {
+            Err(Error::InvalidParameter {
+                name: "tolerance",
+                value: tolerance,
+                reason: "the relative tolerance needs an internal step below 1e-6 s, beyond the work limit",
+            })
+        } else {
+            Ok(())
+        }
+    };
+    check_work(n)?;
     let mut choice = StepChoice {
         step_bound: ladder_step(base, n, config.max_internal_step),
         model_step,
@@ -237,12 +276,11 @@ pub fn choose_step(plant: &Plant, config: &SimulationConfig) -> Result<StepChoic
         probe_rounds: 0,
     };
     if matches!(config.road, RoadSpec::Input) {
-        return Ok(choice);
+        return Ok((choice, None));
     }
-    let coarsest = (base / LARGEST_STEP).ceil().max(1.0);
-    let allowed = PROBE_SAFETY * tolerance;
-    // The last step the probe accepted, while a coarser one is tried.
-    let mut accepted: Option<f64> = None;
+    // What passed the probe, while a coarser step is tried.
+    let mut accepted: Option<(f64, f64, Option<Simulator>)> = None;
+    let mut pristine = None;
     while choice.probe_rounds < PROBE_ROUNDS {
         let coarse = ladder_step(base, n, config.max_internal_step);
         let fine = ladder_step(base, 2.0 * n, config.max_internal_step);
@@ -251,14 +289,15 @@ pub fn choose_step(plant: &Plant, config: &SimulationConfig) -> Result<StepChoic
             break;
         }
         choice.probe_rounds += 1;
-        let Some(error) = probe_error(plant, config, coarse, fine)? else {
+        let Some(probe) = probe(plant, config, coarse, fine)? else {
             break;
         };
-        choice.probe_error = error;
+        pristine = Some(probe.pristine);
         // `n` for which the error would be `allowed` (ε ∝ h⁴ = (Δ/n)⁴),
         // with a margin of 10 %.
-        let needed = n * (error / allowed).powf(0.25) * 1.1;
-        if error <= allowed {
+        let needed = n * (probe.error / allowed).powf(0.25) * 1.1;
+        if probe.error <= allowed {
+            choice.probe_error = probe.error;
             if accepted.is_some() {
                 break;
             }
@@ -266,32 +305,43 @@ pub fn choose_step(plant: &Plant, config: &SimulationConfig) -> Result<StepChoic
             if coarser >= n {
                 break;
             }
-            accepted = Some(n);
+            accepted = Some((n, probe.error, pristine.take()));
             n = coarser;
-        } else if let Some(previous) = accepted {
+        } else if let Some((previous, error, kept)) = accepted.take() {
             // The coarser step failed its check: back to the one that passed.
             n = previous;
+            choice.probe_error = error;
+            pristine = kept;
             break;
         } else {
             n = needed.ceil().max(n + 1.0);
-            if too_fine(n) && !capped {
-                return Err(refuse());
-            }
+            check_work(n)?;
+            pristine = None;
         }
     }
     choice.step_bound = ladder_step(base, n, config.max_internal_step);
-    Ok(choice)
+    let pristine = pristine.filter(|sim| sim.step_choice.step_bound == choice.step_bound);
+    Ok((choice, pristine))
 }
 
-/// The estimated relative error of the RMS values of a run at step bound
-/// `coarse` (module docs), from two runs of [`PROBE_DURATION`]; `None`
-/// when it cannot be measured (divergence, no response).
-fn probe_error(
+/// What one probe round measured.
+struct Probe {
+    /// The estimated relative error of the run at the coarse step.
+    error: f64,
+    /// The coarse simulator before it ran.
+    pristine: Simulator,
+}
+
+/// The estimated relative error of the metrics of a run at step bound
+/// `coarse` (module docs), from two runs of [`PROBE_DURATION`]: the RMS
+/// values, and the largest |SDD| where the run keeps it; `None` when it
+/// cannot be measured (divergence, no response).
+fn probe(
     plant: &Plant,
     config: &SimulationConfig,
     coarse: f64,
     fine: f64,
-) -> Result<Option<f64>> {
+) -> Result<Option<Probe>> {
     let tau = if config.variant.has_control() {
         config.params.tau
     } else {
@@ -302,21 +352,29 @@ fn probe_error(
     if ratio >= 1.0 {
         return Ok(None);
     }
-    let probe = SimulationConfig {
-        metrics: Metrics::RoadHolding,
-        ..config.clone()
+    let start = |grid: DelayGrid, bound: f64| -> Option<Simulator> {
+        let mut sim = Simulator::with_grid(config.clone(), plant.clone(), grid).ok()?;
+        sim.step_choice.step_bound = bound;
+        Some(sim)
     };
-    let run = |grid: DelayGrid| -> Option<[f64; 4]> {
-        let mut sim = Simulator::with_grid(probe.clone(), plant.clone(), grid).ok()?;
+    let measure = |mut sim: Simulator| -> Option<[f64; 4]> {
         let summary = sim.run_for(PROBE_DURATION).ok()?;
+        let largest = summary
+            .road_holding
+            .map_or(0.0, |h| h.max_suspension_deflection);
         Some([
             summary.rms.body_acceleration,
             summary.rms.suspension_deflection,
             summary.rms.tire_deflection,
-            summary.road_holding?.max_suspension_deflection,
+            largest,
         ])
     };
-    let (Some(a), Some(b)) = (run(coarse_grid), run(fine_grid)) else {
+    let Some(pristine) = start(coarse_grid, coarse) else {
+        return Ok(None);
+    };
+    let a = measure(pristine.clone());
+    let b = start(fine_grid, fine).and_then(measure);
+    let (Some(a), Some(b)) = (a, b) else {
         return Ok(None);
     };
     let mut error: Option<f64> = None;
@@ -326,5 +384,5 @@ fn probe_error(
             error = Some(error.map_or(relative, |e| e.max(relative)));
         }
     }
-    Ok(error)
+    Ok(error.map(|error| Probe { error, pristine }))
 }

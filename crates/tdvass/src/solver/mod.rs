@@ -279,8 +279,15 @@ impl Simulator {
     /// checks that the internal step `h` resolves times near the start:
     /// `|start_time| <= 2^42 h` ([`Self::MAX_START_TIME_IN_STEPS`]).
     pub fn new(config: SimulationConfig) -> Result<Simulator> {
-        let choice = Self::choose_step(&config)?;
-        Self::with_choice(config, choice)
+        let plant = Self::validate(&config)?;
+        match accuracy::choose(&plant, &config)? {
+            // The probe's coarse simulator, before it ran, is this one.
+            (choice, Some(mut sim)) => {
+                sim.step_choice = choice;
+                Ok(sim)
+            }
+            (choice, None) => Self::with_choice(config, choice),
+        }
     }
 
     /// Checks `config` as [`Self::new`] does and chooses its internal step
