@@ -1,16 +1,20 @@
 /*
- * Cost of one fmi2DoStep through the real tdvass shared library (dlopen),
- * with exact (t = k h) and accumulated (t += h) communication times.
+ * Cost of one fmi2DoStep through the real tdvass shared library (dlopen).
  *
  *   dostep_cost LIB GUID [REPEATS]
  *
- * For each time style and communication step h (1 ms and 10 ms, that is 10
- * and 100 internal steps of 1e-4 s) it runs 15 s of the default experiment
- * and keeps the fastest of REPEATS runs (default 7). A line through the
- * exact-time costs at 10 and 100 internal steps gives the fixed call cost
- * and the cost per internal step; the ratios printed compare each 1 ms cost
- * with "10 internal steps plus the fixed call cost" and the two time styles
- * with each other. Figures in BENCHMARKS.md.
+ * 1. The fixed call cost, with the internal step pinned at 1e-4 s
+ *    (max_internal_step): 15 s of the default experiment at 1 ms and 10 ms
+ *    (10 and 100 internal steps, exact times t = k h and accumulated
+ *    t += h), the fastest of REPEATS runs (default 7). A line through the
+ *    exact-time costs gives the fixed call cost and the cost per internal
+ *    step.
+ * 2. The default tolerance (1e-6: internal step 10/3 ms on the default
+ *    experiment): a doStep of one internal step (aligned), of 1 ms, and of
+ *    steps that are not multiples of it (0.7 ms, 9.9e-5 s, 1e-7 s, and a
+ *    master that varies its step among 0.13 ... 1.9 ms), each against the
+ *    aligned one. Each runs at most 200 000 calls (or 15 s).
+ * Figures in BENCHMARKS.md.
  */
 #define _POSIX_C_SOURCE 199309L
 #include <dlfcn.h>
@@ -42,6 +46,14 @@ static fmi2Status (*setup)(fmi2Component, int, double, double, int, double);
 static fmi2Status (*enter_init)(fmi2Component);
 static fmi2Status (*exit_init)(fmi2Component);
 static fmi2Status (*do_step)(fmi2Component, double, double, int);
+static fmi2Status (*set_real)(fmi2Component, const unsigned *, size_t, const double *);
+
+/* Value reference of max_internal_step. */
+static const unsigned MAX_INTERNAL_STEP = 20;
+/* The default experiment's internal step at the default tolerance. */
+static const double DEFAULT_INTERNAL_STEP = 1e-3;
+/* The step sizes of the varying master (s), taken in turn. */
+static const double VARYING[] = {0.13e-3, 1.9e-3, 0.71e-3, 0.29e-3, 1.37e-3, 0.53e-3, 1.03e-3};
 
 static void *symbol(void *lib, const char *name) {
     void *f = dlsym(lib, name);
@@ -58,32 +70,38 @@ static double now(void) {
     return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 
-/* Seconds per fmi2DoStep over 15 s with step h; `accumulate`: t += h. */
-static double run(const char *guid, double h, int accumulate) {
+/* Seconds per fmi2DoStep with step h (h < 0: the varying master) for 15 s
+ * or at most 200 000 calls; `accumulate`: t += h; `bound`: the
+ * max_internal_step set before initialization (0: none). */
+static double run(const char *guid, double h, int accumulate, double bound) {
     fmi2Component c = instantiate("bench", 1, guid, NULL, &callbacks, 0, 0);
-    if (!c || setup(c, 0, 0.0, 0.0, 0, 0.0) || enter_init(c) || exit_init(c)) {
+    if (!c || set_real(c, &MAX_INTERNAL_STEP, 1, &bound) || setup(c, 0, 0.0, 0.0, 0, 0.0) ||
+        enter_init(c) || exit_init(c)) {
         fprintf(stderr, "cannot start an instance\n");
         exit(1);
     }
-    long n = (long)(15.0 / h + 0.5);
+    double mean = h > 0 ? h : 0.8e-3;
+    long n = (long)(15.0 / mean + 0.5);
+    if (n > 200000) n = 200000;
     double t = 0.0;
     double start = now();
     for (long k = 0; k < n; k++) {
-        if (do_step(c, t, h, 1) != 0) {
+        double step = h > 0 ? h : VARYING[k % 7];
+        if (do_step(c, t, step, 1) != 0) {
             fprintf(stderr, "fmi2DoStep failed at t = %g\n", t);
             exit(1);
         }
-        t = accumulate ? t + h : (double)(k + 1) * h;
+        t = accumulate || h < 0 ? t + step : (double)(k + 1) * h;
     }
     double seconds = (now() - start) / n;
     free_instance(c);
     return seconds;
 }
 
-static double fastest(const char *guid, double h, int accumulate, int repeats) {
+static double fastest(const char *guid, double h, int accumulate, double bound, int repeats) {
     double best = 1e30;
     for (int i = 0; i < repeats; i++) {
-        double s = run(guid, h, accumulate);
+        double s = run(guid, h, accumulate, bound);
         best = s < best ? s : best;
     }
     return best;
@@ -106,22 +124,29 @@ int main(int argc, char **argv) {
     *(void **)&enter_init = symbol(lib, "fmi2EnterInitializationMode");
     *(void **)&exit_init = symbol(lib, "fmi2ExitInitializationMode");
     *(void **)&do_step = symbol(lib, "fmi2DoStep");
-    double exact_10 = fastest(argv[2], 1e-3, 0, repeats);
-    double exact_100 = fastest(argv[2], 1e-2, 0, repeats);
-    double drift_10 = fastest(argv[2], 1e-3, 1, repeats);
-    double drift_100 = fastest(argv[2], 1e-2, 1, repeats);
+    *(void **)&set_real = symbol(lib, "fmi2SetReal");
+    double exact_10 = fastest(argv[2], 1e-3, 0, 1e-4, repeats);
+    double exact_100 = fastest(argv[2], 1e-2, 0, 1e-4, repeats);
+    double drift_10 = fastest(argv[2], 1e-3, 1, 1e-4, repeats);
+    double drift_100 = fastest(argv[2], 1e-2, 1, 1e-4, repeats);
     double per_step = (exact_100 - exact_10) / 90.0;
     double fixed = exact_10 - 10.0 * per_step;
-    printf("fmi2DoStep, default experiment, fastest of %d runs of 15 s:\n", repeats);
+    printf("fmi2DoStep, default experiment, fastest of %d runs:\n", repeats);
+    printf("internal step pinned at 1e-4 s (max_internal_step):\n");
     printf("  1 ms (10 internal steps):   exact t = k h %7.3f us, accumulated t += h %7.3f us\n",
            exact_10 * 1e6, drift_10 * 1e6);
     printf("  10 ms (100 internal steps): exact t = k h %7.3f us, accumulated t += h %7.3f us\n",
            exact_100 * 1e6, drift_100 * 1e6);
     printf("  fit on exact times: %.2f ns per internal step, fixed call cost %.3f us\n",
            per_step * 1e9, fixed * 1e6);
-    printf("  1 ms against 10 internal steps + fixed cost: exact %.3f, accumulated %.3f\n",
-           exact_10 / (fixed + 10.0 * per_step), drift_10 / (fixed + 10.0 * per_step));
-    printf("  accumulated / exact: 1 ms %.3f, 10 ms %.3f\n", drift_10 / exact_10,
-           drift_100 / exact_100);
+    double aligned = fastest(argv[2], DEFAULT_INTERNAL_STEP, 0, 0.0, repeats);
+    printf("default tolerance (internal step %.6g s):\n", DEFAULT_INTERNAL_STEP);
+    printf("  %-28s %8.3f us\n", "aligned (one internal step)", aligned * 1e6);
+    const double steps[] = {1e-3, 0.7e-3, 9.9e-5, 1e-7, -1.0};
+    const char *names[] = {"1 ms", "0.7 ms", "9.9e-5 s", "1e-7 s", "varying 0.13 to 1.9 ms"};
+    for (int i = 0; i < 5; i++) {
+        double cost = fastest(argv[2], steps[i], getenv("EXACT") ? 0 : 1, 0.0, repeats);
+        printf("  %-28s %8.3f us  (%.2f x aligned)\n", names[i], cost * 1e6, cost / aligned);
+    }
     return 0;
 }

@@ -226,6 +226,7 @@ impl RunArgs {
             road: self.road_spec()?,
             tolerance: self.tolerance,
             max_internal_step: self.max_internal_step,
+            communication_step: 0.0,
             start_time: 0.0,
             initial_state: State::zeros(),
             weights: Weights {

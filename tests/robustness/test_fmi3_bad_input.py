@@ -500,7 +500,7 @@ BAD_VALUES = [
     ("fmi3SetFloat64", "g", NAN, "must be finite"),
     ("fmi3SetFloat64", "tau", -2e-4, "must be >= 0"),
     ("fmi3SetFloat64", "tau", NAN, "must be finite"),
-    ("fmi3SetFloat64", "max_internal_step", 0.0, "must be > 0"),
+    ("fmi3SetFloat64", "max_internal_step", -1e-4, "must be >= 0"),
     ("fmi3SetFloat64", "road_amplitude", 1e4, "exceeds 1e3"),
     ("fmi3SetFloat64", "w_tdd", 1e300, "exceeds 1e12"),
     ("fmi3SetFloat64", "x_g", NAN, "must be finite"),

@@ -104,6 +104,16 @@ pub fn check_time_resolution(what: &str, t: f64, grid_step: f64) -> Result<(), F
     Ok(())
 }
 
+/// The first state of `state` (solver order) that is not finite, with its
+/// name and value.
+pub fn non_finite_state(state: &tdvass::model::State) -> Option<(&'static str, f64)> {
+    state
+        .iter()
+        .zip(tdvass::model::STATE_NAMES)
+        .find(|(value, _)| !value.is_finite())
+        .map(|(value, name)| (name, *value))
+}
+
 /// The first output of `outputs` that is not finite, with its value.
 pub fn non_finite_output(outputs: &Outputs) -> Option<(&'static str, f64)> {
     VARIABLES.iter().find_map(|v| match v.access {

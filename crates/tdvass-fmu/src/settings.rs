@@ -167,6 +167,9 @@ impl Settings {
             road: self.road_spec()?,
             tolerance: self.tolerance,
             max_internal_step: self.max_internal_step,
+            // The internal step divides the DefaultExperiment stepSize: a
+            // master stepping by it meets internal nodes only.
+            communication_step: crate::DEFAULT_STEP_SIZE,
             start_time,
             initial_state: State::from(self.initial_state),
             weights: self.weights(),

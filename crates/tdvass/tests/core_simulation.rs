@@ -396,7 +396,7 @@ fn tiny_delays_are_continuous_with_zero_and_huge_delays_are_refused() {
     assert!((states[4] - states[0]).amax() > 0.0);
     let err = Simulator::new(config(
         Variant::Tdvass,
-        Params::with_controller(5386.0, 1e4),
+        Params::with_controller(5386.0, 1e5),
         RoadSpec::paper_harmonic(),
     ))
     .unwrap_err();

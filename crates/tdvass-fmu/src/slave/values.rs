@@ -33,10 +33,19 @@ impl Slave {
 
     /// The outputs now: from the simulation, or during initialization from
     /// a simulator built from the current settings.
+    /// A non-finite output is never handed out (a last line of defence:
+    /// the states are bounded at every step).
     fn outputs(&mut self) -> Result<Outputs, FmiError> {
-        match self.state.sim.as_mut() {
-            Some(sim) => Ok(sim.outputs()),
-            None => Ok(self.build_simulator()?.outputs()),
+        let outputs = match self.state.sim.as_mut() {
+            Some(sim) => sim.outputs(),
+            None => self.build_simulator()?.outputs(),
+        };
+        match limits::non_finite_output(&outputs) {
+            None => Ok(outputs),
+            Some((name, value)) => Err(FmiError::error(format!(
+                "output `{name}` = {value} is not finite at t = {} s",
+                outputs.time
+            ))),
         }
     }
 

@@ -95,11 +95,13 @@ fn start_values_are_admissible_and_match_the_library_defaults() {
     }
     let s = Settings::start_values();
     let config = s.to_config(0.0).unwrap();
-    // The library's defaults, with every metric computed (the FMU's level).
+    // The library's defaults, with every metric computed (the FMU's level)
+    // and the internal step dividing the DefaultExperiment stepSize.
     assert_eq!(
         config,
         SimulationConfig {
             metrics: tdvass::solver::Metrics::Comfort,
+            communication_step: crate::DEFAULT_STEP_SIZE,
             ..SimulationConfig::default()
         }
     );

@@ -42,8 +42,11 @@
 //! **The ladder.** h is taken from `Δ / n` (n a whole number): Δ is the
 //! spacing of the road's breakpoints for the ISO 8608 and paper-compatible
 //! roads, so that every breakpoint falls on a node and no step is split,
-//! else [`LARGEST_STEP`]. The step is then a function of a whole number,
-//! the same on every platform.
+//! else [`LARGEST_STEP`]. A communication step below that (the FMU's
+//! DefaultExperiment stepSize, 1 ms) takes the place of Δ: a master that
+//! steps by it, or by a multiple, then meets internal nodes only, and a
+//! call costs its internal steps and nothing for a point inside a step.
+//! The step is a function of a whole number, the same on every platform.
 //!
 //! **The probe.** Step doubling checks the choice after the fact: two runs
 //! of [`PROBE_DURATION`] from the configured start (the start transient
@@ -183,15 +186,33 @@ pub fn fastest_oscillation(plant: &Plant) -> f64 {
 }
 
 /// The spacing Δ of the ladder `Δ / n` (s): the road's breakpoint spacing
-/// where it has one of its own, else [`LARGEST_STEP`].
-fn ladder_base(road: &RoadSpec) -> f64 {
-    match road {
+/// where it has one of its own, else [`LARGEST_STEP`]; a communication
+/// step (when > 0) below that takes its place.
+fn ladder_base(road: &RoadSpec, communication_step: f64) -> f64 {
+    let road_base = match road {
         RoadSpec::Iso8608(_) => ISO_NODE_INTERVAL,
         RoadSpec::PaperCompatible {
             sample_interval, ..
         } if *sample_interval <= LARGEST_STEP * 100.0 => *sample_interval,
         _ => LARGEST_STEP,
+    };
+    if communication_step > 0.0 {
+        road_base.min(communication_step)
+    } else {
+        road_base
     }
+}
+
+/// Checks `communication_step`: 0 (none) or finite and > 0.
+pub fn check_communication_step(step: f64) -> Result<()> {
+    if !(step.is_finite() && step >= 0.0) {
+        return Err(Error::InvalidParameter {
+            name: "communication_step",
+            value: step,
+            reason: "must be finite and >= 0 (0 = none)",
+        });
+    }
+    Ok(())
 }
 
 /// The roughness constant C of the error model for this road.
@@ -243,6 +264,7 @@ pub(super) fn choose(
 ) -> Result<(StepChoice, Option<Simulator>)> {
     check_tolerance(config.tolerance)?;
     check_max_internal_step(config.max_internal_step)?;
+    check_communication_step(config.communication_step)?;
     let tolerance = config.tolerance;
     let allowed = PROBE_SAFETY * tolerance;
     let mut rate = fastest_oscillation(plant);
@@ -253,7 +275,7 @@ pub(super) fn choose(
         rate = rate.max(angular_frequency.abs());
     }
     let model_step = (allowed / roughness(&config.road)).powf(0.25) / rate.max(1.0);
-    let base = ladder_base(&config.road);
+    let base = ladder_base(&config.road, config.communication_step);
     let coarsest = (base / LARGEST_STEP).ceil().max(1.0);
     let mut n = (base / model_step).ceil().max(coarsest);
     let capped = config.max_internal_step > 0.0 && config.max_internal_step <= SMALLEST_STEP;

@@ -100,6 +100,14 @@ impl Holding {
     }
 }
 
+/// Whether the cubic through the margins `a` and `b` (`[g, g']` at the
+/// ends of an interval of length `length`) may be negative somewhere: the
+/// test of [`check_step`].
+#[inline]
+pub(crate) fn may_lose_contact(length: f64, a: [f64; 2], b: [f64; 2]) -> bool {
+    a[0].min(b[0]) < HERMITE_BOUND * length * (a[1].abs() + b[1].abs())
+}
+
 /// `[SDD, SDD']` = `[x_s − x_t, v_s − v_t]` (m, m/s) at state x.
 #[inline(always)]
 pub(crate) fn deflection(x: &[f64; 6]) -> [f64; 2] {

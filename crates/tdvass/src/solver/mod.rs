@@ -129,6 +129,12 @@ pub struct SimulationConfig {
     /// Optional upper bound of the internal step (s); 0 = none, the
     /// tolerance alone sets the step.
     pub max_internal_step: f64,
+    /// A communication step the internal step should divide (s; 0 =
+    /// none): the ladder of steps becomes `communication_step / n`, so that
+    /// a caller advancing by it (or a multiple) meets internal nodes only
+    /// and never pays for a point inside a step. The FMU passes its
+    /// DefaultExperiment stepSize (see [`accuracy`]).
+    pub communication_step: f64,
     /// Start time t_0 (s).
     pub start_time: f64,
     /// X(t_0) = [x_s, v_s, x_h, v_h, x_t, v_t]; also the history for t < t_0.
@@ -205,6 +211,7 @@ impl Default for SimulationConfig {
             road: RoadSpec::paper_harmonic(),
             tolerance: DEFAULT_TOLERANCE,
             max_internal_step: 0.0,
+            communication_step: 0.0,
             start_time: 0.0,
             initial_state: State::zeros(),
             weights: Weights::default(),
@@ -311,6 +318,7 @@ impl Simulator {
         let plant = Self::validate(&config)?;
         accuracy::check_tolerance(config.tolerance)?;
         accuracy::check_max_internal_step(config.max_internal_step)?;
+        accuracy::check_communication_step(config.communication_step)?;
         let grid = DelayGrid::new(Self::resolved_delay(&config), step_bound)?;
         let mut sim = Self::with_grid(config, plant, grid)?;
         sim.step_choice.step_bound = step_bound;

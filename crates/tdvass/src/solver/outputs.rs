@@ -208,7 +208,33 @@ impl Simulator {
 
     /// The first loss of tire contact so far, if any (see [`ContactLoss`];
     /// always `None` below [`super::Metrics::RoadHolding`]).
+    ///
+    /// Cheap where nothing is lost: the committed accumulators answer up to
+    /// the committed point, and the stretch from there to now is decided
+    /// from its end margins ([`super::holding::may_lose_contact`]); only a
+    /// stretch that may lose contact computes the outputs.
     pub fn first_contact_loss(&mut self) -> Option<ContactLoss> {
+        if !self.config.metrics.road_holding() {
+            return None;
+        }
+        if let Some(time) = self.holding.first_loss {
+            return Some(self.contact_loss_at(time));
+        }
+        let (tc, t) = (self.committed_time, self.current_time);
+        if t <= tc {
+            return None;
+        }
+        let piece = self.piece_from(tc);
+        if piece.end() >= t {
+            let (xc, x) = (self.committed_state, self.current_state);
+            let (a, b) = (
+                self.margin_at(tc, &xc, &piece),
+                self.margin_at(t, &x, &piece),
+            );
+            if !super::holding::may_lose_contact(t - tc, a, b) {
+                return None;
+            }
+        }
         self.outputs()
             .road_holding
             .and_then(|holding| holding.first_contact_loss)

@@ -23,8 +23,9 @@ use std::sync::Arc;
 /// W_k filter state, the integrals of a_w² and a_w⁴, and the road-holding
 /// and working-space accumulators; the bytes of version 1 had no version
 /// word (they begin with the body mass) and are refused. Version 3 added
-/// the tolerance and the internal step bound it gave (a restored simulator
-/// keeps its step without probing again).
+/// the tolerance, the communication step the internal step divides and the
+/// internal step bound they gave (a restored simulator keeps its step
+/// without probing again).
 pub const STATE_FORMAT_VERSION: u64 = 3;
 
 fn write_random_road(w: &mut ByteWriter, r: &RandomRoad) {
@@ -73,6 +74,7 @@ fn write_config(w: &mut ByteWriter, c: &SimulationConfig) {
     }
     w.f64(c.tolerance);
     w.f64(c.max_internal_step);
+    w.f64(c.communication_step);
     w.f64(c.start_time);
     c.initial_state.iter().for_each(|&v| w.f64(v));
     w.f64(c.weights.body_acceleration);
@@ -123,6 +125,7 @@ fn read_config(r: &mut ByteReader) -> Result<SimulationConfig> {
     };
     let tolerance = r.f64()?;
     let max_internal_step = r.f64()?;
+    let communication_step = r.f64()?;
     let start_time = r.f64()?;
     let mut initial_state = State::zeros();
     for v in initial_state.iter_mut() {
@@ -141,6 +144,7 @@ fn read_config(r: &mut ByteReader) -> Result<SimulationConfig> {
         road,
         tolerance,
         max_internal_step,
+        communication_step,
         start_time,
         initial_state,
         weights,
