@@ -48,7 +48,13 @@ const STEPS: u64 = 1000;
 /// m = 2, harmonic road), advanced `n` internal steps per call by one
 /// `advance_to`, so each call does everything a step does.
 fn tdvass_steps() -> impl FnMut(u64) {
-    config_steps(SimulationConfig::default())
+    // The floor's case: h = 1e-4 s, m = 2 (the bound sets the step; the
+    // loop per step is the same at any step the tolerance chooses).
+    config_steps(SimulationConfig {
+        tolerance: tdvass::solver::accuracy::MAX_TOLERANCE,
+        max_internal_step: 1e-4,
+        ..SimulationConfig::default()
+    })
 }
 
 /// `n` internal steps per call of the simulator of `config` by one

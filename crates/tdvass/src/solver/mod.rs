@@ -37,7 +37,14 @@
 //! index alone, so splits and `to_bytes`/`from_bytes` stay bit-identical
 //! (unit tests at the end of this file).
 //!
-//! **Files.** `grid` (the internal step and how the delay lies on it),
+//! **The step.** The internal step comes from the tolerance
+//! ([`SimulationConfig::tolerance`]): an error model of what depends on it
+//! (the Hermite interpolant of the delayed input, the time-average
+//! quadrature, the located extrema) gives a first step, and a
+//! step-doubling probe checks and refines it ([`accuracy`]).
+//!
+//! **Files.** `accuracy` (the step from the tolerance), `grid` (the
+//! internal step and how the delay lies on it),
 //! `operators` (the exact step maps), `kernel` (the whole-step loop and its
 //! AVX2 build: all of the solver's `unsafe`; the crate denies it elsewhere),
 //! `steps` (whole steps and steps that a road breakpoint splits), `outputs`

@@ -1,0 +1,83 @@
+#!/usr/bin/env python3
+"""tdvass.fmu against the FMI project's Reference FMU Dahlquist in the same
+master loop and the same run: fmpy's FMU2Slave, `doStep` of 1 ms then
+`getReal` of three variables, 15 s (15 000 points), median of the repeats.
+
+Dahlquist (one state, explicit Euler) is the cheapest model an FMU can be,
+so the ratio is what tdvass adds to what the master itself costs.
+
+Usage: benches/fmu_vs_reference.py [--fmu PATH] [--reference PATH]
+                                   [--repeats N] [--duration S]
+Defaults: target/fmu/tdvass.fmu (cargo run --release -p fmu-build) and
+../shared/ref-fmus/Dahlquist.fmu beside the repository.
+"""
+
+import argparse
+import statistics
+import tempfile
+import time
+from pathlib import Path
+
+from fmpy import extract, read_model_description
+from fmpy.fmi2 import FMU2Slave
+
+ROOT = Path(__file__).resolve().parent.parent
+TDVASS_OUTPUTS = ["rms_body_acceleration", "rms_suspension_deflection", "rms_tire_deflection"]
+DAHLQUIST_VARIABLES = ["x", "der(x)", "k"]
+
+
+def start(path, workdir):
+    md = read_model_description(str(path))
+    unzipdir = extract(str(path), unzipdir=tempfile.mkdtemp(dir=workdir))
+    slave = FMU2Slave(
+        guid=md.guid,
+        unzipDirectory=unzipdir,
+        modelIdentifier=md.coSimulation.modelIdentifier,
+        instanceName="bench",
+    )
+    slave.instantiate()
+    slave.setupExperiment(startTime=0.0)
+    slave.enterInitializationMode()
+    slave.exitInitializationMode()
+    return md, slave
+
+
+def loop(path, names, duration, step, workdir):
+    """Seconds per communication point of `doStep` + `getReal(names)`."""
+    md, slave = start(path, workdir)
+    by_name = {v.name: v.valueReference for v in md.modelVariables}
+    vrs = [by_name[n] for n in names]
+    n = int(round(duration / step))
+    begin = time.perf_counter()
+    for k in range(n):
+        slave.doStep(currentCommunicationPoint=k * step, communicationStepSize=step)
+        slave.getReal(vrs)
+    seconds = (time.perf_counter() - begin) / n
+    slave.terminate()
+    slave.freeInstance()
+    return seconds
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--fmu", default=str(ROOT / "target" / "fmu" / "tdvass.fmu"))
+    parser.add_argument(
+        "--reference", default=str(ROOT.parent / "shared" / "ref-fmus" / "Dahlquist.fmu")
+    )
+    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--duration", type=float, default=15.0)
+    args = parser.parse_args()
+    ours, theirs = [], []
+    with tempfile.TemporaryDirectory() as workdir:
+        for _ in range(args.repeats):
+            ours.append(loop(args.fmu, TDVASS_OUTPUTS, args.duration, 1e-3, workdir))
+            theirs.append(loop(args.reference, DAHLQUIST_VARIABLES, args.duration, 1e-3, workdir))
+    a, b = statistics.median(ours), statistics.median(theirs)
+    print(f"doStep(1 ms) + getReal(3), median of {args.repeats} runs of {args.duration} s:")
+    print(f"  tdvass.fmu      {a * 1e6:8.3f} us per point")
+    print(f"  Dahlquist.fmu   {b * 1e6:8.3f} us per point")
+    print(f"  ratio           {a / b:8.3f}")
+
+
+if __name__ == "__main__":
+    main()
