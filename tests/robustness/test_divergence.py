@@ -178,7 +178,7 @@ sys.path.insert(0, {here!r})
 import fmi2
 lib = fmi2.load()
 a = fmi2.Instance(lib)
-a.initialize(stop=None)
+a.initialize(stop=None, max_internal_step=1e-4)
 assert a.step(0.0623) == fmi2.OK
 status, state = a.get_state()
 data = a.serialize(state)

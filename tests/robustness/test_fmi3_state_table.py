@@ -252,7 +252,8 @@ def bring_to(make3, error_state, state):
 
 def inside_an_intermediate_update(make3, action):
     """Runs `action(inst)` once, from the first intermediate update of a
-    1 ms step (10 internal steps) from t = 0 in Step Mode. Returns the
+    1 ms step (10 internal steps of 0.1 ms, max_internal_step) from t = 0
+    in Step Mode. Returns the
     instance, what the action returned, what it logged, the state inside
     the callback after the action, and the serialized state after the step
     with the serialized state of the same step without the action."""
@@ -270,7 +271,7 @@ def inside_an_intermediate_update(make3, action):
     runs = []
     for act in (on_update, lambda *_: False):
         inst = make3(intermediate=act)
-        inst.initialize(stop=15.0)
+        inst.initialize(stop=15.0, max_internal_step=1e-4)
         keep_a_state(inst)
         assert inst.step(0.001) == OK, inst.log.last()
         assert len(inst.updates) == 9  # the nodes inside the step

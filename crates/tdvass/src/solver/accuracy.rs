@@ -67,7 +67,11 @@
 //! runs again, at most [`PROBE_ROUNDS`] times. Where the first estimate is
 //! well below the tolerance, the same formula gives a longer step (by at
 //! most [`MAX_COARSENING`]), and one more probe confirms it; if it fails,
-//! the step that passed is kept. The probe runs the caller's own
+//! the step that passed is kept. A probe whose finer run would need more
+//! than [`MAX_PROBE_WORK`] internal steps and road breakpoints is not run
+//! (a tiny `max_internal_step` or road sample interval): the model's step
+//! stands, and the work limits of the caller apply to the run. The probe
+//! runs the caller's own
 //! configuration, so it checks the metrics the run reports, and a probe
 //! that accepts the step hands its coarse simulator, as it was before it
 //! ran, to [`Simulator::new`]: the check costs one extra simulator and
@@ -106,6 +110,9 @@ pub const PROBE_DURATION: f64 = 0.5;
 pub const PROBE_SAFETY: f64 = 0.5;
 /// Most rounds of the probe.
 pub const PROBE_ROUNDS: usize = 6;
+/// Most internal steps plus road breakpoints of one probe run (2^20, a
+/// few milliseconds); a probe that would need more is not run.
+pub const MAX_PROBE_WORK: f64 = 1_048_576.0;
 /// Largest factor by which the probe may lengthen the model's step.
 pub const MAX_COARSENING: f64 = 8.0;
 /// `C` of the harmonic road.
@@ -114,6 +121,10 @@ pub const ROUGHNESS_SMOOTH: f64 = 1e-4;
 pub const ROUGHNESS_SPARSE: f64 = 1e-3;
 /// `C` of the ISO 8608 road (a breakpoint every millisecond).
 pub const ROUGHNESS_DENSE: f64 = 2e-2;
+/// A road's breakpoint spacing below this (s) is not made a divisor of
+/// the step (the breakpoints then split steps, and the work limit per call
+/// counts them).
+const MIN_ROAD_BASE: f64 = 10.0 * SMALLEST_STEP;
 /// Most QR sweeps of the Schur form that finds the plant's eigenvalues.
 const SCHUR_ITERATIONS: usize = 200;
 
@@ -204,7 +215,7 @@ fn ladder_base(road: &RoadSpec, communication_step: f64) -> f64 {
         RoadSpec::Iso8608(_) => ISO_NODE_INTERVAL,
         RoadSpec::PaperCompatible {
             sample_interval, ..
-        } if *sample_interval <= LARGEST_STEP * 100.0 => *sample_interval,
+        } if (MIN_ROAD_BASE..=LARGEST_STEP * 100.0).contains(sample_interval) => *sample_interval,
         _ => LARGEST_STEP,
     };
     if communication_step > 0.0 {
@@ -317,8 +328,9 @@ pub(super) fn choose(
     while choice.probe_rounds < PROBE_ROUNDS {
         let coarse = ladder_step(base, n, config.max_internal_step);
         let fine = ladder_step(base, 2.0 * n, config.max_internal_step);
-        if fine >= coarse {
-            // max_internal_step caps both: nothing to refine.
+        if fine >= coarse || probe_work(config, fine) > MAX_PROBE_WORK {
+            // max_internal_step caps both (nothing to refine), or the probe
+            // would pass its work limit: the model's step stands.
             break;
         }
         choice.probe_rounds += 1;
@@ -355,6 +367,25 @@ pub(super) fn choose(
     choice.step_bound = ladder_step(base, n, config.max_internal_step);
     let pristine = pristine.filter(|sim| sim.step_choice.step_bound == choice.step_bound);
     Ok((choice, pristine))
+}
+
+/// Internal steps and road breakpoints of the finer probe run at step
+/// `fine`.
+fn probe_work(config: &SimulationConfig, fine: f64) -> f64 {
+    let breakpoints = match &config.road {
+        RoadSpec::Iso8608(_) => PROBE_DURATION / ISO_NODE_INTERVAL,
+        RoadSpec::PaperCompatible {
+            sample_interval, ..
+        } => PROBE_DURATION / sample_interval,
+        RoadSpec::Samples(samples) => {
+            let (from, to) = (config.start_time, config.start_time + PROBE_DURATION);
+            let first = samples.partition_point(|&(t, _)| t < from);
+            let last = samples.partition_point(|&(t, _)| t <= to);
+            last.saturating_sub(first) as f64
+        }
+        RoadSpec::Harmonic { .. } | RoadSpec::Input => 0.0,
+    };
+    PROBE_DURATION / fine + breakpoints
 }
 
 /// What one probe round measured.
