@@ -46,6 +46,8 @@ typedef fmi3Status (*fmi3ExitInitializationModeTYPE)(fmi3Instance);
 typedef fmi3Status (*fmi3TerminateTYPE)(fmi3Instance);
 typedef fmi3Status (*fmi3GetFloat64TYPE)(fmi3Instance, const fmi3ValueReference[], size_t,
                                          fmi3Float64[], size_t nValues);
+typedef fmi3Status (*fmi3SetFloat64TYPE)(fmi3Instance, const fmi3ValueReference[], size_t,
+                                         const fmi3Float64[], size_t nValues);
 typedef fmi3Status (*fmi3SetInt32TYPE)(fmi3Instance, const fmi3ValueReference[], size_t,
                                        const fmi3Int32[], size_t nValues);
 typedef fmi3Status (*fmi3SetInt64TYPE)(fmi3Instance, const fmi3ValueReference[], size_t,

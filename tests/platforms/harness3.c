@@ -53,6 +53,7 @@ static struct {
     fmi3ExitInitializationModeTYPE ExitInitializationMode;
     fmi3TerminateTYPE Terminate;
     fmi3GetFloat64TYPE GetFloat64;
+    fmi3SetFloat64TYPE SetFloat64;
     fmi3SetInt32TYPE SetInt32;
     fmi3SetInt64TYPE SetInt64;
     fmi3GetFMUStateTYPE GetFMUState;
@@ -66,7 +67,7 @@ static struct {
 
 /* Value references of the parameters the harness sets (the tests check
  * these names against modelDescription.xml). */
-enum { VR_VARIANT = 1, VR_ROAD = 12, VR_ROAD_CLASS = 15, VR_ROAD_SEED = 18 };
+enum { VR_VARIANT = 1, VR_ROAD = 12, VR_ROAD_CLASS = 15, VR_ROAD_SEED = 18, VR_MAX_INTERNAL_STEP = 20 };
 enum { VARIANT_CS = 1, ROAD_ISO8608 = 2, ROAD_CLASS_C = 3 };
 
 #define STEP 1e-3               /* communication step, s */
@@ -132,6 +133,7 @@ static void load(const char *path) {
     SYM(ExitInitializationMode, "fmi3ExitInitializationMode");
     SYM(Terminate, "fmi3Terminate");
     SYM(GetFloat64, "fmi3GetFloat64");
+    SYM(SetFloat64, "fmi3SetFloat64");
     SYM(SetInt32, "fmi3SetInt32");
     SYM(SetInt64, "fmi3SetInt64");
     SYM(GetFMUState, "fmi3GetFMUState");
@@ -187,15 +189,17 @@ static void intermediate_update(fmi3InstanceEnvironment env, fmi3Float64 time, f
     if (get_allowed && e->csv) write_values(e->csv, e->instance, time);
 }
 
-/* Int64 (Enumerations) and Int32 parameters set before initialization. */
+/* Int64 (Enumerations), Int32 and Float64 parameters set before
+ * initialization. */
 typedef struct {
     size_t count;
     fmi3ValueReference vrs[3];
     fmi3Int64 values[3];
     fmi3Int32 seed; /* road_seed, when > 0 */
+    fmi3Float64 max_internal_step; /* when > 0 */
 } Parameters;
 
-static const Parameters defaults = {0, {0}, {0}, 0};
+static const Parameters defaults = {0, {0}, {0}, 0, 0.0};
 
 static fmi3Instance initialized(const char *name, const Parameters *parameters, Environment *env) {
     fmi3Instance c = fmi.InstantiateCoSimulation(
@@ -209,6 +213,10 @@ static fmi3Instance initialized(const char *name, const Parameters *parameters, 
     if (parameters->seed > 0) {
         const fmi3ValueReference vr = VR_ROAD_SEED;
         REQUIRE_OK(fmi.SetInt32(c, &vr, 1, &parameters->seed, 1));
+    }
+    if (parameters->max_internal_step > 0.0) {
+        const fmi3ValueReference vr = VR_MAX_INTERNAL_STEP;
+        REQUIRE_OK(fmi.SetFloat64(c, &vr, 1, &parameters->max_internal_step, 1));
     }
     REQUIRE_OK(fmi.EnterInitializationMode(c, false, 0.0, 0.0, true, STEPS * STEP));
     REQUIRE_OK(fmi.ExitInitializationMode(c));
@@ -299,12 +307,15 @@ static fmi3Byte *read_file(const char *path, size_t *size) {
     return bytes;
 }
 
-/* The default experiment's first steps with the callback reading outputs. */
+/* The default experiment's first steps with the callback reading outputs,
+ * on internal nodes every 0.1 ms (max_internal_step): nine inside each
+ * 1 ms step. */
 static long intermediate(const char *dir) {
     Environment env = {NULL, NULL, 0};
     env.csv = open_file(dir, "intermediate.csv", "wb");
     write_header(env.csv);
-    fmi3Instance c = initialized("intermediate", &defaults, &env);
+    const Parameters fine = {0, {0}, {0}, 0, 1e-4};
+    fmi3Instance c = initialized("intermediate", &fine, &env);
     run_steps(c, NULL, 0, INTERMEDIATE_STEPS);
     finish(c);
     fclose(env.csv);
@@ -343,7 +354,7 @@ int main(int argc, char **argv) {
 
     experiment(dir, "default.csv", &defaults);
     static const Parameters iso_c_cs = {
-        3, {VR_VARIANT, VR_ROAD, VR_ROAD_CLASS}, {VARIANT_CS, ROAD_ISO8608, ROAD_CLASS_C}, 7};
+        3, {VR_VARIANT, VR_ROAD, VR_ROAD_CLASS}, {VARIANT_CS, ROAD_ISO8608, ROAD_CLASS_C}, 7, 0.0};
     experiment(dir, "iso_c_cs.csv", &iso_c_cs);
 
     size_t size = 0;

@@ -102,6 +102,7 @@ pub mod bytes;
 pub mod comfort;
 pub mod error;
 pub mod limits;
+pub mod math;
 pub mod metrics;
 pub mod model;
 mod monotone;

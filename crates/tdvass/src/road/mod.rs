@@ -375,7 +375,7 @@ impl RoadPiece {
             RoadPiece::Harmonic {
                 amplitude,
                 angular_frequency,
-            } => amplitude * (angular_frequency * t).sin(),
+            } => amplitude * crate::math::sin(angular_frequency * t),
             RoadPiece::Linear {
                 start,
                 value,
@@ -392,7 +392,7 @@ impl RoadPiece {
             RoadPiece::Harmonic {
                 amplitude,
                 angular_frequency,
-            } => amplitude * angular_frequency * (angular_frequency * t).cos(),
+            } => amplitude * angular_frequency * crate::math::cos(angular_frequency * t),
             RoadPiece::Linear { slope, .. } => slope,
         }
     }
@@ -541,10 +541,10 @@ impl Road {
                 // spectral density, i.e. intensity 1/2: this is what makes the
                 // spatial PSD equal Gq(n0) (n/n0)^-2.
                 let rate = 2.0 * PI * road.cutoff_frequency;
-                let decay = (-rate * ISO_NODE_INTERVAL).exp();
+                let decay = crate::math::exp(-rate * ISO_NODE_INTERVAL);
                 let diffusion = road.noise_gain() / std::f64::consts::SQRT_2;
-                let gain =
-                    diffusion * (-(-2.0 * rate * ISO_NODE_INTERVAL).exp_m1() / (2.0 * rate)).sqrt();
+                let gain = diffusion
+                    * (-crate::math::exp_m1(-2.0 * rate * ISO_NODE_INTERVAL) / (2.0 * rate)).sqrt();
                 RoadKind::Nodes(Box::new(NodeSequence::new(
                     start_time,
                     ISO_NODE_INTERVAL,

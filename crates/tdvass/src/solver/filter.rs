@@ -168,7 +168,7 @@ impl FilterRows {
                 amplitude,
                 angular_frequency,
             } => {
-                let (sin, cos) = (angular_frequency * at).sin_cos();
+                let (sin, cos) = crate::math::sin_cos(angular_frequency * at);
                 next += self.harmonic_road * Vector2::new(amplitude * sin, amplitude * cos);
             }
         }
@@ -408,7 +408,7 @@ impl Simulator {
                 amplitude,
                 angular_frequency: w,
             } => {
-                let (sin, cos) = (w * t).sin_cos();
+                let (sin, cos) = crate::math::sin_cos(w * t);
                 let a = amplitude;
                 [a * sin, a * w * cos, -a * w * w * sin, -a * w * w * w * cos]
             }

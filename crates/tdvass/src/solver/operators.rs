@@ -87,7 +87,7 @@ impl StepOperator {
                 amplitude,
                 angular_frequency,
             } => {
-                let (sin, cos) = (angular_frequency * at).sin_cos();
+                let (sin, cos) = crate::math::sin_cos(angular_frequency * at);
                 next += self.harmonic_road * Vector2::new(amplitude * sin, amplitude * cos);
             }
         }
@@ -273,7 +273,7 @@ impl GridStep {
         angular_frequency: f64,
         h: f64,
     ) -> GridStep {
-        let (sin, cos) = (angular_frequency * h).sin_cos();
+        let (sin, cos) = crate::math::sin_cos(angular_frequency * h);
         GridStep {
             transition: columns(transition),
             nodes: columns(nodes),

@@ -18,7 +18,7 @@ impl Simulator {
                 amplitude,
                 angular_frequency,
             } => {
-                let (sin, cos) = (angular_frequency * self.grid_time(k)).sin_cos();
+                let (sin, cos) = crate::math::sin_cos(angular_frequency * self.grid_time(k));
                 [amplitude * sin, amplitude * cos]
             }
             _ => [0.0; 2],

@@ -619,7 +619,7 @@ impl Simulator {
                 amplitude,
                 angular_frequency: w,
             } => {
-                let (sin, cos) = (w * t).sin_cos();
+                let (sin, cos) = crate::math::sin_cos(w * t);
                 let a = amplitude;
                 [a * sin, a * w * cos, -a * w * w * sin, -a * w * w * w * cos]
             }
