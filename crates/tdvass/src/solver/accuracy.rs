@@ -283,7 +283,7 @@ pub fn choose_step(plant: &Plant, config: &SimulationConfig) -> Result<StepChoic
 pub(super) fn choose(
     plant: &Plant,
     config: &SimulationConfig,
-) -> Result<(StepChoice, Option<Simulator>)> {
+) -> Result<(StepChoice, Option<Box<Simulator>>)> {
     check_tolerance(config.tolerance)?;
     check_max_internal_step(config.max_internal_step)?;
     check_communication_step(config.communication_step)?;
@@ -323,7 +323,7 @@ pub(super) fn choose(
         return Ok((choice, None));
     }
     // What passed the probe, while a coarser step is tried.
-    let mut accepted: Option<(f64, f64, Option<Simulator>)> = None;
+    let mut accepted: Option<(f64, f64, Option<Box<Simulator>>)> = None;
     let mut pristine = None;
     while choice.probe_rounds < PROBE_ROUNDS {
         let coarse = ladder_step(base, n, config.max_internal_step);
@@ -393,7 +393,7 @@ struct Probe {
     /// The estimated relative error of the run at the coarse step.
     error: f64,
     /// The coarse simulator before it ran.
-    pristine: Simulator,
+    pristine: Box<Simulator>,
 }
 
 /// The estimated relative error of the metrics of a run at step bound
@@ -416,12 +416,13 @@ fn probe(
     if ratio >= 1.0 {
         return Ok(None);
     }
-    let start = |grid: DelayGrid, bound: f64| -> Option<Simulator> {
-        let mut sim = Simulator::with_grid(config.clone(), plant.clone(), grid).ok()?;
+    // Boxed: a simulator is several kilobytes, and it moves.
+    let start = |grid: DelayGrid, bound: f64| -> Option<Box<Simulator>> {
+        let mut sim = Box::new(Simulator::with_grid(config.clone(), plant.clone(), grid).ok()?);
         sim.step_choice.step_bound = bound;
         Some(sim)
     };
-    let measure = |mut sim: Simulator| -> Option<[f64; 4]> {
+    let measure = |mut sim: Box<Simulator>| -> Option<[f64; 4]> {
         let summary = sim.run_for(PROBE_DURATION).ok()?;
         let largest = summary
             .road_holding

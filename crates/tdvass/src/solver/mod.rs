@@ -298,7 +298,7 @@ impl Simulator {
             // The probe's coarse simulator, before it ran, is this one.
             (choice, Some(mut sim)) => {
                 sim.step_choice = choice;
-                Ok(sim)
+                Ok(*sim)
             }
             (choice, None) => Self::with_choice(config, choice),
         }
