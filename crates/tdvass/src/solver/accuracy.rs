@@ -80,6 +80,11 @@
 //! external road input (road = 0) is not known in advance: its step is the
 //! model's alone.
 //!
+//! **The same step everywhere.** The choice uses only IEEE-exact
+//! operations (+, ×, ÷, √; `x^{1/4}` as `√√x`) and the Schur form's, so
+//! every platform takes the same step; the probe's runs are bit-identical
+//! across platforms like any run (see [`crate::math`]).
+//!
 //! **Delay regimes.** The step bound then goes to [`super::DelayGrid`],
 //! which keeps the three regimes (folded, inside the step, whole steps of
 //! `h = tau / m`). Each is accurate to the tolerance, so J(tau) is
@@ -201,7 +206,7 @@ pub fn fastest_oscillation(plant: &Plant) -> f64 {
             .complex_eigenvalues()
             .iter()
             .filter(|λ| λ.im != 0.0)
-            .map(|λ| λ.norm())
+            .map(|λ| (λ.re * λ.re + λ.im * λ.im).sqrt())
             .fold(0.0, f64::max),
         None => rate_bound(plant),
     }
@@ -296,7 +301,7 @@ pub(super) fn choose(
     {
         rate = rate.max(angular_frequency.abs());
     }
-    let model_step = (allowed / roughness(&config.road)).powf(0.25) / rate.max(1.0);
+    let model_step = (allowed / roughness(&config.road)).sqrt().sqrt() / rate.max(1.0);
     let base = ladder_base(&config.road, config.communication_step);
     let coarsest = (base / LARGEST_STEP).ceil().max(1.0);
     let mut n = (base / model_step).ceil().max(coarsest);
@@ -340,7 +345,7 @@ pub(super) fn choose(
         pristine = Some(probe.pristine);
         // `n` for which the error would be `allowed` (ε ∝ h⁴ = (Δ/n)⁴),
         // with a margin of 10 %.
-        let needed = n * (probe.error / allowed).powf(0.25) * 1.1;
+        let needed = n * (probe.error / allowed).sqrt().sqrt() * 1.1;
         if probe.error <= allowed {
             choice.probe_error = probe.error;
             if accepted.is_some() {

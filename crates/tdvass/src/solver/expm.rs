@@ -9,23 +9,24 @@ use nalgebra::SMatrix;
 /// the Taylor increment; the truncation error of the fourth-order increment
 /// is then below (2^-10)^5 / 5! ≈ 7e-18 relative.
 const SCALED_NORM_EXPONENT: i32 = 10;
-/// No squarings beyond what the scaling needs (the classical PIM fixes
-/// N = 20): the truncation bound depends on the scaled norm alone, so a
-/// short step costs fewer products and is as accurate. This is most of
-/// the cost of building a simulator (a PSO builds tens of thousands).
-const MINIMUM_SQUARINGS: u32 = 0;
 
 /// `e^{M}` for a square static matrix by the 2^N precise integration method.
+///
+/// N is what the scaling needs and no more (the classical PIM fixes
+/// N = 20): the truncation bound depends on the scaled norm alone, so a
+/// short step costs fewer products and is as accurate. These products are
+/// most of the cost of building a simulator (a PSO builds tens of
+/// thousands). N comes from the norm's binary exponent, exactly, the same
+/// on every platform.
 ///
 /// With `τ = 1 / 2^N`: `T_a = Mτ + (Mτ)²/2 + (Mτ)³/6 + (Mτ)⁴/24`, then N times
 /// `T_a ← 2 T_a + T_a T_a` (that is `(I + T_a)² − I`), and `e^M = I + T_a`.
 pub fn precise_exp<const D: usize>(m: &SMatrix<f64, D, D>) -> SMatrix<f64, D, D> {
     let norm = m.abs().row_sum().max();
     let squarings = if norm > 0.0 && norm.is_finite() {
-        let needed = norm.log2().ceil() as i32 + SCALED_NORM_EXPONENT;
-        (needed.max(0) as u32).max(MINIMUM_SQUARINGS)
+        (ceil_log2(norm) + SCALED_NORM_EXPONENT).max(0) as u32
     } else {
-        MINIMUM_SQUARINGS
+        0
     };
     let scaled = m * 0.5f64.powi(squarings as i32);
     let scaled2 = scaled * scaled;
@@ -35,6 +36,24 @@ pub fn precise_exp<const D: usize>(m: &SMatrix<f64, D, D>) -> SMatrix<f64, D, D>
         increment = increment * 2.0 + increment * increment;
     }
     SMatrix::identity() + increment
+}
+
+/// The least integer e with `2^e >= x`, for a finite x > 0, from its bits
+/// (no logarithm: exact on every platform).
+fn ceil_log2(x: f64) -> i32 {
+    let bits = x.to_bits();
+    let biased = ((bits >> 52) & 0x7ff) as i32;
+    let mantissa = bits & ((1u64 << 52) - 1);
+    if biased == 0 {
+        // Subnormal: below 2^-1022, far below any scaling that matters.
+        return -1022;
+    }
+    let exponent = biased - 1023;
+    if mantissa == 0 {
+        exponent
+    } else {
+        exponent + 1
+    }
 }
 
 #[cfg(test)]
@@ -59,6 +78,25 @@ mod tests {
                 "h = {h}: {}",
                 (ours - reference).abs().max()
             );
+        }
+    }
+
+    #[test]
+    fn ceil_log2_is_exact() {
+        for (x, e) in [
+            (1.0, 0),
+            (2.0, 1),
+            (3.0, 2),
+            (0.5, -1),
+            (0.75, 0),
+            (1024.0, 10),
+            (1025.0, 11),
+        ] {
+            assert_eq!(ceil_log2(x), e, "{x}");
+        }
+        for i in 1..2000 {
+            let x = i as f64 * 0.37;
+            assert_eq!(ceil_log2(x), x.log2().ceil() as i32, "{x}");
         }
     }
 
