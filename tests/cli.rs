@@ -652,3 +652,38 @@ fn the_comfort_objective_keeps_its_constraints_at_its_optimum() {
         failure(&["optimize", "absorber", "--objective", "softest"]).contains("paper or comfort")
     );
 }
+
+#[test]
+fn the_tolerance_sets_the_internal_step_and_bad_ones_are_refused_naming_the_value() {
+    let run =
+        |tolerance: &str| tdvass_json(&["simulate", "--duration", "1", "--tolerance", tolerance]);
+    let (loose, tight) = (run("1e-4"), run("1e-9"));
+    assert_eq!(loose["tolerance"], Value::from(1e-4));
+    let step = |v: &Value| v["internal_step"].as_f64().unwrap();
+    assert!(step(&loose) > step(&tight), "{loose} {tight}");
+    // The cap bounds the step the tolerance gives.
+    let capped = tdvass_json(&["simulate", "--duration", "1", "--max-internal-step", "1e-4"]);
+    assert_eq!(step(&capped), 1e-4);
+    for subcommand in [
+        &["simulate"][..],
+        &[
+            "optimize",
+            "controller",
+            "--particles",
+            "2",
+            "--iterations",
+            "1",
+        ][..],
+    ] {
+        for (bad, shown) in [("0.5", "0.5"), ("-1e-6", "-0.000001"), ("NaN", "NaN")] {
+            let flag = format!("--tolerance={bad}");
+            let mut args = subcommand.to_vec();
+            args.push(&flag);
+            let stderr = failure(&args);
+            assert!(
+                stderr.contains("`tolerance`") && stderr.contains(shown),
+                "{args:?}: {stderr}"
+            );
+        }
+    }
+}

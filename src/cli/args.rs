@@ -220,6 +220,10 @@ impl RunArgs {
     }
 
     pub(super) fn config(&self, params: Params, variant: Variant) -> Result<SimulationConfig> {
+        // Checked here, once, so that an optimisation refuses them by name
+        // rather than finding every candidate infeasible.
+        tdvass::solver::accuracy::check_tolerance(self.tolerance)?;
+        tdvass::solver::accuracy::check_max_internal_step(self.max_internal_step)?;
         Ok(SimulationConfig {
             params,
             variant,
