@@ -7,6 +7,9 @@
 //! paper-compatible road, tau from 0 to 0.05 s (folded, inside the step,
 //! whole steps) and both signs of g.
 
+mod common;
+
+use common::{harmonic, iso};
 use tdvass::model::{Params, Variant};
 use tdvass::road::{RandomRoad, RoadClass, RoadSpec};
 use tdvass::solver::accuracy::{MAX_TOLERANCE, check_tolerance};
@@ -23,21 +26,6 @@ struct Case {
     road: RoadSpec,
     g: f64,
     tau: f64,
-}
-
-fn harmonic(amplitude: f64, angular_frequency: f64) -> RoadSpec {
-    RoadSpec::Harmonic {
-        amplitude,
-        angular_frequency,
-    }
-}
-
-fn iso(class: RoadClass, speed: f64) -> RoadSpec {
-    RoadSpec::Iso8608(RandomRoad {
-        class,
-        speed,
-        ..RandomRoad::default()
-    })
 }
 
 fn paper_road() -> RoadSpec {

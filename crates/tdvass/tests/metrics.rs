@@ -2,27 +2,15 @@
 //! holding (dynamic tire load, its RMS ratio, contact loss) and working
 //! space (max |SDD|), against independent computations.
 
+mod common;
+
+use common::{harmonic, iso};
 use tdvass::analysis::frf::body_acceleration_gain;
 use tdvass::comfort::wk_response;
 use tdvass::model::State;
 use tdvass::road::{RandomRoad, RoadClass, RoadSpec};
 use tdvass::solver::{Metrics, Outputs, SimulationConfig, Simulator, simulate};
 use tdvass::{Params, Variant};
-
-fn harmonic(amplitude: f64, angular_frequency: f64) -> RoadSpec {
-    RoadSpec::Harmonic {
-        amplitude,
-        angular_frequency,
-    }
-}
-
-fn iso(class: RoadClass, speed: f64) -> RoadSpec {
-    RoadSpec::Iso8608(RandomRoad {
-        class,
-        speed,
-        ..RandomRoad::default()
-    })
-}
 
 /// `∫_{t_0}^{t} a_w²` and `∫ a_w⁴` from the outputs at t.
 fn weighted_integrals(o: &Outputs) -> (f64, f64) {

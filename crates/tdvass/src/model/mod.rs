@@ -173,7 +173,9 @@ impl Default for Params {
     }
 }
 
-fn check(name: &'static str, value: f64, ok: bool, reason: &'static str) -> Result<()> {
+/// `Ok` when `value` is finite and `ok`; else the error naming `name` and
+/// `value` ("must be finite", or `reason`).
+pub(crate) fn check(name: &'static str, value: f64, ok: bool, reason: &'static str) -> Result<()> {
     if !value.is_finite() {
         return Err(Error::InvalidParameter {
             name,

@@ -161,14 +161,25 @@ pub fn check_tolerance(tolerance: f64) -> Result<()> {
 
 /// Checks `max_internal_step`: 0 (no bound) or finite and > 0.
 pub fn check_max_internal_step(bound: f64) -> Result<()> {
-    if !(bound.is_finite() && bound >= 0.0) {
-        return Err(Error::InvalidParameter {
-            name: "max_internal_step",
-            value: bound,
-            reason: "must be finite and >= 0 (0 = no bound: the tolerance sets the step)",
-        });
-    }
-    Ok(())
+    check_optional_step(
+        "max_internal_step",
+        bound,
+        "must be finite and >= 0 (0 = no bound: the tolerance sets the step)",
+    )
+}
+
+/// Checks `communication_step`: 0 (none) or finite and > 0.
+pub fn check_communication_step(step: f64) -> Result<()> {
+    check_optional_step(
+        "communication_step",
+        step,
+        "must be finite and >= 0 (0 = none)",
+    )
+}
+
+/// An optional time (s): 0 or finite and > 0.
+fn check_optional_step(name: &'static str, value: f64, reason: &'static str) -> Result<()> {
+    crate::model::check(name, value, value >= 0.0, reason)
 }
 
 /// The bound `γ + √κ` (1/s) on the plant's eigenvalues (module docs), from
@@ -228,18 +239,6 @@ fn ladder_base(road: &RoadSpec, communication_step: f64) -> f64 {
     } else {
         road_base
     }
-}
-
-/// Checks `communication_step`: 0 (none) or finite and > 0.
-pub fn check_communication_step(step: f64) -> Result<()> {
-    if !(step.is_finite() && step >= 0.0) {
-        return Err(Error::InvalidParameter {
-            name: "communication_step",
-            value: step,
-            reason: "must be finite and >= 0 (0 = none)",
-        });
-    }
-    Ok(())
 }
 
 /// The roughness constant C of the error model for this road.
@@ -348,7 +347,8 @@ pub(super) fn choose(
         let needed = n * (probe.error / allowed).sqrt().sqrt() * 1.1;
         if probe.error <= allowed {
             choice.probe_error = probe.error;
-            if accepted.is_some() {
+            if accepted.take().is_some() {
+                // The coarser step passed its check too.
                 break;
             }
             let coarser = needed.ceil().max(coarsest).max((n / MAX_COARSENING).ceil());
@@ -357,17 +357,20 @@ pub(super) fn choose(
             }
             accepted = Some((n, probe.error, pristine.take()));
             n = coarser;
-        } else if let Some((previous, error, kept)) = accepted.take() {
-            // The coarser step failed its check: back to the one that passed.
-            n = previous;
-            choice.probe_error = error;
-            pristine = kept;
+        } else if accepted.is_some() {
             break;
         } else {
             n = needed.ceil().max(n + 1.0);
             check_work(n)?;
             pristine = None;
         }
+    }
+    if let Some((previous, error, kept)) = accepted {
+        // A coarser step that failed its check, or could not be checked:
+        // back to the one that passed.
+        n = previous;
+        choice.probe_error = error;
+        pristine = kept;
     }
     choice.step_bound = ladder_step(base, n, config.max_internal_step);
     let pristine = pristine.filter(|sim| sim.step_choice.step_bound == choice.step_bound);

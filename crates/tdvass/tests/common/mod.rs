@@ -1,8 +1,26 @@
 //! Helpers shared by the integration tests: an independent reference
-//! integrator for the delay equation and a small FFT.
+//! integrator for the delay equation, a small FFT, and road shorthands.
 #![allow(dead_code)]
 
 use tdvass::model::{Plant, State, V_T, X_T};
+use tdvass::road::{RandomRoad, RoadClass, RoadSpec};
+
+/// The harmonic road `amplitude sin(angular_frequency t)`.
+pub fn harmonic(amplitude: f64, angular_frequency: f64) -> RoadSpec {
+    RoadSpec::Harmonic {
+        amplitude,
+        angular_frequency,
+    }
+}
+
+/// An ISO 8608 road of `class` at `speed` (m/s), the other settings default.
+pub fn iso(class: RoadClass, speed: f64) -> RoadSpec {
+    RoadSpec::Iso8608(RandomRoad {
+        class,
+        speed,
+        ..RandomRoad::default()
+    })
+}
 
 /// Classical RK4 with the method of steps for
 /// `X' = A X + b x_t(t − tau) + e x_g(t)`, a constant history X0 for t < 0,
