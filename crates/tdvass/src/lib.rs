@@ -9,7 +9,8 @@
 //! - [`model`]: parameters (Table 1), the three variants, the state-space
 //!   matrices of Eq. (2) and the outputs BA, SDD, TDD;
 //! - [`solver`]: the precise (fine) integration method for the delay
-//!   differential equation, Eq. (22)-(24);
+//!   differential equation, Eq. (22)-(24), its internal step chosen from a
+//!   relative tolerance ([`solver::accuracy`]);
 //! - [`road`]: harmonic, ISO 8608 and paper-compatible random roads, roads
 //!   from files and from an external input;
 //! - [`metrics`]: running RMS values and the objective J of Eq. (6);
@@ -18,7 +19,9 @@
 //! - [`comfort`]: the ISO 2631-1 W_k weighting and comfort scale;
 //! - [`limits`]: the numerical limits every configuration is checked
 //!   against, whoever builds it (the FMU, the command line, a library user);
-//! - [`bytes`]: the one little-endian codec of saved states.
+//! - [`bytes`]: the one little-endian codec of saved states;
+//! - [`math`]: the transcendental functions the results depend on, from one
+//!   pure-Rust implementation (the same bits on every platform).
 //!
 //! # The metrics beyond Eq. (6)
 //!
