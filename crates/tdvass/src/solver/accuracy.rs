@@ -60,25 +60,24 @@
 //! of [`PROBE_DURATION`] from the configured start (the start transient
 //! included), at h and at the next finer step h' (about h / 2, on the
 //! same ladder and delay grid), estimate the error of the coarse one as
-//! `|RMS_h − RMS_h'| / (1 − (h'/h)⁴)` for BA, SDD and TDD, and the same
-//! for the largest |SDD| (located inside the steps). Where it
-//! exceeds [`PROBE_SAFETY`] × tol, n grows by the factor
+//! `|RMS_h − RMS_h'| / (1 − (h'/h)⁴)` for BA, SDD and TDD, and the same for
+//! the largest |SDD| where the run keeps it. Where the estimate exceeds
+//! [`PROBE_SAFETY`] × tol, n grows by the factor
 //! `1.1 (ε / (PROBE_SAFETY tol))^{1/4}` (at least by one) and the probe
 //! runs again, at most [`PROBE_ROUNDS`] times. Where the first estimate is
 //! well below the tolerance, the same formula gives a longer step (by at
 //! most [`MAX_COARSENING`]), and one more probe confirms it; if it fails,
-//! the step that passed is kept. A probe whose finer run would need more
-//! than [`MAX_PROBE_WORK`] internal steps and road breakpoints is not run
-//! (a tiny `max_internal_step` or road sample interval): the model's step
-//! stands, and the work limits of the caller apply to the run. The probe
-//! runs the caller's own
-//! configuration, so it checks the metrics the run reports, and a probe
-//! that accepts the step hands its coarse simulator, as it was before it
-//! ran, to [`Simulator::new`]: the check costs one extra simulator and
-//! 1.5 × [`PROBE_DURATION`] of simulated time. A probe that diverges (an unstable
-//! (g, tau)) or has no response to measure leaves the model's step. The
-//! external road input (road = 0) is not known in advance: its step is the
-//! model's alone.
+//! or cannot run, the step that passed is kept. A probe whose finer run
+//! would need more than [`MAX_PROBE_WORK`] internal steps and road
+//! breakpoints is not run (a tiny `max_internal_step` or road sample
+//! interval): the model's step stands, and the caller's work limits apply
+//! to the run. The probe runs the caller's own configuration, so it checks
+//! the metrics the run reports; a round that accepts the step hands its
+//! coarse simulator, as it was before it ran, to [`Simulator::new`], so a
+//! round costs one extra simulator and 1.5 × [`PROBE_DURATION`] of
+//! simulated time. A probe that diverges (an unstable (g, tau)) or has no
+//! response to measure leaves the model's step. The external road input
+//! (road = 0) is not known in advance: its step is the model's alone.
 //!
 //! **The same step everywhere.** The choice uses only IEEE-exact
 //! operations (+, ×, ÷, √; `x^{1/4}` as `√√x`) and the Schur form's, so
