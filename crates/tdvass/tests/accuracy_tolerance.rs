@@ -294,3 +294,20 @@ fn the_step_shrinks_with_the_tolerance_and_is_reproducible() {
     assert_eq!(capped.grid().step, 1e-4);
     assert_eq!(capped.grid().regime, DelayRegime::WholeSteps { m: 2 });
 }
+
+/// A tolerance that would need an internal step below 1e-6 s (here a road
+/// at 1e5 rad/s at the tightest tolerance) is refused, naming it.
+#[test]
+fn a_tolerance_beyond_the_work_limit_is_refused() {
+    let error = Simulator::new(SimulationConfig {
+        tolerance: 1e-12,
+        road: harmonic(1e-6, 1e5),
+        ..SimulationConfig::default()
+    })
+    .expect_err("refused")
+    .to_string();
+    assert!(
+        error.contains("`tolerance`") && error.contains("below 1e-6 s"),
+        "{error}"
+    );
+}

@@ -366,6 +366,35 @@ fn delays_shorter_than_the_step_agree_with_the_reference() {
     }
 }
 
+/// The step the default tolerance chooses, against the independent RK4
+/// method of steps (a fine fixed step, its own Hermite history): the state
+/// after 0.6 s with a delay that matters agrees to the tolerance, 1e-6 of
+/// its largest component.
+#[test]
+fn the_default_tolerance_agrees_with_an_independent_rk4_reference() {
+    let params = Params::with_controller(40000.0, 0.03);
+    let x0 = State::new(0.01, 0.0, 0.0, 0.0, 0.0, 0.0);
+    let plant = Plant::new(params, Variant::Tdvass).unwrap();
+    let duration = 0.6;
+    let reference = rk4_method_of_steps(
+        &plant,
+        params.tau,
+        x0,
+        |t| 0.05 * (5.0 * t).sin(),
+        0.03 / 6000.0,
+        duration,
+    );
+    let mut sim = Simulator::new(SimulationConfig {
+        params,
+        initial_state: x0,
+        ..SimulationConfig::default()
+    })
+    .unwrap();
+    sim.advance_to(duration).unwrap();
+    let error = (sim.state() - reference).amax() / reference.amax();
+    assert!(error <= 1e-6, "h = {} s: {error:e}", sim.grid().step);
+}
+
 #[test]
 fn tiny_delays_are_continuous_with_zero_and_huge_delays_are_refused() {
     // The state moves smoothly with tau, also across the threshold below
