@@ -231,6 +231,7 @@ impl RunArgs {
             tolerance: self.tolerance,
             max_internal_step: self.max_internal_step,
             communication_step: 0.0,
+            tire_contact: tdvass::TireContact::Bilateral,
             start_time: 0.0,
             initial_state: State::zeros(),
             weights: Weights {

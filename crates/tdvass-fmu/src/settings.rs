@@ -170,6 +170,7 @@ impl Settings {
             // The internal step divides the DefaultExperiment stepSize: a
             // master stepping by it meets internal nodes only.
             communication_step: crate::DEFAULT_STEP_SIZE,
+            tire_contact: tdvass::TireContact::Bilateral,
             start_time,
             initial_state: State::from(self.initial_state),
             weights: self.weights(),

@@ -113,4 +113,4 @@ pub mod road;
 pub mod solver;
 
 pub use error::{Error, Result};
-pub use model::{Params, Variant};
+pub use model::{Params, TireContact, Variant};

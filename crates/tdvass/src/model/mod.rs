@@ -7,8 +7,10 @@
 //! zero and they stay at zero); outputs report `x_h = x_t`, `v_h = v_t`.
 
 mod equations;
+mod tire;
 
 pub use equations::{Element, MassSpringDamper};
+pub use tire::TireContact;
 
 use crate::error::{Error, Result};
 use nalgebra::{Matrix6, Vector6};

@@ -359,8 +359,9 @@ impl Simulator {
                 self.partial_operator(length).clone()
             };
             let rows = op.filter.as_ref().expect("the filter is on");
-            w = rows.apply(&w, &x, delayed.as_ref(), &piece, start);
-            x = op.apply(&x, delayed.as_ref(), &piece, start);
+            let drive = self.forcing(&piece);
+            w = rows.apply(&w, &x, delayed.as_ref(), &drive, start);
+            x = op.apply(&x, delayed.as_ref(), &drive, start);
             if end == to {
                 return w;
             }
@@ -402,7 +403,8 @@ impl Simulator {
     fn committed_derivatives(&mut self, delta: f64) -> [State; 4] {
         let (k, t, x) = (self.grid_index, self.committed_time, self.committed_state);
         let p = self.delayed_vector_at(k, t, (t, x), &x);
-        let piece = self.piece_from(t + delta);
+        let road_piece = self.piece_from(t + delta);
+        let piece = self.forcing(&road_piece);
         let road = match piece {
             RoadPiece::Harmonic {
                 amplitude,

@@ -55,6 +55,13 @@ pub(crate) struct Holding {
     pub lost_time: f64,
     /// Time at which the contact was first lost (s).
     pub first_loss: Option<f64>,
+    /// Lift-offs so far: with the bilateral tire the down-crossings of the
+    /// margin through 0 (located on its cubic), with the unilateral tire
+    /// the switches to flight (see `solver::contact`).
+    pub lift_offs: u64,
+    /// Unilateral tire: the start of the flight in progress (s), `None`
+    /// in contact. The flights that ended are in `lost_time`.
+    pub flight_start: Option<f64>,
 }
 
 impl Holding {
@@ -66,6 +73,8 @@ impl Holding {
             lost_steps: 0,
             lost_time: 0.0,
             first_loss: (margin < 0.0).then_some(start),
+            lift_offs: u64::from(margin < 0.0),
+            flight_start: None,
         }
     }
 
@@ -92,9 +101,10 @@ impl Holding {
             // In contact throughout (the test of [`check_step`]).
             return;
         }
-        let (lost, first) = time_below_zero(length, a, b);
-        self.lost_time += lost;
-        if let (None, Some(offset)) = (self.first_loss, first) {
+        let below = below_zero(length, a, b);
+        self.lost_time += below.time;
+        self.lift_offs += below.entries;
+        if let (None, Some(offset)) = (self.first_loss, below.first) {
             self.first_loss = Some(start + offset);
         }
     }
@@ -160,6 +170,9 @@ pub(crate) struct ContactCheck {
     pub start_time: f64,
     /// h (s).
     pub step: f64,
+    /// The tire is unilateral: a step that may lose contact stops the
+    /// whole-step loop ([`super::kernel::SegmentEnd::Switch`]).
+    pub unilateral: bool,
 }
 
 /// The whole-step loop's test of the step from node k (margins a) to node
@@ -190,6 +203,8 @@ pub(crate) struct StepLoss {
     pub time: f64,
     /// When the contact is lost first in the step (s).
     pub first: Option<f64>,
+    /// How often it is lost in the step ([`BelowZero::entries`]).
+    pub entries: u64,
 }
 
 impl Holding {
@@ -201,6 +216,7 @@ impl Holding {
         } else {
             self.lost_time += loss.time;
         }
+        self.lift_offs += loss.entries;
         if let (None, Some(first)) = (self.first_loss, loss.first) {
             self.first_loss = Some(first);
         }
@@ -225,13 +241,15 @@ fn step_without_contact(
             whole: true,
             time: 0.0,
             first: Some(t_k),
+            entries: 0,
         }
     } else {
-        let (time, first) = time_below_zero(h, a, b);
+        let below = below_zero(h, a, b);
         StepLoss {
             whole: false,
-            time,
-            first: first.map(|offset| t_k + offset),
+            time: below.time,
+            first: below.first.map(|offset| t_k + offset),
+            entries: below.entries,
         }
     }
 }
@@ -240,10 +258,30 @@ fn step_without_contact(
 /// `a = [g_0, g'_0]` at 0 and `b = [g_1, g'_1]` at `length` is negative,
 /// and the first offset (s) at which it is; `(0, None)` for a length that
 /// is not positive.
+#[cfg(test)]
 pub(crate) fn time_below_zero(length: f64, a: [f64; 2], b: [f64; 2]) -> (f64, Option<f64>) {
-    if length.is_nan() || length <= 0.0 {
-        return (0.0, None);
-    }
+    let below = below_zero(length, a, b);
+    (below.time, below.first)
+}
+
+/// Where the cubic of [`time_below_zero`] is negative.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct BelowZero {
+    /// The measure of the set where it is negative (s).
+    pub time: f64,
+    /// The first offset at which it is negative (s).
+    pub first: Option<f64>,
+    /// How often it goes negative: its down-crossings through 0, and its
+    /// start when it starts at 0 and falls (a start below 0 is not one).
+    pub entries: u64,
+}
+
+/// The cubic Hermite interpolant p on `[0, 1]` (σ = offset / length)
+/// through `a = [p_0, p'_0]` at 0 and `b = [p_1, p'_1]` at `length`, and
+/// the points cutting `[0, 1]` into sub-intervals on each of which p keeps
+/// its sign: the ends, its critical points and its roots (by bisection on
+/// its monotone pieces).
+fn sign_pieces(length: f64, a: [f64; 2], b: [f64; 2]) -> (impl Fn(f64) -> f64, Vec<f64>) {
     // p(σ) = c0 + c1 σ + c2 σ² + c3 σ³ on σ ∈ [0, 1].
     let (g0, d0, g1, d1) = (a[0], a[1] * length, b[0], b[1] * length);
     let c = [
@@ -254,7 +292,7 @@ pub(crate) fn time_below_zero(length: f64, a: [f64; 2], b: [f64; 2]) -> (f64, Op
     ];
     // Evaluated in the Hermite basis, whose terms keep their signs near the
     // ends (no cancellation where p touches zero at an end).
-    let p = |s: f64| {
+    let p = move |s: f64| {
         let r = 1.0 - s;
         g0 * ((1.0 + 2.0 * s) * r * r) + g1 * (s * s * (3.0 - 2.0 * s)) + d0 * (s * r * r)
             - d1 * (s * s * r)
@@ -285,18 +323,80 @@ pub(crate) fn time_below_zero(length: f64, a: [f64; 2], b: [f64; 2]) -> (f64, Op
         points.push(pair[1]);
     }
     points.dedup();
+    (p, points)
+}
+
+/// [`BelowZero`] of the cubic of [`time_below_zero`]; nothing for a length
+/// that is not positive.
+pub(crate) fn below_zero(length: f64, a: [f64; 2], b: [f64; 2]) -> BelowZero {
+    let mut below = BelowZero {
+        time: 0.0,
+        first: None,
+        entries: 0,
+    };
+    if length.is_nan() || length <= 0.0 {
+        return below;
+    }
+    let (p, points) = sign_pieces(length, a, b);
     // Sum the sub-intervals on which p is negative (tested at the middle;
     // a sub-interval of zero length adds nothing).
-    let mut lost = 0.0;
-    let mut first = None;
+    let mut negative_before = a[0] < 0.0;
     for pair in points.windows(2) {
         let (lo, hi) = (pair[0], pair[1]);
-        if hi > lo && p(0.5 * (lo + hi)) < 0.0 {
-            lost += (hi - lo) * length;
-            first.get_or_insert(lo * length);
+        if hi <= lo {
+            continue;
         }
+        let negative = p(0.5 * (lo + hi)) < 0.0;
+        if negative {
+            below.time += (hi - lo) * length;
+            below.first.get_or_insert(lo * length);
+            if !negative_before {
+                below.entries += 1;
+            }
+        }
+        negative_before = negative;
     }
-    (lost, first)
+    below
+}
+
+/// The first place where the cubic of [`time_below_zero`] falls through
+/// 0: offsets (s) `(lo, hi)` that bracket it, `p(lo) >= 0 > p(hi)` (the
+/// start of the sign piece before and the middle of the negative one), or
+/// `(0, 0)` when it is negative from the start and `skip_start` is false.
+/// With `skip_start` a negative stretch at the start is passed over (a
+/// state just switched, whose margin is 0 up to rounding and rising).
+pub(crate) fn first_fall(
+    length: f64,
+    a: [f64; 2],
+    b: [f64; 2],
+    skip_start: bool,
+) -> Option<(f64, f64)> {
+    if length.is_nan() || length <= 0.0 {
+        return (a[0] < 0.0 && !skip_start).then_some((0.0, 0.0));
+    }
+    let (p, points) = sign_pieces(length, a, b);
+    let mut negative_before = a[0] < 0.0 && skip_start;
+    let mut before = 0.0;
+    for pair in points.windows(2) {
+        let (lo, hi) = (pair[0], pair[1]);
+        if hi <= lo {
+            continue;
+        }
+        let middle = 0.5 * (lo + hi);
+        let negative = p(middle) < 0.0;
+        if negative && !negative_before {
+            return Some(if lo == 0.0 && a[0] < 0.0 {
+                (0.0, 0.0)
+            } else {
+                (before * length, middle * length)
+            });
+        }
+        if !negative {
+            before = lo;
+        }
+        negative_before = negative;
+    }
+    None
 }
 
 /// Real roots of `a s² + b s + c` (none, one or two; a linear or constant
@@ -388,6 +488,7 @@ mod tests {
                             angular_frequency: 0.0,
                             start_time: 0.0,
                             step: h,
+                            unilateral: false,
                         };
                         if let Some(loss) = check_step(check, 0, [g0, d0], [g1, d1]) {
                             fast.add_step(loss);

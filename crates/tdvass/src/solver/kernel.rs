@@ -113,6 +113,18 @@ impl NodeRoad for LinearPiece {
     }
 }
 
+/// Why a run of the whole-step loop ended.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) enum SegmentEnd {
+    /// At its end node.
+    Reached,
+    /// Before a step whose end state (returned) is out of bounds.
+    Diverged([f64; 6]),
+    /// Before a step in which a unilateral tire may lift off (the margin's
+    /// cubic goes negative), which the caller integrates with the switch.
+    Switch,
+}
+
 /// What the whole-step loop carries from node to node.
 #[derive(Clone, Copy)]
 pub(super) struct HotState<R> {
@@ -147,8 +159,9 @@ pub(super) struct Segment<'a> {
 /// after the first are added to the RMS sums, except the last one's, which
 /// the caller adds (on the harmonic road its phase is exact at an anchor).
 /// Every step is tested for contact loss and every new node enters the
-/// largest |SDD| ([`super::holding`]). Stops at `end` or before a state out
-/// of bounds, which it returns. `DELAY`: the delay is resolved on the grid;
+/// largest |SDD| ([`super::holding`]). Stops at `end`, before a state out
+/// of bounds, or (unilateral tire) before a step that may lift the wheel
+/// off ([`SegmentEnd`]). `DELAY`: the delay is resolved on the grid;
 /// `BEFORE`: all the delayed nodes lie before the start; `FILTER`: the W_k
 /// filter steps along ([`FilterGridStep`]) and its `a_w²`, `a_w⁴` are
 /// summed like the RMS sums.
@@ -162,7 +175,7 @@ pub(super) fn segment<
 >(
     seg: Segment,
     hot: &mut HotState<R>,
-) -> Option<[f64; 6]> {
+) -> SegmentEnd {
     let op = seg.op;
     let history = seg.history;
     let len = history.len();
@@ -181,7 +194,7 @@ pub(super) fn segment<
     let contact = op.contact;
     let mut edge = margin(contact.limit, &x, road.displacement(), road.rate(op));
     let mut bend = deflection(&x);
-    let mut diverged = None;
+    let mut end = SegmentEnd::Reached;
     // Node k, where the segment starts, was counted in the RMS sums already;
     // each later node is counted in the step that leaves it.
     let mut count = false;
@@ -209,6 +222,39 @@ pub(super) fn segment<
             [0.0; 4]
         };
         let x_next = add6(combine6(&op.transition, &x), input);
+        if !within_bounds(&x_next) {
+            if count {
+                op.count(&mut rms, &x, road.displacement());
+                if let Some(f) = filter {
+                    f.count(&w, &mut weighted);
+                }
+            }
+            end = SegmentEnd::Diverged(x_next);
+            break;
+        }
+        let mut road_next = road;
+        road_next.advance(op);
+        if HOLDING {
+            let next_edge = margin(
+                contact.limit,
+                &x_next,
+                road_next.displacement(),
+                road_next.rate(op),
+            );
+            if let Some(loss) = check_step(contact, k, edge, next_edge) {
+                if contact.unilateral && (loss.whole || loss.first.is_some()) {
+                    // The wheel may lift off in this step: it is left to
+                    // the caller (nothing of it is committed).
+                    end = SegmentEnd::Switch;
+                    break;
+                }
+                holding.add_step(loss);
+            }
+            let next_bend = deflection(&x_next);
+            holding.add_deflection(contact.step, bend, next_bend);
+            edge = next_edge;
+            bend = next_bend;
+        }
         if count {
             op.count(&mut rms, &x, road.displacement());
             if let Some(f) = filter {
@@ -216,10 +262,6 @@ pub(super) fn segment<
             }
         }
         count = true;
-        if !within_bounds(&x_next) {
-            diverged = Some(x_next);
-            break;
-        }
         if let Some(f) = filter {
             // The inputs first, then `Φ_ww w` as a pairwise sum added last:
             // the filter's own recurrence is then a short chain.
@@ -236,17 +278,7 @@ pub(super) fn segment<
             let own = f.transition_times(&w);
             w = std::array::from_fn(|i| own[i] + inputs[i]);
         }
-        road.advance(op);
-        if HOLDING {
-            let next_edge = margin(contact.limit, &x_next, road.displacement(), road.rate(op));
-            if let Some(loss) = check_step(contact, k, edge, next_edge) {
-                holding.add_step(loss);
-            }
-            let next_bend = deflection(&x_next);
-            holding.add_deflection(contact.step, bend, next_bend);
-            edge = next_edge;
-            bend = next_bend;
-        }
+        road = road_next;
         // SAFETY: slot < len, as above.
         unsafe { *history.get_unchecked_mut(slot) = [x_next[X_T], x_next[V_T]] };
         x = x_next;
@@ -263,7 +295,7 @@ pub(super) fn segment<
         weighted,
         holding,
     };
-    diverged
+    end
 }
 
 /// [`segment`] compiled for AVX2 (the same operations in the same order,
@@ -279,7 +311,7 @@ pub(super) fn segment_avx2<
 >(
     seg: Segment,
     hot: &mut HotState<R>,
-) -> Option<[f64; 6]> {
+) -> SegmentEnd {
     segment::<R, DELAY, BEFORE, FILTER, HOLDING>(seg, hot)
 }
 
@@ -290,7 +322,7 @@ pub(super) fn run_segment<R: NodeRoad, const DELAY: bool>(
     seg: Segment,
     hot: &mut HotState<R>,
     before: bool,
-) -> Option<[f64; 6]> {
+) -> SegmentEnd {
     match (seg.op.filter.is_some(), seg.op.holding) {
         (true, _) => run_segment_with::<R, DELAY, true, true>(seg, hot, before),
         (false, true) => run_segment_with::<R, DELAY, false, true>(seg, hot, before),
@@ -302,7 +334,7 @@ fn run_segment_with<R: NodeRoad, const DELAY: bool, const FILTER: bool, const HO
     seg: Segment,
     hot: &mut HotState<R>,
     before: bool,
-) -> Option<[f64; 6]> {
+) -> SegmentEnd {
     #[cfg(target_arch = "x86_64")]
     if wide_vectors() {
         // SAFETY: the CPU supports AVX2 (checked at run time).
@@ -335,7 +367,7 @@ pub(super) fn wide_vectors() -> bool {
 impl Simulator {
     /// [`Self::whole_steps`] on piecewise-linear roads: a step that a road
     /// breakpoint splits goes through [`Self::integrate_within_step`].
-    pub(super) fn whole_steps_with<const DELAY: bool>(&mut self, last: u64) -> Result<()> {
+    pub(super) fn whole_steps_with<const DELAY: bool>(&mut self, last: u64) -> Result<bool> {
         #[cfg(target_arch = "x86_64")]
         if wide_vectors() {
             // SAFETY: the CPU supports AVX2 (checked at run time).
@@ -347,7 +379,7 @@ impl Simulator {
     /// [`Self::whole_steps_with`] compiled for AVX2 (bit-identical).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn whole_steps_with_avx2<const DELAY: bool>(&mut self, last: u64) -> Result<()> {
+    fn whole_steps_with_avx2<const DELAY: bool>(&mut self, last: u64) -> Result<bool> {
         self.whole_steps_with_body::<DELAY>(last)
     }
 }

@@ -53,6 +53,7 @@
 //! the configuration, the `Simulator` and its general step.
 
 pub mod accuracy;
+mod contact;
 pub mod expm;
 mod filter;
 mod grid;
@@ -66,7 +67,7 @@ mod time_average;
 
 use crate::error::{Error, Result};
 use crate::metrics::{RunningRms, Weights};
-use crate::model::{Params, Plant, State, V_T, Variant, X_T};
+use crate::model::{Params, Plant, State, TireContact, V_T, Variant, X_T};
 use crate::road::{Road, RoadPiece, RoadSpec};
 use filter::{Filter, FilterCoupling, FilterGridStep};
 pub use grid::{DelayGrid, DelayRegime};
@@ -81,6 +82,7 @@ use std::collections::HashMap;
 use time_average::{INTEGRALS, SquareIntegral};
 
 pub use accuracy::{DEFAULT_TOLERANCE, StepChoice};
+pub use contact::{LOCATION_TOLERANCE, LiftOff, MAX_SWITCHES_PER_STEP};
 /// Most grid nodes of delay history kept (8 M nodes, 64 MiB); a delay
 /// needing more is refused.
 pub const MAX_HISTORY_NODES: u64 = 1 << 23;
@@ -142,6 +144,9 @@ pub struct SimulationConfig {
     /// and never pays for a point inside a step. The FMU passes its
     /// DefaultExperiment stepSize (see [`accuracy`]).
     pub communication_step: f64,
+    /// The tire's contact law ([`TireContact`]; the paper's bilateral
+    /// tire by default).
+    pub tire_contact: TireContact,
     /// Start time t_0 (s).
     pub start_time: f64,
     /// X(t_0) = [x_s, v_s, x_h, v_h, x_t, v_t]; also the history for t < t_0.
@@ -219,6 +224,7 @@ impl Default for SimulationConfig {
             tolerance: DEFAULT_TOLERANCE,
             max_internal_step: 0.0,
             communication_step: 0.0,
+            tire_contact: TireContact::Bilateral,
             start_time: 0.0,
             initial_state: State::zeros(),
             weights: Weights::default(),
@@ -277,6 +283,11 @@ pub struct Simulator {
     start_load: f64,
     /// How the internal step came from the tolerance.
     step_choice: StepChoice,
+    /// Unilateral tire: the operators of the mode not in force (see
+    /// `contact`); `None` with the bilateral tire.
+    other_mode: Option<Box<contact::ModeOperators>>,
+    /// Lift-offs not yet taken by a front-end's event log.
+    lift_off_log: contact::LiftOffLog,
 }
 
 impl Simulator {
@@ -398,6 +409,11 @@ impl Simulator {
             });
         }
         let road = Road::new(&config.road, config.start_time)?;
+        let mut config = config;
+        if config.tire_contact.is_unilateral() {
+            // The flight time and the lift-offs are road holding.
+            config.metrics = config.metrics.max(Metrics::RoadHolding);
+        }
         let mut initial = config.initial_state;
         if config.variant == Variant::Cs {
             initial[crate::model::X_H] = 0.0;
@@ -437,6 +453,8 @@ impl Simulator {
                 probe_error: f64::NAN,
                 probe_rounds: 0,
             },
+            other_mode: None,
+            lift_off_log: contact::LiftOffLog::default(),
             config,
         };
         let piece = sim.piece_from(start_time);
@@ -456,6 +474,13 @@ impl Simulator {
             start_time,
         );
         sim.start_load = sim.config.params.k_t * (piece.value(start_time) - initial[X_T]);
+        if sim.config.tire_contact.is_unilateral() {
+            // A start without contact is a lift-off at the start, made by
+            // the first step's switch search.
+            sim.holding.first_loss = None;
+            sim.holding.lift_offs = 0;
+        }
+        sim.enter_recorded_mode();
         Ok(sim)
     }
 
@@ -520,6 +545,7 @@ impl Simulator {
             f64::INFINITY
         };
         grid_step.contact.start_time = config.start_time;
+        grid_step.contact.unilateral = config.tire_contact.is_unilateral();
         grid_step.holding = config.metrics.road_holding();
         Ok((a, step, grid_step, coupling))
     }
@@ -673,12 +699,13 @@ impl Simulator {
                 .resolves_delay()
                 .then(|| self.delayed_input(k, start - step_start));
             let length = end - start;
+            let drive = self.forcing(&piece);
             state = if self.coincide(length, self.grid.step) {
                 self.full_step
-                    .apply(&state, delayed.as_ref(), &piece, start)
+                    .apply(&state, delayed.as_ref(), &drive, start)
             } else {
                 self.partial_operator(length)
-                    .apply(&state, delayed.as_ref(), &piece, start)
+                    .apply(&state, delayed.as_ref(), &drive, start)
             };
             if end == to {
                 return state;
@@ -734,6 +761,7 @@ impl Simulator {
                 end = switch;
             }
             let op = self.partial_operator(end - start).clone();
+            let piece = self.forcing(&piece);
             if earlier {
                 let delayed = self.delayed_input(k, h - tau + (start - step_start));
                 state = op.apply(&state, Some(&delayed), &piece, start);
@@ -793,41 +821,29 @@ impl Simulator {
                 reason: "must be finite and not before the current time",
             });
         }
+        let unilateral = self.config.tire_contact.is_unilateral();
+        // Switches of the tire contact made in the current step.
+        let mut switches = 0;
         loop {
             let k = self.grid_index;
             let next_node = self.grid_time(k + 1);
             if next_node < t_end || self.snaps(t_end, next_node) {
-                if self.committed_time == self.grid_time(k) {
+                let on_node = self.committed_time == self.grid_time(k);
+                if on_node && !self.in_flight() && switches == 0 {
                     // On a grid node: whole steps up to the last node the
-                    // interval reaches, in one tight loop.
+                    // interval reaches, in one tight loop; with a
+                    // unilateral tire, up to a step that may lift off.
                     let last = self.last_node_until(t_end);
-                    self.whole_steps(last)?;
+                    if self.whole_steps(last)? {
+                        self.step_to_node_switching(&mut switches)?;
+                    }
+                } else if unilateral {
+                    self.step_to_node_switching(&mut switches)?;
                 } else {
-                    // From a point inside the step (where an external road
-                    // input changed) to its end node.
-                    let from = (self.committed_time, self.committed_state);
-                    let x = self.integrate_within_step(k, from.0, from.1, next_node);
-                    self.check_divergence(next_node, &x)?;
-                    let w_from = self.committed_filter;
-                    let w = self.filter_within_step(k, from, &w_from, next_node);
-                    let anchor = self.integral.anchor;
-                    let mut holding = self.holding;
-                    let (step_integral, at_end, last_piece) = self.integral_within_step(
-                        k,
-                        from,
-                        &w_from,
-                        anchor,
-                        next_node,
-                        (&x, &w),
-                        &mut holding,
-                    );
-                    self.holding = holding;
-                    self.commit_node(
-                        k + 1,
-                        (next_node, x, w),
-                        step_integral,
-                        (at_end, last_piece),
-                    );
+                    self.step_to_node()?;
+                }
+                if self.grid_index > k {
+                    switches = 0;
                 }
                 if self.snaps(t_end, self.committed_time) {
                     return self.finish_near_committed(t_end);
@@ -835,6 +851,9 @@ impl Simulator {
             } else {
                 if self.snaps(t_end, self.committed_time) {
                     return self.finish_near_committed(t_end);
+                }
+                if unilateral && self.switch_by(k, t_end, &mut switches)? {
+                    continue;
                 }
                 let x =
                     self.integrate_within_step(k, self.committed_time, self.committed_state, t_end);
@@ -844,6 +863,44 @@ impl Simulator {
                 return Ok(());
             }
         }
+    }
+
+    /// With a unilateral tire: to the end node of the current step,
+    /// through the switches of the tire contact inside it.
+    fn step_to_node_switching(&mut self, switches: &mut u32) -> Result<()> {
+        let k = self.grid_index;
+        let next_node = self.grid_time(k + 1);
+        while self.switch_by(k, next_node, switches)? {
+            if self.snaps(next_node, self.committed_time) {
+                break;
+            }
+        }
+        self.step_to_node()
+    }
+
+    /// From the committed point inside the current step (where an
+    /// external road input changed or the tire contact switched), or from
+    /// its start node, to its end node, which is committed.
+    fn step_to_node(&mut self) -> Result<()> {
+        let k = self.grid_index;
+        let next_node = self.grid_time(k + 1);
+        let from = (self.committed_time, self.committed_state);
+        let x = self.integrate_within_step(k, from.0, from.1, next_node);
+        self.check_divergence(next_node, &x)?;
+        let w_from = self.committed_filter;
+        let w = self.filter_within_step(k, from, &w_from, next_node);
+        let anchor = self.integral.anchor;
+        let mut holding = self.holding;
+        let (step_integral, at_end, last_piece) =
+            self.integral_within_step(k, from, &w_from, anchor, next_node, (&x, &w), &mut holding);
+        self.holding = holding;
+        self.commit_node(
+            k + 1,
+            (next_node, x, w),
+            step_integral,
+            (at_end, last_piece),
+        );
+        Ok(())
     }
 
     /// Ends an advance at `t_end`, which snaps to the committed point: the
@@ -940,6 +997,9 @@ impl Simulator {
         self.full_step = step;
         self.grid_step = grid_step;
         self.partial_steps.clear();
+        // The contact operators were rebuilt: the flight ones follow, and
+        // a flight in progress goes on with them.
+        self.enter_recorded_mode();
         Ok(())
     }
 

@@ -294,6 +294,7 @@ impl GridStep {
                 angular_frequency,
                 start_time: 0.0,
                 step: h,
+                unilateral: false,
             },
             holding: false,
         }

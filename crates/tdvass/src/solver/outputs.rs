@@ -38,6 +38,11 @@ pub struct RoadHolding {
     pub max_suspension_deflection: f64,
     /// The first loss of tire contact, if any so far.
     pub first_contact_loss: Option<ContactLoss>,
+    /// The number of lift-offs so far: with the unilateral tire, the
+    /// switches from contact to flight; with the bilateral tire, the
+    /// number of times the dynamic tire load went below −W (a run that
+    /// starts without contact counts one at the start).
+    pub lift_off_count: u64,
 }
 
 /// The first loss of tire contact: the first time at which the dynamic
@@ -181,11 +186,12 @@ impl Simulator {
             rms,
             objective: rms.objective(&self.config.weights),
             comfort: self.comfort_values(&now, duration),
-            dynamic_tire_load: k_t * (road - x[X_T]),
+            dynamic_tire_load: self.tire_load(k_t * (road - x[X_T])),
             rms_dynamic_tire_load_ratio: k_t * rms.tire_deflection / self.static_load(),
             road_holding: self.config.metrics.road_holding().then(|| RoadHolding {
                 contact_loss_time: now.holding.lost_steps as f64 * self.grid.step
-                    + now.holding.lost_time,
+                    + now.holding.lost_time
+                    + now.holding.flight_start.map_or(0.0, |start| t - start),
                 max_suspension_deflection: now
                     .holding
                     .max_deflection
@@ -194,6 +200,7 @@ impl Simulator {
                     .holding
                     .first_loss
                     .map(|time| self.contact_loss_at(time)),
+                lift_off_count: now.holding.lift_offs,
             }),
         };
         self.outputs_cache = Some(outputs);
@@ -277,8 +284,9 @@ impl Simulator {
         let (road, road_rate) = (piece.value(t), piece.slope(t));
         let (delayed, delayed_rate) = self.delayed_tire_now();
         let b = self.solver_input_column();
-        let dx = self.solver_matrix * x + b * delayed + self.plant.e * road;
-        let d2x = self.solver_matrix * dx + b * delayed_rate + self.plant.e * road_rate;
+        let drive = self.forcing(&piece);
+        let dx = self.solver_matrix * x + b * delayed + self.plant.e * drive.value(t);
+        let d2x = self.solver_matrix * dx + b * delayed_rate + self.plant.e * drive.slope(t);
         let gain = self.config.params.effective_gain(self.config.variant);
         let now = Performance::at(&self.plant, &x, road);
         let rms = self.outputs().rms;
@@ -320,10 +328,20 @@ impl Simulator {
         let sdd = now.suspension_deflection;
         let growing = sdd.signum() * sdd_rate;
         let holding = accumulated.holding;
-        let in_contact = self.margin_at(t, &x, &piece)[0] >= 0.0;
+        let in_contact = if self.config.tire_contact.is_unilateral() {
+            !self.in_flight()
+        } else {
+            self.margin_at(t, &x, &piece)[0] >= 0.0
+        };
         OutputDerivatives {
             comfort,
-            dynamic_tire_load: k_t * (road_rate - dx[X_T]),
+            dynamic_tire_load: if in_contact {
+                k_t * (road_rate - dx[X_T])
+            } else if self.config.tire_contact.is_unilateral() {
+                0.0
+            } else {
+                k_t * (road_rate - dx[X_T])
+            },
             rms_dynamic_tire_load_ratio: k_t * rms_rate.tire_deflection / self.static_load(),
             road_holding: self.config.metrics.road_holding().then_some(RoadHolding {
                 contact_loss_time: if in_contact { 0.0 } else { 1.0 },
@@ -333,6 +351,7 @@ impl Simulator {
                     0.0
                 },
                 first_contact_loss: None,
+                lift_off_count: 0,
             }),
             rms: rms_rate,
             objective: rms_rate.objective(&self.config.weights),

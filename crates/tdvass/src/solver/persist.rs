@@ -14,7 +14,7 @@ use super::{Metrics, SimulationConfig, Simulator, accuracy};
 use crate::bytes::{ByteReader, ByteWriter};
 use crate::error::{Error, Result};
 use crate::metrics::{RunningRms, Weights};
-use crate::model::{Params, State, Variant};
+use crate::model::{Params, State, TireContact, Variant};
 use crate::road::{RandomRoad, RoadClass, RoadSpec, RoadState, RoadType};
 use std::sync::Arc;
 
@@ -25,8 +25,9 @@ use std::sync::Arc;
 /// word (they begin with the body mass) and are refused. Version 3 added
 /// the tolerance, the communication step the internal step divides and the
 /// internal step bound they gave (a restored simulator keeps its step
-/// without probing again).
-pub const STATE_FORMAT_VERSION: u64 = 3;
+/// without probing again). Version 4 added the tire's contact law, the
+/// lift-off count and the start of the flight in progress.
+pub const STATE_FORMAT_VERSION: u64 = 4;
 
 fn write_random_road(w: &mut ByteWriter, r: &RandomRoad) {
     w.u64(r.class.code() as u64);
@@ -81,6 +82,7 @@ fn write_config(w: &mut ByteWriter, c: &SimulationConfig) {
     w.f64(c.weights.suspension_deflection);
     w.f64(c.weights.tire_deflection);
     w.u64(c.metrics.code());
+    w.u64(c.tire_contact.code() as u64);
 }
 
 fn read_config(r: &mut ByteReader) -> Result<SimulationConfig> {
@@ -138,6 +140,8 @@ fn read_config(r: &mut ByteReader) -> Result<SimulationConfig> {
     };
     let metrics = Metrics::from_code(r.u64()?)
         .map_err(|e| Error::InvalidState(format!("metrics level: {e}")))?;
+    let tire_contact = TireContact::from_code(i64::try_from(r.u64()?).unwrap_or(i64::MAX))
+        .map_err(|e| Error::InvalidState(format!("tire contact: {e}")))?;
     Ok(SimulationConfig {
         params,
         variant,
@@ -145,6 +149,7 @@ fn read_config(r: &mut ByteReader) -> Result<SimulationConfig> {
         tolerance,
         max_internal_step,
         communication_step,
+        tire_contact,
         start_time,
         initial_state,
         weights,
@@ -181,6 +186,14 @@ impl Simulator {
         w.u64(holding.lost_steps);
         w.f64(holding.lost_time);
         match holding.first_loss {
+            Some(time) => {
+                w.u64(1);
+                w.f64(time);
+            }
+            None => w.u64(0),
+        }
+        w.u64(holding.lift_offs);
+        match holding.flight_start {
             Some(time) => {
                 w.u64(1);
                 w.f64(time);
@@ -307,7 +320,16 @@ impl Simulator {
                     )));
                 }
             },
+            lift_offs: r.u64()?,
+            flight_start: match r.u64()? {
+                0 => None,
+                1 => Some(r.f64()?),
+                other => {
+                    return Err(Error::InvalidState(format!("flight tag {other}")));
+                }
+            },
         };
+        sim.enter_recorded_mode();
         let mut road = RoadState {
             word_position: r.u128()?,
             first_node: r.u64()?,
@@ -460,6 +482,28 @@ impl Simulator {
                 Err(Error::InvalidState(format!(
                     "first contact loss at {time} s lies outside the run up to the committed_time {} s",
                     self.committed_time
+                )))
+            }
+            _ => Ok(()),
+        }?;
+        if holding.lift_offs > 0 && holding.first_loss.is_none() {
+            return Err(Error::InvalidState(format!(
+                "{} lift-offs without a first contact loss",
+                holding.lift_offs
+            )));
+        }
+        match holding.flight_start {
+            Some(_) if !self.config.tire_contact.is_unilateral() => Err(Error::InvalidState(
+                "a flight in progress, but the tire is bilateral".into(),
+            )),
+            Some(time)
+                if !(time >= self.config.start_time
+                    && time <= self.committed_time + tolerance
+                    && holding.lift_offs > 0) =>
+            {
+                Err(Error::InvalidState(format!(
+                    "a flight from {time} s does not fit in the run up to the committed time {} s after {} lift-offs",
+                    self.committed_time, holding.lift_offs
                 )))
             }
             _ => Ok(()),

@@ -4,7 +4,9 @@
 //! their share of the RMS time integral.
 
 use super::filter::Filter;
-use super::kernel::{HarmonicPhase, HotState, LinearPiece, Segment, run_segment, within_bounds};
+use super::kernel::{
+    HarmonicPhase, HotState, LinearPiece, Segment, SegmentEnd, run_segment, within_bounds,
+};
 use super::{PHASE_ANCHOR, Simulator};
 use crate::error::Result;
 use crate::model::{State, V_T, X_T};
@@ -44,7 +46,10 @@ impl Simulator {
     /// Commits the grid nodes `grid_index + 1 ..= last`, each by one whole
     /// step from the node before (the committed state is on node
     /// `grid_index`). Each node's state is a function of its index alone.
-    pub(super) fn whole_steps(&mut self, last: u64) -> Result<()> {
+    /// Returns `true` when it stopped early, before a step in which a
+    /// unilateral tire may lift off or a road breakpoint splits (the caller
+    /// integrates that step with its switches, `solver::contact`).
+    pub(super) fn whole_steps(&mut self, last: u64) -> Result<bool> {
         let harmonic = matches!(self.config.road, RoadSpec::Harmonic { .. });
         match (self.grid.resolves_delay(), harmonic) {
             (true, true) => self.harmonic_whole_steps::<true>(last),
@@ -57,7 +62,7 @@ impl Simulator {
     /// [`Self::whole_steps`] on the harmonic road: segments that end at the
     /// phase anchors (and at node m, where the history starts), each run by
     /// [`segment`].
-    fn harmonic_whole_steps<const DELAY: bool>(&mut self, last: u64) -> Result<()> {
+    fn harmonic_whole_steps<const DELAY: bool>(&mut self, last: u64) -> Result<bool> {
         let m = self.grid.delay_steps();
         let first = self.grid_index;
         let len = self.history.len();
@@ -72,7 +77,7 @@ impl Simulator {
             weighted: self.weighted,
             holding: self.holding,
         };
-        let mut diverged = None;
+        let mut end_reason = SegmentEnd::Reached;
         while hot.k < last {
             let start = hot.k;
             let mut end = last.min((hot.k / PHASE_ANCHOR + 1) * PHASE_ANCHOR);
@@ -86,11 +91,15 @@ impl Simulator {
                 end,
                 before_start: [x0, 0.0, x0, 0.0],
             };
-            diverged = run_segment::<_, DELAY>(segment, &mut hot, before_history);
+            end_reason = run_segment::<_, DELAY>(segment, &mut hot, before_history);
             if hot.k.is_multiple_of(PHASE_ANCHOR) {
                 hot.road = HarmonicPhase(self.exact_phase(hot.k));
             }
-            if diverged.is_some() {
+            if end_reason == SegmentEnd::Switch && hot.k > start {
+                self.grid_step.count(&mut hot.rms, &hot.x, hot.road.0[0]);
+                self.grid_step.count_weighted(&hot.w, &mut hot.weighted);
+            }
+            if end_reason != SegmentEnd::Reached {
                 break;
             }
             if hot.k > start {
@@ -103,9 +112,12 @@ impl Simulator {
         self.holding = hot.holding;
         self.phase = Some((hot.k, hot.road.0));
         self.set_committed_node(first, hot.k, hot.x, hot.w);
-        match diverged {
-            Some(x) => self.check_divergence(self.grid_time(hot.k + 1), &State::from(x)),
-            None => Ok(()),
+        match end_reason {
+            SegmentEnd::Diverged(x) => self
+                .check_divergence(self.grid_time(hot.k + 1), &State::from(x))
+                .map(|()| false),
+            SegmentEnd::Switch => Ok(true),
+            SegmentEnd::Reached => Ok(false),
         }
     }
 
@@ -125,7 +137,7 @@ impl Simulator {
     }
 
     #[inline(always)]
-    pub(super) fn whole_steps_with_body<const DELAY: bool>(&mut self, last: u64) -> Result<()> {
+    pub(super) fn whole_steps_with_body<const DELAY: bool>(&mut self, last: u64) -> Result<bool> {
         let m = self.grid.delay_steps();
         let len = self.history.len();
         let first = self.grid_index;
@@ -149,7 +161,7 @@ impl Simulator {
         let mut piece_at_node = None;
         let result = loop {
             if k >= last {
-                break Ok(());
+                break Ok(false);
             }
             let (t, to) = (self.grid_time(k), self.grid_time(k + 1));
             let covering = self.piece_over(t, to, piece_at_node.take());
@@ -194,11 +206,24 @@ impl Simulator {
                     end: stop,
                     before_start,
                 };
-                let diverged = run_segment::<_, DELAY>(segment, &mut hot, before);
+                let end_reason = run_segment::<_, DELAY>(segment, &mut hot, before);
+                let started = k;
                 (x, k, slot, rms) = (hot.x, hot.k, hot.slot, hot.rms);
                 (w, weighted, holding) = (hot.w, hot.weighted, hot.holding);
-                if let Some(x_next) = diverged {
-                    break self.check_divergence(self.grid_time(k + 1), &State::from(x_next));
+                match end_reason {
+                    SegmentEnd::Diverged(x_next) => {
+                        break self
+                            .check_divergence(self.grid_time(k + 1), &State::from(x_next))
+                            .map(|()| false);
+                    }
+                    SegmentEnd::Switch => {
+                        if k > started {
+                            op.count(&mut rms, &x, piece.value(self.grid_time(k)));
+                            op.count_weighted(&w, &mut weighted);
+                        }
+                        break Ok(true);
+                    }
+                    SegmentEnd::Reached => {}
                 }
                 let now = self.grid_time(k);
                 // `road.piece(now)` is this piece exactly when the node lies
@@ -228,6 +253,11 @@ impl Simulator {
                 self.road.release_before(self.grid_time(k - 1));
                 piece_at_node = Some(piece_now);
                 continue;
+            }
+            if op.contact.unilateral {
+                // A step that a road breakpoint splits, with a tire that
+                // may lift off inside it: the caller integrates it.
+                break Ok(true);
             }
             // A step that a road breakpoint splits: the RMS run closes at
             // its start, and the step is integrated piece by piece.

@@ -210,7 +210,8 @@ impl Simulator {
             } else {
                 0.0
             };
-            let xg = self.piece_from(t).value(t);
+            let piece = self.piece_from(t);
+            let xg = self.forcing(&piece).value(t);
             let dx = self.solver_matrix * x + self.plant.e * xg;
             Vector4::new(x[X_T] - tau * x[V_T], dx[X_T] - tau * dx[V_T], 0.0, 0.0)
         }
@@ -230,10 +231,12 @@ impl Simulator {
     ) -> Squares {
         let p = self.delayed_vector_at(k, t, from, x);
         let (road, road_rate) = (piece.value(t), piece.slope(t));
+        let drive = self.forcing(piece);
         let b = self.solver_input_column();
-        let dx = self.solver_matrix * x + b * p[0] + self.plant.e * road;
-        let acceleration_rate =
-            (self.solver_matrix.row(V_S) * dx)[0] + b[V_S] * p[1] + self.plant.e[V_S] * road_rate;
+        let dx = self.solver_matrix * x + b * p[0] + self.plant.e * drive.value(t);
+        let acceleration_rate = (self.solver_matrix.row(V_S) * dx)[0]
+            + b[V_S] * p[1]
+            + self.plant.e[V_S] * drive.slope(t);
         let y = [
             self.plant.body_acceleration(x),
             x[X_S] - x[X_T],
@@ -311,7 +314,9 @@ impl Simulator {
                     self.margin_at(start, &x_start, &piece),
                     self.margin_at(end, &x_end, &piece),
                 );
-                holding.add_interval(start, end - start, a, b);
+                if !self.config.tire_contact.is_unilateral() {
+                    holding.add_interval(start, end - start, a, b);
+                }
                 holding.add_deflection(
                     end - start,
                     deflection(&x_start.into()),
@@ -373,7 +378,9 @@ impl Simulator {
                     self.margin_at(start, &x_start, &piece),
                     self.margin_at(end, &x_end, &piece),
                 );
-                holding.add_interval(start, end - start, a, b);
+                if !self.config.tire_contact.is_unilateral() {
+                    holding.add_interval(start, end - start, a, b);
+                }
                 holding.add_deflection(
                     end - start,
                     deflection(&x_start.into()),
@@ -454,7 +461,10 @@ impl Simulator {
             // the integral).
             let delta = t - tc;
             let piece = self.piece_from(tc);
-            if self.config.metrics.road_holding() && self.margin_at(tc, &xc, &piece)[0] < 0.0 {
+            if self.config.metrics.road_holding()
+                && !self.config.tire_contact.is_unilateral()
+                && self.margin_at(tc, &xc, &piece)[0] < 0.0
+            {
                 holding.lost_time += delta;
             }
             return Accumulated {
@@ -562,6 +572,24 @@ impl Simulator {
         if self.snaps(t, tc) {
             let (closed, _) = self.integral_to_committed();
             self.integral.closed = closed;
+            self.rms = RunningRms::default();
+            self.weighted = [0.0; 2];
+            self.integral.anchor_index = self.grid_index;
+            self.integral.anchor_time = self.committed_time;
+        } else {
+            self.close_run_here();
+        }
+        self.committed_time
+    }
+
+    /// Closes the run at the current time, which becomes the committed
+    /// point (its filter state and road-holding accumulators with it),
+    /// however close to the committed point it is (a switch of the tire's
+    /// contact, `solver::contact`).
+    pub(super) fn close_run_here(&mut self) {
+        if self.current_time == self.committed_time {
+            let (closed, _) = self.integral_to_committed();
+            self.integral.closed = closed;
         } else {
             let now = self.accumulated_now();
             self.integral.closed = now.integral;
@@ -570,14 +598,13 @@ impl Simulator {
                 self.holding.add_node(&self.current_state.into());
             }
             self.committed_filter = now.filter;
-            self.committed_time = t;
+            self.committed_time = self.current_time;
             self.committed_state = self.current_state;
         }
         self.rms = RunningRms::default();
         self.weighted = [0.0; 2];
         self.integral.anchor_index = self.grid_index;
         self.integral.anchor_time = self.committed_time;
-        self.committed_time
     }
 
     /// After the external road input changed at the anchor: the anchor's
@@ -612,7 +639,8 @@ impl Simulator {
             _ => 4,
         };
         let p = self.delayed_vector_at(k, t, (t, x), &x);
-        let piece = self.piece_from(t + delta);
+        let road_piece = self.piece_from(t + delta);
+        let piece = self.forcing(&road_piece);
         let road = match piece {
             _ if order == 1 => [piece.value(t), 0.0, 0.0, 0.0],
             RoadPiece::Harmonic {

@@ -1,0 +1,353 @@
+//! The unilateral tire ([`TireContact::Unilateral`]): contact and flight,
+//! each exact, with the switches between them located inside the steps.
+//!
+//! **The two modes.** In contact the plant is Eq. (2). In flight the tire
+//! force is the constant −W, so the wheel row loses the tire spring: with
+//! `e = [0, …, k_t/m_t]` the road column, the flight plant is
+//! `dX/dt = (A + e c_tᵀ) X + b u + e (−W/k_t)`, `c_t` picking x_t. That is
+//! the same form as contact, with the road replaced by the constant
+//! `−W/k_t` ([`Simulator::forcing`]), so every exact step map of the solver
+//! applies to flight unchanged: the mode's plant matrix and its operators
+//! are swapped at a switch ([`ModeOperators`]).
+//!
+//! **The switches.** With the margin `g = W/k_t − (x_t − x_g)` (m) of
+//! `solver::holding`, the wheel lifts off where g falls through 0 in
+//! contact, and touches down where it rises through 0 in flight. The
+//! tire force `max(−W, k_t (x_g − x_t))` is continuous there, so the state
+//! and its first two derivatives are: the delay history, the RMS
+//! integrals, the W_k filter and the running extrema continue across a
+//! switch.
+//!
+//! From the committed point the step is integrated to its end node in the
+//! current mode; the cubic Hermite interpolant of the switch function
+//! (g in contact, −g in flight) through the exact values and rates at the
+//! ends of each road piece brackets its first fall through 0 (the root
+//! test of `solver::holding`). The bracket is then checked and narrowed on
+//! the exact dense output (the state from the committed point by the exact
+//! partial step), by Newton's method on `φ' = ±(x_g' − v_t)`, a state,
+//! kept inside the bracket by bisection, to [`LOCATION_TOLERANCE`]. The
+//! switch time is committed like a change of an external road input (the
+//! RMS run closes there), the mode flips, and the step goes on from there.
+//! A bracket that the exact output does not confirm is a graze (the
+//! margin touches 0 within the interpolant's error, some 1e-14 m) and
+//! switches nothing.
+//!
+//! The search always runs to the step's end node, whatever time the
+//! caller asked for, so the switch times do not depend on how a run is
+//! split. A step may hold at most [`MAX_SWITCHES_PER_STEP`] switches;
+//! more is refused with an error naming the cause (the margin then
+//! oscillates about 0 faster than the step resolves), never looped on.
+//!
+//! **Accuracy.** Each mode keeps the exact step. The Hermite interpolant of
+//! the delayed `x_t` over a grid interval with a switch in it interpolates
+//! a function whose third derivative jumps there (the tire force has a
+//! kink), an error of order `h³ |Δx_t'''|` over that interval only; with a
+//! delay inside the step (`0 < tau < h`) the step's end node is predicted
+//! in the mode at the step's start. Both are within the tolerance's step
+//! choice, which probes the unilateral run itself.
+
+use super::operators::StepOperator;
+use super::{Simulator, holding};
+use crate::error::{Error, Result};
+use crate::model::{State, X_T};
+use crate::road::{RoadPiece, RoadSpec};
+use nalgebra::Matrix6;
+use std::collections::HashMap;
+
+/// The accuracy to which a switch time is located (s).
+pub const LOCATION_TOLERANCE: f64 = 1e-13;
+
+/// Most switches between contact and flight inside one internal step.
+pub const MAX_SWITCHES_PER_STEP: u32 = 16;
+
+/// Newton (or bisection) iterations at most per switch: from a bracket of
+/// a whole step, bisection alone reaches 2^-64 of it.
+const LOCATION_ITERATIONS: usize = 64;
+
+/// Lift-offs kept for the front-ends' event log between two takes.
+const LIFT_OFF_LOG: usize = 64;
+
+/// A lift-off, as logged.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LiftOff {
+    /// When (s).
+    pub time: f64,
+    /// TDD = x_t − x_g then (m): W/k_t up to the location tolerance.
+    pub tire_deflection: f64,
+    /// W/k_t (m): the TDD at which the tire load reaches 0.
+    pub limit: f64,
+}
+
+/// The operators of the mode that is not in force (see the module docs).
+#[derive(Debug, Clone)]
+pub(super) struct ModeOperators {
+    pub(super) solver_matrix: Matrix6<f64>,
+    pub(super) solver_matrix_norm: f64,
+    pub(super) full_step: StepOperator,
+    pub(super) partial_steps: HashMap<u64, StepOperator>,
+}
+
+/// Lift-offs since the front-end last took them.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub(super) struct LiftOffLog {
+    pub(super) events: Vec<LiftOff>,
+    /// Lift-offs that did not fit.
+    pub(super) dropped: u64,
+}
+
+impl Simulator {
+    /// Whether the wheel is in flight now (unilateral tire only).
+    pub fn in_flight(&self) -> bool {
+        self.holding.flight_start.is_some()
+    }
+
+    /// The lift-offs since the last call (at most 64; the second value
+    /// counts those left out), for an event log.
+    pub fn take_lift_offs(&mut self) -> (Vec<LiftOff>, u64) {
+        let log = std::mem::take(&mut self.lift_off_log);
+        (log.events, log.dropped)
+    }
+
+    /// The tire load as the tire law gives it (N): `load` =
+    /// `k_t (x_g − x_t)`, at least −W with the unilateral tire.
+    pub(super) fn tire_load(&self, load: f64) -> f64 {
+        if self.config.tire_contact.is_unilateral() {
+            load.max(-self.static_load())
+        } else {
+            load
+        }
+    }
+
+    /// What drives the plant through its road column `e` over `piece`: the
+    /// road in contact, the constant `−W/k_t` in flight (see the module
+    /// docs).
+    #[inline]
+    pub(super) fn forcing(&self, piece: &RoadPiece) -> RoadPiece {
+        if self.in_flight() {
+            RoadPiece::Linear {
+                start: 0.0,
+                end: piece.end(),
+                value: -self.grid_step.contact.limit,
+                slope: 0.0,
+            }
+        } else {
+            *piece
+        }
+    }
+
+    /// The flight mode's operators for the contact plant matrix `contact`
+    /// (the solver's, with any folded feedback).
+    pub(super) fn flight_operators(&self, contact: &Matrix6<f64>) -> ModeOperators {
+        let e = self.plant.e;
+        let mut a = *contact;
+        for row in 0..6 {
+            a[(row, X_T)] += e[row];
+        }
+        let omega = match self.config.road {
+            RoadSpec::Harmonic {
+                angular_frequency, ..
+            } => angular_frequency,
+            _ => 0.0,
+        };
+        let b = self.solver_input_column();
+        ModeOperators {
+            solver_matrix_norm: super::operators::infinity_norm(&a),
+            full_step: StepOperator::new(&a, &b, &e, omega, self.grid.step, self.coupling.as_ref()),
+            solver_matrix: a,
+            partial_steps: HashMap::new(),
+        }
+    }
+
+    /// Swaps the operators in force with those of the other mode.
+    fn swap_mode_operators(&mut self) {
+        let other = self
+            .other_mode
+            .as_mut()
+            .expect("a unilateral tire has the operators of both modes");
+        std::mem::swap(&mut self.solver_matrix, &mut other.solver_matrix);
+        std::mem::swap(&mut self.solver_matrix_norm, &mut other.solver_matrix_norm);
+        std::mem::swap(&mut self.full_step, &mut other.full_step);
+        std::mem::swap(&mut self.partial_steps, &mut other.partial_steps);
+    }
+
+    /// Puts the operators of the mode the holding state says (after a
+    /// restore or a rebuild of the contact operators).
+    pub(super) fn enter_recorded_mode(&mut self) {
+        if self.config.tire_contact.is_unilateral() {
+            self.other_mode = Some(Box::new(self.flight_operators(&self.solver_matrix)));
+            if self.in_flight() {
+                self.swap_mode_operators();
+            }
+        }
+    }
+
+    /// The switch function `[φ, φ']` at time t with state x: the margin g
+    /// in contact, −g in flight; the mode switches where φ falls through 0.
+    fn switch_function(&self, t: f64, x: &State, piece: &RoadPiece) -> [f64; 2] {
+        let [g, rate] = self.margin_at(t, x, piece);
+        if self.in_flight() {
+            [-g, -rate]
+        } else {
+            [g, rate]
+        }
+    }
+
+    /// The rounding level of φ at state x (m): below it a φ of the other
+    /// sign is taken for 0.
+    fn switch_rounding(&self, t: f64, x: &State, piece: &RoadPiece) -> f64 {
+        let scale = self.grid_step.contact.limit.abs() + x[X_T].abs() + piece.value(t).abs();
+        64.0 * f64::EPSILON * scale
+    }
+
+    /// The first switch in grid step k after the committed point, searched
+    /// up to the step's end node in the current mode (`None` if there is
+    /// none).
+    fn next_switch(&mut self, k: u64) -> Option<f64> {
+        let (tc, xc) = (self.committed_time, self.committed_state);
+        let node = self.grid_time(k + 1);
+        let (mut start, mut x_start) = (tc, xc);
+        while start < node {
+            let piece = self.piece_from(start);
+            let end = if piece.end() < node && !self.coincide(piece.end(), node) {
+                piece.end()
+            } else {
+                node
+            };
+            let x_end = self.integrate_within_step(k, tc, xc, end);
+            let a = self.switch_function(start, &x_start, &piece);
+            let b = self.switch_function(end, &x_end, &piece);
+            // A start on the other side by rounding only, and leaving it,
+            // is a switch just made (or a graze), not a new one.
+            let skip_start = start == tc
+                && a[0] >= -self.switch_rounding(start, &x_start, &piece)
+                && a[1] >= 0.0;
+            if let Some((lo, hi)) = holding::first_fall(end - start, a, b, skip_start) {
+                if hi == 0.0 {
+                    return Some(start);
+                }
+                if let Some(time) = self.locate_switch(k, (start + lo, start + hi), &piece) {
+                    return Some(time);
+                }
+            }
+            (start, x_start) = (end, x_end);
+        }
+        None
+    }
+
+    /// φ at time t in step k on the exact dense output from the committed
+    /// point: `[φ, φ']`.
+    fn exact_switch_function(&mut self, k: u64, t: f64, piece: &RoadPiece) -> [f64; 2] {
+        let (tc, xc) = (self.committed_time, self.committed_state);
+        let x = if t == tc {
+            xc
+        } else {
+            self.integrate_within_step(k, tc, xc, t)
+        };
+        self.switch_function(t, &x, piece)
+    }
+
+    /// The root of φ in `bracket` (times of step k) where the cubic falls
+    /// through 0, on the exact dense output: `None` when φ does not change
+    /// sign across the bracket there (a graze).
+    fn locate_switch(&mut self, k: u64, bracket: (f64, f64), piece: &RoadPiece) -> Option<f64> {
+        let (mut lo, mut hi) = bracket;
+        let at_lo = self.exact_switch_function(k, lo, piece);
+        let at_hi = self.exact_switch_function(k, hi, piece);
+        if at_hi[0] >= 0.0 || at_lo[0] < 0.0 {
+            return None;
+        }
+        // Start from the secant root.
+        let mut t = lo + (hi - lo) * at_lo[0] / (at_lo[0] - at_hi[0]);
+        for _ in 0..LOCATION_ITERATIONS {
+            if hi - lo <= LOCATION_TOLERANCE {
+                break;
+            }
+            if !(t > lo && t < hi) {
+                t = 0.5 * (lo + hi);
+            }
+            let [phi, rate] = self.exact_switch_function(k, t, piece);
+            if phi < 0.0 {
+                hi = t;
+            } else {
+                lo = t;
+            }
+            let newton = t - phi / rate;
+            let step = (newton - t).abs();
+            t = newton;
+            if step <= 0.25 * LOCATION_TOLERANCE && t > lo && t < hi {
+                // Converged: the first time past the root by at most the
+                // tolerance where φ is below 0.
+                let past = (t + LOCATION_TOLERANCE / 2.0).min(hi);
+                if self.exact_switch_function(k, past, piece)[0] < 0.0 {
+                    hi = past;
+                }
+                break;
+            }
+        }
+        // The earliest time at which φ is known to be below 0 is `hi`; the
+        // switch is put there, so that the new mode starts on its side.
+        Some(hi)
+    }
+
+    /// In unilateral mode: the first switch in grid step k after the
+    /// committed point, if it comes at or before `until`, is committed and
+    /// the mode flipped (`Ok(true)`); `Ok(false)` if none comes by then.
+    /// `switches`: the switches made in this step so far (refused beyond
+    /// [`MAX_SWITCHES_PER_STEP`]).
+    pub(super) fn switch_by(&mut self, k: u64, until: f64, switches: &mut u32) -> Result<bool> {
+        let Some(time) = self.next_switch(k) else {
+            return Ok(false);
+        };
+        if time > until && !self.snaps(until, time) {
+            return Ok(false);
+        }
+        *switches += 1;
+        if *switches > MAX_SWITCHES_PER_STEP {
+            return Err(Error::InvalidSetting {
+                name: "tire_contact",
+                value: 1,
+                reason: "the wheel switches between contact and flight more than 16 times in one internal step (near t = the current time): the tire margin W/k_t oscillates about 0 faster than the step resolves; lower the tolerance or max_internal_step, or use the bilateral tire",
+            });
+        }
+        self.commit_switch(k, time)
+    }
+
+    /// Commits the state at the switch time `time` in step k and flips the
+    /// mode.
+    fn commit_switch(&mut self, k: u64, time: f64) -> Result<bool> {
+        let (tc, xc) = (self.committed_time, self.committed_state);
+        let x = if time == tc {
+            xc
+        } else {
+            self.integrate_within_step(k, tc, xc, time)
+        };
+        self.check_divergence(time, &x)?;
+        self.outputs_cache = None;
+        self.current_time = time;
+        self.current_state = x;
+        self.close_run_here();
+        let piece = self.piece_from(time);
+        if self.in_flight() {
+            let start = self.holding.flight_start.take().unwrap_or(time);
+            self.holding.lost_time += time - start;
+        } else {
+            let limit = self.grid_step.contact.limit;
+            self.holding.flight_start = Some(time);
+            self.holding.lift_offs += 1;
+            self.holding.first_loss.get_or_insert(time);
+            let event = LiftOff {
+                time,
+                tire_deflection: x[X_T] - piece.value(time),
+                limit,
+            };
+            if self.lift_off_log.events.len() < LIFT_OFF_LOG {
+                self.lift_off_log.events.push(event);
+            } else {
+                self.lift_off_log.dropped += 1;
+            }
+        }
+        self.swap_mode_operators();
+        self.reanchor_after_input();
+        Ok(true)
+    }
+}
