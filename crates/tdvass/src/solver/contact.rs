@@ -303,10 +303,14 @@ impl Simulator {
         }
         *switches += 1;
         if *switches > MAX_SWITCHES_PER_STEP {
-            return Err(Error::InvalidSetting {
-                name: "tire_contact",
-                value: 1,
-                reason: "the wheel switches between contact and flight more than 16 times in one internal step (near t = the current time): the tire margin W/k_t oscillates about 0 faster than the step resolves; lower the tolerance or max_internal_step, or use the bilateral tire",
+            return Err(Error::Numerical {
+                what: "the unilateral tire (tire_contact = 1)",
+                reason: format!(
+                    "more than {MAX_SWITCHES_PER_STEP} switches between contact and flight in the internal step from {} s: the margin to W/k_t = {} m changes sign faster than a step of {} s resolves; use a tighter tolerance or a smaller max_internal_step, or the bilateral tire",
+                    self.grid_time(k),
+                    self.grid_step.contact.limit,
+                    self.grid.step
+                ),
             });
         }
         self.commit_switch(k, time)
@@ -349,5 +353,39 @@ impl Simulator {
         self.swap_mode_operators();
         self.reanchor_after_input();
         Ok(true)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{TireContact, V_T};
+    use crate::solver::SimulationConfig;
+
+    #[test]
+    fn more_switches_in_one_step_than_the_limit_are_refused_with_the_cause() {
+        // A wheel leaving the road at the start: the first step switches.
+        let mut initial = State::zeros();
+        initial[X_T] = 0.1;
+        initial[V_T] = 1.0;
+        let mut sim = Simulator::new(SimulationConfig {
+            tire_contact: TireContact::Unilateral,
+            initial_state: initial,
+            ..SimulationConfig::default()
+        })
+        .unwrap();
+        let node = sim.grid_time(1);
+        let mut switches = MAX_SWITCHES_PER_STEP;
+        let message = sim
+            .switch_by(0, node, &mut switches)
+            .unwrap_err()
+            .to_string();
+        assert!(message.contains("tire_contact = 1"), "{message}");
+        assert!(message.contains("more than 16 switches"), "{message}");
+        // Below the limit the same switch is made.
+        let mut switches = 0;
+        assert!(sim.switch_by(0, node, &mut switches).unwrap());
+        assert!(sim.in_flight());
+        assert_eq!(switches, 1);
     }
 }

@@ -743,12 +743,19 @@ mod tests {
         let bytes = sim.to_bytes();
         Simulator::from_bytes(&bytes).unwrap();
         // Offsets from the end: the road state (input tag, the nodes with
-        // their count, first_node, word position), then the first loss (tag
-        // and time), the lost time, the lost steps, the max deflection, the
-        // 8 filter states and the 2 a_w sums.
+        // their count, first_node, word position), then the flight in
+        // progress (tag 0), the lift-offs, the first loss (tag and time),
+        // the lost time, the lost steps, the max deflection, the 8 filter
+        // states and the 2 a_w sums.
         let road = sim.road.dynamic_state();
         let road_len = 16 + 8 + 8 + 8 * road.nodes.len() + 8;
-        let first_loss_at = bytes.len() - road_len - 16;
+        let flight_at = bytes.len() - road_len - 8;
+        let lift_offs_at = flight_at - 8;
+        let first_loss_at = lift_offs_at - 16;
+        assert_eq!(
+            bytes[lift_offs_at..lift_offs_at + 8],
+            holding.lift_offs.to_le_bytes()
+        );
         let lost_time_at = first_loss_at - 8;
         let lost_steps_at = lost_time_at - 8;
         let max_at = lost_steps_at - 8;
@@ -787,6 +794,12 @@ mod tests {
         forged.extend(0u64.to_le_bytes());
         forged.extend(&bytes[first_loss_at + 16..]);
         refused(&forged, &["contact loss time", "without a first"]);
+        // A flight in progress with the bilateral tire.
+        let mut forged = bytes[..flight_at].to_vec();
+        forged.extend(1u64.to_le_bytes());
+        forged.extend(0.25f64.to_le_bytes());
+        forged.extend(&bytes[flight_at + 8..]);
+        refused(&forged, &["flight in progress", "bilateral"]);
         // A foreign version.
         let mut forged = bytes.clone();
         put(&mut forged, 0, 1);

@@ -139,3 +139,124 @@ impl Lcg {
         (self.0 >> 11) as f64 / (1u64 << 53) as f64
     }
 }
+
+/// What [`rk4_unilateral`] measures over a run from t = 0.
+#[derive(Debug, Clone, Copy)]
+pub struct SwitchedRun {
+    /// Time averages `sqrt(∫ y² / T)` of BA, SDD, TDD.
+    pub rms: [f64; 3],
+    /// The time with the wheel off the road (s).
+    pub flight_time: f64,
+    /// The number of lift-offs.
+    pub lift_offs: u64,
+}
+
+/// Classical RK4 at a fixed fine step for the switched delay equation of
+/// a unilateral tire: `X' = A X + b x_t(t − tau) + e x_g(t)` with the tire
+/// force `k_t (x_g − x_t)` replaced by `max(−W, k_t (x_g − x_t))`, written
+/// pointwise in the right-hand side (it is continuous, so RK4 stays
+/// accurate to O(h³) per step across a switch, which it does not locate).
+/// History as in [`rk4_method_of_steps`], from rest. The RMS integrals
+/// are trapezoids over the nodes; the flight time and the lift-offs come
+/// from the margin `W/k_t − (x_t − x_g)` at the nodes, its zeros placed
+/// by linear interpolation (O(h²)).
+pub fn rk4_unilateral(
+    plant: &Plant,
+    tau: f64,
+    weight: f64,
+    road: impl Fn(f64) -> f64,
+    step: f64,
+    duration: f64,
+) -> SwitchedRun {
+    let k_t = plant.params.k_t;
+    let m_t = plant.params.m_t;
+    let m = if tau > 0.0 {
+        (tau / step).round() as usize
+    } else {
+        0
+    };
+    assert!(
+        m == 0 || ((m as f64) * step - tau).abs() < 1e-12 * tau,
+        "step must divide tau"
+    );
+    let n = (duration / step).round() as usize;
+    let derivative = |x: &State, delayed: f64, xg: f64| {
+        let mut dx = plant.derivative(x, delayed, xg);
+        let load = k_t * (xg - x[X_T]);
+        dx[V_T] += (load.max(-weight) - load) / m_t;
+        dx
+    };
+    let mut nodes: Vec<[f64; 2]> = Vec::with_capacity(n + 1);
+    nodes.push([0.0, 0.0]);
+    let delayed = |nodes: &Vec<[f64; 2]>, k: usize, frac: f64, x_now: &State| -> f64 {
+        if m == 0 {
+            return x_now[X_T];
+        }
+        if k < m {
+            return 0.0;
+        }
+        let [xa, va] = nodes[k - m];
+        if frac == 0.0 {
+            return xa;
+        }
+        let [xb, vb] = nodes[k - m + 1];
+        let (s, h) = (frac * step, step);
+        let slope = (xb - xa) / h;
+        let c2 = (3.0 * slope - 2.0 * va - vb) / h;
+        let c3 = (va + vb - 2.0 * slope) / (h * h);
+        xa + s * (va + s * (c2 + s * c3))
+    };
+    let outputs = |x: &State, t: f64| {
+        [
+            plant.body_acceleration(x),
+            x[tdvass::model::X_S] - x[X_T],
+            x[X_T] - road(t),
+        ]
+    };
+    let margin = |x: &State, t: f64| weight / k_t - (x[X_T] - road(t));
+    let mut x = State::zeros();
+    let mut sums = [0.0; 3];
+    let mut before = outputs(&x, 0.0);
+    let mut margin_before = margin(&x, 0.0);
+    let (mut flight_time, mut lift_offs) = (0.0, 0);
+    for k in 0..n {
+        let t = k as f64 * step;
+        let f = |x: &State, frac: f64, nodes: &Vec<[f64; 2]>| {
+            derivative(x, delayed(nodes, k, frac, x), road(t + frac * step))
+        };
+        let k1 = f(&x, 0.0, &nodes);
+        let k2 = f(&(x + k1 * (step / 2.0)), 0.5, &nodes);
+        let k3 = f(&(x + k2 * (step / 2.0)), 0.5, &nodes);
+        let x4 = x + k3 * step;
+        let k4 = if m == 0 {
+            derivative(&x4, x4[X_T], road(t + step))
+        } else {
+            derivative(&x4, delayed(&nodes, k + 1, 0.0, &x4), road(t + step))
+        };
+        x += (k1 + k2 * 2.0 + k3 * 2.0 + k4) * (step / 6.0);
+        nodes.push([x[X_T], x[V_T]]);
+        let after = outputs(&x, t + step);
+        for i in 0..3 {
+            sums[i] += 0.5 * step * (before[i] * before[i] + after[i] * after[i]);
+        }
+        before = after;
+        let margin_after = margin(&x, t + step);
+        match (margin_before >= 0.0, margin_after >= 0.0) {
+            (true, true) => {}
+            (false, false) => flight_time += step,
+            (true, false) => {
+                lift_offs += 1;
+                flight_time += step * margin_after / (margin_after - margin_before);
+            }
+            (false, true) => {
+                flight_time += step * margin_before / (margin_before - margin_after);
+            }
+        }
+        margin_before = margin_after;
+    }
+    SwitchedRun {
+        rms: sums.map(|s| (s / duration).sqrt()),
+        flight_time,
+        lift_offs,
+    }
+}
