@@ -31,6 +31,16 @@
 //! ```
 //!
 //! (criterion's view of the same: `cargo bench --bench simulation -- 'comfort filter'`).
+//!
+//! The cost of the unilateral tire: whole 15 s runs (construction
+//! included) with the bilateral and the unilateral tire, interleaved in one
+//! process, min and median of 15 each, at the paper and the comfort
+//! metrics level, on roads without lift-off and on class D, with the ratio
+//! of unilateral to bilateral at the same level:
+//!
+//! ```text
+//! cargo bench --bench simulation -- --tire-contact-cost
+//! ```
 
 use criterion::{Criterion, Throughput, criterion_group};
 use nalgebra::{Matrix6, SMatrix, Vector2, Vector4, Vector6};
@@ -658,6 +668,100 @@ fn comfort_cost() {
     }
 }
 
+/// Runs of [`tire_contact_cost`] per configuration.
+const WHOLE_RUNS: usize = 15;
+
+/// Min and median wall time (ms) of whole 15 s runs of each configuration,
+/// interleaved.
+fn whole_run_times(configs: &[SimulationConfig]) -> Vec<(f64, f64)> {
+    let mut times = vec![Vec::new(); configs.len()];
+    for _ in 0..WHOLE_RUNS {
+        for (config, samples) in configs.iter().zip(&mut times) {
+            let start = Instant::now();
+            let summary = simulate(config.clone(), 15.0).expect("the run succeeds");
+            black_box(summary);
+            samples.push(start.elapsed().as_secs_f64() * 1e3);
+        }
+    }
+    times
+        .into_iter()
+        .map(|mut samples| {
+            samples.sort_by(f64::total_cmp);
+            (samples[0], samples[samples.len() / 2])
+        })
+        .collect()
+}
+
+/// The `--tire-contact-cost` mode (see the module documentation).
+fn tire_contact_cost() {
+    use tdvass::TireContact;
+    let road = |class| {
+        RoadSpec::Iso8608(RandomRoad {
+            class,
+            ..RandomRoad::default()
+        })
+    };
+    let cases = [
+        ("TDVASS harmonic (default)", SimulationConfig::default()),
+        (
+            "PVASS ISO 8608 A",
+            SimulationConfig {
+                variant: Variant::Pvass,
+                road: road(tdvass::road::RoadClass::A),
+                ..SimulationConfig::default()
+            },
+        ),
+        (
+            "TDVASS ISO 8608 D (lifts off)",
+            SimulationConfig {
+                params: Params::with_controller(PAPER_G2, PAPER_TAU2),
+                road: road(tdvass::road::RoadClass::D),
+                ..SimulationConfig::default()
+            },
+        ),
+    ];
+    println!("whole 15 s runs, min and median of {WHOLE_RUNS} (ms)");
+    println!();
+    println!(
+        "{:<30} {:<28} {:>8} {:>8} {:>10} {:>10}",
+        "case", "tire, metrics", "min", "median", "lift-offs", "ratio"
+    );
+    for (name, config) in cases {
+        let with = |tire_contact, metrics| SimulationConfig {
+            tire_contact,
+            metrics,
+            ..config.clone()
+        };
+        // Bilateral and unilateral at the paper level (which the
+        // unilateral tire raises to road holding: a PSO on J) and at the
+        // comfort level (every metric: `simulate`, the FMUs).
+        let configs = [
+            with(TireContact::Bilateral, Metrics::Paper),
+            with(TireContact::Unilateral, Metrics::Paper),
+            with(TireContact::Bilateral, Metrics::Comfort),
+            with(TireContact::Unilateral, Metrics::Comfort),
+        ];
+        let times = whole_run_times(&configs);
+        for (i, (config, (min, median))) in configs.iter().zip(&times).enumerate() {
+            let lift_offs = simulate(config.clone(), 15.0)
+                .expect("the run succeeds")
+                .road_holding
+                .map_or(0, |holding| holding.lift_off_count);
+            let ratio = if i % 2 == 1 {
+                format!("{:.2}", min / times[i - 1].0)
+            } else {
+                String::new()
+            };
+            println!(
+                "{name:<30} {:<28} {min:>8.2} {median:>8.2} {lift_offs:>10} {ratio:>10}",
+                format!("{:?}, {:?}", config.tire_contact, config.metrics),
+            );
+        }
+    }
+    println!();
+    println!("ratio: unilateral min / bilateral min at the same metrics level");
+}
+
 /// `criterion_main!(benches)` plus the min-of-N modes: with `--min-of-n`
 /// among the arguments, runs [`min_of_n`], with `--comfort-cost`
 /// [`comfort_cost`], instead of criterion.
@@ -668,6 +772,10 @@ fn main() {
     }
     if std::env::args().any(|arg| arg == "--comfort-cost") {
         comfort_cost();
+        return;
+    }
+    if std::env::args().any(|arg| arg == "--tire-contact-cost") {
+        tire_contact_cost();
         return;
     }
     benches();

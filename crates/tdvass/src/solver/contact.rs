@@ -158,26 +158,30 @@ impl Simulator {
         }
     }
 
-    /// Swaps the operators in force with those of the other mode.
+    /// Swaps the operators in force with those of the other mode. Those
+    /// of flight are made at the first lift-off: until then (`other_mode`
+    /// empty) the contact operators are in force.
     fn swap_mode_operators(&mut self) {
-        let other = self
-            .other_mode
-            .as_mut()
-            .expect("a unilateral tire has the operators of both modes");
+        if self.other_mode.is_none() {
+            let flight = self.flight_operators(&self.solver_matrix);
+            self.other_mode = Some(Box::new(flight));
+        }
+        let Some(other) = self.other_mode.as_mut() else {
+            return;
+        };
         std::mem::swap(&mut self.solver_matrix, &mut other.solver_matrix);
         std::mem::swap(&mut self.solver_matrix_norm, &mut other.solver_matrix_norm);
         std::mem::swap(&mut self.full_step, &mut other.full_step);
         std::mem::swap(&mut self.partial_steps, &mut other.partial_steps);
+        self.location_steps.clear();
     }
 
-    /// Puts the operators of the mode the holding state says (after a
-    /// restore or a rebuild of the contact operators).
+    /// Puts the operators of the mode the holding state says, the contact
+    /// operators being in force (after a restore or a rebuild of them).
     pub(super) fn enter_recorded_mode(&mut self) {
-        if self.config.tire_contact.is_unilateral() {
-            self.other_mode = Some(Box::new(self.flight_operators(&self.solver_matrix)));
-            if self.in_flight() {
-                self.swap_mode_operators();
-            }
+        self.other_mode = None;
+        if self.in_flight() {
+            self.swap_mode_operators();
         }
     }
 
@@ -221,11 +225,12 @@ impl Simulator {
             let skip_start = start == tc
                 && a[0] >= -self.switch_rounding(start, &x_start, &piece)
                 && a[1] >= 0.0;
-            if let Some((lo, hi)) = holding::first_fall(end - start, a, b, skip_start) {
+            if let Some([lo, root, hi]) = holding::first_fall(end - start, a, b, skip_start) {
                 if hi == 0.0 {
                     return Some(start);
                 }
-                if let Some(time) = self.locate_switch(k, (start + lo, start + hi), &piece) {
+                let bracket = [start + lo, start + root, start + hi];
+                if let Some(time) = self.locate_switch(k, bracket, &piece) {
                     return Some(time);
                 }
             }
@@ -241,16 +246,62 @@ impl Simulator {
         let x = if t == tc {
             xc
         } else {
-            self.integrate_within_step(k, tc, xc, t)
+            // The plant alone, from operators without the W_k filter rows
+            // (the plant's step is the same to the bit with them or
+            // without), kept apart from the filter-carrying ones.
+            let coupling = self.coupling.take();
+            std::mem::swap(&mut self.partial_steps, &mut self.location_steps);
+            let x = self.integrate_within_step(k, tc, xc, t);
+            std::mem::swap(&mut self.partial_steps, &mut self.location_steps);
+            self.coupling = coupling;
+            x
         };
         self.switch_function(t, &x, piece)
     }
 
-    /// The root of φ in `bracket` (times of step k) where the cubic falls
-    /// through 0, on the exact dense output: `None` when φ does not change
-    /// sign across the bracket there (a graze).
-    fn locate_switch(&mut self, k: u64, bracket: (f64, f64), piece: &RoadPiece) -> Option<f64> {
-        let (mut lo, mut hi) = bracket;
+    /// The root of φ where the cubic falls through 0, given as `[lo, root,
+    /// hi]` (times of step k: the cubic's root and a bracket of it), on the
+    /// exact dense output: the first time past it by at most
+    /// [`LOCATION_TOLERANCE`] where φ is below 0, so that the new mode
+    /// starts on its side; `None` when φ does not fall through 0 there (a
+    /// graze).
+    ///
+    /// The cubic's root is within its error (some 1e-14 m in φ) of the
+    /// exact one, so Newton's method from it usually converges in two
+    /// steps; otherwise the bracket is checked on the exact output and
+    /// narrowed by Newton steps kept inside it by bisection.
+    fn locate_switch(
+        &mut self,
+        k: u64,
+        [lo, root, hi]: [f64; 3],
+        piece: &RoadPiece,
+    ) -> Option<f64> {
+        let mut t = root;
+        for _ in 0..2 {
+            let [phi, rate] = self.exact_switch_function(k, t, piece);
+            let next = t - phi / rate;
+            if !(rate < 0.0 && next >= lo && next <= hi) {
+                break;
+            }
+            if (next - t).abs() <= 0.25 * LOCATION_TOLERANCE {
+                let past = (next + 0.5 * LOCATION_TOLERANCE).min(hi);
+                if self.exact_switch_function(k, past, piece)[0] < 0.0 {
+                    return Some(past);
+                }
+                break;
+            }
+            t = next;
+        }
+        self.locate_switch_in_bracket(k, (lo, hi), piece)
+    }
+
+    /// [`Self::locate_switch`] from the bracket alone.
+    fn locate_switch_in_bracket(
+        &mut self,
+        k: u64,
+        (mut lo, mut hi): (f64, f64),
+        piece: &RoadPiece,
+    ) -> Option<f64> {
         let at_lo = self.exact_switch_function(k, lo, piece);
         let at_hi = self.exact_switch_function(k, hi, piece);
         if at_hi[0] >= 0.0 || at_lo[0] < 0.0 {
@@ -275,8 +326,6 @@ impl Simulator {
             let step = (newton - t).abs();
             t = newton;
             if step <= 0.25 * LOCATION_TOLERANCE && t > lo && t < hi {
-                // Converged: the first time past the root by at most the
-                // tolerance where φ is below 0.
                 let past = (t + LOCATION_TOLERANCE / 2.0).min(hi);
                 if self.exact_switch_function(k, past, piece)[0] < 0.0 {
                     hi = past;
@@ -284,8 +333,6 @@ impl Simulator {
                 break;
             }
         }
-        // The earliest time at which φ is known to be below 0 is `hi`; the
-        // switch is put there, so that the new mode starts on its side.
         Some(hi)
     }
 

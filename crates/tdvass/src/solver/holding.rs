@@ -360,12 +360,12 @@ pub(crate) fn below_zero(length: f64, a: [f64; 2], b: [f64; 2]) -> BelowZero {
 }
 
 /// The first place where the cubic of [`time_below_zero`] falls through
-/// 0: offsets (s) `(lo, hi)` that bracket it, `p(lo) >= 0 > p(hi)`, `lo`
-/// the start of the sign piece before it and `hi` the deepest sub-interval
-/// middle of the negative stretch after it (so that a tiny first piece
-/// next to a root at an end does not make a bracket that rounding can
-/// undo); or `(0, 0)` when it is negative from the start and `skip_start`
-/// is false. With `skip_start` a negative stretch at the start is passed
+/// 0: offsets (s) `[lo, root, hi]`, the root and a bracket of it,
+/// `p(lo) >= 0 > p(hi)`, `lo` the start of the sign piece before it and
+/// `hi` the deepest sub-interval middle of the negative stretch after it
+/// (so that a tiny first piece next to a root at an end does not make a
+/// bracket that rounding can undo); or zeros when it is negative from the
+/// start and `skip_start` is false. With `skip_start` a negative stretch at the start is passed
 /// over (a state just switched, whose margin is 0 up to rounding and
 /// rising).
 pub(crate) fn first_fall(
@@ -373,15 +373,15 @@ pub(crate) fn first_fall(
     a: [f64; 2],
     b: [f64; 2],
     skip_start: bool,
-) -> Option<(f64, f64)> {
+) -> Option<[f64; 3]> {
     if length.is_nan() || length <= 0.0 {
-        return (a[0] < 0.0 && !skip_start).then_some((0.0, 0.0));
+        return (a[0] < 0.0 && !skip_start).then_some([0.0; 3]);
     }
     let (p, points) = sign_pieces(length, a, b);
     let mut negative_before = a[0] < 0.0 && skip_start;
     let mut before = 0.0;
-    // The fall found: (its lo, the deepest middle so far, p there).
-    let mut fall: Option<(f64, f64, f64)> = None;
+    // The fall found: (its lo, its root, the deepest middle so far, p there).
+    let mut fall: Option<(f64, f64, f64, f64)> = None;
     for pair in points.windows(2) {
         let (lo, hi) = (pair[0], pair[1]);
         if hi <= lo {
@@ -391,17 +391,17 @@ pub(crate) fn first_fall(
         let value = p(middle);
         let negative = value < 0.0;
         match fall {
-            Some((_, _, deepest)) if negative => {
+            Some((_, _, _, deepest)) if negative => {
                 if value < deepest {
-                    fall = fall.map(|(start, _, _)| (start, middle, value));
+                    fall = fall.map(|(start, root, _, _)| (start, root, middle, value));
                 }
             }
             Some(_) => break,
             None if negative && !negative_before => {
                 if lo == 0.0 && a[0] < 0.0 {
-                    return Some((0.0, 0.0));
+                    return Some([0.0; 3]);
                 }
-                fall = Some((before, middle, value));
+                fall = Some((before, lo, middle, value));
             }
             None => {
                 if !negative {
@@ -411,7 +411,7 @@ pub(crate) fn first_fall(
             }
         }
     }
-    fall.map(|(lo, hi, _)| (lo * length, hi * length))
+    fall.map(|(lo, root, hi, _)| [lo * length, root * length, hi * length])
 }
 
 /// Real roots of `a s² + b s + c` (none, one or two; a linear or constant

@@ -250,6 +250,9 @@ pub struct Simulator {
     /// `full_step` in the form of the whole-step loop.
     grid_step: GridStep,
     partial_steps: HashMap<u64, StepOperator>,
+    /// Cached partial steps of the plant alone, for locating the switches
+    /// of a unilateral tire (`contact`).
+    location_steps: HashMap<u64, StepOperator>,
     road: Road,
     /// Index k of the grid node at or before the committed time.
     grid_index: u64,
@@ -431,6 +434,7 @@ impl Simulator {
             full_step,
             grid_step,
             partial_steps: HashMap::new(),
+            location_steps: HashMap::new(),
             road,
             grid_index: 0,
             committed_time: config.start_time,
@@ -997,6 +1001,7 @@ impl Simulator {
         self.full_step = step;
         self.grid_step = grid_step;
         self.partial_steps.clear();
+        self.location_steps.clear();
         // The contact operators were rebuilt: the flight ones follow, and
         // a flight in progress goes on with them.
         self.enter_recorded_mode();
