@@ -290,3 +290,25 @@ fn hard_input_is_integrated_or_refused_never_looped_on() {
         }
     }
 }
+
+#[test]
+fn the_bilateral_lift_off_count_is_the_number_of_falls_below_minus_the_static_load() {
+    let config = SimulationConfig {
+        tire_contact: TireContact::Bilateral,
+        ..unilateral(Variant::Pvass, iso(RoadClass::D, 20.0))
+    };
+    let mut sim = Simulator::new(config).unwrap();
+    let weight = sim.static_load();
+    // The load sampled every 10 µs (a crossing pair closer than that
+    // would be missed; the cubic of the count sees it).
+    let (mut falls, mut below) = (0, false);
+    for i in 1..=300_000 {
+        sim.advance_to(i as f64 * 1e-5).unwrap();
+        let now = sim.outputs().dynamic_tire_load < -weight;
+        falls += u64::from(now && !below);
+        below = now;
+    }
+    let count = sim.outputs().road_holding.unwrap().lift_off_count;
+    assert!(falls >= 5, "{falls}");
+    assert_eq!(count, falls);
+}

@@ -47,7 +47,9 @@
 //! internal step and how the delay lies on it),
 //! `operators` (the exact step maps), `kernel` (the whole-step loop and its
 //! AVX2 build: all of the solver's `unsafe`; the crate denies it elsewhere),
-//! `steps` (whole steps and steps that a road breakpoint splits), `outputs`
+//! `steps` (whole steps and steps that a road breakpoint splits), `contact`
+//! (the unilateral tire: flight, and the switches located inside steps),
+//! `outputs`
 //! (what the simulator reports), `time_average` (the RMS values),
 //! `persist` (the byte form), `expm` (the 2^N exponential); this file holds
 //! the configuration, the `Simulator` and its general step.

@@ -31,7 +31,8 @@ pub struct ComfortValues {
 pub struct RoadHolding {
     /// The time without tire contact so far (s): the measure of the times
     /// at which the dynamic tire load was below −W, crossings located
-    /// inside the steps (see `solver::holding`).
+    /// inside the steps (see `solver::holding`); with the unilateral tire
+    /// the flight time, between located switches (see `solver::contact`).
     pub contact_loss_time: f64,
     /// The largest |SDD| so far (m), located inside the steps (see
     /// `solver::holding`), and now: the suspension working space used.
@@ -47,9 +48,10 @@ pub struct RoadHolding {
 
 /// The first loss of tire contact: the first time at which the dynamic
 /// tire load `k_t (x_g − x_t)` fell below minus the static load
-/// ([`crate::model::Params::static_load`]). The linear model does not hold
-/// while the contact is lost; the simulation goes on, and front-ends warn
-/// once.
+/// ([`crate::model::Params::static_load`]). With the bilateral tire the
+/// linear model does not hold while the contact is lost; the simulation
+/// goes on, and front-ends warn once. With the unilateral tire it is the
+/// first lift-off.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ContactLoss {
     /// When (s).
@@ -85,12 +87,14 @@ pub struct Outputs {
     pub comfort: Option<ComfortValues>,
     /// The dynamic tire load `k_t (x_g − x_t)` (N; `−k_t TDD`, positive
     /// when the tire is compressed beyond its static load; there is no tire
-    /// damping).
+    /// damping); with the unilateral tire at least −W (0 N of total load
+    /// in flight).
     pub dynamic_tire_load: f64,
     /// `RMS(dynamic tire load) / W` (dimensionless): `k_t RMS(TDD) / W`
     /// with the static load W ([`crate::model::Params::static_load`]).
     /// At most 1/3 keeps the contact with 3σ confidence for a Gaussian
-    /// load.
+    /// load. It is the tire deflection's, also with the unilateral tire
+    /// (whose load does not fall below −W in flight).
     pub rms_dynamic_tire_load_ratio: f64,
     /// Road holding and working space (`None` below
     /// [`super::Metrics::RoadHolding`]).
