@@ -601,9 +601,10 @@ impl Simulator {
         (a - b).abs() <= 1e-9 * self.grid.step + 8.0 * f64::EPSILON * a.abs().max(b.abs())
     }
 
-    /// The snap tolerance at time `t` (s): `2^22 ε |t|` (see
-    /// [`SNAPPED_ADDITIONS`]), at most `h / 1024`, at least the
-    /// [`Self::coincide`] tolerance.
+    /// The snap tolerance at time `t` (s): `2^22 ε |t|` (the rounding drift
+    /// of 2^22 additions `t += step`, with a factor 2 to spare), at most
+    /// `h / 1024`, at least `1e-9 h + 8 ε |t|` (the tolerance within which
+    /// two times are the same node).
     pub fn snap_tolerance(&self, t: f64) -> f64 {
         let drift = SNAPPED_ADDITIONS * f64::EPSILON * t.abs();
         let floor = 1e-9 * self.grid.step + 8.0 * f64::EPSILON * t.abs();

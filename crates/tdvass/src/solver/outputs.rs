@@ -9,7 +9,7 @@ use crate::road::RoadPiece;
 
 /// Ride comfort by ISO 2631-1:1997 (vertical whole-body vibration, W_k
 /// weighting of the body acceleration BA; see [`crate::comfort`]), present
-/// when [`super::SimulationConfig::comfort`] is on.
+/// when [`super::SimulationConfig::metrics`] is [`super::Metrics::Comfort`].
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct ComfortValues {
     /// The frequency-weighted body acceleration a_w(t) (m/s²): BA through
@@ -83,7 +83,7 @@ pub struct Outputs {
     /// J of Eq. (6) from the running RMS values.
     pub objective: f64,
     /// ISO 2631-1 ride comfort (`None` unless
-    /// [`super::SimulationConfig::comfort`] is on).
+    /// [`super::SimulationConfig::metrics`] is [`super::Metrics::Comfort`]).
     pub comfort: Option<ComfortValues>,
     /// The dynamic tire load `k_t (x_g − x_t)` (N; `−k_t TDD`, positive
     /// when the tire is compressed beyond its static load; there is no tire
@@ -139,7 +139,7 @@ pub struct RunSummary {
     /// J of Eq. (6).
     pub objective: f64,
     /// ISO 2631-1 ride comfort at the end (`None` unless
-    /// [`super::SimulationConfig::comfort`] is on).
+    /// [`super::SimulationConfig::metrics`] is [`super::Metrics::Comfort`]).
     pub comfort: Option<ComfortValues>,
     /// `RMS(dynamic tire load) / W` over the run (see [`Outputs`]).
     pub rms_dynamic_tire_load_ratio: f64,
