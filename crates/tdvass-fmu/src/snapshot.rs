@@ -3,7 +3,7 @@
 //! ```text
 //! offset  size  content
 //! 0       8     magic "TDVASSFS"
-//! 8       4     format version (u32 LE), currently 4
+//! 8       4     format version (u32 LE), currently 5
 //! 12      4     GUID length n (u32 LE)
 //! 16      n     GUID of the FMU that wrote the state (ASCII)
 //! 16+n    8     payload length (u64 LE)
@@ -41,10 +41,11 @@ pub const MAGIC: &[u8; 8] = b"TDVASSFS";
 /// `root_count`) and the simulator's own versioned bytes with the
 /// comfort, road-holding and working-space accumulators; older states are
 /// refused; version 4 the experiment's tolerance (after the stop time) and
-/// the simulator's step bound. Both FMI versions write the
+/// the simulator's step bound; version 5 the setting `tire_contact` and the
+/// simulator's contact mode. Both FMI versions write the
 /// same format; the header's token (the FMI 2.0 GUID or the FMI 3.0
 /// instantiation token) keeps a state of one from being read by the other.
-pub const FORMAT_VERSION: u32 = 4;
+pub const FORMAT_VERSION: u32 = 5;
 /// Longest GUID accepted in a header.
 const MAX_GUID_LEN: usize = 64;
 /// Most internal steps between the start and a restored state (2^52: node
@@ -471,7 +472,7 @@ mod tests {
                 "{cut}: {e}"
             );
         }
-        for version in [1, 2, 3, 5] {
+        for version in [1, 2, 3, 4, 6] {
             let mut other = bytes.clone();
             other[8] = version;
             assert!(err(&other).contains(&format!("format version {version}")));
