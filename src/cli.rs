@@ -366,7 +366,7 @@ fn simulate_command(a: SimulateArgs) -> Result<String> {
         let write_error = |e: std::io::Error| io_error("writing", path, &e);
         writeln!(
             csv,
-            "time,x_s,v_s,x_h,v_h,x_t,v_t,body_acceleration,suspension_deflection,tire_deflection,road_displacement,control_force,weighted_body_acceleration,dynamic_tire_load,contact_loss_time,max_suspension_deflection"
+            "time,x_s,v_s,x_h,v_h,x_t,v_t,body_acceleration,suspension_deflection,tire_deflection,road_displacement,control_force,weighted_body_acceleration,dynamic_tire_load,contact_loss_time,max_suspension_deflection,lift_off_count"
         )
         .map_err(write_error)?;
         let rows = (duration / a.output_interval).floor() as u64;
@@ -377,7 +377,7 @@ fn simulate_command(a: SimulateArgs) -> Result<String> {
             let (comfort, holding) = metric_outputs(&o);
             writeln!(
                 csv,
-                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
                 o.time,
                 s[0],
                 s[1],
@@ -393,7 +393,8 @@ fn simulate_command(a: SimulateArgs) -> Result<String> {
                 comfort.weighted_body_acceleration,
                 o.dynamic_tire_load,
                 holding.contact_loss_time,
-                holding.max_suspension_deflection
+                holding.max_suspension_deflection,
+                holding.lift_off_count
             )
             .map_err(write_error)?;
             progress.update(o.time);
@@ -410,7 +411,10 @@ fn simulate_command(a: SimulateArgs) -> Result<String> {
     progress.finish();
     let o = sim.outputs();
     let (comfort, holding) = metric_outputs(&o);
-    if let Some(loss) = holding.first_contact_loss {
+    let unilateral = sim.config().tire_contact.is_unilateral();
+    // The unilateral tire models the lift-offs (counted in the results);
+    // the bilateral one leaves its model there.
+    if let Some(loss) = holding.first_contact_loss.filter(|_| !unilateral) {
         eprintln!(
             "warning: the tire leaves the road at t = {} s (dynamic tire load {} N below minus the static load {} N): the linear model no longer holds from there; contact_loss_time = {} s",
             loss.time, loss.dynamic_tire_load, loss.static_load, holding.contact_loss_time
@@ -433,6 +437,7 @@ fn simulate_command(a: SimulateArgs) -> Result<String> {
             "rms_dynamic_tire_load_ratio": o.rms_dynamic_tire_load_ratio,
             "contact_loss_time": holding.contact_loss_time,
             "max_suspension_deflection": holding.max_suspension_deflection,
+            "lift_off_count": holding.lift_off_count,
         });
         for (name, parameter) in params.named_values() {
             value[name] = parameter.into();
@@ -442,9 +447,10 @@ fn simulate_command(a: SimulateArgs) -> Result<String> {
         return Ok(value.to_string());
     }
     Ok(format!(
-        "{} on the {}, {} s from rest\n  RMS body acceleration      {:.4} m/s^2\n  RMS suspension deflection  {:.4} m\n  RMS tire deflection        {:.4} mm\n  objective J                {:.6}\n  ISO 2631-1 a_w             {:.4} m/s^2 ({reaction})\n  vibration dose value       {:.4} m/s^1.75\n  RMS tire load / static     {:.4}\n  time without tire contact  {:.4} s\n  max suspension deflection  {:.4} mm\n",
+        "{} on the {}, {} tire, {} s from rest\n  RMS body acceleration      {:.4} m/s^2\n  RMS suspension deflection  {:.4} m\n  RMS tire deflection        {:.4} mm\n  objective J                {:.6}\n  ISO 2631-1 a_w             {:.4} m/s^2 ({reaction})\n  vibration dose value       {:.4} m/s^1.75\n  RMS tire load / static     {:.4}\n  time without tire contact  {:.4} s\n  lift-offs                  {}\n  max suspension deflection  {:.4} mm\n",
         variant.label(),
         a.run.road_note(),
+        sim.config().tire_contact.name(),
         duration,
         o.rms.body_acceleration,
         o.rms.suspension_deflection,
@@ -454,6 +460,7 @@ fn simulate_command(a: SimulateArgs) -> Result<String> {
         comfort.vibration_dose_value,
         o.rms_dynamic_tire_load_ratio,
         holding.contact_loss_time,
+        holding.lift_off_count,
         holding.max_suspension_deflection * 1e3
     ))
 }
@@ -536,6 +543,7 @@ fn optimize_command(a: OptimizeArgs) -> Result<String> {
     let mut value = report.to_json();
     value["road_note"] = a.run.road_note().into();
     value["objective_function"] = problem.objective.name().into();
+    value["tire_contact"] = problem.base.tire_contact.name().into();
     let evaluation = problem.comfort_evaluation(&report.swarm.best_position);
     if let (
         Objective::Comfort {
@@ -563,12 +571,13 @@ fn optimize_command(a: OptimizeArgs) -> Result<String> {
     }
     let names = target.parameter_names();
     let mut out = format!(
-        "{} optimisation on the {}\n",
+        "{} optimisation on the {}, {} tire\n",
         match target {
             Target::Absorber => "absorber",
             Target::Controller => "controller",
         },
-        a.run.road_note()
+        a.run.road_note(),
+        problem.base.tire_contact.name()
     );
     let score = match problem.objective {
         Objective::Paper => "J",

@@ -97,7 +97,7 @@ fn negative_numbers_reach_the_model_checks() {
 
 #[test]
 fn a_bad_name_is_echoed_with_the_valid_ones() {
-    let cases: [(&[&str], &str, &[&str]); 4] = [
+    let cases: [(&[&str], &str, &[&str]); 6] = [
         (
             &["simulate", "--road", "bumpy"],
             "`bumpy`",
@@ -114,6 +114,16 @@ fn a_bad_name_is_echoed_with_the_valid_ones() {
             &["A..H"],
         ),
         (&["optimize", "foo"], "`foo`", &["absorber", "controller"]),
+        (
+            &["simulate", "--tire-contact", "sticky"],
+            "`sticky`",
+            &["bilateral", "unilateral"],
+        ),
+        (
+            &["optimize", "absorber", "--tire-contact", "2"],
+            "`2`",
+            &["bilateral", "unilateral"],
+        ),
     ];
     for (args, echo, valid) in cases {
         let stderr = failure(args);
@@ -511,6 +521,18 @@ fn cli_defaults_are_the_library_defaults_and_the_fmu_start_values() {
         .and_then(|v| v.start)
         .unwrap();
     assert_eq!(run["road_seed"].as_f64(), Some(seed));
+    // The tire: the library's default, and the item of the FMU's start code.
+    let contact = tdvass_fmu::variables::by_name("tire_contact").unwrap();
+    let start = contact.start.unwrap() as i32;
+    let item = contact
+        .enumeration
+        .unwrap()
+        .items
+        .iter()
+        .find(|i| i.value == start)
+        .unwrap();
+    assert_eq!(run["tire_contact"], item.name);
+    assert_eq!(run["tire_contact"], tdvass::TireContact::default().name());
 }
 
 #[test]
@@ -685,5 +707,171 @@ fn the_tolerance_sets_the_internal_step_and_bad_ones_are_refused_naming_the_valu
                 "{args:?}: {stderr}"
             );
         }
+    }
+}
+
+#[test]
+fn the_unilateral_tire_lifts_off_on_a_class_d_road_and_is_recorded() {
+    let road = [
+        "simulate",
+        "--road",
+        "iso8608",
+        "--road-class",
+        "D",
+        "--duration",
+        "2",
+    ];
+    let csv = temporary("lift-offs.csv");
+    let csv_path = csv.to_str().unwrap();
+    let unilateral = tdvass(
+        &[
+            &road[..],
+            &[
+                "--tire-contact",
+                "unilateral",
+                "--output",
+                csv_path,
+                "--output-interval",
+                "0.01",
+                "--json",
+            ],
+        ]
+        .concat(),
+    );
+    assert!(unilateral.success, "{}", unilateral.stderr);
+    let u: Value = serde_json::from_str(&unilateral.stdout).unwrap();
+    assert_eq!(u["tire_contact"], "unilateral");
+    let count = u["lift_off_count"].as_u64().expect("an integer count");
+    assert!(count > 0, "{u}");
+    assert!(u["contact_loss_time"].as_f64().unwrap() > 0.0, "{u}");
+    // The unilateral tire models the flight: no warning that the model
+    // stops holding.
+    assert!(
+        !unilateral.stderr.contains("leaves the road"),
+        "{}",
+        unilateral.stderr
+    );
+    // The default is the bilateral tire, recorded as such, which warns.
+    let bilateral = tdvass(&[&road[..], &["--json"]].concat());
+    assert!(bilateral.success, "{}", bilateral.stderr);
+    let b: Value = serde_json::from_str(&bilateral.stdout).unwrap();
+    assert_eq!(b["tire_contact"], "bilateral");
+    assert!(b["lift_off_count"].as_u64().unwrap() > 0, "{b}");
+    assert!(
+        bilateral.stderr.contains("the tire leaves the road"),
+        "{}",
+        bilateral.stderr
+    );
+    // The flag reaches the run: flights change the tire deflection.
+    assert_ne!(u["rms_tire_deflection"], b["rms_tire_deflection"]);
+    // The CSV's count never decreases, in whole numbers, and ends at the
+    // JSON's.
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let column = header.iter().position(|h| *h == "lift_off_count").unwrap();
+    let counts: Vec<u64> = lines
+        .map(|l| l.split(',').nth(column).unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(counts.len(), 201);
+    assert_eq!(counts[0], 0);
+    assert!(counts.windows(2).all(|w| w[0] <= w[1]));
+    assert_eq!(*counts.last().unwrap(), count);
+    let _ = std::fs::remove_file(&csv);
+    // Where the wheel never lifts off (the default harmonic road) both
+    // tires give the same run.
+    let run = |contact: &str| {
+        let mut value = tdvass_json(&["simulate", "--duration", "2", "--tire-contact", contact]);
+        assert_eq!(value["lift_off_count"], 0);
+        value["tire_contact"] = Value::Null;
+        value
+    };
+    assert_eq!(run("unilateral"), run("bilateral"));
+}
+
+#[test]
+fn optimize_takes_the_tire_contact_with_both_objectives() {
+    for objective in ["paper", "comfort"] {
+        let run = |contact: &str| {
+            tdvass_json(&[
+                "optimize",
+                "absorber",
+                "--objective",
+                objective,
+                "--road",
+                "iso8608",
+                "--road-class",
+                "D",
+                "--particles",
+                "3",
+                "--iterations",
+                "2",
+                "--duration",
+                "1",
+                "--tire-contact",
+                contact,
+            ])
+        };
+        let (unilateral, bilateral) = (run("unilateral"), run("bilateral"));
+        assert_eq!(unilateral["tire_contact"], "unilateral");
+        assert_eq!(bilateral["tire_contact"], "bilateral");
+        // Every candidate runs with the tire asked for: the wheel lifts off
+        // on this road, so the scores differ.
+        assert_ne!(
+            unilateral["objective"], bilateral["objective"],
+            "{objective}: {unilateral}"
+        );
+    }
+    // Without lift-offs the two tires are the same model: the same scores
+    // to the tolerance (1e-6; the unilateral runs keep the road-holding
+    // metrics, whose step choice may differ).
+    let controller = |contact: &str| {
+        tdvass_json(&[
+            "optimize",
+            "controller",
+            "--particles",
+            "2",
+            "--iterations",
+            "1",
+            "--duration",
+            "1",
+            "--tire-contact",
+            contact,
+        ])
+    };
+    let (unilateral, bilateral) = (controller("unilateral"), controller("bilateral"));
+    let close = |a: &Value, b: &Value| {
+        let (a, b) = (a.as_f64().unwrap(), b.as_f64().unwrap());
+        (a - b).abs() <= 1e-6 * b.abs()
+    };
+    assert!(close(&unilateral["objective"], &bilateral["objective"]));
+    let points = |v: &Value| v["paper_points"].as_array().unwrap().clone();
+    assert_eq!(points(&unilateral).len(), 2);
+    for (u, b) in points(&unilateral).iter().zip(&points(&bilateral)) {
+        assert!(close(&u["objective"], &b["objective"]), "{u} {b}");
+    }
+}
+
+#[test]
+fn the_linear_analyses_say_so_and_take_no_tire_contact() {
+    for subcommand in ["stability", "stable", "frf", "map"] {
+        let help = tdvass(&[subcommand, "--help"]);
+        assert!(help.success);
+        assert!(
+            help.stdout.contains("linear model") && !help.stdout.contains("--tire-contact <"),
+            "{subcommand}: {}",
+            help.stdout
+        );
+        let stderr = failure(&[subcommand, "--tire-contact", "unilateral"]);
+        assert!(stderr.contains("--tire-contact"), "{subcommand}: {stderr}");
+    }
+    for subcommand in [&["simulate"][..], &["optimize", "absorber"][..]] {
+        let help = tdvass(&[subcommand, &["--help"]].concat());
+        assert!(
+            help.stdout.contains("--tire-contact <TIRE_CONTACT>")
+                && help.stdout.contains("[default: bilateral]"),
+            "{subcommand:?}: {}",
+            help.stdout
+        );
     }
 }

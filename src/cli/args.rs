@@ -2,6 +2,7 @@
 //! and the parsing of names (variant, road, target).
 
 use clap::{Args, CommandFactory, Parser, Subcommand};
+use tdvass::TireContact;
 use tdvass::analysis::optimize::{
     CONTROLLER_DELAY_RANGE, CONTROLLER_GAIN_RANGE, DEFAULT_TRAVEL_LIMIT, Objective, Target,
 };
@@ -28,15 +29,19 @@ pub(super) enum Command {
     /// Time-domain run from rest; RMS of BA, SDD, TDD and the objective J.
     Simulate(SimulateArgs),
     /// Delay-independent range, crossing frequencies, critical delays and
-    /// stable delay intervals for a gain g (section 3).
+    /// stable delay intervals for a gain g (section 3), of the linear model
+    /// (the bilateral tire; --tire-contact does not apply).
     Stability(StabilityArgs),
-    /// Rightmost characteristic roots and stability at one (g, tau).
+    /// Rightmost characteristic roots and stability at one (g, tau), of the
+    /// linear model (the bilateral tire; --tire-contact does not apply).
     Stable(StableArgs),
-    /// Amplitude-frequency characteristics, Eq. (4) and (5).
+    /// Amplitude-frequency characteristics, Eq. (4) and (5), of the linear
+    /// model (the bilateral tire; --tire-contact does not apply).
     Frf(FrfArgs),
     /// Particle swarm optimisation of the absorber or the controller.
     Optimize(OptimizeArgs),
-    /// The (g, tau) stability map as CSV.
+    /// The (g, tau) stability map as CSV, of the linear model (the bilateral
+    /// tire; --tire-contact does not apply).
     Map(MapArgs),
 }
 
@@ -181,6 +186,11 @@ pub(super) struct RunArgs {
     /// Simulated duration of each run (s).
     #[arg(long, default_value_t = 15.0)]
     pub(super) duration: f64,
+    /// bilateral (the paper's linear tire, which pulls as well as pushes)
+    /// or unilateral (the tire cannot pull: the wheel lifts off where the
+    /// tire load falls to 0 and flies until it lands). Any case.
+    #[arg(long, default_value = "bilateral")]
+    pub(super) tire_contact: String,
 }
 
 impl RunArgs {
@@ -193,6 +203,10 @@ impl RunArgs {
             Ok(code) => RoadClass::from_code(code),
             Err(_) => self.road_class.parse::<RoadClass>(),
         }
+    }
+
+    pub(super) fn tire_contact(&self) -> Result<TireContact> {
+        self.tire_contact.trim().parse()
     }
 
     pub(super) fn road_spec(&self) -> Result<RoadSpec> {
@@ -231,7 +245,7 @@ impl RunArgs {
             tolerance: self.tolerance,
             max_internal_step: self.max_internal_step,
             communication_step: 0.0,
-            tire_contact: tdvass::TireContact::Bilateral,
+            tire_contact: self.tire_contact()?,
             start_time: 0.0,
             initial_state: State::zeros(),
             weights: Weights {
@@ -275,6 +289,7 @@ impl RunArgs {
         value["w_sdd"] = self.w_sdd.into();
         value["w_tdd"] = self.w_tdd.into();
         value["duration"] = self.duration.into();
+        value["tire_contact"] = self.tire_contact()?.name().into();
         Ok(())
     }
 

@@ -153,7 +153,7 @@ def test_experiment_codes_name_the_intended_items(description):
     types = {t.get("name"): {int(i.get("value")): i.get("name") for i in t.iter("Item")}
              for t in description.iter("EnumerationType")}
     declared = {v.get("name"): v.get("declaredType") for v in description.iter("Enumeration")}
-    assert set(declared) == {"variant", "road", "road_class"}
+    assert set(declared) == {"variant", "road", "road_class", "tire_contact"}
     items = {name: types[declared[name]] for name in declared}
     assert items["variant"][EXPERIMENTS["cs_iso8608"].start_values["variant"]] == "CS"
     assert items["road"][EXPERIMENTS["cs_iso8608"].start_values["road"]] == "iso8608"

@@ -544,10 +544,11 @@ def test_deserialize_bit_flipped(serialized, position):
     refused_state(inst, bytes(flipped), "")
 
 
-@pytest.mark.parametrize("version", [1, 2, 3, 5])
+@pytest.mark.parametrize("version", [1, 2, 3, 4, 6])
 def test_deserialize_wrong_version(serialized, version):
-    # Version 1 and 2 states (before the RMS time integral, before the FMI
-    # 3.0 settings and the metrics) and unknown versions.
+    # States of the earlier versions (before the RMS time integral, the FMI
+    # 3.0 settings and the metrics, the tolerance, the tire's contact law)
+    # and an unknown version.
     inst, data = serialized
     refused_state(inst, data[:8] + version.to_bytes(4, "little") + data[12:], f"format version {version} is not supported")
 

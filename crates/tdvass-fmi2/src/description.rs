@@ -293,6 +293,10 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
         w,
         "Integration: the precise (fine) integration method of the paper (section 4.1) on an internal grid anchored at the start time. The tolerance (relative, of every output metric: the master's from fmi2SetupExperiment when it defines one, else the DefaultExperiment's 1e-6) sets the internal step, from an error model checked by a step-doubling probe; the step divides tau exactly when tau is longer and is at most max_internal_step when that is > 0. The delayed wheel displacement is a cubic Hermite interpolant of the stored history, the road is exact over each internal step. Results do not depend on how the master splits time into communication steps (except with road = 0, where the input changes at communication points).",
     )?;
+    paragraph(
+        w,
+        "Tire (tire_contact): 0 = bilateral, the paper's linear tire, which pulls as well as pushes; where the dynamic tire load falls below minus the static load W the real tire would leave the road and the linear model no longer holds: contact_loss_time accumulates that time and the first crossing is logged as a warning. 1 = unilateral: the tire cannot pull, so the wheel lifts off where TDD rises through W/k_t and flies (tire force -W) until TDD falls back to it; contact and flight are each integrated exactly, with the switches located inside the internal steps. contact_loss_time is then the flight time, and each lift-off is logged under logEvents with its time, TDD and W/k_t. lift_off_count counts the lift-offs in both modes. The stability results (spectral_abscissa, stable) are those of the linear (bilateral) model.",
+    )?;
     text_element(w, "h3", "Static gain of the controlled suspension")?;
     paragraph(
         w,
@@ -472,7 +476,7 @@ mod tests {
         let initial: Vec<_> = els[initial_at + 1..].iter().collect();
         let count = |c: Causality| VARIABLES.iter().filter(|v| v.causality == c).count();
         assert_eq!(outputs.len(), count(Causality::Output));
-        assert_eq!(outputs.len(), 22);
+        assert_eq!(outputs.len(), 23);
         assert_eq!(
             initial.len(),
             count(Causality::Output) + count(Causality::CalculatedParameter)

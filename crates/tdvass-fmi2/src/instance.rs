@@ -280,7 +280,7 @@ impl Drop for Instance {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::variables::{Causality, VARIABLES, by_name};
+    use crate::variables::{Causality, VARIABLES, VarType, by_name};
     use std::cell::RefCell;
     use std::rc::Rc;
     use tdvass::model::V_S;
@@ -731,7 +731,7 @@ mod tests {
             .unwrap();
             for v in VARIABLES
                 .iter()
-                .filter(|v| v.causality == Causality::Output)
+                .filter(|v| v.causality == Causality::Output && v.var_type() == VarType::Real)
             {
                 let mut partial = [f64::NAN];
                 i.run(Function::GetDirectionalDerivative, |i| {
@@ -747,6 +747,17 @@ mod tests {
                     v.feedthrough
                 );
             }
+            // The counts are Integers: no partials, and no dependencies.
+            let mut partial = [f64::NAN];
+            let e = i
+                .directional_derivative(&[vr("lift_off_count")], &[vr("x_g")], &[1.0], &mut partial)
+                .unwrap_err();
+            assert!(
+                e.message.contains("`lift_off_count` is an Integer output"),
+                "{}",
+                e.message
+            );
+            assert!(by_name("lift_off_count").unwrap().feedthrough.is_empty());
         }
     }
 
@@ -881,6 +892,150 @@ mod tests {
                 assert!(warnings.is_empty(), "{warnings:?}");
                 assert_eq!(lost, 0.0);
             }
+        }
+    }
+
+    fn lift_off_count(i: &mut Instance) -> i32 {
+        let mut n = [-1];
+        i.run(Function::GetInteger, |i| {
+            i.get_integer(&[vr("lift_off_count")], &mut n)
+        })
+        .unwrap();
+        n[0]
+    }
+
+    /// The same PVASS run on class H as above with `tire_contact = 1`: no
+    /// warning; each lift-off is an event (time, TDD at W/k_t), as many as
+    /// `lift_off_count`; in flight the dynamic tire load is −W and does not
+    /// depend on `x_t`. A code that is none is refused by name.
+    #[test]
+    fn the_unilateral_tire_logs_each_lift_off_as_an_event() {
+        let (mut i, log) = new_instance(true);
+        let refused = i.run(Function::SetInteger, |i| {
+            i.set_integer(&[vr("tire_contact")], &[2])
+        });
+        assert_eq!(refused, Err(Status::Error));
+        let message = log.borrow().last().unwrap().2.clone();
+        assert!(
+            message.contains("`tire_contact`") && message.contains("invalid value 2"),
+            "{message}"
+        );
+        i.run(Function::SetInteger, |i| {
+            i.set_integer(
+                &[
+                    vr("variant"),
+                    vr("road"),
+                    vr("road_class"),
+                    vr("tire_contact"),
+                ],
+                &[2, 2, 8, 1],
+            )
+        })
+        .unwrap();
+        i.run(Function::SetReal, |i| {
+            i.set_real(&[vr("vehicle_speed")], &[30.0])
+        })
+        .unwrap();
+        i.run(Function::EnterInitializationMode, |i| {
+            i.enter_initialization_mode()
+        })
+        .unwrap();
+        i.run(Function::ExitInitializationMode, |i| {
+            i.exit_initialization_mode()
+        })
+        .unwrap();
+        let static_load = (345.0 + 4.05) * 9.80665 + 40.5 * 9.80665;
+        let limit = static_load / 190000.0;
+        let (mut t, mut flights, mut contacts) = (0.0, 0, 0);
+        for _ in 0..200 {
+            i.run(Function::DoStep, |i| i.do_step(t, 0.01)).unwrap();
+            t += 0.01;
+            let mut partial = [f64::NAN];
+            i.run(Function::GetDirectionalDerivative, |i| {
+                i.directional_derivative(
+                    &[vr("dynamic_tire_load")],
+                    &[vr("x_t")],
+                    &[1.0],
+                    &mut partial,
+                )
+            })
+            .unwrap();
+            let load = get(&mut i, "dynamic_tire_load");
+            if i.simulator().unwrap().in_flight() {
+                flights += 1;
+                assert_eq!(partial[0], 0.0);
+                assert!((load + static_load).abs() <= 1e-9 * static_load, "{load}");
+            } else {
+                contacts += 1;
+                assert_eq!(partial[0], -190000.0);
+                assert!(load >= -static_load * (1.0 + 1e-9), "{load}");
+            }
+        }
+        assert!(flights > 0 && contacts > 0, "{flights} {contacts}");
+        let log = log.borrow();
+        assert!(
+            !log.iter()
+                .any(|(s, _, m)| *s == Status::Warning && m.contains("the tire leaves the road")),
+            "the bilateral tire's warning with the unilateral tire"
+        );
+        let events: Vec<&String> = log
+            .iter()
+            .filter(|(s, c, m)| {
+                *s == Status::Ok && c == "logEvents" && m.contains("lift-off at t = ")
+            })
+            .map(|(_, _, m)| m)
+            .collect();
+        let count = lift_off_count(&mut i);
+        assert!(count > 0);
+        assert_eq!(events.len(), count as usize, "{events:?}");
+        let mut last = 0.0;
+        for e in events {
+            let number = |after: &str| -> f64 {
+                let rest = &e[e.find(after).unwrap() + after.len()..];
+                rest[..rest.find(' ').unwrap()].parse().unwrap()
+            };
+            let (time, tdd, shown) = (number("t = "), number("TDD = "), number("W/k_t = "));
+            assert!(time > last && time <= 2.0, "{e}");
+            last = time;
+            assert!((shown - limit).abs() <= 1e-12 * limit, "{e}");
+            assert!((tdd - shown).abs() <= 1e-9 * shown, "{e}");
+        }
+        assert!(get(&mut i, "contact_loss_time") > 0.0);
+    }
+
+    /// With the bilateral tire `lift_off_count` counts the falls of the load
+    /// below −W (no events, the one warning of the test above).
+    #[test]
+    fn the_bilateral_tire_counts_its_would_be_lift_offs() {
+        for (class, loses) in [(8, true), (1, false)] {
+            let (mut i, log) = new_instance(true);
+            i.run(Function::SetInteger, |i| {
+                i.set_integer(
+                    &[vr("variant"), vr("road"), vr("road_class")],
+                    &[2, 2, class],
+                )
+            })
+            .unwrap();
+            i.run(Function::SetReal, |i| {
+                i.set_real(&[vr("vehicle_speed")], &[30.0])
+            })
+            .unwrap();
+            i.run(Function::EnterInitializationMode, |i| {
+                i.enter_initialization_mode()
+            })
+            .unwrap();
+            i.run(Function::ExitInitializationMode, |i| {
+                i.exit_initialization_mode()
+            })
+            .unwrap();
+            i.run(Function::DoStep, |i| i.do_step(0.0, 2.0)).unwrap();
+            let count = lift_off_count(&mut i);
+            assert_eq!(count > 0, loses, "class {class}: {count}");
+            assert!(
+                !log.borrow()
+                    .iter()
+                    .any(|(_, _, m)| m.contains("lift-off at t = "))
+            );
         }
     }
 }

@@ -433,7 +433,7 @@ impl Instance {
         self.slave.set_integer(vrs, &narrowed)
     }
 
-    /// `fmi3GetInt64`: the Enumerations (`variant`, `road`, `road_class`).
+    /// `fmi3GetInt64`: the Enumerations (`variant`, `road`, `road_class`, `tire_contact`).
     pub fn get_int64(&mut self, vrs: &[u32], values: &mut [i64]) -> Result<Status, FmiError> {
         self.get_wide(vrs, values, ValueType::Int64, i64::from)
     }

@@ -1,7 +1,8 @@
 //! The FMI 3.0 type of each variable of the one table: Float64 for Reals
 //! (scalars and arrays), Enumeration for Integer settings with named codes,
 //! UInt64 for structural parameters (array sizes), Int32 for the other
-//! Integers, Boolean.
+//! Integers (`road_seed`, `input_extrapolation`, the count `lift_off_count`),
+//! Boolean.
 
 use tdvass_fmu::variables::{Causality, VarType, Variable};
 
@@ -145,6 +146,8 @@ mod tests {
         assert_eq!(type_of("variant"), Fmi3Type::Enumeration);
         assert_eq!(type_of("road"), Fmi3Type::Enumeration);
         assert_eq!(type_of("road_class"), Fmi3Type::Enumeration);
+        assert_eq!(type_of("tire_contact"), Fmi3Type::Enumeration);
+        assert_eq!(type_of("lift_off_count"), Fmi3Type::Int32);
         assert_eq!(type_of("road_seed"), Fmi3Type::Int32);
         assert_eq!(type_of("stable"), Fmi3Type::Boolean);
         assert_eq!(type_of("root_count"), Fmi3Type::UInt64);

@@ -142,7 +142,7 @@ impl std::fmt::Display for FmiError {
 pub const LOG_CATEGORIES: [(&str, &str); 6] = [
     (
         "logEvents",
-        "Life-cycle events: instantiation, initialization, reset, FMU states",
+        "Life-cycle events: instantiation, initialization, reset, FMU states; the lift-offs of the unilateral tire",
     ),
     ("logStatusWarning", "Warnings, e.g. an unstable (g, tau)"),
     (

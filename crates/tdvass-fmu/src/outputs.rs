@@ -1,6 +1,6 @@
 //! How the FMU's outputs are read from the simulator: their values, exact
 //! time derivatives and exact partial derivatives with respect to the
-//! input and the states.
+//! input and the states (Real outputs), and the counts (Integer outputs).
 
 use tdvass::model::{V_H, V_T, X_H, X_S, X_T};
 use tdvass::solver::{OutputDerivatives, Outputs};
@@ -28,6 +28,26 @@ pub enum OutputId {
     MaxSuspensionDeflection,
 }
 
+/// An Integer output of the simulator: a count, discrete (it has no
+/// derivative and no partials).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum IntegerOutputId {
+    /// The lift-offs since the start ([`tdvass::solver::RoadHolding::lift_off_count`]).
+    LiftOffCount,
+}
+
+impl IntegerOutputId {
+    /// The value in `outputs`, saturated at `i32::MAX` (the Integer of
+    /// FMI 2.0 has 32 bits); `None` when the simulator does not keep it.
+    pub fn value(self, o: &Outputs) -> Option<i32> {
+        match self {
+            IntegerOutputId::LiftOffCount => o
+                .road_holding
+                .map(|r| i32::try_from(r.lift_off_count).unwrap_or(i32::MAX)),
+        }
+    }
+}
+
 /// A "known" of `fmi2GetDirectionalDerivative`: the input `x_g` or a
 /// component of the state `X` (addressed by the value reference of the
 /// state output of the same name).
@@ -46,7 +66,9 @@ pub struct Linearization {
     pub conventional: bool,
     /// `road = 0`: the applied road is the input.
     pub road_is_input: bool,
-    /// Tire stiffness k_t (N/m): the dynamic tire load is `k_t (x_g − x_t)`.
+    /// Tire stiffness k_t (N/m): the dynamic tire load is `k_t (x_g − x_t)`;
+    /// 0 while the wheel is in flight (unilateral tire), where the load is
+    /// the constant −W.
     pub tire_stiffness: f64,
     /// `(g, tau)` when the control force is `g (x_t − tau v_t)` of the current
     /// state (delay folded into the plant); `None` when it acts on the delayed

@@ -4,6 +4,7 @@
 //! [`SimulationConfig`]. Start values come from the one variable table.
 
 use crate::variables::{ALL_VARIABLES, Access};
+use tdvass::TireContact;
 use tdvass::metrics::Weights;
 use tdvass::model::{Params, State, Variant};
 use tdvass::road::{RandomRoad, RoadClass, RoadSpec, RoadType};
@@ -27,6 +28,8 @@ pub struct Settings {
     pub road_seed: i32,
     pub road_sample_interval: f64,
     pub max_internal_step: f64,
+    /// `tire_contact` code ([`TireContact`]): 0 bilateral, 1 unilateral.
+    pub tire_contact: i32,
     /// The relative tolerance of the experiment: the master's, when it
     /// defines one, else the DefaultExperiment's ([`DEFAULT_TOLERANCE`]).
     /// No variable: it comes from `the experiment set-up`.
@@ -74,6 +77,7 @@ impl Settings {
             road_seed: 0,
             road_sample_interval: 0.0,
             max_internal_step: 0.0,
+            tire_contact: 0,
             tolerance: DEFAULT_TOLERANCE,
             weights: Weights {
                 body_acceleration: 0.0,
@@ -104,6 +108,11 @@ impl Settings {
     /// The variant (`variant` code checked).
     pub fn variant(&self) -> tdvass::Result<Variant> {
         Variant::from_code(self.variant as i64)
+    }
+
+    /// The tire's contact law (`tire_contact` code checked).
+    pub fn tire_contact(&self) -> tdvass::Result<TireContact> {
+        TireContact::from_code(self.tire_contact as i64)
     }
 
     /// The weights of J.
@@ -170,7 +179,7 @@ impl Settings {
             // The internal step divides the DefaultExperiment stepSize: a
             // master stepping by it meets internal nodes only.
             communication_step: crate::DEFAULT_STEP_SIZE,
-            tire_contact: tdvass::TireContact::Bilateral,
+            tire_contact: self.tire_contact()?,
             start_time,
             initial_state: State::from(self.initial_state),
             weights: self.weights(),

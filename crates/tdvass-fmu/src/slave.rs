@@ -75,7 +75,8 @@ pub struct SlaveState {
     pub earlier_input: Option<(f64, f64)>,
     /// The hold warning of [`Slave::do_step`] was logged.
     pub hold_warned: bool,
-    /// The first loss of tire contact was logged.
+    /// The first loss of tire contact was logged (bilateral tire; the
+    /// unilateral tire logs every lift-off as an event instead).
     pub contact_warned: bool,
     /// Start time from `the experiment set-up` (s).
     pub start_time: f64,
@@ -292,10 +293,11 @@ impl Slave {
         self.state.terminate_requested = false;
         let s = &self.state.settings;
         self.event(format!(
-            "{}: variant {}, road {}, tolerance {}, internal step {} s ({}), start {} s, stop {}",
+            "{}: variant {}, road {}, tire_contact {}, tolerance {}, internal step {} s ({}), start {} s, stop {}",
             self.call("ExitInitializationMode"),
             s.variant,
             s.road,
+            s.tire_contact,
             s.tolerance,
             grid.step,
             if grid.delay_inside_step() {

@@ -3,7 +3,7 @@
 //! ```text
 //! offset  size  content
 //! 0       8     magic "TDVASSFS"
-//! 8       4     format version (u32 LE), currently 4
+//! 8       4     format version (u32 LE), currently 5
 //! 12      4     GUID length n (u32 LE)
 //! 16      n     GUID of the FMU that wrote the state (ASCII)
 //! 16+n    8     payload length (u64 LE)
@@ -41,10 +41,11 @@ pub const MAGIC: &[u8; 8] = b"TDVASSFS";
 /// `root_count`) and the simulator's own versioned bytes with the
 /// comfort, road-holding and working-space accumulators; older states are
 /// refused; version 4 the experiment's tolerance (after the stop time) and
-/// the simulator's step bound. Both FMI versions write the
+/// the simulator's step bound; version 5 the setting `tire_contact` and the
+/// simulator's contact mode. Both FMI versions write the
 /// same format; the header's token (the FMI 2.0 GUID or the FMI 3.0
 /// instantiation token) keeps a state of one from being read by the other.
-pub const FORMAT_VERSION: u32 = 4;
+pub const FORMAT_VERSION: u32 = 5;
 /// Longest GUID accepted in a header.
 const MAX_GUID_LEN: usize = 64;
 /// Most internal steps between the start and a restored state (2^52: node
@@ -440,6 +441,46 @@ mod tests {
     }
 
     #[test]
+    fn a_unilateral_state_in_flight_round_trips_and_continues_exactly() {
+        // TDVASS on an ISO 8608 class D road: stopped in a flight.
+        let mut model = SlaveState::new();
+        model.settings.road = 2;
+        model.settings.road_class = 4;
+        model.settings.tire_contact = 1;
+        let config = model.settings.to_config(0.0).unwrap();
+        let mut sim = Simulator::new(config).unwrap();
+        let mut t = 0.0;
+        while !sim.in_flight() {
+            t += 1e-3;
+            assert!(t < 2.0, "no flight within 2 s");
+            sim.advance_to(t).unwrap();
+        }
+        // The slave takes the lift-offs after every step (they are not
+        // part of the state).
+        assert!(!sim.take_lift_offs().0.is_empty());
+        model.sim = Some(sim);
+        model.phase = Phase::StepComplete;
+        model.last_successful_time = t;
+        let bytes = serialize(&model, &guid());
+        let back = deserialize(&bytes, &guid()).unwrap();
+        assert_eq!(back.settings.tire_contact, 1);
+        assert_eq!(serialize(&back, &guid()), bytes);
+        let (mut a, mut b) = (model.sim.unwrap(), back.sim.unwrap());
+        assert!(b.in_flight());
+        a.advance_to(1.5).unwrap();
+        b.advance_to(1.5).unwrap();
+        assert_eq!(a.outputs(), b.outputs());
+        assert_eq!(a.take_lift_offs(), b.take_lift_offs());
+        // The setting is checked like every other one.
+        let mut bad = SlaveState::new();
+        bad.settings.tire_contact = 2;
+        let e = deserialize(&serialize(&bad, &guid()), &guid())
+            .unwrap_err()
+            .message;
+        assert!(e.contains("tire_contact") && e.contains('2'), "{e}");
+    }
+
+    #[test]
     fn state_ending_just_before_a_grid_node_round_trips() {
         // A step that ends within the solver's tolerance before a grid node
         // commits the node and keeps the requested time as the current one,
@@ -471,7 +512,7 @@ mod tests {
                 "{cut}: {e}"
             );
         }
-        for version in [1, 2, 3, 5] {
+        for version in [1, 2, 3, 4, 6] {
             let mut other = bytes.clone();
             other[8] = version;
             assert!(err(&other).contains(&format!("format version {version}")));

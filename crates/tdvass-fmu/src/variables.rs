@@ -17,7 +17,7 @@
 //! would scatter what must be read, and changed, in one place.
 
 use crate::FmiError;
-use crate::outputs::OutputId;
+use crate::outputs::{IntegerOutputId, OutputId};
 use crate::settings::Settings;
 use tdvass::model::{V_H, V_S, V_T, X_H, X_S, X_T};
 
@@ -53,6 +53,8 @@ impl Causality {
 pub enum Variability {
     Fixed,
     Tunable,
+    /// Changes at communication points only (the Integer outputs).
+    Discrete,
     Continuous,
 }
 
@@ -62,6 +64,7 @@ impl Variability {
         match self {
             Variability::Fixed => "fixed",
             Variability::Tunable => "tunable",
+            Variability::Discrete => "discrete",
             Variability::Continuous => "continuous",
         }
     }
@@ -389,6 +392,23 @@ pub static ROAD_CLASS_ITEMS: Enumeration = Enumeration {
     ],
 };
 
+/// `tire_contact`.
+pub static TIRE_CONTACT_ITEMS: Enumeration = Enumeration {
+    type_name: "TireContact",
+    items: &[
+        item(
+            "bilateral",
+            0,
+            "the paper's linear tire, which pulls as well as pushes",
+        ),
+        item(
+            "unilateral",
+            1,
+            "a tire that cannot pull: the wheel lifts off",
+        ),
+    ],
+};
+
 /// The size of one dimension of an array variable.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Dimension {
@@ -420,6 +440,8 @@ pub enum Access {
     },
     /// A Real output of the simulator.
     Output(OutputId),
+    /// An Integer output of the simulator (a count).
+    IntegerOutput(IntegerOutputId),
     /// A calculated parameter.
     Calculated(Calculated),
     /// The independent variable: the slave's time.
@@ -463,7 +485,7 @@ impl Variable {
     pub fn var_type(&self) -> VarType {
         match self.access {
             Access::Real { .. } | Access::Output(_) | Access::Time => VarType::Real,
-            Access::Integer { .. } => VarType::Integer,
+            Access::Integer { .. } | Access::IntegerOutput(_) => VarType::Integer,
             Access::Calculated(Calculated::SpectralAbscissa | Calculated::RightmostRoots) => {
                 VarType::Real
             }
@@ -868,6 +890,17 @@ const TABLE: &[Variable] = &[
         "Optional upper bound of the internal integration step (0 = none); the step itself follows from the tolerance (the master's, else the DefaultExperiment's 1e-6, relative, of every output metric) and divides tau exactly when tau is longer",
     ),
     parameter(
+        "tire_contact",
+        60,
+        Fixed,
+        Q::Dimensionless,
+        0.0,
+        Range::Integers(0, 1),
+        integer!(tire_contact),
+        "Tire: 0 = bilateral, the paper's linear tire (it pulls as well as pushes), 1 = unilateral: the tire cannot pull, so the wheel lifts off where TDD rises through W/k_t (W the static load) and flies until it falls back; each lift-off is logged under logEvents, and contact_loss_time is the flight time",
+    )
+    .enumerated(&TIRE_CONTACT_ITEMS),
+    parameter(
         "w_ba",
         21,
         Tunable,
@@ -1185,9 +1218,22 @@ const TABLE: &[Variable] = &[
         56,
         Q::Force,
         OutputId::DynamicTireLoad,
-        "Dynamic tire load k_t (x_g - x_t) = -k_t TDD (no tire damping); below minus the static load the tire would leave the road",
+        "Dynamic tire load k_t (x_g - x_t) = -k_t TDD (no tire damping); below minus the static load the tire would leave the road (tire_contact = 1: it never goes below, the wheel flies)",
         &["x_g"],
-        &["k_t", "road", "road_amplitude", "road_angular_frequency", "x_t_start", "x_g"],
+        // tire_contact = 1 bounds it below by minus the static load.
+        &[
+            "variant",
+            "m_s",
+            "m_h",
+            "m_t",
+            "k_t",
+            "road",
+            "road_amplitude",
+            "road_angular_frequency",
+            "tire_contact",
+            "x_t_start",
+            "x_g",
+        ],
     ),
     output(
         "rms_dynamic_tire_load_ratio",
@@ -1203,10 +1249,41 @@ const TABLE: &[Variable] = &[
         58,
         Q::Time,
         OutputId::ContactLossTime,
-        "Accumulated time with the dynamic tire load below minus the static load (the tire would leave the road; the linear model no longer holds there); crossings located inside the internal steps; the first one is logged as a warning",
+        "Accumulated time with the dynamic tire load below minus the static load, crossings located inside the internal steps. tire_contact = 0: the tire would leave the road and the linear model no longer holds there; the first crossing is logged as a warning. tire_contact = 1: the flight time (the load is then minus the static load)",
         &[],
         &[],
     ),
+    Variable {
+        name: "lift_off_count",
+        vr: 61,
+        causality: Causality::Output,
+        variability: Variability::Discrete,
+        quantity: Q::Dimensionless,
+        display_unit: None,
+        start: None,
+        range: Range::Computed,
+        access: Access::IntegerOutput(IntegerOutputId::LiftOffCount),
+        description: "Number of lift-offs since the start time (a start without contact counts one): tire_contact = 1, the switches from contact to flight; tire_contact = 0, the times the dynamic tire load went below minus the static load",
+        feedthrough: &[],
+        initial_dependencies: &[
+            "variant",
+            "m_s",
+            "m_h",
+            "m_t",
+            "k_t",
+            "road",
+            "road_amplitude",
+            "road_angular_frequency",
+            "tire_contact",
+            "x_t_start",
+            "x_g",
+        ],
+        enumeration: None,
+        dimensions: &[],
+        // Discrete: it changes at communication points, not inside a step.
+        intermediate_update: false,
+        fmi3_only: false,
+    },
     output(
         "max_suspension_deflection",
         59,

@@ -95,6 +95,10 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
     )?;
     paragraph(
         w,
+        "Tire (tire_contact): 0 = bilateral, the paper's linear tire, which pulls as well as pushes; where the dynamic tire load falls below minus the static load W the real tire would leave the road and the linear model no longer holds: contact_loss_time accumulates that time and the first crossing is logged as a warning. 1 = unilateral: the tire cannot pull, so the wheel lifts off where TDD rises through W/k_t and flies (tire force -W) until TDD falls back to it; contact and flight are each integrated exactly, with the switches located inside the internal steps. contact_loss_time is then the flight time, and each lift-off is logged under logEvents with its time, TDD and W/k_t. lift_off_count counts the lift-offs in both modes. The stability results (spectral_abscissa, stable) are those of the linear (bilateral) model.",
+    )?;
+    paragraph(
+        w,
         "Integration: the precise integration method of the paper on an internal grid anchored at the start time. The tolerance (relative, of every output metric: the master's from fmi3EnterInitializationMode when it defines one, else the DefaultExperiment's 1e-6) sets the internal step, from an error model checked by a step-doubling probe; the step divides tau exactly when tau is longer and is at most max_internal_step when that is > 0. Results do not depend on how the importer splits time into communication steps (except with road = input, where the input changes at communication points or intermediate updates).",
     )?;
 

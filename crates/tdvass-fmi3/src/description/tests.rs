@@ -1,7 +1,9 @@
 use super::*;
 use quick_xml::Reader;
 use std::collections::{HashMap, HashSet};
-use tdvass_fmu::variables::{Initial, ROAD_CLASS_ITEMS, ROAD_ITEMS, VARIABLES, VARIANT_ITEMS};
+use tdvass_fmu::variables::{
+    Initial, ROAD_CLASS_ITEMS, ROAD_ITEMS, TIRE_CONTACT_ITEMS, VARIABLES, VARIANT_ITEMS,
+};
 
 /// One element: its name, its attributes and the index of its parent.
 #[derive(Debug)]
@@ -232,9 +234,14 @@ fn enumerations_types_and_units_are_declared() {
             .iter()
             .map(|e| e.type_name)
             .collect::<Vec<_>>(),
-        ["Variant", "Road", "RoadClass"]
+        ["Variant", "Road", "RoadClass", "TireContact"]
     );
-    for e in [&VARIANT_ITEMS, &ROAD_ITEMS, &ROAD_CLASS_ITEMS] {
+    for e in [
+        &VARIANT_ITEMS,
+        &ROAD_ITEMS,
+        &ROAD_CLASS_ITEMS,
+        &TIRE_CONTACT_ITEMS,
+    ] {
         let at = els
             .iter()
             .position(|t| t.name == "EnumerationType" && t.attr("name") == e.type_name)
@@ -271,6 +278,27 @@ fn enumerations_types_and_units_are_declared() {
     assert_eq!(variant.name, "Enumeration");
     assert_eq!(variant.attr("declaredType"), "Variant");
     assert_eq!(variant.attr("start"), "3");
+    let contact = children(&els, "ModelVariables")
+        .into_iter()
+        .find(|e| e.attr("name") == "tire_contact")
+        .unwrap();
+    assert_eq!(contact.name, "Enumeration");
+    assert_eq!(contact.attr("declaredType"), "TireContact");
+    assert_eq!(
+        (contact.attr("causality"), contact.attr("variability")),
+        ("parameter", "fixed")
+    );
+    assert_eq!(contact.attr("start"), "0");
+    let count = children(&els, "ModelVariables")
+        .into_iter()
+        .find(|e| e.attr("name") == "lift_off_count")
+        .unwrap();
+    assert_eq!(count.name, "Int32");
+    assert_eq!(
+        (count.attr("causality"), count.attr("variability")),
+        ("output", "discrete")
+    );
+    assert!(count.get("intermediateUpdate").is_none());
 }
 
 #[test]
@@ -353,7 +381,7 @@ fn model_structure_lists_outputs_and_initial_unknowns_by_value_reference() {
         .collect();
     let listed: Vec<&str> = outputs.iter().map(|e| e.attr("valueReference")).collect();
     assert_eq!(listed, expected_outputs);
-    assert_eq!(outputs.len(), 22);
+    assert_eq!(outputs.len(), 23);
     let expected_initial: Vec<String> = ALL_VARIABLES
         .iter()
         .filter(|v| is_initial_unknown(v))
@@ -361,7 +389,7 @@ fn model_structure_lists_outputs_and_initial_unknowns_by_value_reference() {
         .collect();
     let listed: Vec<&str> = initial.iter().map(|e| e.attr("valueReference")).collect();
     assert_eq!(listed, expected_initial);
-    assert_eq!(initial.len(), 25);
+    assert_eq!(initial.len(), 26);
 
     let by_vr = |vr: u32| ALL_VARIABLES.iter().find(|v| v.vr == vr).unwrap();
     let x_g = by_name("x_g").unwrap().vr;

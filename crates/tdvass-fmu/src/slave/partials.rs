@@ -34,6 +34,10 @@ impl Slave {
                     .ok_or_else(|| FmiError::error(format!("unknown value reference {vr}")))?;
                 match var.access {
                     Access::Output(id) => Ok(id),
+                    Access::IntegerOutput(_) => Err(FmiError::error(format!(
+                        "`{}` is an Integer output (a count); directional derivatives exist for Real outputs only",
+                        var.name
+                    ))),
                     _ => Err(FmiError::error(format!(
                         "`{}` is not an output; directional derivatives exist for outputs only",
                         var.name
@@ -134,7 +138,8 @@ impl Slave {
             body_acceleration_row: row,
             conventional: variant == Variant::Cs,
             road_is_input: self.state.settings.road_is_input(),
-            tire_stiffness: params.k_t,
+            // In flight the dynamic tire load is the constant −W.
+            tire_stiffness: if sim.in_flight() { 0.0 } else { params.k_t },
             instantaneous_control,
         })
     }

@@ -123,14 +123,29 @@ impl Slave {
             self.state.previous_input = Some((now, settings.x_g));
         }
         self.state.input_pending = false;
-        match sim.advance_to(until) {
+        let advanced = sim.advance_to(until);
+        // The lift-offs up to where the simulation stopped, whatever the
+        // outcome.
+        self.log_lift_offs();
+        let Some(sim) = self.state.sim.as_mut() else {
+            unreachable!("stepComplete has a simulator")
+        };
+        match advanced {
             // `advance_to` bounds every state (its divergence check); the
             // outputs, computed only when a getter asks, follow from them.
             Ok(()) => match limits::non_finite_state(&sim.state()) {
                 None => {
                     self.state.last_successful_time = sim.time();
-                    let loss = sim.first_contact_loss();
-                    if let Some(loss) = loss.filter(|_| !self.state.contact_warned) {
+                    // The bilateral tire warns once where the linear model
+                    // stops holding; the unilateral one has logged its
+                    // lift-offs as events.
+                    let loss =
+                        if self.state.contact_warned || sim.config().tire_contact.is_unilateral() {
+                            None
+                        } else {
+                            sim.first_contact_loss()
+                        };
+                    if let Some(loss) = loss {
                         self.state.contact_warned = true;
                         self.warning(format!(
                             "{}: the tire leaves the road at t = {} s: `dynamic_tire_load` = {} N is below minus the static load {} N, so the linear model no longer holds from there (the simulation goes on; `contact_loss_time` accumulates the time without contact)",
@@ -170,6 +185,33 @@ impl Slave {
                 self.state.phase = Phase::Error;
                 Err(FmiError::error(format!("the simulation failed: {e}")))
             }
+        }
+    }
+
+    /// Logs (under `logEvents`) each lift-off of the unilateral tire since
+    /// the last call: its time, the TDD then and the limit W/k_t it
+    /// reached; those the simulator did not keep are counted in one more
+    /// message.
+    fn log_lift_offs(&mut self) {
+        let Some(sim) = self.state.sim.as_mut() else {
+            return;
+        };
+        let (lift_offs, dropped) = sim.take_lift_offs();
+        let now = sim.time();
+        if lift_offs.is_empty() && dropped == 0 {
+            return;
+        }
+        let function = self.call("DoStep");
+        for l in &lift_offs {
+            self.event(format!(
+                "{function}: lift-off at t = {} s: the wheel leaves the road (TDD = {} m reaches W/k_t = {} m, where the tire load falls to 0; tire_contact = 1)",
+                l.time, l.tire_deflection, l.limit
+            ));
+        }
+        if dropped > 0 {
+            self.event(format!(
+                "{function}: ... and {dropped} more lift-offs up to t = {now} s, not listed one by one (`lift_off_count` counts every one)"
+            ));
         }
     }
 
@@ -291,11 +333,20 @@ impl Slave {
         for ((&vr, &order), value) in vrs.iter().zip(orders).zip(values.iter_mut()) {
             let var = by_vr_in(self.dialect.version, vr)
                 .ok_or_else(|| FmiError::error(format!("unknown value reference {vr}")))?;
-            let Access::Output(id) = var.access else {
-                return Err(FmiError::error(format!(
-                    "`{}` is not an output; derivatives exist for outputs only",
-                    var.name
-                )));
+            let id = match var.access {
+                Access::Output(id) => id,
+                Access::IntegerOutput(_) => {
+                    return Err(FmiError::error(format!(
+                        "`{}` is an Integer output (a count); derivatives exist for Real outputs only",
+                        var.name
+                    )));
+                }
+                _ => {
+                    return Err(FmiError::error(format!(
+                        "`{}` is not an output; derivatives exist for outputs only",
+                        var.name
+                    )));
+                }
             };
             if order != 1 {
                 return Err(FmiError::error(format!(

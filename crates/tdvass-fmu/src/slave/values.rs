@@ -145,7 +145,9 @@ impl Slave {
                 Access::Calculated(Calculated::RightmostRoots) => {
                     slots.copy_from_slice(&self.rightmost_roots()?)
                 }
-                Access::Integer { .. } | Access::Calculated(Calculated::Stable) => {
+                Access::Integer { .. }
+                | Access::IntegerOutput(_)
+                | Access::Calculated(Calculated::Stable) => {
                     unreachable!("type checked")
                 }
             }
@@ -167,11 +169,23 @@ impl Slave {
         Ok(Status::Ok)
     }
 
-    /// `GetInteger`.
+    /// `GetInteger`: the Integer settings and the counts.
     pub fn get_integer(&mut self, vrs: &[u32], values: &mut [i32]) -> Result<Status, FmiError> {
+        let mut outputs = None;
         for (&vr, value) in vrs.iter().zip(values.iter_mut()) {
-            match self.variable(vr, VarType::Integer)?.access {
+            let var = self.variable(vr, VarType::Integer)?;
+            match var.access {
                 Access::Integer { get, .. } => *value = get(&self.state.settings),
+                Access::IntegerOutput(id) => {
+                    if outputs.is_none() {
+                        outputs = Some(self.outputs()?);
+                    }
+                    *value = id
+                        .value(outputs.as_ref().expect("computed above"))
+                        .ok_or_else(|| {
+                            FmiError::error(format!("`{}` is not available", var.name))
+                        })?;
+                }
                 _ => unreachable!("type checked"),
             }
         }

@@ -15,7 +15,7 @@ fn names_and_value_references_are_unique() {
 
 #[test]
 fn interface_of_the_spec_is_present() {
-    let spec: [(&str, Causality, VarType); 45] = {
+    let spec: [(&str, Causality, VarType); 47] = {
         use Causality::*;
         use VarType::*;
         [
@@ -43,6 +43,7 @@ fn interface_of_the_spec_is_present() {
             ("w_sdd", Parameter, Real),
             ("w_tdd", Parameter, Real),
             ("input_extrapolation", Parameter, Integer),
+            ("tire_contact", Parameter, Integer),
             ("x_g", Input, Real),
             ("x_s", Output, Real),
             ("x_h", Output, Real),
@@ -59,6 +60,7 @@ fn interface_of_the_spec_is_present() {
             ("rms_suspension_deflection", Output, Real),
             ("rms_tire_deflection", Output, Real),
             ("objective", Output, Real),
+            ("lift_off_count", Output, Integer),
             ("spectral_abscissa", CalculatedParameter, Real),
             ("stable", CalculatedParameter, Boolean),
             ("x_s_start", Parameter, Real),
@@ -163,7 +165,9 @@ fn every_variable_is_readable_and_settings_round_trip() {
                 set(&mut s, 1000 + i as i32);
                 assert_eq!(get(&s), 1000 + i as i32, "{}", v.name);
             }
-            Access::Output(_) => assert_eq!(v.causality, Causality::Output),
+            Access::Output(_) | Access::IntegerOutput(_) => {
+                assert_eq!(v.causality, Causality::Output)
+            }
             Access::Calculated(_) => assert_eq!(v.causality, Causality::CalculatedParameter),
             Access::Time => assert_eq!(v.causality, Causality::Independent),
         }
@@ -180,12 +184,48 @@ fn every_variable_is_readable_and_settings_round_trip() {
         .iter()
         .filter(|v| v.causality == Causality::Output)
         .collect();
-    assert_eq!(outputs.len(), 22);
-    assert!(
-        outputs
-            .iter()
-            .all(|v| matches!(v.access, Access::Output(_)))
-    );
+    assert_eq!(outputs.len(), 23);
+    // The Real outputs are continuous; the counts are Integers, discrete,
+    // and not read inside a step.
+    for v in outputs {
+        match v.access {
+            Access::Output(_) => assert_eq!(v.variability, Variability::Continuous, "{}", v.name),
+            Access::IntegerOutput(_) => {
+                assert_eq!(v.variability, Variability::Discrete, "{}", v.name);
+                assert!(!v.intermediate_update, "{}", v.name);
+            }
+            _ => panic!("`{}` is an output without an output access", v.name),
+        }
+    }
+}
+
+#[test]
+fn tire_contact_codes_are_the_library_codes() {
+    use tdvass::TireContact;
+    let v = by_name("tire_contact").unwrap();
+    assert_eq!(v.variability, Fixed);
+    assert_eq!(v.start, Some(TireContact::default().code() as f64));
+    let items = v.enumeration.unwrap().items;
+    assert_eq!(items.len(), TireContact::ALL.len());
+    for (item, contact) in items.iter().zip(TireContact::ALL) {
+        assert_eq!((item.name, item.value), (contact.name(), contact.code()));
+    }
+    // The table's range and the library's codes agree.
+    for code in -1..=2 {
+        assert_eq!(
+            v.range.check(v.name, code as f64).is_ok(),
+            TireContact::from_code(code).is_ok(),
+            "{code}"
+        );
+    }
+    let mut s = Settings::start_values();
+    for contact in TireContact::ALL {
+        s.tire_contact = contact.code();
+        assert_eq!(s.to_config(0.0).unwrap().tire_contact, contact);
+    }
+    s.tire_contact = 2;
+    let e = s.to_config(0.0).unwrap_err().to_string();
+    assert!(e.contains("tire_contact") && e.contains('2'), "{e}");
 }
 
 #[test]
