@@ -50,8 +50,9 @@ fn road_value(samples: &[(f64, f64)], t: f64) -> f64 {
 fn unilateral_tdvass_agrees_with_a_fine_step_integration_of_the_switched_delay_equation() {
     let duration = 2.0;
     let samples = rough_samples(duration, 11);
-    // tau = 2e-4 s lies inside the internal step, 0.02 s spans whole steps.
-    for (g, tau) in [(5386.0, 2e-4), (20000.0, 0.02)] {
+    // tau = 2e-4 s lies inside the internal step, 0.02 s spans whole
+    // steps; 2.6 ms puts the road breakpoints inside steps.
+    for (g, tau) in [(5386.0, 2e-4), (20000.0, 0.02), (5386.0, 0.0026)] {
         let params = Params {
             g,
             tau,

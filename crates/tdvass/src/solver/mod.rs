@@ -891,6 +891,20 @@ impl Simulator {
     fn step_to_node(&mut self) -> Result<()> {
         let k = self.grid_index;
         let next_node = self.grid_time(k + 1);
+        if self.rms.samples > 0 {
+            // From a node that ends a run of the whole-step loop (a
+            // unilateral tire's step that may lift off, or a step that a
+            // road breakpoint splits): the run closes there first.
+            let (t, x, w) = (
+                self.committed_time,
+                self.committed_state,
+                self.committed_filter,
+            );
+            let piece = self.piece_from(t);
+            let (mut rms, mut weighted) = (self.rms, self.weighted);
+            self.close_run_at_node(k, t, &x, &w, &mut rms, &mut weighted, &piece, &piece);
+            (self.rms, self.weighted) = (rms, weighted);
+        }
         let from = (self.committed_time, self.committed_state);
         let x = self.integrate_within_step(k, from.0, from.1, next_node);
         self.check_divergence(next_node, &x)?;
