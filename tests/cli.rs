@@ -791,11 +791,16 @@ fn the_unilateral_tire_lifts_off_on_a_class_d_road_and_is_recorded() {
 
 #[test]
 fn optimize_takes_the_tire_contact_with_both_objectives() {
-    for objective in ["paper", "comfort"] {
+    for (target, objective) in [
+        ("absorber", "paper"),
+        ("absorber", "comfort"),
+        ("controller", "paper"),
+        ("controller", "comfort"),
+    ] {
         let run = |contact: &str| {
             tdvass_json(&[
                 "optimize",
-                "absorber",
+                target,
                 "--objective",
                 objective,
                 "--road",
@@ -819,7 +824,7 @@ fn optimize_takes_the_tire_contact_with_both_objectives() {
         // on this road, so the scores differ.
         assert_ne!(
             unilateral["objective"], bilateral["objective"],
-            "{objective}: {unilateral}"
+            "{target}, {objective}: {unilateral}"
         );
     }
     // Without lift-offs the two tires are the same model: the same scores
