@@ -35,6 +35,7 @@ PICTURES = {
     "pso.py": ["pso.png"],
     "sweep_dask.py": ["sweep_dask.png"],
     "plot_result.py": ["plot_result.png"],
+    "lift_off.py": ["lift_off.png"],
 }
 # examples that are not `--quick --out` scripts
 NOT_SCRIPTS = {"default_experiment.py"}
