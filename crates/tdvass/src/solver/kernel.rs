@@ -248,12 +248,16 @@ pub(super) fn segment<
                     end = SegmentEnd::Switch;
                     break;
                 }
-                holding.add_step(loss);
+                if op.holding {
+                    holding.add_step(loss);
+                }
             }
-            let next_bend = deflection(&x_next);
-            holding.add_deflection(contact.step, bend, next_bend);
+            if op.holding {
+                let next_bend = deflection(&x_next);
+                holding.add_deflection(contact.step, bend, next_bend);
+                bend = next_bend;
+            }
             edge = next_edge;
-            bend = next_bend;
         }
         if count {
             op.count(&mut rms, &x, road.displacement());
@@ -316,14 +320,19 @@ pub(super) fn segment_avx2<
 }
 
 /// Runs [`segment`] with the widest vector unit available; the filter
-/// steps along when the grid step has it, the road-holding test when the
-/// grid step asks for it ([`super::Metrics`]: the filter implies it).
+/// steps along when the grid step has it, the contact test when the grid
+/// step keeps road holding ([`super::Metrics`]: the filter implies it) or
+/// has a unilateral tire (which stops at a lift-off; its accumulators run
+/// only with road holding).
 pub(super) fn run_segment<R: NodeRoad, const DELAY: bool>(
     seg: Segment,
     hot: &mut HotState<R>,
     before: bool,
 ) -> SegmentEnd {
-    match (seg.op.filter.is_some(), seg.op.holding) {
+    match (
+        seg.op.filter.is_some(),
+        seg.op.holding || seg.op.contact.unilateral,
+    ) {
         (true, _) => run_segment_with::<R, DELAY, true, true>(seg, hot, before),
         (false, true) => run_segment_with::<R, DELAY, false, true>(seg, hot, before),
         (false, false) => run_segment_with::<R, DELAY, false, false>(seg, hot, before),

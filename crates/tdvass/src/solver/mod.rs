@@ -414,11 +414,6 @@ impl Simulator {
             });
         }
         let road = Road::new(&config.road, config.start_time)?;
-        let mut config = config;
-        if config.tire_contact.is_unilateral() {
-            // The flight time and the lift-offs are road holding.
-            config.metrics = config.metrics.max(Metrics::RoadHolding);
-        }
         let mut initial = config.initial_state;
         if config.variant == Variant::Cs {
             initial[crate::model::X_H] = 0.0;

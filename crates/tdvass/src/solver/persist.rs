@@ -353,7 +353,7 @@ impl Simulator {
         sim.check_times()?;
         sim.check_rms()?;
         sim.check_comfort()?;
-        if sim.config.metrics.road_holding() {
+        if sim.config.metrics.road_holding() || sim.config.tire_contact.is_unilateral() {
             sim.check_holding()?;
         } else if sim.holding != initial_holding {
             return Err(Error::InvalidState(
@@ -454,7 +454,10 @@ impl Simulator {
         let x = self.committed_state;
         let committed = (x[crate::model::X_S] - x[crate::model::X_T]).abs();
         let deflection = holding.max_deflection;
-        if !(deflection.is_finite() && deflection >= committed) {
+        // Below road holding (a unilateral tire at the paper level) the
+        // largest |SDD| is not kept.
+        let kept = self.config.metrics.road_holding();
+        if kept && !(deflection.is_finite() && deflection >= committed) {
             return Err(Error::InvalidState(format!(
                 "max suspension deflection {deflection} m is not finite or below the committed |SDD| {committed} m"
             )));
