@@ -827,9 +827,8 @@ fn optimize_takes_the_tire_contact_with_both_objectives() {
             "{target}, {objective}: {unilateral}"
         );
     }
-    // Without lift-offs the two tires are the same model: the same scores
-    // to the tolerance (1e-6; the unilateral runs keep the road-holding
-    // metrics, whose step choice may differ).
+    // Without lift-offs the two tires are the same model: the same scores,
+    // bit for bit.
     let controller = |contact: &str| {
         tdvass_json(&[
             "optimize",
@@ -845,15 +844,11 @@ fn optimize_takes_the_tire_contact_with_both_objectives() {
         ])
     };
     let (unilateral, bilateral) = (controller("unilateral"), controller("bilateral"));
-    let close = |a: &Value, b: &Value| {
-        let (a, b) = (a.as_f64().unwrap(), b.as_f64().unwrap());
-        (a - b).abs() <= 1e-6 * b.abs()
-    };
-    assert!(close(&unilateral["objective"], &bilateral["objective"]));
+    assert_eq!(unilateral["objective"], bilateral["objective"]);
     let points = |v: &Value| v["paper_points"].as_array().unwrap().clone();
     assert_eq!(points(&unilateral).len(), 2);
     for (u, b) in points(&unilateral).iter().zip(&points(&bilateral)) {
-        assert!(close(&u["objective"], &b["objective"]), "{u} {b}");
+        assert_eq!(u["objective"], b["objective"], "{u} {b}");
     }
 }
 
