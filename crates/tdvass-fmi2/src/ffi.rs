@@ -226,9 +226,11 @@ pub unsafe extern "C" fn fmi2Instantiate(
         let Some(logger) = logger else {
             return std::ptr::null_mut();
         };
-        // SAFETY (all three): NULL or NUL-terminated strings; copied.
+        // SAFETY: by contract NULL or a NUL-terminated string; copied.
         let name = unsafe { copy_str(instanceName) };
+        // SAFETY: as above.
         let guid = unsafe { copy_str(fmuGUID) };
+        // SAFETY: as above.
         let resource = unsafe { copy_str(fmuResourceLocation) };
         let sink = c_logger(logger, environment, name.as_deref().unwrap_or(""));
         let request = InstantiateRequest {

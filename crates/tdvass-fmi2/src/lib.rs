@@ -8,7 +8,7 @@
 //!
 //! - [`states`]: the FMI 2.0 state machine as one declarative table of
 //!   which function is allowed in which state.
-//! - [`instance`]: the FMI 2.0 [`Instance`](instance::Instance): the
+//! - [`instance`]: the FMI 2.0 [`instance::Instance`]: the
 //!   instantiation checks, the state table, the status kinds and a
 //!   [`Slave`](tdvass_fmu::Slave) that does the rest. Every method returns
 //!   `Result<_, FmiError>`.

@@ -13,8 +13,8 @@
 
 use crate::FmiError;
 
-/// The state of an instance: the version-neutral [`Phase`] of the slave,
-/// named by the FMI 2.0 standard's state names ([`Phase::name`]).
+/// The state of an instance: the version-neutral [`tdvass_fmu::Phase`] of the slave,
+/// named by the FMI 2.0 standard's state names ([`tdvass_fmu::Phase::name`]).
 pub use tdvass_fmu::Phase as MachineState;
 
 /// A set of states.

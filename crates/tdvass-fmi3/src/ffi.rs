@@ -285,9 +285,11 @@ pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
 ) -> fmi3Instance {
     let made = catch_unwind(AssertUnwindSafe(|| {
         let sink = c_logger(logMessage, instanceEnvironment);
-        // SAFETY (all three): NULL or NUL-terminated strings; copied.
+        // SAFETY: by contract NULL or a NUL-terminated string; copied.
         let name = unsafe { copy_str(instanceName) };
+        // SAFETY: as above.
         let token = unsafe { copy_str(instantiationToken) };
+        // SAFETY: as above.
         let resources = unsafe { copy_str(resourcePath) };
         // SAFETY: module contract: an array of the given length.
         let required = match unsafe {
@@ -1035,6 +1037,8 @@ pub unsafe extern "C" fn fmi3DoStep(
         let _ = catch_unwind(AssertUnwindSafe(|| {
             // SAFETY: module contract; the pointers were checked above.
             if let Some(c) = unsafe { component(instance) } {
+                // SAFETY: the output pointers were checked non-NULL and
+                // aligned above, and point to the caller's variables.
                 unsafe {
                     *eventHandlingNeeded = FMI3_FALSE;
                     *terminateSimulation = if c.instance.terminate_requested() {

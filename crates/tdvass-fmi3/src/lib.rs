@@ -6,7 +6,7 @@
 //!
 //! - [`types`]: the FMI 3.0 type of each variable of the one table.
 //! - [`states`]: the FMI 3.0 state machine as one declarative table.
-//! - [`instance`]: the FMI 3.0 [`Instance`](instance::Instance): the
+//! - [`instance`]: the FMI 3.0 [`instance::Instance`]: the
 //!   instantiation checks, the state table, the FMI 3.0 types,
 //!   Configuration Mode and intermediate updates, around a
 //!   [`Slave`](tdvass_fmu::Slave).

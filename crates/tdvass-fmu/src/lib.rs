@@ -19,7 +19,7 @@
 //!   library's ([`tdvass::limits`]).
 //! - [`snapshot`]: the versioned, checksummed byte format of serialized FMU
 //!   states, written with the library's one codec ([`tdvass::bytes`]).
-//! - [`slave`]: the [`Slave`](slave::Slave): settings, simulator, phase,
+//! - [`slave`]: the [`slave::Slave`]: settings, simulator, phase,
 //!   logging and the FMU states it handed out, with a version-neutral API
 //!   (set/get by value reference, `do_step(t, h)`, input value and slope,
 //!   snapshots, partials). Every method returns `Result<_, FmiError>`.

@@ -11,7 +11,7 @@ use tdvass::road::{RandomRoad, RoadClass, RoadSpec, RoadType};
 use tdvass::solver::{DEFAULT_TOLERANCE, Metrics, SimulationConfig};
 
 /// Every setting of an instance: the parameters and the input. Start values
-/// come from [`ALL_VARIABLES`] ([`Settings::default`]).
+/// come from [`ALL_VARIABLES`] ([`Settings::start_values`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Settings {
     /// `variant` code: 1 CS, 2 PVASS, 3 TDVASS.
