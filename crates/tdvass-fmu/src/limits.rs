@@ -3,10 +3,11 @@
 //! values and rates, which the library checks for every configuration, so
 //! the command line refuses the same runaway inputs):
 //!
-//! - **Values and rates** ([`check_value`], [`check_rates`]): the library's
-//!   checks applied to a value when it is set (and when a serialized state
-//!   is read) and to the settings when the simulation is built or `g` is
-//!   tuned.
+//! - **Values and rates** ([`check_variable`], [`check_input_slope`],
+//!   [`check_rates`]): the library's checks, by the kind of value each
+//!   variable's table entry declares, applied to a value when it is set
+//!   (and when a serialized state is read) and to the settings when the
+//!   simulation is built or `g` is tuned.
 //! - **Work per step** ([`step_work`]): one step may need at most
 //!   [`MAX_WORK_PER_STEP`] internal steps and road breakpoints, so that no
 //!   call runs for more than a few seconds (a huge communication step
@@ -18,23 +19,39 @@
 
 use crate::FmiError;
 use crate::settings::Settings;
-use crate::variables::{ALL_VARIABLES, Access, VARIABLES};
+use crate::variables::{ALL_VARIABLES, Access, VARIABLES, Variable};
+use tdvass::limits::Bound;
 use tdvass::road::RoadType;
 use tdvass::solver::Outputs;
 
 pub use tdvass::limits::{MAX_RATE, MAX_WEIGHT};
 
-/// The library's limit on a single value (already in its declared range).
-pub fn check_value(name: &str, value: f64) -> Result<(), FmiError> {
-    Ok(tdvass::limits::check_value(name, value)?)
+/// The library's limit on a value of `var` (already in its declared
+/// range): the kind of value its table entry declares ([`Variable::bound`]),
+/// none for a variable without one.
+pub fn check_variable(var: &Variable, value: f64) -> Result<(), FmiError> {
+    match var.bound {
+        Some(bound) => Ok(tdvass::limits::check_value(bound, var.name, value)?),
+        None => Ok(()),
+    }
+}
+
+/// The library's limit on the slope of the road input x_g (an input
+/// derivative, or the slope of an extrapolation): a velocity.
+pub fn check_input_slope(value: f64) -> Result<(), FmiError> {
+    Ok(tdvass::limits::check_value(
+        Bound::Velocity,
+        "x_g derivative",
+        value,
+    )?)
 }
 
 /// Every single-value limit of `settings`.
 pub fn check_values(settings: &Settings) -> Result<(), FmiError> {
     for v in ALL_VARIABLES {
         match v.access {
-            Access::Real { get, .. } => check_value(v.name, get(settings))?,
-            Access::Integer { get, .. } => check_value(v.name, get(settings) as f64)?,
+            Access::Real { get, .. } => check_variable(v, get(settings))?,
+            Access::Integer { get, .. } => check_variable(v, get(settings) as f64)?,
             _ => {}
         }
     }
@@ -139,13 +156,40 @@ mod tests {
 
     #[test]
     fn limits_name_variable_and_value() {
-        let e = check_value("x_s_start", -2e3).unwrap_err().message;
+        let var = |name| crate::variables::by_name(name).unwrap();
+        let e = check_variable(var("x_s_start"), -2e3).unwrap_err().message;
         assert!(e.contains("`x_s_start`") && e.contains("-2000"), "{e}");
-        let e = check_value("w_tdd", 1e300).unwrap_err().message;
+        let e = check_variable(var("w_tdd"), 1e300).unwrap_err().message;
         assert!(
             e.contains("`w_tdd`") && e.contains(&1e300.to_string()),
             "{e}"
         );
+        let e = check_input_slope(2e6).unwrap_err().message;
+        assert!(
+            e.contains("`x_g derivative`") && e.contains("velocities"),
+            "{e}"
+        );
+        // The table maps its variables onto the library's kinds of value.
+        let bounded: Vec<_> = ALL_VARIABLES
+            .iter()
+            .filter_map(|v| v.bound.map(|b| (v.name, b)))
+            .collect();
+        let expected = [
+            ("road_amplitude", Bound::Displacement),
+            ("road_angular_frequency", Bound::AngularFrequency),
+            ("w_ba", Bound::Weight),
+            ("w_sdd", Bound::Weight),
+            ("w_tdd", Bound::Weight),
+            ("x_s_start", Bound::Displacement),
+            ("v_s_start", Bound::Velocity),
+            ("x_h_start", Bound::Displacement),
+            ("v_h_start", Bound::Velocity),
+            ("x_t_start", Bound::Displacement),
+            ("v_t_start", Bound::Velocity),
+            ("x_g", Bound::Displacement),
+        ];
+        assert_eq!(bounded, expected);
+        check_variable(var("m_s"), 1e300).unwrap();
         let mut s = Settings::start_values();
         s.params.k_s = 1e300;
         let e = check_rates(&s).unwrap_err().message;

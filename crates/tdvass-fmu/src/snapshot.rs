@@ -219,7 +219,7 @@ fn decode_settings(r: &mut Reader) -> Result<Settings, FmiError> {
                 let value = f64::from_bits(bits);
                 var.range
                     .check(var.name, value)
-                    .and_then(|()| crate::limits::check_value(var.name, value))
+                    .and_then(|()| crate::limits::check_variable(var, value))
                     .map_err(|e| invalid(e.message))?;
                 set(&mut settings, value);
             }

@@ -19,6 +19,7 @@
 use crate::FmiError;
 use crate::outputs::{IntegerOutputId, OutputId};
 use crate::settings::Settings;
+use tdvass::limits::Bound;
 use tdvass::model::{V_H, V_S, V_T, X_H, X_S, X_T};
 
 /// FMI causality.
@@ -478,6 +479,9 @@ pub struct Variable {
     /// Only the FMI 3.0 FMU has it (these follow the common variables in
     /// the table, so FMI 2.0's `ModelVariables` are a prefix of it).
     pub fmi3_only: bool,
+    /// The library's numerical limit on its magnitude, by the kind of value
+    /// it is ([`tdvass::limits::Bound`]; `None`: its range alone).
+    pub bound: Option<Bound>,
 }
 
 impl Variable {
@@ -520,6 +524,11 @@ impl Variable {
 
     const fn enumerated(mut self, enumeration: &'static Enumeration) -> Variable {
         self.enumeration = Some(enumeration);
+        self
+    }
+
+    const fn bounded(mut self, bound: Bound) -> Variable {
+        self.bound = Some(bound);
         self
     }
 }
@@ -598,6 +607,7 @@ const fn parameter(
         dimensions: &[],
         intermediate_update: false,
         fmi3_only: false,
+        bound: None,
     }
 }
 
@@ -627,6 +637,7 @@ const fn output(
         dimensions: &[],
         intermediate_update: true,
         fmi3_only: false,
+        bound: None,
     }
 }
 
@@ -655,6 +666,7 @@ const fn calculated(
         dimensions: &[],
         intermediate_update: false,
         fmi3_only: false,
+        bound: None,
     }
 }
 
@@ -817,7 +829,8 @@ const TABLE: &[Variable] = &[
         Range::Finite,
         real!(road_amplitude),
         "Harmonic road amplitude",
-    ),
+    )
+    .bounded(Bound::Displacement),
     parameter(
         "road_angular_frequency",
         14,
@@ -827,7 +840,8 @@ const TABLE: &[Variable] = &[
         Range::Finite,
         real!(road_angular_frequency),
         "Harmonic road angular frequency",
-    ),
+    )
+    .bounded(Bound::AngularFrequency),
     parameter(
         "road_class",
         15,
@@ -909,7 +923,8 @@ const TABLE: &[Variable] = &[
         Range::AtLeast(0.0),
         real!(weights.body_acceleration),
         "Weight z1 of RMS(BA) in the objective J (Eq. 6; tunable)",
-    ),
+    )
+    .bounded(Bound::Weight),
     parameter(
         "w_sdd",
         22,
@@ -919,7 +934,8 @@ const TABLE: &[Variable] = &[
         Range::AtLeast(0.0),
         real!(weights.suspension_deflection),
         "Weight z2 of RMS(SDD) in the objective J (Eq. 6; tunable)",
-    ),
+    )
+    .bounded(Bound::Weight),
     parameter(
         "w_tdd",
         23,
@@ -929,7 +945,8 @@ const TABLE: &[Variable] = &[
         Range::AtLeast(0.0),
         real!(weights.tire_deflection),
         "Weight z3 of RMS(TDD) in the objective J (Eq. 6, TDD in m; tunable)",
-    ),
+    )
+    .bounded(Bound::Weight),
     parameter(
         "input_extrapolation",
         48,
@@ -949,7 +966,8 @@ const TABLE: &[Variable] = &[
         Range::Finite,
         real!(initial_state[0]),
         "Initial body displacement (also the history before the start)",
-    ),
+    )
+    .bounded(Bound::Displacement),
     parameter(
         "v_s_start",
         25,
@@ -959,7 +977,8 @@ const TABLE: &[Variable] = &[
         Range::Finite,
         real!(initial_state[1]),
         "Initial body velocity",
-    ),
+    )
+    .bounded(Bound::Velocity),
     parameter(
         "x_h_start",
         26,
@@ -969,7 +988,8 @@ const TABLE: &[Variable] = &[
         Range::Finite,
         real!(initial_state[2]),
         "Initial absorber displacement (ignored by CS)",
-    ),
+    )
+    .bounded(Bound::Displacement),
     parameter(
         "v_h_start",
         27,
@@ -979,7 +999,8 @@ const TABLE: &[Variable] = &[
         Range::Finite,
         real!(initial_state[3]),
         "Initial absorber velocity (ignored by CS)",
-    ),
+    )
+    .bounded(Bound::Velocity),
     parameter(
         "x_t_start",
         28,
@@ -989,7 +1010,8 @@ const TABLE: &[Variable] = &[
         Range::Finite,
         real!(initial_state[4]),
         "Initial wheel displacement (also the delayed history before the start)",
-    ),
+    )
+    .bounded(Bound::Displacement),
     parameter(
         "v_t_start",
         29,
@@ -999,7 +1021,8 @@ const TABLE: &[Variable] = &[
         Range::Finite,
         real!(initial_state[5]),
         "Initial wheel velocity",
-    ),
+    )
+    .bounded(Bound::Velocity),
     Variable {
         name: "x_g",
         vr: 30,
@@ -1017,6 +1040,7 @@ const TABLE: &[Variable] = &[
         dimensions: &[],
         intermediate_update: true,
         fmi3_only: false,
+        bound: Some(Bound::Displacement),
     },
     output(
         "x_s",
@@ -1283,6 +1307,7 @@ const TABLE: &[Variable] = &[
         // Discrete: it changes at communication points, not inside a step.
         intermediate_update: false,
         fmi3_only: false,
+        bound: None,
     },
     output(
         "max_suspension_deflection",
@@ -1325,6 +1350,7 @@ const TABLE: &[Variable] = &[
         dimensions: &[],
         intermediate_update: false,
         fmi3_only: true,
+        bound: None,
     },
     Variable {
         dimensions: &[Dimension::Structural("root_count"), Dimension::Fixed(2)],
@@ -1354,6 +1380,7 @@ const TABLE: &[Variable] = &[
         dimensions: &[],
         intermediate_update: false,
         fmi3_only: true,
+        bound: None,
     },
 ];
 

@@ -3,7 +3,7 @@
 //! the configuration, so every front-end (the FMU, the command line, a
 //! library user) refuses the same runaway inputs with the same messages.
 //!
-//! - **Values** ([`check_value`]): initial displacements and the road
+//! - **Values** ([`check_value`], by their kind, [`Bound`]): initial displacements and the road
 //!   amplitude (and an external road input) within the divergence bound of
 //!   displacements ([`DIVERGENCE_DISPLACEMENT`]), initial velocities and the
 //!   slope of an external input within the bound of velocities
@@ -22,7 +22,7 @@
 
 use crate::error::{Error, Result};
 use crate::metrics::Weights;
-use crate::model::{Params, State, Variant};
+use crate::model::{Params, STATE_NAMES, State, Variant};
 use crate::road::RoadSpec;
 use crate::solver::{DIVERGENCE_DISPLACEMENT, DIVERGENCE_VELOCITY};
 
@@ -32,45 +32,57 @@ pub const MAX_RATE: f64 = 1e12;
 /// Largest weight of the objective J.
 pub const MAX_WEIGHT: f64 = 1e12;
 
-/// The names of the initial state's components, as the FMU names them.
-pub const INITIAL_STATE_NAMES: [&str; 6] = [
-    "x_s_start",
-    "v_s_start",
-    "x_h_start",
-    "v_h_start",
-    "x_t_start",
-    "v_t_start",
-];
+/// A kind of value whose magnitude has a numerical limit. Front-ends map
+/// their variables onto these (the FMU's table declares one per variable
+/// that has a limit); the names in messages are the caller's.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Bound {
+    /// A displacement (m): an initial displacement, the harmonic road's
+    /// amplitude, an external road input.
+    Displacement,
+    /// A velocity (m/s): an initial velocity, the slope of an external
+    /// road input.
+    Velocity,
+    /// The harmonic road's angular frequency (rad/s).
+    AngularFrequency,
+    /// A weight of the objective J (Eq. (6)).
+    Weight,
+}
 
-/// The limit of a named value, if it has one: the bound of its magnitude
-/// and what the bound is.
-fn value_limit(name: &str) -> Option<(f64, &'static str)> {
-    match name {
-        "x_s_start" | "x_h_start" | "x_t_start" | "road_amplitude" | "x_g" => Some((
-            DIVERGENCE_DISPLACEMENT,
-            "the divergence bound of displacements (m)",
-        )),
-        "v_s_start" | "v_h_start" | "v_t_start" | "x_g derivative" => Some((
-            DIVERGENCE_VELOCITY,
-            "the divergence bound of velocities (m/s)",
-        )),
-        "road_angular_frequency" => Some((MAX_RATE.sqrt(), "the numerical limit (rad/s)")),
-        "w_ba" | "w_sdd" | "w_tdd" => Some((MAX_WEIGHT, "the numerical limit of the weights")),
-        _ => None,
+impl Bound {
+    /// The largest admissible magnitude.
+    pub fn limit(self) -> f64 {
+        match self {
+            Bound::Displacement => DIVERGENCE_DISPLACEMENT,
+            Bound::Velocity => DIVERGENCE_VELOCITY,
+            Bound::AngularFrequency => MAX_RATE.sqrt(),
+            Bound::Weight => MAX_WEIGHT,
+        }
+    }
+
+    /// What the limit is, for messages.
+    pub fn what(self) -> &'static str {
+        match self {
+            Bound::Displacement => "the divergence bound of displacements (m)",
+            Bound::Velocity => "the divergence bound of velocities (m/s)",
+            Bound::AngularFrequency => "the numerical limit (rad/s)",
+            Bound::Weight => "the numerical limit of the weights",
+        }
     }
 }
 
-/// Refuses a value whose magnitude exceeds the limit of `name` (names
-/// without a limit pass).
-pub fn check_value(name: &str, value: f64) -> Result<()> {
-    match value_limit(name) {
-        Some((bound, what)) if value.abs() > bound => Err(Error::BeyondLimit {
+/// Refuses a value of kind `bound` whose magnitude exceeds its limit;
+/// `name` names the value in the message.
+pub fn check_value(bound: Bound, name: &str, value: f64) -> Result<()> {
+    if value.abs() > bound.limit() {
+        Err(Error::BeyondLimit {
             name: name.to_string(),
             value,
-            bound,
-            what,
-        }),
-        _ => Ok(()),
+            bound: bound.limit(),
+            what: bound.what(),
+        })
+    } else {
+        Ok(())
     }
 }
 
@@ -120,20 +132,29 @@ pub fn check_config(
     initial_state: &State,
     weights: &Weights,
 ) -> Result<()> {
-    for (name, value) in INITIAL_STATE_NAMES.iter().zip(initial_state.iter()) {
-        check_value(name, *value)?;
+    for (i, value) in initial_state.iter().enumerate() {
+        let bound = if i % 2 == 0 {
+            Bound::Displacement
+        } else {
+            Bound::Velocity
+        };
+        check_value(bound, &format!("initial {}", STATE_NAMES[i]), *value)?;
     }
     if let RoadSpec::Harmonic {
         amplitude,
         angular_frequency,
     } = road
     {
-        check_value("road_amplitude", *amplitude)?;
-        check_value("road_angular_frequency", *angular_frequency)?;
+        check_value(Bound::Displacement, "road_amplitude", *amplitude)?;
+        check_value(
+            Bound::AngularFrequency,
+            "road_angular_frequency",
+            *angular_frequency,
+        )?;
     }
-    check_value("w_ba", weights.body_acceleration)?;
-    check_value("w_sdd", weights.suspension_deflection)?;
-    check_value("w_tdd", weights.tire_deflection)?;
+    check_value(Bound::Weight, "w_ba", weights.body_acceleration)?;
+    check_value(Bound::Weight, "w_sdd", weights.suspension_deflection)?;
+    check_value(Bound::Weight, "w_tdd", weights.tire_deflection)?;
     check_rates(params, Some(variant))
 }
 
@@ -157,19 +178,37 @@ mod tests {
 
     #[test]
     fn limits_name_variable_and_value() {
-        let e = check_value("x_s_start", -2e3).unwrap_err().to_string();
+        let e = check_value(Bound::Displacement, "initial x_s", -2e3)
+            .unwrap_err()
+            .to_string();
         assert_eq!(
             e,
-            "invalid value -2000 for `x_s_start`: its magnitude exceeds 1e3, the divergence bound of displacements (m)"
+            "invalid value -2000 for `initial x_s`: its magnitude exceeds 1e3, the divergence bound of displacements (m)"
         );
-        let e = check_value("w_tdd", 1e300).unwrap_err().to_string();
+        let e = check_value(Bound::Weight, "w_tdd", 1e300)
+            .unwrap_err()
+            .to_string();
         assert!(
             e.contains("`w_tdd`") && e.contains(&1e300.to_string()),
             "{e}"
         );
-        check_value("road_angular_frequency", 1e6).unwrap();
-        assert!(check_value("road_angular_frequency", 1.000001e6).is_err());
-        check_value("m_s", 1e300).unwrap();
+        check_value(Bound::AngularFrequency, "omega", 1e6).unwrap();
+        assert!(check_value(Bound::AngularFrequency, "omega", 1.000001e6).is_err());
+        let mut state = State::zeros();
+        state[crate::model::V_T] = 2e6;
+        let e = check_config(
+            &Params::default(),
+            Variant::Cs,
+            &RoadSpec::paper_harmonic(),
+            &state,
+            &Weights::default(),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("`initial v_t`") && e.contains("velocities"),
+            "{e}"
+        );
         let params = Params {
             k_s: 1e300,
             ..Params::default()

@@ -243,7 +243,7 @@ impl Slave {
                 .flatten()
                 .collect();
             let slope = extrapolation_slope(&values, h);
-            limits::check_value("x_g derivative", slope).map_err(|e| {
+            limits::check_input_slope(slope).map_err(|e| {
                 FmiError::error(format!(
                     "input_extrapolation = {mode}: the slope {slope} m/s through x_g = {x_g} m at {now} s and the values before it is refused: {}",
                     e.message
@@ -297,7 +297,7 @@ impl Slave {
                 )));
             }
             if order == 1 {
-                limits::check_value("x_g derivative", value)?;
+                limits::check_input_slope(value)?;
                 slope = Some(value);
             } else {
                 ignored.push(order);

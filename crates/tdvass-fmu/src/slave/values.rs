@@ -242,7 +242,7 @@ impl Slave {
             }
             _ => {
                 var.range.check(var.name, value)?;
-                limits::check_value(var.name, value)
+                limits::check_variable(var, value)
             }
         }
     }
