@@ -116,19 +116,7 @@ fn record(mut sim: Simulator, stops: &[f64]) -> Vec<Outputs> {
 }
 
 fn output_vector(o: &Outputs) -> Vec<f64> {
-    let mut v: Vec<f64> = o.state.iter().copied().collect();
-    v.extend([
-        o.performance.body_acceleration,
-        o.performance.suspension_deflection,
-        o.performance.tire_deflection,
-        o.road_displacement,
-        o.control_force,
-        o.rms.body_acceleration,
-        o.rms.suspension_deflection,
-        o.rms.tire_deflection,
-        o.objective,
-    ]);
-    v
+    o.core_values().to_vec()
 }
 
 fn assert_same_at_common_times(reference: &[Outputs], other: &[Outputs], label: &str) {

@@ -30,7 +30,7 @@ use super::{Simulator, expm};
 use crate::comfort::{WK_STATES, WkStateSpace, wk_state_space};
 use crate::model::{Plant, State, V_S};
 use crate::road::RoadPiece;
-use nalgebra::{Matrix6, RowSVector, SMatrix, SVector, Vector2, Vector4};
+use nalgebra::{Matrix6, RowSVector, SMatrix, SVector, Vector4};
 
 /// The W_k filter state w (m/s², see [`WkStateSpace`]).
 pub(crate) type Filter = SVector<f64, WK_STATES>;
@@ -160,18 +160,7 @@ impl FilterRows {
         if let Some(p) = delayed {
             next += self.delayed_input * p;
         }
-        match *road {
-            RoadPiece::Linear { .. } => {
-                next += self.linear_road * Vector2::new(road.value(at), road.slope(at));
-            }
-            RoadPiece::Harmonic {
-                amplitude,
-                angular_frequency,
-            } => {
-                let (sin, cos) = crate::math::sin_cos(angular_frequency * at);
-                next += self.harmonic_road * Vector2::new(amplitude * sin, amplitude * cos);
-            }
-        }
+        next += super::operators::road_input(&self.linear_road, &self.harmonic_road, road, at);
         next
     }
 }

@@ -79,19 +79,30 @@ impl StepOperator {
         if let Some(p) = delayed {
             next += self.delayed_input * p;
         }
-        match *road {
-            RoadPiece::Linear { .. } => {
-                next += self.linear_road * Vector2::new(road.value(at), road.slope(at));
-            }
-            RoadPiece::Harmonic {
-                amplitude,
-                angular_frequency,
-            } => {
-                let (sin, cos) = crate::math::sin_cos(angular_frequency * at);
-                next += self.harmonic_road * Vector2::new(amplitude * sin, amplitude * cos);
-            }
-        }
+        next += road_input(&self.linear_road, &self.harmonic_road, road, at);
         next
+    }
+}
+
+/// The road's part of an exact step map starting at time `at`, for the
+/// rows `linear` (`Γ_l`, acting on `[x_g, x_g']` of a linear piece) and
+/// `harmonic` (`Γ_h`, acting on `A [sin ω at, cos ω at]`) of any state.
+#[inline]
+pub(super) fn road_input<const R: usize>(
+    linear: &SMatrix<f64, R, 2>,
+    harmonic: &SMatrix<f64, R, 2>,
+    road: &RoadPiece,
+    at: f64,
+) -> SMatrix<f64, R, 1> {
+    match *road {
+        RoadPiece::Linear { .. } => linear * Vector2::new(road.value(at), road.slope(at)),
+        RoadPiece::Harmonic {
+            amplitude,
+            angular_frequency,
+        } => {
+            let (sin, cos) = crate::math::sin_cos(angular_frequency * at);
+            harmonic * Vector2::new(amplitude * sin, amplitude * cos)
+        }
     }
 }
 

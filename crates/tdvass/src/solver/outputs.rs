@@ -101,6 +101,32 @@ pub struct Outputs {
     pub road_holding: Option<RoadHolding>,
 }
 
+impl Outputs {
+    /// The outputs every metrics level has, as numbers in a fixed order:
+    /// the reported state `[x_s, v_s, x_h, v_h, x_t, v_t]`, BA, SDD, TDD,
+    /// x_g, the control force, RMS of BA, SDD, TDD, and J.
+    pub fn core_values(&self) -> [f64; 15] {
+        let s = &self.state;
+        [
+            s[0],
+            s[1],
+            s[2],
+            s[3],
+            s[4],
+            s[5],
+            self.performance.body_acceleration,
+            self.performance.suspension_deflection,
+            self.performance.tire_deflection,
+            self.road_displacement,
+            self.control_force,
+            self.rms.body_acceleration,
+            self.rms.suspension_deflection,
+            self.rms.tire_deflection,
+            self.objective,
+        ]
+    }
+}
+
 /// First time derivatives of the outputs.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct OutputDerivatives {

@@ -3,19 +3,8 @@ use crate::road::RandomRoad;
 
 fn bits(sim: &mut Simulator) -> Vec<u64> {
     let o = sim.outputs();
-    let mut v: Vec<f64> = o.state.iter().copied().collect();
-    v.extend([
-        o.performance.body_acceleration,
-        o.performance.suspension_deflection,
-        o.performance.tire_deflection,
-        o.road_displacement,
-        o.control_force,
-        o.rms.body_acceleration,
-        o.rms.suspension_deflection,
-        o.rms.tire_deflection,
-        o.objective,
-        o.time,
-    ]);
+    let mut v = o.core_values().to_vec();
+    v.push(o.time);
     v.extend(sim.committed_state.iter().copied());
     v.extend(sim.rms.sums_of_squares);
     v.push(sim.rms.samples as f64);
