@@ -309,75 +309,150 @@ where
     bounds.validate()?;
     settings.validate()?;
 
-    let dim = bounds.dim();
-    let m = settings.particles;
-    let range: Vec<f64> = bounds
+    let v_max: Vec<f64> = bounds
         .upper
         .iter()
         .zip(&bounds.lower)
-        .map(|(hi, lo)| hi - lo)
+        .map(|(hi, lo)| settings.max_velocity_fraction * (hi - lo))
         .collect();
-    let v_max: Vec<f64> = range
-        .iter()
-        .map(|r| settings.max_velocity_fraction * r)
-        .collect();
-
     let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
 
-    // Step 1: random initial positions and velocities, drawn sequentially.
-    let mut positions: Vec<Vec<f64>> = Vec::with_capacity(m);
-    let mut velocities: Vec<Vec<f64>> = Vec::with_capacity(m);
-    for _ in 0..m {
+    // Steps 1 and 3: the random swarm, its fitness and its bests.
+    let (positions, velocities) = random_swarm(bounds, &v_max, settings.particles, &mut rng);
+    let values = evaluate(&objective, &positions);
+    let mut evaluations = settings.particles;
+    let mut swarm = Swarm::new(positions, velocities, values);
+
+    let mut history = Vec::with_capacity(settings.iterations);
+    for k in 0..settings.iterations {
+        swarm.fly(bounds, settings, &v_max, settings.inertia(k), &mut rng);
+        // Steps 2, 3 and 5: evaluate, then update the bests in particle order.
+        let values = evaluate(&objective, &swarm.positions);
+        evaluations += settings.particles;
+        swarm.update(&values);
+        history.push(swarm.global_val);
+        if let Some(report) = progress {
+            report(k + 1, swarm.global_val);
+        }
+    }
+
+    // Step 6: output the optimum.
+    if swarm.global.is_none() {
+        return Err(Error::Numerical {
+            what: "particle swarm optimisation",
+            reason: format!("no feasible candidate among {evaluations} evaluations"),
+        });
+    }
+    Ok(PsoResult {
+        best_position: swarm.global_pos,
+        best_value: swarm.global_val,
+        history,
+        evaluations,
+    })
+}
+
+/// Step 1: `particles` random positions, uniform in the bounds, and
+/// velocities, uniform in `±v_max`, drawn sequentially (for each particle
+/// and dimension: the position's number, then the velocity's).
+fn random_swarm(
+    bounds: &Bounds,
+    v_max: &[f64],
+    particles: usize,
+    rng: &mut ChaCha8Rng,
+) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
+    let dim = bounds.dim();
+    let mut positions: Vec<Vec<f64>> = Vec::with_capacity(particles);
+    let mut velocities: Vec<Vec<f64>> = Vec::with_capacity(particles);
+    for _ in 0..particles {
         let mut x = Vec::with_capacity(dim);
         let mut v = Vec::with_capacity(dim);
         for d in 0..dim {
+            let range = bounds.upper[d] - bounds.lower[d];
             let u: f64 = rng.random();
             // `lower + u * range` can round up to `upper` but never beyond it
             // in a way `clamp` would not fix.
-            x.push((bounds.lower[d] + u * range[d]).clamp(bounds.lower[d], bounds.upper[d]));
+            x.push((bounds.lower[d] + u * range).clamp(bounds.lower[d], bounds.upper[d]));
             let u: f64 = rng.random();
             v.push((2.0 * u - 1.0) * v_max[d]);
         }
         positions.push(x);
         velocities.push(v);
     }
+    (positions, velocities)
+}
 
-    // Step 3: fitness of the initial swarm, individual and global bests.
-    let values = evaluate(&objective, &positions);
-    let mut evaluations = m;
-    let mut personal_pos = positions.clone();
-    let mut personal_val = values;
-    let mut global: Option<usize> = None; // index into personal_* of the best
-    let mut global_val = f64::INFINITY;
-    let mut global_pos: Vec<f64> = Vec::new();
-    for (i, &val) in personal_val.iter().enumerate() {
-        if val < global_val {
-            global_val = val;
-            global = Some(i);
+/// The swarm between iterations: the particles, their own bests and the
+/// swarm's best.
+struct Swarm {
+    positions: Vec<Vec<f64>>,
+    velocities: Vec<Vec<f64>>,
+    personal_pos: Vec<Vec<f64>>,
+    personal_val: Vec<f64>,
+    /// Index into `personal_*` of the swarm's best (`None` while no value
+    /// is finite).
+    global: Option<usize>,
+    global_val: f64,
+    global_pos: Vec<f64>,
+}
+
+impl Swarm {
+    /// Step 3 on the first evaluation: every particle's best is where it
+    /// starts.
+    fn new(positions: Vec<Vec<f64>>, velocities: Vec<Vec<f64>>, values: Vec<f64>) -> Swarm {
+        let mut swarm = Swarm {
+            personal_pos: positions.clone(),
+            positions,
+            velocities,
+            personal_val: values,
+            global: None,
+            global_val: f64::INFINITY,
+            global_pos: Vec::new(),
+        };
+        swarm.choose_global();
+        swarm
+    }
+
+    /// The swarm's best among the particles' bests, in particle order
+    /// (the first of equal values stays).
+    fn choose_global(&mut self) {
+        let mut improved = false;
+        for (i, &val) in self.personal_val.iter().enumerate() {
+            if val < self.global_val {
+                self.global_val = val;
+                self.global = Some(i);
+                improved = true;
+            }
+        }
+        if improved && let Some(i) = self.global {
+            self.global_pos.clone_from(&self.personal_pos[i]);
         }
     }
-    if let Some(i) = global {
-        global_pos.clone_from(&personal_pos[i]);
-    }
 
-    let mut history = Vec::with_capacity(settings.iterations);
-    for k in 0..settings.iterations {
-        // Step 4: Eq. (7), random numbers drawn sequentially.
-        let w = settings.inertia(k);
-        for i in 0..m {
-            let x = &mut positions[i];
-            let v = &mut velocities[i];
-            let own_best = personal_val[i].is_finite();
-            let swarm_best = global.is_some();
-            for d in 0..dim {
+    /// Step 4: Eq. (7) with inertia `w`, the random numbers drawn
+    /// sequentially (r1, r2 for each particle and dimension); a particle
+    /// that would leave the bounds stops on them.
+    fn fly(
+        &mut self,
+        bounds: &Bounds,
+        settings: &PsoSettings,
+        v_max: &[f64],
+        w: f64,
+        rng: &mut ChaCha8Rng,
+    ) {
+        let swarm_best = self.global.is_some();
+        for i in 0..self.positions.len() {
+            let x = &mut self.positions[i];
+            let v = &mut self.velocities[i];
+            let own_best = self.personal_val[i].is_finite();
+            for d in 0..x.len() {
                 let r1: f64 = rng.random();
                 let r2: f64 = rng.random();
                 let mut vd = w * v[d];
                 if own_best {
-                    vd += settings.cognitive * r1 * (personal_pos[i][d] - x[d]);
+                    vd += settings.cognitive * r1 * (self.personal_pos[i][d] - x[d]);
                 }
                 if swarm_best {
-                    vd += settings.social * r2 * (global_pos[d] - x[d]);
+                    vd += settings.social * r2 * (self.global_pos[d] - x[d]);
                 }
                 vd = vd.clamp(-v_max[d], v_max[d]);
                 let xd = x[d] + vd;
@@ -393,47 +468,18 @@ where
                 }
             }
         }
+    }
 
-        // Steps 2, 3 and 5: evaluate, then update the bests in particle order.
-        let values = evaluate(&objective, &positions);
-        evaluations += m;
+    /// Steps 3 and 5: each particle's best, then the swarm's.
+    fn update(&mut self, values: &[f64]) {
         for (i, &val) in values.iter().enumerate() {
-            if val < personal_val[i] {
-                personal_val[i] = val;
-                personal_pos[i].clone_from(&positions[i]);
+            if val < self.personal_val[i] {
+                self.personal_val[i] = val;
+                self.personal_pos[i].clone_from(&self.positions[i]);
             }
         }
-        let mut improved = false;
-        for (i, &val) in personal_val.iter().enumerate() {
-            if val < global_val {
-                global_val = val;
-                global = Some(i);
-                improved = true;
-            }
-        }
-        if improved && let Some(i) = global {
-            global_pos.clone_from(&personal_pos[i]);
-        }
-
-        history.push(global_val);
-        if let Some(report) = progress {
-            report(k + 1, global_val);
-        }
+        self.choose_global();
     }
-
-    // Step 6: output the optimum.
-    if global.is_none() {
-        return Err(Error::Numerical {
-            what: "particle swarm optimisation",
-            reason: format!("no feasible candidate among {evaluations} evaluations"),
-        });
-    }
-    Ok(PsoResult {
-        best_position: global_pos,
-        best_value: global_val,
-        history,
-        evaluations,
-    })
 }
 
 #[cfg(test)]
