@@ -366,14 +366,13 @@ fn random_swarm(
     for _ in 0..particles {
         let mut x = Vec::with_capacity(dim);
         let mut v = Vec::with_capacity(dim);
-        for d in 0..dim {
-            let range = bounds.upper[d] - bounds.lower[d];
+        for ((&lower, &upper), &v_max) in bounds.lower.iter().zip(&bounds.upper).zip(v_max) {
             let u: f64 = rng.random();
             // `lower + u * range` can round up to `upper` but never beyond it
             // in a way `clamp` would not fix.
-            x.push((bounds.lower[d] + u * range).clamp(bounds.lower[d], bounds.upper[d]));
+            x.push((lower + u * (upper - lower)).clamp(lower, upper));
             let u: f64 = rng.random();
-            v.push((2.0 * u - 1.0) * v_max[d]);
+            v.push((2.0 * u - 1.0) * v_max);
         }
         positions.push(x);
         velocities.push(v);
