@@ -589,6 +589,16 @@ pub fn stability_map(
     tau_values: &[f64],
 ) -> Result<Vec<MapPoint>> {
     params.validate()?;
+    check_map_axes(g_values, tau_values)?;
+    let tau_max = tau_values.iter().copied().fold(0.0, f64::max);
+    let columns = in_parallel(g_values, "stability map", |g| {
+        map_column(params, g, tau_values, tau_max)
+    })?;
+    Ok(columns.into_iter().flatten().collect())
+}
+
+/// The map's axes: finite gains, finite delays >= 0.
+fn check_map_axes(g_values: &[f64], tau_values: &[f64]) -> Result<()> {
     for &tau in tau_values {
         if !(tau.is_finite() && tau >= 0.0) {
             return Err(Error::InvalidParameter {
@@ -607,53 +617,66 @@ pub fn stability_map(
             });
         }
     }
-    let tau_max = tau_values.iter().copied().fold(0.0, f64::max);
-    let column = |g: f64| -> Result<Vec<MapPoint>> {
-        let schedule = SwitchingSchedule::new(params, g, tau_max)?;
-        let solver = CharacteristicRootSolver::new(&Params { g, ..*params }, Variant::Tdvass)?;
-        let critical: Vec<(f64, f64)> = crossings(params, g)?
-            .iter()
-            .filter(|c| c.direction != 0)
-            .flat_map(|c| {
-                critical_delays(c, tau_max)
-                    .into_iter()
-                    .map(move |delay| (delay, c.omega))
-            })
-            .collect();
-        let mut tracker = RootTracker::new(&solver, critical);
-        let mut order: Vec<usize> = (0..tau_values.len()).collect();
-        order.sort_by(|&a, &b| tau_values[a].total_cmp(&tau_values[b]));
-        let mut abscissae = vec![f64::NAN; tau_values.len()];
-        for index in order {
-            abscissae[index] = tracker.spectral_abscissa(tau_values[index])?;
-        }
-        Ok(tau_values
-            .iter()
-            .zip(abscissae)
-            .map(|(&tau, spectral_abscissa)| MapPoint {
-                g,
-                tau,
-                stable: schedule.is_stable_at(tau),
-                spectral_abscissa,
-            })
-            .collect())
-    };
+    Ok(())
+}
+
+/// The map's points at gain g over `tau_values` (in their order): the
+/// crossing analysis for `stable`, the rightmost roots tracked over the
+/// delays in increasing order.
+fn map_column(params: &Params, g: f64, tau_values: &[f64], tau_max: f64) -> Result<Vec<MapPoint>> {
+    let schedule = SwitchingSchedule::new(params, g, tau_max)?;
+    let solver = CharacteristicRootSolver::new(&Params { g, ..*params }, Variant::Tdvass)?;
+    let critical: Vec<(f64, f64)> = crossings(params, g)?
+        .iter()
+        .filter(|c| c.direction != 0)
+        .flat_map(|c| {
+            critical_delays(c, tau_max)
+                .into_iter()
+                .map(move |delay| (delay, c.omega))
+        })
+        .collect();
+    let mut tracker = RootTracker::new(&solver, critical);
+    let mut order: Vec<usize> = (0..tau_values.len()).collect();
+    order.sort_by(|&a, &b| tau_values[a].total_cmp(&tau_values[b]));
+    let mut abscissae = vec![f64::NAN; tau_values.len()];
+    for index in order {
+        abscissae[index] = tracker.spectral_abscissa(tau_values[index])?;
+    }
+    Ok(tau_values
+        .iter()
+        .zip(abscissae)
+        .map(|(&tau, spectral_abscissa)| MapPoint {
+            g,
+            tau,
+            stable: schedule.is_stable_at(tau),
+            spectral_abscissa,
+        })
+        .collect())
+}
+
+/// `f` of every item, in order, computed on all available cores (std
+/// scoped threads taking the next item as they finish one); the first
+/// error in item order, or a worker's panic as an error of `what`.
+fn in_parallel<T: Send>(
+    items: &[f64],
+    what: &'static str,
+    f: impl Fn(f64) -> Result<T> + Sync,
+) -> Result<Vec<T>> {
     let workers = std::thread::available_parallelism()
         .map_or(1, |n| n.get())
-        .min(g_values.len().max(1));
+        .min(items.len().max(1));
     let next = std::sync::atomic::AtomicUsize::new(0);
-    let mut columns: Vec<Option<Result<Vec<MapPoint>>>> = vec![None; g_values.len()];
-    let finished: Vec<Vec<(usize, Result<Vec<MapPoint>>)>> = std::thread::scope(|scope| {
+    let finished: Vec<Vec<(usize, Result<T>)>> = std::thread::scope(|scope| {
         let handles: Vec<_> = (0..workers)
             .map(|_| {
                 scope.spawn(|| {
                     let mut done = Vec::new();
                     loop {
                         let index = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                        if index >= g_values.len() {
+                        if index >= items.len() {
                             break done;
                         }
-                        done.push((index, column(g_values[index])));
+                        done.push((index, f(items[index])));
                     }
                 })
             })
@@ -665,7 +688,7 @@ pub fn stability_map(
                     vec![(
                         usize::MAX,
                         Err(Error::Numerical {
-                            what: "stability map",
+                            what,
                             reason: "a worker thread panicked".to_string(),
                         }),
                     )]
@@ -673,26 +696,25 @@ pub fn stability_map(
             })
             .collect()
     });
+    let mut results: Vec<Option<Result<T>>> = (0..items.len()).map(|_| None).collect();
     for (index, result) in finished.into_iter().flatten() {
         if index == usize::MAX {
             result?;
         } else {
-            columns[index] = Some(result);
+            results[index] = Some(result);
         }
     }
-    let mut points = Vec::with_capacity(g_values.len() * tau_values.len());
-    for column in columns {
-        match column {
-            Some(result) => points.extend(result?),
-            None => {
-                return Err(Error::Numerical {
-                    what: "stability map",
-                    reason: "a gain column was not computed".to_string(),
-                });
-            }
-        }
-    }
-    Ok(points)
+    results
+        .into_iter()
+        .map(|result| {
+            result.unwrap_or_else(|| {
+                Err(Error::Numerical {
+                    what,
+                    reason: "an item was not computed".to_string(),
+                })
+            })
+        })
+        .collect()
 }
 
 #[cfg(test)]
