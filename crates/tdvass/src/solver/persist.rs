@@ -157,6 +157,58 @@ fn read_config(r: &mut ByteReader) -> Result<SimulationConfig> {
     })
 }
 
+/// The internal step bound a saved simulator keeps, within the range the
+/// step choice can give for `config`.
+fn read_step_bound(r: &mut ByteReader, config: &SimulationConfig) -> Result<f64> {
+    let step_bound = r.f64()?;
+    let floor = if config.max_internal_step > 0.0 {
+        accuracy::SMALLEST_STEP.min(config.max_internal_step)
+    } else {
+        accuracy::SMALLEST_STEP
+    };
+    if !(step_bound >= floor && step_bound <= accuracy::LARGEST_STEP) {
+        return Err(Error::InvalidState(format!(
+            "internal step bound {step_bound} s outside [{floor}, {}] s",
+            accuracy::LARGEST_STEP
+        )));
+    }
+    Ok(step_bound)
+}
+
+/// The road-holding accumulators and the flight in progress.
+fn read_holding(r: &mut ByteReader) -> Result<Holding> {
+    let optional_time = |r: &mut ByteReader, what: &str| -> Result<Option<f64>> {
+        match r.u64()? {
+            0 => Ok(None),
+            1 => Ok(Some(r.f64()?)),
+            other => Err(Error::InvalidState(format!("{what} tag {other}"))),
+        }
+    };
+    Ok(Holding {
+        max_deflection: r.f64()?,
+        lost_steps: r.u64()?,
+        lost_time: r.f64()?,
+        first_loss: optional_time(r, "first contact loss")?,
+        lift_offs: r.u64()?,
+        flight_start: optional_time(r, "flight")?,
+    })
+}
+
+/// The road's dynamic state (random road position and nodes, external
+/// input).
+fn read_road_state(r: &mut ByteReader) -> Result<RoadState> {
+    let mut road = RoadState {
+        word_position: r.u128()?,
+        first_node: r.u64()?,
+        nodes: r.f64s(1 << 28)?,
+        input: None,
+    };
+    if r.u64()? == 1 {
+        road.input = Some((r.f64()?, r.f64()?, r.f64()?));
+    }
+    Ok(road)
+}
+
 impl Simulator {
     /// Encodes the whole simulator.
     pub fn to_bytes(&self) -> Vec<u8> {
@@ -250,95 +302,14 @@ impl Simulator {
             )));
         }
         let config = read_config(&mut r)?;
-        let step_bound = r.f64()?;
-        let floor = if config.max_internal_step > 0.0 {
-            accuracy::SMALLEST_STEP.min(config.max_internal_step)
-        } else {
-            accuracy::SMALLEST_STEP
-        };
-        if !(step_bound >= floor && step_bound <= accuracy::LARGEST_STEP) {
-            return Err(Error::InvalidState(format!(
-                "internal step bound {step_bound} s outside [{floor}, {}] s",
-                accuracy::LARGEST_STEP
-            )));
-        }
+        let step_bound = read_step_bound(&mut r, &config)?;
         let mut sim = Simulator::with_step_bound(config, step_bound)?;
-        sim.grid_index = r.u64()?;
-        sim.committed_time = r.f64()?;
-        for v in sim.committed_state.iter_mut() {
-            *v = r.f64()?;
-        }
-        sim.current_time = r.f64()?;
-        for v in sim.current_state.iter_mut() {
-            *v = r.f64()?;
-        }
-        let flat = r.f64s(2 * super::MAX_HISTORY_NODES + 2)?;
-        if flat.len() != 2 * sim.history.len() {
-            return Err(Error::InvalidState(format!(
-                "history of {} values where {} were expected",
-                flat.len(),
-                2 * sim.history.len()
-            )));
-        }
-        for (slot, pair) in sim.history.iter_mut().zip(flat.chunks(2)) {
-            *slot = [pair[0], pair[1]];
-        }
-        let mut rms = RunningRms::default();
-        for v in rms.sums_of_squares.iter_mut() {
-            *v = r.f64()?;
-        }
-        rms.samples = r.u64()?;
-        sim.rms = rms;
-        for v in sim.integral.closed.iter_mut() {
-            *v = r.f64()?;
-        }
-        sim.integral.anchor_index = r.u64()?;
-        sim.integral.anchor_time = r.f64()?;
-        for v in sim.integral.anchor.value.iter_mut() {
-            *v = r.f64()?;
-        }
-        for v in sim.integral.anchor.rate.iter_mut() {
-            *v = r.f64()?;
-        }
-        for v in sim.weighted.iter_mut() {
-            *v = r.f64()?;
-        }
-        for v in sim.committed_filter.iter_mut() {
-            *v = r.f64()?;
-        }
+        sim.read_trajectory(&mut r)?;
+        sim.read_accumulators(&mut r)?;
         let initial_holding = sim.holding;
-        sim.holding = Holding {
-            max_deflection: r.f64()?,
-            lost_steps: r.u64()?,
-            lost_time: r.f64()?,
-            first_loss: match r.u64()? {
-                0 => None,
-                1 => Some(r.f64()?),
-                other => {
-                    return Err(Error::InvalidState(format!(
-                        "first contact loss tag {other}"
-                    )));
-                }
-            },
-            lift_offs: r.u64()?,
-            flight_start: match r.u64()? {
-                0 => None,
-                1 => Some(r.f64()?),
-                other => {
-                    return Err(Error::InvalidState(format!("flight tag {other}")));
-                }
-            },
-        };
+        sim.holding = read_holding(&mut r)?;
         sim.enter_recorded_mode();
-        let mut road = RoadState {
-            word_position: r.u128()?,
-            first_node: r.u64()?,
-            nodes: r.f64s(1 << 28)?,
-            input: None,
-        };
-        if r.u64()? == 1 {
-            road.input = Some((r.f64()?, r.f64()?, r.f64()?));
-        }
+        let road = read_road_state(&mut r)?;
         if !r.is_empty() {
             return Err(Error::InvalidState("trailing bytes".into()));
         }
@@ -364,6 +335,61 @@ impl Simulator {
         sim.road
             .restore_dynamic_state(&road, sim.committed_time, horizon)?;
         Ok(sim)
+    }
+
+    /// The grid node, the committed and current points and the delay
+    /// history, as [`Self::to_bytes`] wrote them.
+    fn read_trajectory(&mut self, r: &mut ByteReader) -> Result<()> {
+        self.grid_index = r.u64()?;
+        self.committed_time = r.f64()?;
+        for v in self.committed_state.iter_mut() {
+            *v = r.f64()?;
+        }
+        self.current_time = r.f64()?;
+        for v in self.current_state.iter_mut() {
+            *v = r.f64()?;
+        }
+        let flat = r.f64s(2 * super::MAX_HISTORY_NODES + 2)?;
+        if flat.len() != 2 * self.history.len() {
+            return Err(Error::InvalidState(format!(
+                "history of {} values where {} were expected",
+                flat.len(),
+                2 * self.history.len()
+            )));
+        }
+        for (slot, pair) in self.history.iter_mut().zip(flat.chunks(2)) {
+            *slot = [pair[0], pair[1]];
+        }
+        Ok(())
+    }
+
+    /// The RMS sums, the time integral with its anchor, the a_w sums and
+    /// the filter state, as [`Self::to_bytes`] wrote them.
+    fn read_accumulators(&mut self, r: &mut ByteReader) -> Result<()> {
+        let mut rms = RunningRms::default();
+        for v in rms.sums_of_squares.iter_mut() {
+            *v = r.f64()?;
+        }
+        rms.samples = r.u64()?;
+        self.rms = rms;
+        for v in self.integral.closed.iter_mut() {
+            *v = r.f64()?;
+        }
+        self.integral.anchor_index = r.u64()?;
+        self.integral.anchor_time = r.f64()?;
+        for v in self.integral.anchor.value.iter_mut() {
+            *v = r.f64()?;
+        }
+        for v in self.integral.anchor.rate.iter_mut() {
+            *v = r.f64()?;
+        }
+        for v in self.weighted.iter_mut() {
+            *v = r.f64()?;
+        }
+        for v in self.committed_filter.iter_mut() {
+            *v = r.f64()?;
+        }
+        Ok(())
     }
 
     /// The RMS accumulators of [`Simulator::from_bytes`]: one sample per
