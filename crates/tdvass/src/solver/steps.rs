@@ -4,11 +4,13 @@
 //! their share of the RMS time integral.
 
 use super::filter::Filter;
+use super::holding::Holding;
 use super::kernel::{
     HarmonicPhase, HotState, LinearPiece, Segment, SegmentEnd, run_segment, within_bounds,
 };
 use super::{PHASE_ANCHOR, Simulator};
 use crate::error::Result;
+use crate::metrics::RunningRms;
 use crate::model::{State, V_T, X_T};
 use crate::road::{RoadPiece, RoadSpec};
 
@@ -136,6 +138,13 @@ impl Simulator {
         }
     }
 
+    /// [`Self::whole_steps`] on piecewise-linear roads: runs of the hot
+    /// loop inside each road piece, the node at a piece's end closing the
+    /// RMS run, and [`Self::split_step`] for a step that a breakpoint
+    /// splits. It stays one function on purpose: the run's state (state,
+    /// filter state, sums, road holding, ring slot) lives in locals from
+    /// one run of the loop to the next, which the AVX2 build keeps in
+    /// registers.
     #[inline(always)]
     pub(super) fn whole_steps_with_body<const DELAY: bool>(&mut self, last: u64) -> Result<bool> {
         let m = self.grid.delay_steps();
@@ -259,58 +268,85 @@ impl Simulator {
                 // may lift off inside it: the caller integrates it.
                 break Ok(true);
             }
-            // A step that a road breakpoint splits: the RMS run closes at
-            // its start, and the step is integrated piece by piece.
-            let next_slot = if slot + 1 == len { 0 } else { slot + 1 };
-            let node = State::from(x);
-            let node_filter = Filter::from(w);
-            let piece_at_start = self.piece_from(t);
-            self.close_run_at_node(
+            // A step that a road breakpoint splits.
+            match self.split_step(
                 k,
-                t,
-                &node,
-                &node_filter,
-                &mut rms,
-                &mut weighted,
-                &piece_at_start,
-                &piece_at_start,
-            );
-            let anchor = self.integral.anchor;
-            let mut step_holding = holding;
-            let (x_end, w_end, step_integral, at_end, last_piece) =
-                self.integrate_split_step(k, t, node, node_filter, anchor, to, &mut step_holding);
-            let x_next: [f64; 6] = x_end.into();
-            if (k + 1).is_multiple_of(PHASE_ANCHOR) {
-                self.road.release_before(t);
+                (t, to),
+                (x, w),
+                slot,
+                (&mut rms, &mut weighted),
+                &mut holding,
+            ) {
+                Ok((x_next, w_next, piece_next)) => {
+                    piece_at_node = Some(piece_next);
+                    (x, w) = (x_next, w_next);
+                    slot = if slot + 1 == len { 0 } else { slot + 1 };
+                    k += 1;
+                }
+                Err(e) => break Err(e),
             }
-            let piece_next = self.road.piece(to);
-            piece_at_node = Some(piece_next);
-            if !within_bounds(&x_next)
-                && let Err(e) = self.check_divergence(to, &State::from(x_next))
-            {
-                break Err(e);
-            }
-            self.history[slot] = [x_next[X_T], x_next[V_T]];
-            if self.config.metrics.road_holding() {
-                holding = step_holding;
-                holding.add_node(&x_next);
-            }
-            self.restart_run_after_step(
-                k + 1,
-                (to, &x_end, &w_end),
-                step_integral,
-                (at_end, last_piece),
-            );
-            w = w_end.into();
-            x = x_next;
-            slot = next_slot;
-            k += 1;
         };
         self.rms = rms;
         self.weighted = weighted;
         self.holding = holding;
         self.set_committed_node(first, k, x, w);
         result
+    }
+
+    /// A step of the whole-step loop that a road breakpoint splits, from
+    /// node k at t (state and filter state `node`) to node k + 1 at `to`:
+    /// the open run (`sums`: its RMS and a_w sums) closes at node k, the
+    /// step is integrated piece by piece, node k + 1 goes into the history
+    /// ring at `slot` and starts the next run. Returns node k + 1's state,
+    /// filter state and road piece; a state out of bounds is an error.
+    #[cold]
+    #[inline(never)]
+    fn split_step(
+        &mut self,
+        k: u64,
+        (t, to): (f64, f64),
+        (x, w): ([f64; 6], [f64; 8]),
+        slot: usize,
+        (rms, weighted): (&mut RunningRms, &mut [f64; 2]),
+        holding: &mut Holding,
+    ) -> Result<([f64; 6], [f64; 8], RoadPiece)> {
+        let node = State::from(x);
+        let node_filter = Filter::from(w);
+        let piece_at_start = self.piece_from(t);
+        self.close_run_at_node(
+            k,
+            t,
+            &node,
+            &node_filter,
+            rms,
+            weighted,
+            &piece_at_start,
+            &piece_at_start,
+        );
+        let anchor = self.integral.anchor;
+        let mut step_holding = *holding;
+        let (x_end, w_end, step_integral, at_end, last_piece) =
+            self.integrate_split_step(k, t, node, node_filter, anchor, to, &mut step_holding);
+        let x_next: [f64; 6] = x_end.into();
+        if (k + 1).is_multiple_of(PHASE_ANCHOR) {
+            self.road.release_before(t);
+        }
+        let piece_next = self.road.piece(to);
+        if !within_bounds(&x_next) {
+            self.check_divergence(to, &State::from(x_next))?;
+        }
+        self.history[slot] = [x_next[X_T], x_next[V_T]];
+        if self.config.metrics.road_holding() {
+            *holding = step_holding;
+            holding.add_node(&x_next);
+        }
+        self.restart_run_after_step(
+            k + 1,
+            (to, &x_end, &w_end),
+            step_integral,
+            (at_end, last_piece),
+        );
+        Ok((x_next, w_end.into(), piece_next))
     }
 
     /// The largest node index `n` in `[k, last]` such that the nodes
