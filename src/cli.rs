@@ -354,52 +354,7 @@ fn simulate_command(a: SimulateArgs) -> Result<String> {
     a.run.warn_past_road_end(&road);
     let mut progress = SimulationProgress::new(duration);
     if let Some(path) = &a.output {
-        if !(a.output_interval.is_finite() && a.output_interval > 0.0) {
-            return Err(Error::InvalidParameter {
-                name: "output_interval",
-                value: a.output_interval,
-                reason: "must be finite and > 0",
-            });
-        }
-        let file = std::fs::File::create(path).map_err(|e| io_error("creating", path, &e))?;
-        let mut csv = std::io::BufWriter::new(file);
-        let write_error = |e: std::io::Error| io_error("writing", path, &e);
-        writeln!(
-            csv,
-            "time,x_s,v_s,x_h,v_h,x_t,v_t,body_acceleration,suspension_deflection,tire_deflection,road_displacement,control_force,weighted_body_acceleration,dynamic_tire_load,contact_loss_time,max_suspension_deflection,lift_off_count"
-        )
-        .map_err(write_error)?;
-        let rows = (duration / a.output_interval).floor() as u64;
-        for i in 0..=rows {
-            sim.advance_to((i as f64 * a.output_interval).min(duration))?;
-            let o = sim.outputs();
-            let s = o.state;
-            let (comfort, holding) = metric_outputs(&o);
-            writeln!(
-                csv,
-                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-                o.time,
-                s[0],
-                s[1],
-                s[2],
-                s[3],
-                s[4],
-                s[5],
-                o.performance.body_acceleration,
-                o.performance.suspension_deflection,
-                o.performance.tire_deflection,
-                o.road_displacement,
-                o.control_force,
-                comfort.weighted_body_acceleration,
-                o.dynamic_tire_load,
-                holding.contact_loss_time,
-                holding.max_suspension_deflection,
-                holding.lift_off_count
-            )
-            .map_err(write_error)?;
-            progress.update(o.time);
-        }
-        csv.flush().map_err(write_error)?;
+        write_history(&mut sim, path, a.output_interval, duration, &mut progress)?;
     }
     let mut time = sim.time();
     while time < duration {
@@ -409,8 +364,7 @@ fn simulate_command(a: SimulateArgs) -> Result<String> {
     }
     sim.advance_to(duration)?;
     progress.finish();
-    let o = sim.outputs();
-    let (comfort, holding) = metric_outputs(&o);
+    let (_, holding) = metric_outputs(&sim.outputs());
     let unilateral = sim.config().tire_contact.is_unilateral();
     // The unilateral tire models the lift-offs (counted in the results);
     // the bilateral one leaves its model there.
@@ -420,6 +374,77 @@ fn simulate_command(a: SimulateArgs) -> Result<String> {
             loss.time, loss.dynamic_tire_load, loss.static_load, holding.contact_loss_time
         );
     }
+    simulate_report(&a, &mut sim, variant, &params, duration)
+}
+
+/// Writes the time histories of `simulate --output` to `path`, a row every
+/// `interval` s up to `duration`, advancing `sim` there.
+fn write_history(
+    sim: &mut Simulator,
+    path: &str,
+    interval: f64,
+    duration: f64,
+    progress: &mut SimulationProgress,
+) -> Result<()> {
+    if !(interval.is_finite() && interval > 0.0) {
+        return Err(Error::InvalidParameter {
+            name: "output_interval",
+            value: interval,
+            reason: "must be finite and > 0",
+        });
+    }
+    let file = std::fs::File::create(path).map_err(|e| io_error("creating", path, &e))?;
+    let mut csv = std::io::BufWriter::new(file);
+    let write_error = |e: std::io::Error| io_error("writing", path, &e);
+    writeln!(
+        csv,
+        "time,x_s,v_s,x_h,v_h,x_t,v_t,body_acceleration,suspension_deflection,tire_deflection,road_displacement,control_force,weighted_body_acceleration,dynamic_tire_load,contact_loss_time,max_suspension_deflection,lift_off_count"
+    )
+    .map_err(write_error)?;
+    let rows = (duration / interval).floor() as u64;
+    for i in 0..=rows {
+        sim.advance_to((i as f64 * interval).min(duration))?;
+        let o = sim.outputs();
+        let s = o.state;
+        let (comfort, holding) = metric_outputs(&o);
+        writeln!(
+            csv,
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            o.time,
+            s[0],
+            s[1],
+            s[2],
+            s[3],
+            s[4],
+            s[5],
+            o.performance.body_acceleration,
+            o.performance.suspension_deflection,
+            o.performance.tire_deflection,
+            o.road_displacement,
+            o.control_force,
+            comfort.weighted_body_acceleration,
+            o.dynamic_tire_load,
+            holding.contact_loss_time,
+            holding.max_suspension_deflection,
+            holding.lift_off_count
+        )
+        .map_err(write_error)?;
+        progress.update(o.time);
+    }
+    csv.flush().map_err(write_error)?;
+    Ok(())
+}
+
+/// The answer of `simulate` at the end of the run: JSON, or a short text.
+fn simulate_report(
+    a: &SimulateArgs,
+    sim: &mut Simulator,
+    variant: tdvass::Variant,
+    params: &tdvass::Params,
+    duration: f64,
+) -> Result<String> {
+    let o = sim.outputs();
+    let (comfort, holding) = metric_outputs(&o);
     let reaction = tdvass::comfort::comfort_reaction(comfort.rms_weighted_body_acceleration)?;
     if a.json {
         let mut value = json!({
