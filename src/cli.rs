@@ -549,16 +549,7 @@ fn optimize_command(a: OptimizeArgs) -> Result<String> {
         seed: a.seed,
         ..PsoSettings::default()
     };
-    let bar = indicatif::ProgressBar::new(a.iterations as u64);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(match problem.objective {
-            Objective::Paper => "{bar:40} {pos}/{len} iterations, best J {msg} [{elapsed_precise}]",
-            Objective::Comfort { .. } => {
-                "{bar:40} {pos}/{len} iterations, best score {msg} [{elapsed_precise}]"
-            }
-        })
-        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
+    let bar = iteration_bar(a.iterations, problem.objective);
     let progress = |iteration: usize, best: f64| {
         bar.set_position(iteration as u64);
         bar.set_message(format!("{best:.6}"));
@@ -594,6 +585,40 @@ fn optimize_command(a: OptimizeArgs) -> Result<String> {
     if a.json {
         return Ok(value.to_string());
     }
+    Ok(optimize_text(
+        target,
+        &a.run.road_note(),
+        &problem,
+        &report,
+        evaluation,
+    ))
+}
+
+/// The progress bar of an optimisation: iterations, and the best J or
+/// score so far.
+fn iteration_bar(iterations: usize, objective: Objective) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(iterations as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(match objective {
+            Objective::Paper => "{bar:40} {pos}/{len} iterations, best J {msg} [{elapsed_precise}]",
+            Objective::Comfort { .. } => {
+                "{bar:40} {pos}/{len} iterations, best score {msg} [{elapsed_precise}]"
+            }
+        })
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar
+}
+
+/// The text answer of `optimize`: the best point, the comfort objective's
+/// evaluation of it, and the paper's points.
+fn optimize_text(
+    target: Target,
+    road_note: &str,
+    problem: &Problem,
+    report: &tdvass::analysis::optimize::Report,
+    evaluation: Option<tdvass::analysis::optimize::ComfortEvaluation>,
+) -> String {
     let names = target.parameter_names();
     let mut out = format!(
         "{} optimisation on the {}, {} tire\n",
@@ -601,7 +626,7 @@ fn optimize_command(a: OptimizeArgs) -> Result<String> {
             Target::Absorber => "absorber",
             Target::Controller => "controller",
         },
-        a.run.road_note(),
+        road_note,
         problem.base.tire_contact.name()
     );
     let score = match problem.objective {
@@ -643,7 +668,7 @@ fn optimize_command(a: OptimizeArgs) -> Result<String> {
             p.label, names[0], p.position[0], names[1], p.position[1]
         );
     }
-    Ok(out)
+    out
 }
 
 /// Entry point of the `tdvass` binary.
