@@ -96,6 +96,18 @@ fn all_platforms_pack_linux64_and_win64_for_fmi2_and_all_three_for_fmi3() {
         platforms[2].built_path(Path::new("t"), "tdvass_fmi2"),
         Path::new("t/aarch64-unknown-linux-gnu/release/libtdvass_fmi2.so")
     );
+    // The Linux libraries are linked by zig against the glibc floor, so the
+    // x86-64 one is a cross build too (cargo-zigbuild writes it under the
+    // triple without the glibc suffix).
+    assert_eq!(
+        platforms[0].built_path(Path::new("t"), "tdvass_fmi3"),
+        Path::new("t/x86_64-unknown-linux-gnu/release/libtdvass_fmi3.so")
+    );
+    let floors: Vec<Option<&str>> = platforms.iter().map(|p| p.glibc).collect();
+    assert_eq!(floors, [Some("2.17"), None, Some("2.17")]);
+    // The host-only build keeps the host's own toolchain.
+    let host = host_platform("linux", "x86_64").unwrap();
+    assert_eq!((host.cross_target, host.glibc), (None, None));
     assert_eq!(
         platforms[1].built_path(Path::new("t"), "tdvass_fmi3"),
         Path::new("t/x86_64-pc-windows-gnu/release/tdvass_fmi3.dll")
@@ -152,6 +164,11 @@ fn cross_linkers_match_the_cargo_configuration() {
         let Some(triple) = platform.cross_target else {
             continue;
         };
+        if platform.glibc.is_some() {
+            // zig links it (cargo-zigbuild sets the linker itself).
+            assert!(platform.requirements.is_empty(), "{}", platform.label);
+            continue;
+        }
         let section = config
             .split("\n[")
             .find(|s| s.starts_with(&format!("target.{triple}]")))
@@ -178,6 +195,7 @@ fn missing_targets_and_toolchains_are_named_with_their_install_command() {
             file: "no-such-linker-gcc",
             debian_package: "gcc-no-such",
         }],
+        glibc: None,
     };
     let missing = missing_requirements(&workspace_root(), &[platform]);
     assert_eq!(missing.len(), 2, "{missing:?}");
@@ -214,4 +232,14 @@ fn binary_formats_are_read_from_the_headers() {
     );
     assert_eq!(BinaryFormat::of(b"MZ"), None);
     assert_eq!(BinaryFormat::of(b""), None);
+}
+
+#[test]
+fn missing_zig_is_named_with_the_python_set_that_installs_it() {
+    let nowhere = std::env::temp_dir().join("fmu-build-test-no-venv");
+    let empty_path = std::ffi::OsString::new();
+    let error = ZigTools::find_in(&nowhere, Some(&empty_path)).unwrap_err();
+    assert!(error.contains("cargo-zigbuild"), "{error}");
+    assert!(error.contains("tests/python_env.sh build"), "{error}");
+    assert!(error.contains(GLIBC_FLOOR), "{error}");
 }
