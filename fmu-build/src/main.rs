@@ -29,7 +29,11 @@
 //!
 //! The descriptions and documentation come from the libraries
 //! ([`tdvass_fmi2::description`], [`tdvass_fmi3::description`]), generated
-//! from the variable table.
+//! from the variable table. Besides them each FMU carries the reference
+//! results of its default experiment ([`reference`], FMI-LS-REF). Every
+//! entry is written
+//! in a fixed order with a fixed time stamp and mode, so that two builds of
+//! the same sources give byte-identical FMUs.
 
 use std::fs;
 use std::io::{Read, Write};
@@ -37,9 +41,11 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
 use tdvass_fmi2::MODEL_IDENTIFIER;
 use tdvass_fmi2::markdown::{BEGIN_MARKER, END_MARKER, splice_into};
+use tdvass_fmu::slave::Dialect;
 use zip::write::SimpleFileOptions;
 use zip::{CompressionMethod, DateTime, ZipArchive, ZipWriter};
 
+mod reference;
 mod zig;
 
 use zig::GLIBC_FLOOR;
@@ -76,6 +82,10 @@ struct Fmu {
     /// How the description identifies the interface (`GUID ...`,
     /// `instantiationToken ...`), for messages.
     identity: String,
+    /// The front-end's dialect of the slave (for the reference results).
+    dialect: Dialect,
+    /// The GUID or instantiation token the slave's states carry.
+    token: String,
 }
 
 impl Fmu {
@@ -91,6 +101,8 @@ impl Fmu {
                 description: tdvass_fmi2::description::model_description_xml(),
                 documentation: tdvass_fmi2::description::documentation_html(),
                 identity: format!("GUID {}", tdvass_fmi2::guid()),
+                dialect: tdvass_fmi2::instance::FMI2_DIALECT,
+                token: tdvass_fmi2::guid(),
             },
             Fmu {
                 version: FmiVersion::Fmi3,
@@ -101,6 +113,8 @@ impl Fmu {
                 description: tdvass_fmi3::description::model_description_xml(),
                 documentation: tdvass_fmi3::description::documentation_html(),
                 identity: format!("instantiationToken {}", tdvass_fmi3::instantiation_token()),
+                dialect: tdvass_fmi3::instance::FMI3_DIALECT,
+                token: tdvass_fmi3::instantiation_token(),
             },
         ]
     }
@@ -653,19 +667,39 @@ fn check_only(root: &Path, fmus: &[Fmu]) -> Result<()> {
     Ok(())
 }
 
-/// Writes `fmu` with `binaries` (path in the archive, bytes) into
-/// `out_dir`, and returns its path.
-fn pack(out_dir: &Path, fmu: &Fmu, binaries: &[(String, Vec<u8>)]) -> Result<PathBuf> {
+/// Every file of `fmu` but its binaries, in the order of the archive:
+/// (path, content). The reference results are `results` (CSV).
+fn fixed_entries(fmu: &Fmu, results: &str) -> Vec<(String, Vec<u8>)> {
+    vec![
+        (
+            "documentation/index.html".to_string(),
+            fmu.documentation.as_bytes().to_vec(),
+        ),
+        (
+            reference::manifest_entry(),
+            reference::manifest_xml().into_bytes(),
+        ),
+        (reference::csv_entry(), results.as_bytes().to_vec()),
+    ]
+}
+
+/// Writes `fmu` with `binaries` (path in the archive, bytes) and the
+/// reference `results` into `out_dir`, and returns its path.
+fn pack(
+    out_dir: &Path,
+    fmu: &Fmu,
+    binaries: &[(String, Vec<u8>)],
+    results: &str,
+) -> Result<PathBuf> {
     let mut entries: Vec<(&str, &[u8], u32)> =
         vec![("modelDescription.xml", fmu.description.as_bytes(), 0o644)];
     for (name, bytes) in binaries {
         entries.push((name.as_str(), bytes, 0o755));
     }
-    entries.push((
-        "documentation/index.html",
-        fmu.documentation.as_bytes(),
-        0o644,
-    ));
+    let fixed = fixed_entries(fmu, results);
+    for (name, bytes) in &fixed {
+        entries.push((name.as_str(), bytes, 0o644));
+    }
     let path = out_dir.join(fmu.file_name);
     // Written beside, checked, then renamed: an interrupted run never leaves
     // a truncated FMU under the final name.
@@ -697,6 +731,14 @@ fn build(root: &Path, fmus: &[Fmu], platforms: &[Platform]) -> Result<()> {
     } else {
         None
     };
+    // The reference results first: they need no build, and a failure
+    // stops before the long part.
+    let mut results = Vec::new();
+    for fmu in fmus {
+        let csv = reference::results_csv(fmu.dialect, fmu.token.clone())
+            .map_err(|e| format!("the reference results of the {} FMU: {e}", fmu.label()))?;
+        results.push(csv);
+    }
     // Every library is built before anything is packed: a failed build
     // leaves no FMU with some of its platforms.
     let mut binaries: Vec<Vec<(String, Vec<u8>)>> = vec![Vec::new(); fmus.len()];
@@ -720,8 +762,8 @@ fn build(root: &Path, fmus: &[Fmu], platforms: &[Platform]) -> Result<()> {
     fs::create_dir_all(&out_dir)
         .map_err(|e| format!("cannot create {}: {e}", out_dir.display()))?;
     let mut written = Vec::new();
-    for (fmu, packed) in fmus.iter().zip(&binaries) {
-        written.push(pack(&out_dir, fmu, packed)?);
+    for ((fmu, packed), csv) in fmus.iter().zip(&binaries).zip(&results) {
+        written.push(pack(&out_dir, fmu, packed, csv)?);
     }
     let mut refreshed = Vec::new();
     for copy in checked_in(root, fmus)? {

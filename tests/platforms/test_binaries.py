@@ -69,6 +69,8 @@ def test_fmu_holds_linux64_and_win64_and_nothing_for_tests(fmu):
         "binaries/linux64/tdvass.so",
         "binaries/win64/tdvass.dll",
         "documentation/index.html",
+        "extra/org.fmi-standard.fmi-ls-ref/fmi-ls-manifest.xml",
+        "extra/org.fmi-standard.fmi-ls-ref/tdvass_out.csv",
         "modelDescription.xml",
     ]
 

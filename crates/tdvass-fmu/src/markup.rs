@@ -18,6 +18,11 @@ pub const MODEL_DESCRIPTION: &str = "Quarter-car suspension with an annular vibr
 /// The style sheet of the documentation pages.
 const STYLE: &str = "body{font-family:sans-serif;max-width:70em;margin:auto;padding:1em}table{border-collapse:collapse}td,th{border:1px solid #bbb;padding:0.2em 0.5em;text-align:left;vertical-align:top}";
 
+/// What the documentation says of the reference results every FMU carries
+/// (fmu-build writes them and checks that this paragraph names their file
+/// and interval).
+pub const REFERENCE_RESULTS: &str = "Reference results (the layered standard FMI-LS-REF): extra/org.fmi-standard.fmi-ls-ref/tdvass_out.csv, named by fmi-ls-manifest.xml beside it, holds every Real output of the default experiment every 0.05 s (time in the first column), computed when the FMU was built by the same slave its binaries wrap. A master that runs the default experiment with communication steps of 0.05 s reproduces every column to within 1e-12 of its largest absolute value.";
+
 /// Short number formatting: Rust's shortest round-trip representation.
 pub fn number(v: f64) -> String {
     format!("{v}")

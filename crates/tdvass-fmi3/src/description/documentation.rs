@@ -8,7 +8,8 @@ use crate::{
     MODEL_NAME, instantiation_token,
 };
 use tdvass_fmu::markup::{
-    MODEL_DESCRIPTION, XmlResult, XmlWriter, html_page, list, paragraph, table, text_element,
+    MODEL_DESCRIPTION, REFERENCE_RESULTS, XmlResult, XmlWriter, html_page, list, paragraph, table,
+    text_element,
 };
 use tdvass_fmu::variables::{ALL_VARIABLES, Causality, Dimension, Variable};
 
@@ -200,6 +201,7 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
             "startTime {DEFAULT_START_TIME} s, stopTime {DEFAULT_STOP_TIME} s, stepSize {DEFAULT_STEP_SIZE} s. With the start values (TDVASS, g = 5386 N/m, tau = 0.2 ms, harmonic road 0.05 sin 5t, from rest) the running RMS outputs at t = 15 s reproduce the TDVASS row of the paper's Table 2: BA 0.3068 m/s2, SDD 0.0388 m, TDD 0.6251 mm; variant = CS and PVASS give the other rows."
         ),
     )?;
+    paragraph(w, REFERENCE_RESULTS)?;
 
     text_element(w, "h2", "Logging")?;
     let categories: Vec<String> = LOG_CATEGORIES
