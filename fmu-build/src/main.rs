@@ -29,9 +29,11 @@
 //!
 //! The descriptions and documentation come from the libraries
 //! ([`tdvass_fmi2::description`], [`tdvass_fmi3::description`]), generated
-//! from the variable table. Besides them each FMU carries the reference
-//! results of its default experiment ([`reference`], FMI-LS-REF). Every
-//! entry is written
+//! from the variable table. Besides them each FMU carries the icon
+//! (`fmu-build/assets/icon.png`, drawn by `tools/draw_icon.py`: `model.png`
+//! in FMI 2.0, `terminalsAndIcons/icon.png` in FMI 3.0, and
+//! `documentation/diagram.png` in both) and the reference results of its
+//! default experiment ([`reference`], FMI-LS-REF). Every entry is written
 //! in a fixed order with a fixed time stamp and mode, so that two builds of
 //! the same sources give byte-identical FMUs.
 
@@ -41,6 +43,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
 use tdvass_fmi2::MODEL_IDENTIFIER;
 use tdvass_fmi2::markdown::{BEGIN_MARKER, END_MARKER, splice_into};
+use tdvass_fmu::markup::DIAGRAM_FILE;
 use tdvass_fmu::slave::Dialect;
 use zip::write::SimpleFileOptions;
 use zip::{CompressionMethod, DateTime, ZipArchive, ZipWriter};
@@ -50,6 +53,10 @@ mod zig;
 
 use zig::GLIBC_FLOOR;
 use zig::ZigTools;
+
+/// The icon of both FMUs and the diagram of their documentation, drawn by
+/// `tools/draw_icon.py`.
+const ICON: &[u8] = include_bytes!("../assets/icon.png");
 
 /// The README, whose FMU variable table is generated.
 const README: &str = "README.md";
@@ -86,6 +93,8 @@ struct Fmu {
     dialect: Dialect,
     /// The GUID or instantiation token the slave's states carry.
     token: String,
+    /// Where the FMU holds its icon.
+    icon_entry: &'static str,
 }
 
 impl Fmu {
@@ -103,6 +112,7 @@ impl Fmu {
                 identity: format!("GUID {}", tdvass_fmi2::guid()),
                 dialect: tdvass_fmi2::instance::FMI2_DIALECT,
                 token: tdvass_fmi2::guid(),
+                icon_entry: "model.png",
             },
             Fmu {
                 version: FmiVersion::Fmi3,
@@ -115,6 +125,7 @@ impl Fmu {
                 identity: format!("instantiationToken {}", tdvass_fmi3::instantiation_token()),
                 dialect: tdvass_fmi3::instance::FMI3_DIALECT,
                 token: tdvass_fmi3::instantiation_token(),
+                icon_entry: "terminalsAndIcons/icon.png",
             },
         ]
     }
@@ -671,10 +682,12 @@ fn check_only(root: &Path, fmus: &[Fmu]) -> Result<()> {
 /// (path, content). The reference results are `results` (CSV).
 fn fixed_entries(fmu: &Fmu, results: &str) -> Vec<(String, Vec<u8>)> {
     vec![
+        (fmu.icon_entry.to_string(), ICON.to_vec()),
         (
             "documentation/index.html".to_string(),
             fmu.documentation.as_bytes().to_vec(),
         ),
+        (format!("documentation/{DIAGRAM_FILE}"), ICON.to_vec()),
         (
             reference::manifest_entry(),
             reference::manifest_xml().into_bytes(),

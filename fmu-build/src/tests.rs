@@ -244,24 +244,65 @@ fn missing_zig_is_named_with_the_python_set_that_installs_it() {
     assert!(error.contains(GLIBC_FLOOR), "{error}");
 }
 
+/// Width and height of a PNG, from its IHDR chunk.
+fn png_size(bytes: &[u8]) -> Option<(u32, u32)> {
+    if !bytes.starts_with(b"\x89PNG\r\n\x1a\n") || bytes.get(12..16)? != b"IHDR" {
+        return None;
+    }
+    let be = |at: usize| u32::from_be_bytes(bytes[at..at + 4].try_into().unwrap());
+    Some((be(16), be(20)))
+}
+
 #[test]
-fn each_fmu_carries_the_reference_results_and_its_documentation_names_them() {
+fn each_fmu_carries_the_icon_the_diagram_and_the_reference_results() {
+    let size = tdvass_fmu::markup::DIAGRAM_SIZE_PX;
+    assert_eq!(png_size(ICON), Some((size, size)));
+    assert_eq!(png_size(b"not a png"), None);
     let [fmi2, fmi3] = Fmu::all();
-    for fmu in [&fmi2, &fmi3] {
+    for (fmu, icon) in [(&fmi2, "model.png"), (&fmi3, "terminalsAndIcons/icon.png")] {
         let entries = fixed_entries(fmu, "time\n0\n");
         let names: Vec<&str> = entries.iter().map(|(n, _)| n.as_str()).collect();
         assert_eq!(
             names,
             [
+                icon,
                 "documentation/index.html",
+                "documentation/diagram.png",
                 "extra/org.fmi-standard.fmi-ls-ref/fmi-ls-manifest.xml",
                 "extra/org.fmi-standard.fmi-ls-ref/tdvass_out.csv",
             ],
             "{}",
             fmu.label()
         );
-        assert_eq!(entries[2].1, b"time\n0\n");
+        assert_eq!(entries[0].1, ICON);
+        assert_eq!(entries[2].1, ICON);
+        assert_eq!(entries[4].1, b"time\n0\n");
+        // The page shows the diagram beside it, with the legend of its
+        // symbols, and names the reference results.
         let page = &fmu.documentation;
+        assert!(
+            page.contains(r#"<img src="diagram.png" width="320" height="320""#),
+            "{}",
+            fmu.label()
+        );
+        for symbol in [
+            "m_s",
+            "k_s, c_s",
+            "m_h",
+            "k_h, c_h",
+            "m_t",
+            "k_t",
+            "x_g",
+            "u = g x_t(t - tau)",
+        ] {
+            assert!(page.contains(&format!("<td>{symbol}</td>")), "{symbol}");
+        }
+        assert!(page.contains("m_s (start 345 kg)"), "{}", fmu.label());
+        assert!(
+            page.contains("control_force (output, N)"),
+            "{}",
+            fmu.label()
+        );
         assert!(page.contains(&reference::csv_entry()), "{}", fmu.label());
         assert!(
             page.contains(&format!("every {} s", reference::OUTPUT_INTERVAL)),

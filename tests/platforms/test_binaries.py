@@ -68,9 +68,11 @@ def test_fmu_holds_linux64_and_win64_and_nothing_for_tests(fmu):
     assert sorted(fmu.namelist()) == [
         "binaries/linux64/tdvass.so",
         "binaries/win64/tdvass.dll",
+        "documentation/diagram.png",
         "documentation/index.html",
         "extra/org.fmi-standard.fmi-ls-ref/fmi-ls-manifest.xml",
         "extra/org.fmi-standard.fmi-ls-ref/tdvass_out.csv",
+        "model.png",
         "modelDescription.xml",
     ]
 

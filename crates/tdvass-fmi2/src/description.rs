@@ -11,8 +11,8 @@ use quick_xml::events::{BytesDecl, BytesText, Event};
 use tdvass::solver::DEFAULT_TOLERANCE;
 pub use tdvass_fmu::markup::MODEL_DESCRIPTION;
 use tdvass_fmu::markup::{
-    REFERENCE_RESULTS, XmlResult, XmlWriter, finish, html_page, list, number, paragraph, table,
-    text_element, writer,
+    REFERENCE_RESULTS, XmlResult, XmlWriter, diagram, finish, html_page, list, number, paragraph,
+    table, text_element, writer,
 };
 
 fn start_text(v: &Variable) -> Option<String> {
@@ -282,6 +282,7 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
     )?;
 
     text_element(w, "h2", "The model")?;
+    diagram(w)?;
     paragraph(
         w,
         "State X = [x_s, v_s, x_h, v_h, x_t, v_t]: body, annular absorber and wheel displacements and velocities. The plant is dX/dt = A X + b x_t(t - tau) + e x_g(t) (Eq. 2 of the paper): the body (m_s) sits on the absorber through k_s, c_s; the absorber (m_h) on the wheel through k_h, c_h; the wheel (m_t) on the road through k_t. TDVASS adds the control force u = g x_t(t - tau), acting with -u on the absorber and +u on the wheel. PVASS is the same structure with g = 0; CS is the conventional 2-DOF quarter car (body on wheel through k_s, c_s), for which x_h and v_h mirror x_t and v_t.",

@@ -8,8 +8,8 @@ use crate::{
     MODEL_NAME, instantiation_token,
 };
 use tdvass_fmu::markup::{
-    MODEL_DESCRIPTION, REFERENCE_RESULTS, XmlResult, XmlWriter, html_page, list, paragraph, table,
-    text_element,
+    MODEL_DESCRIPTION, REFERENCE_RESULTS, XmlResult, XmlWriter, diagram, html_page, list,
+    paragraph, table, text_element,
 };
 use tdvass_fmu::variables::{ALL_VARIABLES, Causality, Dimension, Variable};
 
@@ -90,6 +90,7 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
     )?;
 
     text_element(w, "h2", "The model")?;
+    diagram(w)?;
     paragraph(
         w,
         "State X = [x_s, v_s, x_h, v_h, x_t, v_t]: body, annular absorber and wheel displacements and velocities. The plant is dX/dt = A X + b x_t(t - tau) + e x_g(t) (Eq. 2 of the paper). TDVASS feeds the delayed wheel displacement back as the control force u = g x_t(t - tau); PVASS is the same structure with g = 0; CS is the conventional 2-DOF quarter car, for which x_h and v_h mirror x_t and v_t. The outputs are the states, BA = d2x_s/dt2, SDD = x_s - x_t, TDD = x_t - x_g, their running RMS values from the start time and the objective J (Eq. 6).",
