@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Every test of the project: formatting, lints, Rust unit and integration
 # tests, the FMU build (every platform) and its freshness check, the fmpy
-# suite, robustness, the platform harness, fuzzing and the cross-master
+# suite, robustness, the platform harness and the glibc policy, a second
+# build that must give the same FMUs, fuzzing and the cross-master
 # interoperability tests.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -65,6 +66,8 @@ echo "== robustness suite against the built FMU (bad input, state table, diverge
 "$python" -m pytest tests/robustness -q
 echo "== platforms (the same harness on linux64 natively, win64 under wine, aarch64 under qemu; the glibc 2.17 policy of the Linux libraries)"
 "$python" -m pytest tests/platforms -q
+echo "== reproducible FMUs (both FMUs built again from a copy of the sources into a fresh target directory: byte-identical)"
+bash tests/reproducible_fmus.sh
 echo "== fuzzing smoke run (libFuzzer on stable, ${TDVASS_FUZZ_SECONDS:=60} s on each of the two cores: api_sequence_fmi3 on one, deserialize then api_sequence for half of it each on the other)"
 bash fuzz/run.sh build
 logs="$(mktemp -d)"
