@@ -33,7 +33,7 @@
 //! (`fmu-build/assets/icon.png`, drawn by `tools/draw_icon.py`: `model.png`
 //! in FMI 2.0, `terminalsAndIcons/icon.png` in FMI 3.0, and
 //! `documentation/diagram.png` in both) and the reference results of its
-//! default experiment ([`reference`], FMI-LS-REF). Every entry is written
+//! default experiment ([`mod@reference`], FMI-LS-REF). Every entry is written
 //! in a fixed order with a fixed time stamp and mode, so that two builds of
 //! the same sources give byte-identical FMUs.
 
