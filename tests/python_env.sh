@@ -9,20 +9,27 @@
 #   tests/python_env.sh quickstart  the small set of examples/quickstart.sh
 #                                   (examples/requirements.txt: fmpy, numpy,
 #                                   matplotlib)
+#   tests/python_env.sh build       the linker of `fmu-build --all-platforms`
+#                                   (fmu-build/requirements.txt: zig and
+#                                   cargo-zigbuild, for the glibc 2.17 floor
+#                                   of the Linux libraries)
 #
-# The full set contains the quick-start set, so a full environment also
-# serves the quick start.
+# The full set contains the other two, so a full environment also serves
+# the quick start and the build.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 venv="$root/.venv"
 quickstart="$root/examples/requirements.txt"
+build="$root/fmu-build/requirements.txt"
 full="$root/tests/python/requirements.txt"
+full_files=("$full" "$quickstart" "$build")
 set_name="${1:-full}"
 case "$set_name" in
     quickstart) files=("$quickstart") ;;
-    full) files=("$full" "$quickstart") ;;
+    build) files=("$build") ;;
+    full) files=("${full_files[@]}") ;;
     *)
-        echo "usage: tests/python_env.sh [quickstart|full]" >&2
+        echo "usage: tests/python_env.sh [quickstart|build|full]" >&2
         exit 2
         ;;
 esac
@@ -32,7 +39,7 @@ installed() { # installed SET CONTENT
     [ -x "$venv/bin/python" ] && [ -f "$venv/.requirements-$1" ] &&
         [ "$(cat "$venv/.requirements-$1")" = "$2" ]
 }
-if ! installed "$set_name" "$wanted" && ! installed full "$(cat "$full" "$quickstart")"; then
+if ! installed "$set_name" "$wanted" && ! installed full "$(cat "${full_files[@]}")"; then
     echo "installing the $set_name Python set (${files[0]#"$root"/}) into $venv" >&2
     python3 -m venv "$venv" >&2
     "$venv/bin/python" -m pip install --quiet --disable-pip-version-check -r "${files[0]}" >&2

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Every test of the project: formatting, lints, Rust unit and integration
 # tests, the FMU build (every platform) and its freshness check, the fmpy
-# suite, robustness, the platform harness, fuzzing and the cross-master
+# suite, robustness, the platform harness and the glibc policy, a second
+# build that must give the same FMUs, fuzzing and the cross-master
 # interoperability tests.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -36,6 +37,15 @@ for target in x86_64-pc-windows-gnu aarch64-unknown-linux-gnu; do
         exit 1
     fi
 done
+# zig, through cargo-zigbuild, links the Linux libraries of `fmu-build
+# --all-platforms` against glibc 2.17: both from PyPI into .venv (or both on
+# the PATH), as fmu-build looks for them.
+if ! { [ -x .venv/bin/cargo-zigbuild ] && .venv/bin/python -m ziglang version >/dev/null 2>&1; } &&
+    ! { command -v cargo-zigbuild >/dev/null && command -v zig >/dev/null; }; then
+    echo "tests/run_all.sh needs zig and cargo-zigbuild, the linker of the glibc 2.17 Linux libraries" >&2
+    echo "install them into .venv with:  tests/python_env.sh build   (fmu-build/requirements.txt)" >&2
+    exit 1
+fi
 python="$(tests/python_env.sh)"
 echo "== cargo fmt --check"
 cargo fmt --all -- --check
@@ -54,8 +64,10 @@ cargo build --release --bin tdvass
 "$python" benches/peers.py --smoke  # peers of BENCHMARKS.md: smoke size, no timing claims
 echo "== robustness suite against the built FMU (bad input, state table, divergence, hangs, valgrind, threads)"
 "$python" -m pytest tests/robustness -q
-echo "== platforms (the same harness on linux64 natively, win64 under wine, aarch64 under qemu)"
+echo "== platforms (the same harness on linux64 natively, win64 under wine, aarch64 under qemu; the glibc 2.17 policy of the Linux libraries)"
 "$python" -m pytest tests/platforms -q
+echo "== reproducible FMUs (both FMUs built again from a copy of the sources into a fresh target directory: byte-identical)"
+bash tests/reproducible_fmus.sh
 echo "== fuzzing smoke run (libFuzzer on stable, ${TDVASS_FUZZ_SECONDS:=60} s on each of the two cores: api_sequence_fmi3 on one, deserialize then api_sequence for half of it each on the other)"
 bash fuzz/run.sh build
 logs="$(mktemp -d)"

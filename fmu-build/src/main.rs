@@ -15,19 +15,27 @@
 //! `binaries/x86_64-linux/tdvass.so`, Windows x86-64: `binaries/win64/tdvass.dll`
 //! and `binaries/x86_64-windows/tdvass.dll`, macOS: `binaries/darwin64/tdvass.dylib`
 //! and `binaries/<arch>-darwin/tdvass.dylib`), built with the host's own
-//! toolchain. `--all-platforms` works on a Linux x86-64 host: it cross-builds
-//! the libraries for Windows x86-64 and Linux aarch64 (linkers set in
-//! `.cargo/config.toml`); the FMI 2.0 FMU packs linux64 and win64, the
-//! FMI 3.0 FMU `x86_64-linux`, `x86_64-windows` and `aarch64-linux`. FMI 2.0
-//! names no aarch64 platform, so its aarch64 library stays in
-//! `target/aarch64-unknown-linux-gnu/release/` (tests run it). A missing
-//! Rust target or cross toolchain stops the build before anything is
-//! compiled or packed, naming the `rustup target add` command or the Debian
-//! package that provides it.
+//! toolchain. `--all-platforms` works on a Linux x86-64 host: it builds
+//! the Linux libraries (x86-64 and aarch64) with zig as the linker, through
+//! cargo-zigbuild and its glibc-versioned targets, so that they need no glibc
+//! newer than [`GLIBC_FLOOR`], and cross-builds the Windows x86-64 library
+//! with MinGW-w64 (`.cargo/config.toml`); the FMI 2.0 FMU packs linux64 and
+//! win64, the FMI 3.0 FMU `x86_64-linux`, `x86_64-windows` and
+//! `aarch64-linux`. FMI 2.0 names no aarch64 platform, so its aarch64
+//! library stays in `target/aarch64-unknown-linux-gnu/release/` (tests run
+//! it). A missing Rust target, cross toolchain or zig stops the build before
+//! anything is compiled or packed, naming the `rustup target add` command,
+//! the Debian package or the Python set that provides it.
 //!
 //! The descriptions and documentation come from the libraries
 //! ([`tdvass_fmi2::description`], [`tdvass_fmi3::description`]), generated
-//! from the variable table.
+//! from the variable table. Besides them each FMU carries the icon
+//! (`fmu-build/assets/icon.png`, drawn by `tools/draw_icon.py`: `model.png`
+//! in FMI 2.0, `terminalsAndIcons/icon.png` in FMI 3.0, and
+//! `documentation/diagram.png` in both) and the reference results of its
+//! default experiment ([`mod@reference`], FMI-LS-REF). Every entry is written
+//! in a fixed order with a fixed time stamp and mode, so that two builds of
+//! the same sources give byte-identical FMUs.
 
 use std::fs;
 use std::io::{Read, Write};
@@ -35,8 +43,20 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
 use tdvass_fmi2::MODEL_IDENTIFIER;
 use tdvass_fmi2::markdown::{BEGIN_MARKER, END_MARKER, splice_into};
+use tdvass_fmu::markup::DIAGRAM_FILE;
+use tdvass_fmu::slave::Dialect;
 use zip::write::SimpleFileOptions;
 use zip::{CompressionMethod, DateTime, ZipArchive, ZipWriter};
+
+mod reference;
+mod zig;
+
+use zig::GLIBC_FLOOR;
+use zig::ZigTools;
+
+/// The icon of both FMUs and the diagram of their documentation, drawn by
+/// `tools/draw_icon.py`.
+const ICON: &[u8] = include_bytes!("../assets/icon.png");
 
 /// The README, whose FMU variable table is generated.
 const README: &str = "README.md";
@@ -69,6 +89,12 @@ struct Fmu {
     /// How the description identifies the interface (`GUID ...`,
     /// `instantiationToken ...`), for messages.
     identity: String,
+    /// The front-end's dialect of the slave (for the reference results).
+    dialect: Dialect,
+    /// The GUID or instantiation token the slave's states carry.
+    token: String,
+    /// Where the FMU holds its icon.
+    icon_entry: &'static str,
 }
 
 impl Fmu {
@@ -84,6 +110,9 @@ impl Fmu {
                 description: tdvass_fmi2::description::model_description_xml(),
                 documentation: tdvass_fmi2::description::documentation_html(),
                 identity: format!("GUID {}", tdvass_fmi2::guid()),
+                dialect: tdvass_fmi2::instance::FMI2_DIALECT,
+                token: tdvass_fmi2::guid(),
+                icon_entry: "model.png",
             },
             Fmu {
                 version: FmiVersion::Fmi3,
@@ -94,6 +123,9 @@ impl Fmu {
                 description: tdvass_fmi3::description::model_description_xml(),
                 documentation: tdvass_fmi3::description::documentation_html(),
                 identity: format!("instantiationToken {}", tdvass_fmi3::instantiation_token()),
+                dialect: tdvass_fmi3::instance::FMI3_DIALECT,
+                token: tdvass_fmi3::instantiation_token(),
+                icon_entry: "terminalsAndIcons/icon.png",
             },
         ]
     }
@@ -215,6 +247,10 @@ struct Platform {
     /// Linkers and C libraries of a cross build (as `.cargo/config.toml`
     /// names them).
     requirements: &'static [Requirement],
+    /// The oldest glibc the library must load with: it is then linked by
+    /// zig through cargo-zigbuild, for the target `<cross_target>.<glibc>`
+    /// (`None`: the toolchain's own linker and C library).
+    glibc: Option<&'static str>,
 }
 
 impl Platform {
@@ -319,6 +355,7 @@ fn host_platform(os: &str, arch: &str) -> Result<Platform> {
         extension,
         format,
         requirements: &[],
+        glibc: None,
     })
 }
 
@@ -327,8 +364,13 @@ const WINDOWS_TARGET: &str = "x86_64-pc-windows-gnu";
 /// The Linux aarch64 cross build.
 const AARCH64_TARGET: &str = "aarch64-unknown-linux-gnu";
 
+/// The host's target triple of `--all-platforms`, built as a cross target so
+/// that zig links it against the glibc floor.
+const LINUX_X86_64_TARGET: &str = "x86_64-unknown-linux-gnu";
+
 /// Every platform of `--all-platforms`, from a Linux x86-64 host: Linux
-/// x86-64 (host), Windows x86-64 and Linux aarch64 (cross).
+/// x86-64 and Linux aarch64 (zig, glibc [`GLIBC_FLOOR`]) and Windows x86-64
+/// (MinGW-w64).
 fn all_platforms() -> Result<Vec<Platform>> {
     let host = host_platform(std::env::consts::OS, std::env::consts::ARCH)?;
     if host.fmi2_folder != Some("linux64") {
@@ -339,7 +381,11 @@ fn all_platforms() -> Result<Vec<Platform>> {
         ));
     }
     Ok(vec![
-        host,
+        Platform {
+            cross_target: Some(LINUX_X86_64_TARGET),
+            glibc: Some(GLIBC_FLOOR),
+            ..host
+        },
         Platform {
             fmi2_folder: Some("win64"),
             fmi3_folder: "x86_64-windows",
@@ -352,6 +398,7 @@ fn all_platforms() -> Result<Vec<Platform>> {
                 file: "x86_64-w64-mingw32-gcc",
                 debian_package: "gcc-mingw-w64-x86-64",
             }],
+            glibc: None,
         },
         Platform {
             fmi2_folder: None,
@@ -361,16 +408,10 @@ fn all_platforms() -> Result<Vec<Platform>> {
             prefix: "lib",
             extension: "so",
             format: BinaryFormat::ElfAarch64,
-            requirements: &[
-                Requirement {
-                    file: "aarch64-linux-gnu-gcc",
-                    debian_package: "gcc-aarch64-linux-gnu",
-                },
-                Requirement {
-                    file: "/usr/aarch64-linux-gnu/lib/libc.so",
-                    debian_package: "libc6-dev-arm64-cross",
-                },
-            ],
+            // zig brings its own linker and glibc stubs: no cross toolchain
+            // (the tests' harness still needs Debian's, tests/platforms).
+            requirements: &[],
+            glibc: Some(GLIBC_FLOOR),
         },
     ])
 }
@@ -409,10 +450,15 @@ fn rust_target_installed(root: &Path, triple: &str) -> bool {
         .unwrap_or(false)
 }
 
-/// Every missing Rust target and cross toolchain, as instructions to install
-/// them; empty when everything is there.
+/// Every missing Rust target, cross toolchain and zig, as instructions to
+/// install them; empty when everything is there.
 fn missing_requirements(root: &Path, platforms: &[Platform]) -> Vec<String> {
     let mut missing = Vec::new();
+    if platforms.iter().any(|p| p.glibc.is_some())
+        && let Err(message) = ZigTools::find(root)
+    {
+        missing.push(message);
+    }
     let mut targets = Vec::new();
     for platform in platforms {
         if let Some(triple) = platform.cross_target
@@ -446,23 +492,51 @@ fn missing_requirements(root: &Path, platforms: &[Platform]) -> Vec<String> {
 /// returns its bytes, checked to be machine code of that platform. Each
 /// crate is built by a cargo run of its own, so that the FMI 2.0 library is
 /// built exactly as without the FMI 3.0 one.
-fn build_library(root: &Path, platform: &Platform, fmu: &Fmu) -> Result<Vec<u8>> {
-    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
-    let mut args = vec!["build", "--release", "-p", fmu.package, "--lib"];
-    if let Some(triple) = platform.cross_target {
-        args.extend(["--target", triple]);
-    }
+fn build_library(
+    root: &Path,
+    platform: &Platform,
+    fmu: &Fmu,
+    zig: Option<&ZigTools>,
+) -> Result<Vec<u8>> {
+    let mut command = match (platform.glibc, zig) {
+        (Some(glibc), Some(zig)) => {
+            let triple = platform
+                .cross_target
+                .ok_or("a glibc floor needs a target triple")?;
+            zig.command(&[
+                "--release",
+                "-p",
+                fmu.package,
+                "--lib",
+                "--target",
+                &format!("{triple}.{glibc}"),
+            ])
+        }
+        (Some(_), None) => return Err(format!("{} needs zig", platform.label)),
+        (None, _) => {
+            let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+            let mut command = Command::new(cargo);
+            command.args(["build", "--release", "-p", fmu.package, "--lib"]);
+            if let Some(triple) = platform.cross_target {
+                command.args(["--target", triple]);
+            }
+            command
+        }
+    };
+    let shown: Vec<String> = std::iter::once(command.get_program())
+        .chain(command.get_args())
+        .map(|a| a.to_string_lossy().into_owned())
+        .collect();
     eprintln!(
-        "fmu-build: {} {} cargo {}",
+        "fmu-build: {} {}: {}",
         fmu.label(),
         platform.label,
-        args.join(" ")
+        shown.join(" ")
     );
-    let status = Command::new(&cargo)
-        .args(&args)
+    let status = command
         .current_dir(root)
         .status()
-        .map_err(|e| format!("cannot run {}: {e}", cargo.to_string_lossy()))?;
+        .map_err(|e| format!("cannot run {}: {e}", shown[0]))?;
     if !status.success() {
         return Err(format!(
             "cargo build of the {} library for {} failed ({status})",
@@ -604,19 +678,41 @@ fn check_only(root: &Path, fmus: &[Fmu]) -> Result<()> {
     Ok(())
 }
 
-/// Writes `fmu` with `binaries` (path in the archive, bytes) into
-/// `out_dir`, and returns its path.
-fn pack(out_dir: &Path, fmu: &Fmu, binaries: &[(String, Vec<u8>)]) -> Result<PathBuf> {
+/// Every file of `fmu` but its binaries, in the order of the archive:
+/// (path, content). The reference results are `results` (CSV).
+fn fixed_entries(fmu: &Fmu, results: &str) -> Vec<(String, Vec<u8>)> {
+    vec![
+        (fmu.icon_entry.to_string(), ICON.to_vec()),
+        (
+            "documentation/index.html".to_string(),
+            fmu.documentation.as_bytes().to_vec(),
+        ),
+        (format!("documentation/{DIAGRAM_FILE}"), ICON.to_vec()),
+        (
+            reference::manifest_entry(),
+            reference::manifest_xml().into_bytes(),
+        ),
+        (reference::csv_entry(), results.as_bytes().to_vec()),
+    ]
+}
+
+/// Writes `fmu` with `binaries` (path in the archive, bytes) and the
+/// reference `results` into `out_dir`, and returns its path.
+fn pack(
+    out_dir: &Path,
+    fmu: &Fmu,
+    binaries: &[(String, Vec<u8>)],
+    results: &str,
+) -> Result<PathBuf> {
     let mut entries: Vec<(&str, &[u8], u32)> =
         vec![("modelDescription.xml", fmu.description.as_bytes(), 0o644)];
     for (name, bytes) in binaries {
         entries.push((name.as_str(), bytes, 0o755));
     }
-    entries.push((
-        "documentation/index.html",
-        fmu.documentation.as_bytes(),
-        0o644,
-    ));
+    let fixed = fixed_entries(fmu, results);
+    for (name, bytes) in &fixed {
+        entries.push((name.as_str(), bytes, 0o644));
+    }
     let path = out_dir.join(fmu.file_name);
     // Written beside, checked, then renamed: an interrupted run never leaves
     // a truncated FMU under the final name.
@@ -641,12 +737,27 @@ fn build(root: &Path, fmus: &[Fmu], platforms: &[Platform]) -> Result<()> {
             missing.join("; ")
         ));
     }
+    let zig = if platforms.iter().any(|p| p.glibc.is_some()) {
+        let zig = ZigTools::find(root)?;
+        eprintln!("fmu-build: Linux libraries for glibc {GLIBC_FLOOR}: {zig}");
+        Some(zig)
+    } else {
+        None
+    };
+    // The reference results first: they need no build, and a failure
+    // stops before the long part.
+    let mut results = Vec::new();
+    for fmu in fmus {
+        let csv = reference::results_csv(fmu.dialect, fmu.token.clone())
+            .map_err(|e| format!("the reference results of the {} FMU: {e}", fmu.label()))?;
+        results.push(csv);
+    }
     // Every library is built before anything is packed: a failed build
     // leaves no FMU with some of its platforms.
     let mut binaries: Vec<Vec<(String, Vec<u8>)>> = vec![Vec::new(); fmus.len()];
     for platform in platforms {
         for (fmu, packed) in fmus.iter().zip(binaries.iter_mut()) {
-            let bytes = build_library(root, platform, fmu)?;
+            let bytes = build_library(root, platform, fmu, zig.as_ref())?;
             match platform.fmu_entry(fmu.version) {
                 Some(entry) => packed.push((entry, bytes)),
                 None => eprintln!(
@@ -664,8 +775,8 @@ fn build(root: &Path, fmus: &[Fmu], platforms: &[Platform]) -> Result<()> {
     fs::create_dir_all(&out_dir)
         .map_err(|e| format!("cannot create {}: {e}", out_dir.display()))?;
     let mut written = Vec::new();
-    for (fmu, packed) in fmus.iter().zip(&binaries) {
-        written.push(pack(&out_dir, fmu, packed)?);
+    for ((fmu, packed), csv) in fmus.iter().zip(&binaries).zip(&results) {
+        written.push(pack(&out_dir, fmu, packed, csv)?);
     }
     let mut refreshed = Vec::new();
     for copy in checked_in(root, fmus)? {

@@ -96,6 +96,18 @@ fn all_platforms_pack_linux64_and_win64_for_fmi2_and_all_three_for_fmi3() {
         platforms[2].built_path(Path::new("t"), "tdvass_fmi2"),
         Path::new("t/aarch64-unknown-linux-gnu/release/libtdvass_fmi2.so")
     );
+    // The Linux libraries are linked by zig against the glibc floor, so the
+    // x86-64 one is a cross build too (cargo-zigbuild writes it under the
+    // triple without the glibc suffix).
+    assert_eq!(
+        platforms[0].built_path(Path::new("t"), "tdvass_fmi3"),
+        Path::new("t/x86_64-unknown-linux-gnu/release/libtdvass_fmi3.so")
+    );
+    let floors: Vec<Option<&str>> = platforms.iter().map(|p| p.glibc).collect();
+    assert_eq!(floors, [Some("2.17"), None, Some("2.17")]);
+    // The host-only build keeps the host's own toolchain.
+    let host = host_platform("linux", "x86_64").unwrap();
+    assert_eq!((host.cross_target, host.glibc), (None, None));
     assert_eq!(
         platforms[1].built_path(Path::new("t"), "tdvass_fmi3"),
         Path::new("t/x86_64-pc-windows-gnu/release/tdvass_fmi3.dll")
@@ -152,6 +164,11 @@ fn cross_linkers_match_the_cargo_configuration() {
         let Some(triple) = platform.cross_target else {
             continue;
         };
+        if platform.glibc.is_some() {
+            // zig links it (cargo-zigbuild sets the linker itself).
+            assert!(platform.requirements.is_empty(), "{}", platform.label);
+            continue;
+        }
         let section = config
             .split("\n[")
             .find(|s| s.starts_with(&format!("target.{triple}]")))
@@ -178,6 +195,7 @@ fn missing_targets_and_toolchains_are_named_with_their_install_command() {
             file: "no-such-linker-gcc",
             debian_package: "gcc-no-such",
         }],
+        glibc: None,
     };
     let missing = missing_requirements(&workspace_root(), &[platform]);
     assert_eq!(missing.len(), 2, "{missing:?}");
@@ -214,4 +232,190 @@ fn binary_formats_are_read_from_the_headers() {
     );
     assert_eq!(BinaryFormat::of(b"MZ"), None);
     assert_eq!(BinaryFormat::of(b""), None);
+}
+
+#[test]
+fn missing_zig_is_named_with_the_python_set_that_installs_it() {
+    let nowhere = std::env::temp_dir().join("fmu-build-test-no-venv");
+    let empty_path = std::ffi::OsString::new();
+    let error = ZigTools::find_in(&nowhere, Some(&empty_path)).unwrap_err();
+    assert!(error.contains("cargo-zigbuild"), "{error}");
+    assert!(error.contains("tests/python_env.sh build"), "{error}");
+    assert!(error.contains(GLIBC_FLOOR), "{error}");
+}
+
+/// Width and height of a PNG, from its IHDR chunk.
+fn png_size(bytes: &[u8]) -> Option<(u32, u32)> {
+    if !bytes.starts_with(b"\x89PNG\r\n\x1a\n") || bytes.get(12..16)? != b"IHDR" {
+        return None;
+    }
+    let be = |at: usize| u32::from_be_bytes(bytes[at..at + 4].try_into().unwrap());
+    Some((be(16), be(20)))
+}
+
+#[test]
+fn each_fmu_carries_the_icon_the_diagram_and_the_reference_results() {
+    let size = tdvass_fmu::markup::DIAGRAM_SIZE_PX;
+    assert_eq!(png_size(ICON), Some((size, size)));
+    assert_eq!(png_size(b"not a png"), None);
+    let [fmi2, fmi3] = Fmu::all();
+    for (fmu, icon) in [(&fmi2, "model.png"), (&fmi3, "terminalsAndIcons/icon.png")] {
+        let entries = fixed_entries(fmu, "time\n0\n");
+        let names: Vec<&str> = entries.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(
+            names,
+            [
+                icon,
+                "documentation/index.html",
+                "documentation/diagram.png",
+                "extra/org.fmi-standard.fmi-ls-ref/fmi-ls-manifest.xml",
+                "extra/org.fmi-standard.fmi-ls-ref/tdvass_out.csv",
+            ],
+            "{}",
+            fmu.label()
+        );
+        assert_eq!(entries[0].1, ICON);
+        assert_eq!(entries[2].1, ICON);
+        assert_eq!(entries[4].1, b"time\n0\n");
+        // The page shows the diagram beside it, with the legend of its
+        // symbols, and names the reference results.
+        let page = &fmu.documentation;
+        assert!(
+            page.contains(r#"<img src="diagram.png" width="320" height="320""#),
+            "{}",
+            fmu.label()
+        );
+        for symbol in [
+            "m_s",
+            "k_s, c_s",
+            "m_h",
+            "k_h, c_h",
+            "m_t",
+            "k_t",
+            "x_g",
+            "u = g x_t(t - tau)",
+        ] {
+            assert!(page.contains(&format!("<td>{symbol}</td>")), "{symbol}");
+        }
+        assert!(page.contains("m_s (start 345 kg)"), "{}", fmu.label());
+        assert!(
+            page.contains("control_force (output, N)"),
+            "{}",
+            fmu.label()
+        );
+        assert!(page.contains(&reference::csv_entry()), "{}", fmu.label());
+        assert!(
+            page.contains(&format!("every {} s", reference::OUTPUT_INTERVAL)),
+            "{}",
+            fmu.label()
+        );
+    }
+}
+
+#[test]
+fn the_manifest_names_the_results_beside_it() {
+    let xml = reference::manifest_xml();
+    assert!(xml.starts_with(r#"<?xml version="1.0" encoding="UTF-8"?>"#));
+    assert!(xml.contains(r#"<fmiReferences xmlns:fmi-ls="http://fmi-standard.org/fmi-ls-manifest" fmi-ls:fmi-ls-name="org.fmi-standard.fmi-ls-ref" fmi-ls:fmi-ls-version="1.0.0-alpha.1""#), "{xml}");
+    assert!(
+        xml.contains(r#"<Related type="text/csv" source="tdvass_out.csv" role="result""#),
+        "{xml}"
+    );
+    assert_eq!(
+        reference::manifest_entry().rsplit_once('/').unwrap().0,
+        reference::csv_entry().rsplit_once('/').unwrap().0
+    );
+}
+
+#[test]
+fn numbers_are_written_in_their_shortest_round_trip_form() {
+    for v in [
+        0.0,
+        -0.0,
+        0.01,
+        15.0,
+        1e-300,
+        -2.5e-7,
+        0.1 + 0.2,
+        123456.789,
+        f64::MIN_POSITIVE,
+    ] {
+        let text = reference::number(v);
+        assert_eq!(
+            text.parse::<f64>().unwrap().to_bits(),
+            v.to_bits(),
+            "{text}"
+        );
+        assert!(text.len() <= format!("{v}").len() && text.len() <= format!("{v:e}").len());
+    }
+    assert_eq!(reference::number(0.01), "0.01");
+    assert_eq!(reference::number(-2.5e-7), "-2.5e-7");
+}
+
+/// The reference results are the default experiment as fmpy runs it: one
+/// row per 0.05 s from 0 to 15 s, every scalar Real output, the values of
+/// a slave stepped the same way; and the FMI 2.0 and 3.0 slaves agree.
+#[test]
+fn reference_results_are_the_default_experiment_of_each_fmu() {
+    let [fmi2, fmi3] = Fmu::all();
+    let csv2 = reference::results_csv(fmi2.dialect, fmi2.token.clone()).unwrap();
+    let csv3 = reference::results_csv(fmi3.dialect, fmi3.token.clone()).unwrap();
+    for (fmu, csv) in [(&fmi2, &csv2), (&fmi3, &csv3)] {
+        let mut lines = csv.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let outputs = reference::outputs(&fmu.dialect);
+        assert_eq!(header[0], "time");
+        assert_eq!(header.len(), outputs.len() + 1);
+        for name in [
+            "x_s",
+            "body_acceleration",
+            "rms_body_acceleration",
+            "objective",
+            "control_force",
+        ] {
+            assert!(header.contains(&name), "{name} in {header:?}");
+        }
+        let rows: Vec<Vec<f64>> = lines
+            .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+            .collect();
+        assert_eq!(rows.len(), 301);
+        assert!(rows.iter().all(|r| r.len() == header.len()));
+        for (k, row) in rows.iter().enumerate() {
+            assert_eq!(row[0], k as f64 * 0.05);
+        }
+        assert_eq!(rows[300][0], 15.0);
+        // The body moves on the harmonic road, from rest.
+        let x_s = header.iter().position(|h| *h == "x_s").unwrap();
+        assert_eq!(rows[0][x_s], 0.0);
+        assert!(rows.iter().any(|r| r[x_s].abs() > 1e-3));
+        // The running RMS of BA at 15 s is the TDVASS row of Table 2.
+        let ba = header
+            .iter()
+            .position(|h| *h == "rms_body_acceleration")
+            .unwrap();
+        assert!((rows[300][ba] - 0.3068).abs() < 1.5e-4, "{}", rows[300][ba]);
+    }
+    // The columns both versions have carry the same numbers.
+    let table = |csv: &str| -> Vec<Vec<String>> {
+        let mut columns: Vec<Vec<String>> = Vec::new();
+        for line in csv.lines() {
+            for (i, cell) in line.split(',').enumerate() {
+                if columns.len() <= i {
+                    columns.push(Vec::new());
+                }
+                columns[i].push(cell.to_string());
+            }
+        }
+        columns
+    };
+    let (t2, t3) = (table(&csv2), table(&csv3));
+    for column in &t2 {
+        let other = t3.iter().find(|c| c[0] == column[0]);
+        assert_eq!(Some(column), other, "{}", column[0]);
+    }
+    // Deterministic.
+    assert_eq!(
+        csv2,
+        reference::results_csv(fmi2.dialect, fmi2.token.clone()).unwrap()
+    );
 }

@@ -56,6 +56,10 @@ RELATIVE_TOLERANCE = 0.0
 # summary at the end of the run.
 OBSERVED: dict[str, dict[str, list[float]]] = {}
 
+# One line per Linux library checked by test_elf_policy.py (highest GLIBC
+# version, NEEDED), for the summary at the end of the run.
+ELF_POLICY: list[str] = []
+
 
 def target_dir() -> Path:
     override = os.environ.get("CARGO_TARGET_DIR")
@@ -315,6 +319,10 @@ def results3(platforms3, description3):
 
 
 def pytest_terminal_summary(terminalreporter):
+    if ELF_POLICY:
+        terminalreporter.section("Linux libraries: glibc 2.17 floor and NEEDED (elf_policy.py)")
+        for line in ELF_POLICY:
+            terminalreporter.write_line(line)
     if not OBSERVED:
         return
     terminalreporter.section("largest relative difference to the native linux64 run")

@@ -11,7 +11,8 @@ use quick_xml::events::{BytesDecl, BytesText, Event};
 use tdvass::solver::DEFAULT_TOLERANCE;
 pub use tdvass_fmu::markup::MODEL_DESCRIPTION;
 use tdvass_fmu::markup::{
-    XmlResult, XmlWriter, finish, html_page, list, number, paragraph, table, text_element, writer,
+    REFERENCE_RESULTS, XmlResult, XmlWriter, diagram, finish, html_page, list, number, paragraph,
+    table, text_element, writer,
 };
 
 fn start_text(v: &Variable) -> Option<String> {
@@ -281,6 +282,7 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
     )?;
 
     text_element(w, "h2", "The model")?;
+    diagram(w)?;
     paragraph(
         w,
         "State X = [x_s, v_s, x_h, v_h, x_t, v_t]: body, annular absorber and wheel displacements and velocities. The plant is dX/dt = A X + b x_t(t - tau) + e x_g(t) (Eq. 2 of the paper): the body (m_s) sits on the absorber through k_s, c_s; the absorber (m_h) on the wheel through k_h, c_h; the wheel (m_t) on the road through k_t. TDVASS adds the control force u = g x_t(t - tau), acting with -u on the absorber and +u on the wheel. PVASS is the same structure with g = 0; CS is the conventional 2-DOF quarter car (body on wheel through k_s, c_s), for which x_h and v_h mirror x_t and v_t.",
@@ -341,6 +343,7 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
             "startTime {DEFAULT_START_TIME} s, stopTime {DEFAULT_STOP_TIME} s, stepSize {DEFAULT_STEP_SIZE} s. With the start values (TDVASS, Table 1, g = 5386 N/m, tau = 0.2 ms, harmonic road 0.05 sin 5t, from rest) the running RMS outputs at t = 15 s reproduce the TDVASS row of the paper's Table 2: BA 0.3068 m/s2, SDD 0.0388 m, TDD 0.6251 mm. variant = 1 and 2 give the CS and PVASS rows."
         ),
     )?;
+    paragraph(w, REFERENCE_RESULTS)?;
     paragraph(
         w,
         "To reproduce the paper's stability verification (section 3.3), set g and tau (for example g = -40000 N/m, tau = 0.11 s, unstable) and the initial state x_s_start = 0.01 m; spectral_abscissa and stable report the rightmost characteristic root.",

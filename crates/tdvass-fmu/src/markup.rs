@@ -1,8 +1,10 @@
 //! What the generated model descriptions and documentation pages of every
 //! FMI version write alike: the one-line model description, numbers,
-//! elements with text, paragraphs, lists, tables and the HTML page around
-//! a body (quick-xml, never written by hand).
+//! elements with text, paragraphs, lists, tables, the model's diagram with
+//! the legend of its symbols, and the HTML page around a body (quick-xml,
+//! never written by hand).
 
+use crate::variables::by_name;
 use quick_xml::Writer;
 use quick_xml::events::{BytesText, Event};
 use std::io::Cursor;
@@ -16,7 +18,119 @@ pub type XmlResult = std::io::Result<()>;
 pub const MODEL_DESCRIPTION: &str = "Quarter-car suspension with an annular vibration-absorbing structure and time-delay feedback of the tire displacement (TDVASS), with the conventional (CS) and uncontrolled absorber (PVASS) suspensions for comparison";
 
 /// The style sheet of the documentation pages.
-const STYLE: &str = "body{font-family:sans-serif;max-width:70em;margin:auto;padding:1em}table{border-collapse:collapse}td,th{border:1px solid #bbb;padding:0.2em 0.5em;text-align:left;vertical-align:top}";
+const STYLE: &str = "body{font-family:sans-serif;max-width:70em;margin:auto;padding:1em}table{border-collapse:collapse}td,th{border:1px solid #bbb;padding:0.2em 0.5em;text-align:left;vertical-align:top}figure{margin:1em 0}";
+
+/// What the documentation says of the reference results every FMU carries
+/// (fmu-build writes them and checks that this paragraph names their file
+/// and interval).
+pub const REFERENCE_RESULTS: &str = "Reference results (the layered standard FMI-LS-REF): extra/org.fmi-standard.fmi-ls-ref/tdvass_out.csv, named by fmi-ls-manifest.xml beside it, holds every Real output of the default experiment every 0.05 s (time in the first column), computed when the FMU was built by the same slave its binaries wrap. A master that runs the default experiment with communication steps of 0.05 s reproduces every column to within 1e-12 of its largest absolute value.";
+
+/// The model's diagram beside `documentation/index.html` (the FMU's icon,
+/// drawn by `tools/draw_icon.py`; fmu-build packs it).
+pub const DIAGRAM_FILE: &str = "diagram.png";
+/// Width and height of the diagram (px).
+pub const DIAGRAM_SIZE_PX: u32 = 320;
+
+/// The symbols of the diagram: symbol, meaning, and the FMU variables that
+/// carry it (their start values and units are taken from the variable
+/// table).
+pub const DIAGRAM_LEGEND: &[(&str, &str, &[&str])] = &[
+    ("m_s", "body (sprung) mass", &["m_s"]),
+    (
+        "k_s, c_s",
+        "suspension spring and damper between the body and the absorber",
+        &["k_s", "c_s"],
+    ),
+    (
+        "m_h",
+        "mass of the annular vibration-absorbing structure (the ring between body and wheel)",
+        &["m_h"],
+    ),
+    (
+        "k_h, c_h",
+        "spring and damper between the absorber and the wheel",
+        &["k_h", "c_h"],
+    ),
+    ("m_t", "wheel (unsprung) mass", &["m_t"]),
+    ("k_t", "tire stiffness (the tire has no damping)", &["k_t"]),
+    (
+        "x_g",
+        "road displacement under the tire: the input x_g when road = 0, else the road model's; reported as road_displacement",
+        &["x_g", "road_displacement"],
+    ),
+    (
+        "x_s, x_h, x_t",
+        "displacements of body, absorber and wheel from the static equilibrium, positive upwards",
+        &["x_s", "x_h", "x_t"],
+    ),
+    (
+        "g e^(-tau s)",
+        "the feedback path: the wheel displacement x_t, delayed by tau and multiplied by the gain g (TDVASS; PVASS is g = 0, CS has neither absorber nor feedback)",
+        &["g", "tau"],
+    ),
+    (
+        "u = g x_t(t - tau)",
+        "the control force of the actuator between absorber and wheel: -u on the absorber, +u on the wheel",
+        &["control_force"],
+    ),
+];
+
+/// The variables of a legend row, with their start values and units
+/// (`m_s (start 345 kg)`, `x_s (output, m)`).
+fn legend_variables(names: &[&str]) -> String {
+    names
+        .iter()
+        .map(|name| {
+            let v = by_name(name)
+                .unwrap_or_else(|| panic!("the legend names `{name}`, not a variable"));
+            let unit = v.unit().map(|u| format!(" {u}")).unwrap_or_default();
+            match v.start {
+                Some(start) if v.causality != crate::variables::Causality::Input => {
+                    format!("{name} (start {}{unit})", number(start))
+                }
+                _ => format!(
+                    "{name} ({}{})",
+                    v.causality.as_str(),
+                    v.unit().map(|u| format!(", {u}")).unwrap_or_default()
+                ),
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The model's diagram ([`DIAGRAM_FILE`] beside the page) and the legend of
+/// its symbols.
+pub fn diagram(w: &mut XmlWriter) -> XmlResult {
+    let size = DIAGRAM_SIZE_PX.to_string();
+    w.create_element("figure").write_inner_content(|w| {
+        w.create_element("img")
+            .with_attribute(("src", DIAGRAM_FILE))
+            .with_attribute(("width", size.as_str()))
+            .with_attribute(("height", size.as_str()))
+            .with_attribute((
+                "alt",
+                "Quarter car: body m_s on k_s and c_s, annular absorber m_h on k_h and c_h, wheel m_t on the tire spring k_t over the road x_g; an actuator between absorber and wheel applies u = g x_t(t - tau)",
+            ))
+            .write_empty()?;
+        text_element(
+            w,
+            "figcaption",
+            "The quarter car with the annular absorber and the delayed feedback u = g x_t(t - tau).",
+        )
+    })?;
+    let rows: Vec<Vec<String>> = DIAGRAM_LEGEND
+        .iter()
+        .map(|(symbol, meaning, names)| {
+            vec![
+                symbol.to_string(),
+                meaning.to_string(),
+                legend_variables(names),
+            ]
+        })
+        .collect();
+    table(w, &["symbol", "meaning", "FMU variables"], &rows)
+}
 
 /// Short number formatting: Rust's shortest round-trip representation.
 pub fn number(v: f64) -> String {

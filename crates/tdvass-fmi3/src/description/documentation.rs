@@ -8,7 +8,8 @@ use crate::{
     MODEL_NAME, instantiation_token,
 };
 use tdvass_fmu::markup::{
-    MODEL_DESCRIPTION, XmlResult, XmlWriter, html_page, list, paragraph, table, text_element,
+    MODEL_DESCRIPTION, REFERENCE_RESULTS, XmlResult, XmlWriter, diagram, html_page, list,
+    paragraph, table, text_element,
 };
 use tdvass_fmu::variables::{ALL_VARIABLES, Causality, Dimension, Variable};
 
@@ -89,6 +90,7 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
     )?;
 
     text_element(w, "h2", "The model")?;
+    diagram(w)?;
     paragraph(
         w,
         "State X = [x_s, v_s, x_h, v_h, x_t, v_t]: body, annular absorber and wheel displacements and velocities. The plant is dX/dt = A X + b x_t(t - tau) + e x_g(t) (Eq. 2 of the paper). TDVASS feeds the delayed wheel displacement back as the control force u = g x_t(t - tau); PVASS is the same structure with g = 0; CS is the conventional 2-DOF quarter car, for which x_h and v_h mirror x_t and v_t. The outputs are the states, BA = d2x_s/dt2, SDD = x_s - x_t, TDD = x_t - x_g, their running RMS values from the start time and the objective J (Eq. 6).",
@@ -200,6 +202,7 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
             "startTime {DEFAULT_START_TIME} s, stopTime {DEFAULT_STOP_TIME} s, stepSize {DEFAULT_STEP_SIZE} s. With the start values (TDVASS, g = 5386 N/m, tau = 0.2 ms, harmonic road 0.05 sin 5t, from rest) the running RMS outputs at t = 15 s reproduce the TDVASS row of the paper's Table 2: BA 0.3068 m/s2, SDD 0.0388 m, TDD 0.6251 mm; variant = CS and PVASS give the other rows."
         ),
     )?;
+    paragraph(w, REFERENCE_RESULTS)?;
 
     text_element(w, "h2", "Logging")?;
     let categories: Vec<String> = LOG_CATEGORIES
