@@ -365,3 +365,6 @@ impl Slave {
             .unwrap_or(self.state.start_time)
     }
 }
+
+#[cfg(test)]
+mod tests;
