@@ -5,7 +5,7 @@
 //! every `unsafe` of the FMU is in one file.)
 //!
 //! This layer only null-checks, converts raw pointers to slices and strings,
-//! and calls the safe [`Instance`] through [`Instance::run`] (which enforces
+//! and calls the safe [`Instance`] through [`FrontEnd::run`] (which enforces
 //! the state table and logs failures). Every entry point runs inside
 //! [`std::panic::catch_unwind`]: a panic becomes `fmi2Fatal` (the instance
 //! goes to `fatal`) instead of unwinding into the host.
@@ -32,6 +32,7 @@ use crate::{FmiError, Status};
 use libc::{c_char, c_double, c_int, c_uint, c_void, size_t};
 use std::ffi::CStr;
 use std::panic::{AssertUnwindSafe, catch_unwind};
+use tdvass_fmu::entry::FrontEnd;
 use tdvass_fmu::pointers::{self, c_string, copy_str, input, out_value, output, panic_text};
 
 pub type fmi2Component = *mut c_void;
@@ -271,7 +272,7 @@ pub unsafe extern "C" fn fmi2SetupExperiment(
     stopTime: fmi2Real,
 ) -> fmi2Status {
     call(c, Function::SetupExperiment, |i| {
-        i.setup_experiment(
+        i.slave_mut().setup_experiment(
             (toleranceDefined != FMI2_FALSE).then_some(tolerance),
             startTime,
             (stopTimeDefined != FMI2_FALSE).then_some(stopTime),
@@ -282,25 +283,27 @@ pub unsafe extern "C" fn fmi2SetupExperiment(
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2Status {
     call(c, Function::EnterInitializationMode, |i: &mut Instance| {
-        i.enter_initialization_mode()
+        i.slave_mut().enter_initialization_mode()
     })
 }
 
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Status {
     call(c, Function::ExitInitializationMode, |i: &mut Instance| {
-        i.exit_initialization_mode()
+        i.slave_mut().exit_initialization_mode()
     })
 }
 
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2Terminate(c: fmi2Component) -> fmi2Status {
-    call(c, Function::Terminate, |i: &mut Instance| i.terminate())
+    call(c, Function::Terminate, |i: &mut Instance| {
+        i.slave_mut().terminate()
+    })
 }
 
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
-    call(c, Function::Reset, |i: &mut Instance| i.reset())
+    call(c, Function::Reset, |i: &mut Instance| i.slave_mut().reset())
 }
 
 // ------------------------------------------------------------- get and set
@@ -315,7 +318,7 @@ pub unsafe extern "C" fn fmi2GetReal(
     call(c, Function::GetReal, |i| {
         // SAFETY: module contract (arrays of nvr elements).
         let (vrs, values) = unsafe { (input(vr, nvr, "vr")?, output(value, nvr, "value")?) };
-        i.get_real(vrs, values)
+        i.slave_mut().get_real(vrs, values)
     })
 }
 
@@ -329,7 +332,7 @@ pub unsafe extern "C" fn fmi2GetInteger(
     call(c, Function::GetInteger, |i| {
         // SAFETY: module contract (arrays of nvr elements).
         let (vrs, values) = unsafe { (input(vr, nvr, "vr")?, output(value, nvr, "value")?) };
-        i.get_integer(vrs, values)
+        i.slave_mut().get_integer(vrs, values)
     })
 }
 
@@ -344,7 +347,7 @@ pub unsafe extern "C" fn fmi2GetBoolean(
         // SAFETY: module contract (arrays of nvr elements).
         let (vrs, values) = unsafe { (input(vr, nvr, "vr")?, output(value, nvr, "value")?) };
         let mut flags = vec![false; vrs.len()];
-        let s = i.get_boolean(vrs, &mut flags)?;
+        let s = i.slave_mut().get_boolean(vrs, &mut flags)?;
         for (v, f) in values.iter_mut().zip(flags) {
             *v = if f { FMI2_TRUE } else { FMI2_FALSE };
         }
@@ -363,7 +366,7 @@ pub unsafe extern "C" fn fmi2GetString(
         // SAFETY: module contract (arrays of nvr elements). No String
         // variable exists, so nothing is ever written.
         let (vrs, _) = unsafe { (input(vr, nvr, "vr")?, output(value, nvr, "value")?) };
-        i.get_string(vrs)
+        i.slave_mut().get_string(vrs)
     })
 }
 
@@ -377,7 +380,7 @@ pub unsafe extern "C" fn fmi2SetReal(
     call(c, Function::SetReal, |i| {
         // SAFETY: module contract (arrays of nvr elements).
         let (vrs, values) = unsafe { (input(vr, nvr, "vr")?, input(value, nvr, "value")?) };
-        i.set_real(vrs, values)
+        i.slave_mut().set_real(vrs, values)
     })
 }
 
@@ -391,7 +394,7 @@ pub unsafe extern "C" fn fmi2SetInteger(
     call(c, Function::SetInteger, |i| {
         // SAFETY: module contract (arrays of nvr elements).
         let (vrs, values) = unsafe { (input(vr, nvr, "vr")?, input(value, nvr, "value")?) };
-        i.set_integer(vrs, values)
+        i.slave_mut().set_integer(vrs, values)
     })
 }
 
@@ -405,7 +408,7 @@ pub unsafe extern "C" fn fmi2SetBoolean(
     call(c, Function::SetBoolean, |i| {
         // SAFETY: module contract (arrays of nvr elements).
         let (vrs, values) = unsafe { (input(vr, nvr, "vr")?, input(value, nvr, "value")?) };
-        i.set_boolean(vrs, &bools_from(values))
+        i.slave_mut().set_boolean(vrs, &bools_from(values))
     })
 }
 
@@ -420,7 +423,7 @@ pub unsafe extern "C" fn fmi2SetString(
         // SAFETY: module contract (arrays of nvr elements). The strings are
         // never read: no String variable exists.
         let (vrs, _) = unsafe { (input(vr, nvr, "vr")?, input(value, nvr, "value")?) };
-        i.set_string(vrs)
+        i.slave_mut().set_string(vrs)
     })
 }
 
@@ -450,7 +453,7 @@ pub unsafe extern "C" fn fmi2GetFMUstate(
     call(c, Function::GetFmuState, |i| {
         // SAFETY: module contract: FMUstate points to an fmi2FMUstate.
         let slot = unsafe { state_slot(FMUstate, "FMUstate") }?;
-        *slot = i.get_fmu_state(reuse_of(*slot))? as fmi2FMUstate;
+        *slot = i.slave_mut().get_fmu_state(reuse_of(*slot))? as fmi2FMUstate;
         Ok(Status::Ok)
     })
 }
@@ -459,7 +462,7 @@ pub unsafe extern "C" fn fmi2GetFMUstate(
 pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, FMUstate: fmi2FMUstate) -> fmi2Status {
     call(c, Function::SetFmuState, |i| {
         let handle = reuse_of(FMUstate).ok_or_else(|| FmiError::error("FMUstate is NULL"))?;
-        i.set_fmu_state(handle)
+        i.slave_mut().set_fmu_state(handle)
     })
 }
 
@@ -477,7 +480,7 @@ pub unsafe extern "C" fn fmi2FreeFMUstate(
         let Some(handle) = reuse_of(*slot) else {
             return Ok(Status::Ok);
         };
-        i.free_fmu_state(handle)?;
+        i.slave_mut().free_fmu_state(handle)?;
         *slot = std::ptr::null_mut();
         Ok(Status::Ok)
     })
@@ -493,7 +496,7 @@ pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
         // SAFETY: module contract: size points to a size_t.
         let size = unsafe { out_value(size, "size") }?;
         let handle = reuse_of(FMUstate).ok_or_else(|| FmiError::error("FMUstate is NULL"))?;
-        *size = i.serialize_fmu_state(handle)?.len();
+        *size = i.slave().serialize_fmu_state(handle)?.len();
         Ok(Status::Ok)
     })
 }
@@ -507,7 +510,7 @@ pub unsafe extern "C" fn fmi2SerializeFMUstate(
 ) -> fmi2Status {
     call(c, Function::SerializeFmuState, |i| {
         let handle = reuse_of(FMUstate).ok_or_else(|| FmiError::error("FMUstate is NULL"))?;
-        let bytes = i.serialize_fmu_state(handle)?;
+        let bytes = i.slave().serialize_fmu_state(handle)?;
         if size < bytes.len() {
             return Err(FmiError::error(format!(
                 "the buffer has {size} bytes, the state needs {} (fmi2SerializedFMUstateSize)",
@@ -536,7 +539,9 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
                 state_slot(FMUstate, "FMUstate")?,
             )
         };
-        *slot = i.deserialize_fmu_state(bytes, reuse_of(*slot))? as fmi2FMUstate;
+        *slot = i
+            .slave_mut()
+            .deserialize_fmu_state(bytes, reuse_of(*slot))? as fmi2FMUstate;
         Ok(Status::Ok)
     })
 }
@@ -563,7 +568,8 @@ pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
                 output(dvUnknown, nUnknown, "dvUnknown")?,
             )
         };
-        i.directional_derivative(unknowns, knowns, seed, result)
+        i.slave_mut()
+            .directional_derivative(unknowns, knowns, seed, result)
     })
 }
 
@@ -584,7 +590,8 @@ pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
                 input(value, nvr, "value")?,
             )
         };
-        i.set_real_input_derivatives(vrs, orders, values)
+        i.slave_mut()
+            .set_real_input_derivatives(vrs, orders, values)
     })
 }
 
@@ -605,7 +612,8 @@ pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
                 output(value, nvr, "value")?,
             )
         };
-        i.get_real_output_derivatives(vrs, orders, values)
+        i.slave_mut()
+            .get_real_output_derivatives(vrs, orders, values)
     })
 }
 
@@ -619,7 +627,8 @@ pub unsafe extern "C" fn fmi2DoStep(
     _noSetFMUStatePriorToCurrentPoint: fmi2Boolean,
 ) -> fmi2Status {
     call(c, Function::DoStep, |i| {
-        i.do_step(currentCommunicationPoint, communicationStepSize)
+        i.slave_mut()
+            .do_step(currentCommunicationPoint, communicationStepSize)
     })
 }
 

@@ -1,14 +1,14 @@
 //! The FMI 2.0 instance: what `fmi2Instantiate` checks, the FMI 2.0 state
 //! table around every call, the status kinds of `fmi2Get*Status`, and a
-//! version-neutral [`Slave`] that does everything else (it is reached
-//! through `Deref`, so `instance.do_step(..)` is the slave's). No FFI here;
-//! [`crate::ffi`] calls these methods through [`Instance::run`], which
-//! enforces the state table and logs every failure.
+//! version-neutral [`Slave`] that does everything else, called explicitly
+//! ([`FrontEnd::slave_mut`]). No FFI here; [`crate::ffi`] calls the
+//! instance through [`FrontEnd::run`], which enforces the state table and
+//! logs every failure.
 
 use crate::states::{self, Function, MachineState};
 use crate::{FmiError, Status};
-use std::ops::{Deref, DerefMut};
 use std::path::PathBuf;
+use tdvass_fmu::entry::FrontEnd;
 use tdvass_fmu::slave::{Dialect, Logger};
 use tdvass_fmu::variables::FmiVersion;
 
@@ -58,15 +58,23 @@ pub struct Instance {
     slave: Slave,
 }
 
-impl Deref for Instance {
-    type Target = Slave;
-    fn deref(&self) -> &Slave {
+/// The state table is [`states::check`]; the rest is the slave's.
+impl FrontEnd for Instance {
+    type Function = Function;
+
+    fn name(function: Function) -> &'static str {
+        function.name()
+    }
+
+    fn check_state(&self, function: Function) -> Result<(), FmiError> {
+        states::check(function, self.machine_state())
+    }
+
+    fn slave(&self) -> &Slave {
         &self.slave
     }
-}
 
-impl DerefMut for Instance {
-    fn deref_mut(&mut self) -> &mut Slave {
+    fn slave_mut(&mut self) -> &mut Slave {
         &mut self.slave
     }
 }
@@ -124,7 +132,7 @@ impl Instance {
             resource_path,
             slave: Slave::new(FMI2_DIALECT, expected.clone(), logger),
         };
-        instance.logger().log(
+        instance.slave.logger().log(
             Status::Ok,
             &format!(
                 "fmi2Instantiate: instance `{}` of {} (GUID {}), resources {}",
@@ -156,42 +164,9 @@ impl Instance {
         self.resource_path.as_deref()
     }
 
-    /// Runs `op` as `function`: refuses it (fmi2Error, logged "fmi2X: not
-    /// allowed in state Y") when the state table forbids it in the current
-    /// state, and logs any failure with the function name. A refused call
-    /// changes nothing; `fmi2Fatal` moves the instance to `fatal`.
-    pub fn run<T>(
-        &mut self,
-        function: Function,
-        op: impl FnOnce(&mut Self) -> Result<T, FmiError>,
-    ) -> Result<T, Status> {
-        let result = states::check(function, self.machine_state()).and_then(|()| op(self));
-        result.map_err(|e| {
-            self.logger()
-                .log(e.status, &format!("{}: {}", function.name(), e.message));
-            if e.status == Status::Fatal {
-                self.slave.set_phase(MachineState::Fatal);
-            }
-            e.status
-        })
-    }
-
-    /// After a panic inside `function` (caught by the FFI layer): the
-    /// instance may be inconsistent, so it goes to `fatal`.
-    pub fn on_panic(&mut self, function: Function, message: &str) {
-        self.slave.set_phase(MachineState::Fatal);
-        self.logger().log(
-            Status::Fatal,
-            &format!(
-                "{}: internal error (panic: {message}); the instance is unusable, free it",
-                function.name()
-            ),
-        );
-    }
-
     /// Logs that a Model Exchange function was called.
     pub fn refuse_model_exchange(&self, function: &str) -> Status {
-        self.logger().log(
+        self.slave.logger().log(
             Status::Error,
             &format!("{function}: Model Exchange function; this FMU implements Co-Simulation only"),
         );
@@ -266,7 +241,7 @@ impl Instance {
 
 impl Drop for Instance {
     fn drop(&mut self) {
-        self.logger().log(
+        self.slave.logger().log(
             Status::Ok,
             &format!(
                 "fmi2FreeInstance: `{}` freed with {} FMU state(s)",
@@ -378,7 +353,7 @@ mod tests {
     fn wrong_state_is_refused_and_logged() {
         let (mut i, log) = new_instance(false);
         assert_eq!(
-            i.run(Function::DoStep, |i| i.do_step(0.0, 0.1)),
+            i.run(Function::DoStep, |i| i.slave_mut().do_step(0.0, 0.1)),
             Err(Status::Error)
         );
         let last = log.borrow().last().cloned().unwrap();
@@ -397,24 +372,25 @@ mod tests {
     fn divergence_is_a_discard_with_last_successful_time() {
         let (mut i, log) = new_instance(false);
         i.run(Function::SetReal, |i| {
-            i.set_real(
+            i.slave_mut().set_real(
                 &[vr("g"), vr("tau"), vr("x_s_start")],
                 &[-40000.0, 0.11, 0.01],
             )
         })
         .unwrap();
         i.run(Function::EnterInitializationMode, |i| {
-            i.enter_initialization_mode()
+            i.slave_mut().enter_initialization_mode()
         })
         .unwrap();
         assert_eq!(
             i.run(Function::ExitInitializationMode, |i| i
+                .slave_mut()
                 .exit_initialization_mode()),
             Ok(Status::Warning)
         );
         let mut t = 0.0;
         let status = loop {
-            match i.run(Function::DoStep, |i| i.do_step(t, 1.0)) {
+            match i.run(Function::DoStep, |i| i.slave_mut().do_step(t, 1.0)) {
                 Ok(_) => t += 1.0,
                 Err(s) => break s,
             }
@@ -438,9 +414,13 @@ mod tests {
             message.starts_with("fmi2DoStep: simulation diverged at t ="),
             "{message}"
         );
-        assert!(i.run(Function::DoStep, |i| i.do_step(last, 1.0)).is_err());
-        i.run(Function::Terminate, |i| i.terminate()).unwrap();
-        i.run(Function::Reset, |i| i.reset()).unwrap();
+        assert!(
+            i.run(Function::DoStep, |i| i.slave_mut().do_step(last, 1.0))
+                .is_err()
+        );
+        i.run(Function::Terminate, |i| i.slave_mut().terminate())
+            .unwrap();
+        i.run(Function::Reset, |i| i.slave_mut().reset()).unwrap();
         assert_eq!(i.machine_state(), MachineState::Instantiated);
     }
 
@@ -450,6 +430,6 @@ mod tests {
         i.on_panic(Function::DoStep, "boom");
         assert_eq!(i.machine_state(), MachineState::Fatal);
         assert_eq!(log.borrow().last().unwrap().0, Status::Fatal);
-        assert!(i.run(Function::Reset, |i| i.reset()).is_err());
+        assert!(i.run(Function::Reset, |i| i.slave_mut().reset()).is_err());
     }
 }

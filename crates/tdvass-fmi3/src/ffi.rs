@@ -1,6 +1,6 @@
 //! The C ABI: every fmi3 function of the FMI 3.0 standard, exported with C
 //! linkage. The Co-Simulation functions reach the safe [`Instance`]
-//! through [`Instance::run`] (which enforces the state table and logs
+//! through [`FrontEnd::run`] (which enforces the state table and logs
 //! failures); Model Exchange and Scheduled Execution instantiation return
 //! NULL with the reason logged, and the functions of Model Exchange, event
 //! mode, clocks and Scheduled Execution return `fmi3Error` with the reason
@@ -35,6 +35,7 @@ use crate::{FmiError, Status};
 use libc::{c_char, c_int, c_void, size_t};
 use std::ffi::CStr;
 use std::panic::{AssertUnwindSafe, catch_unwind};
+use tdvass_fmu::entry::FrontEnd;
 use tdvass_fmu::pointers::{self, c_string, copy_str, input, out_value, output, panic_text};
 use tdvass_fmu::slave::LogSink;
 
@@ -145,9 +146,7 @@ fn with_instance<T>(
         Ok(result) => result,
         Err(payload) => {
             let text = panic_text(&*payload);
-            let _ = catch_unwind(AssertUnwindSafe(|| {
-                instance.on_panic(function.name(), &text)
-            }));
+            let _ = catch_unwind(AssertUnwindSafe(|| instance.on_panic(function, &text)));
             Err(Status::Fatal)
         }
     }
@@ -368,7 +367,7 @@ pub unsafe extern "C" fn fmi3EnterInitializationMode(
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3ExitInitializationMode(instance: fmi3Instance) -> fmi3Status {
     call(instance, Function::ExitInitializationMode, |i| {
-        i.exit_initialization_mode()
+        i.slave_mut().exit_initialization_mode()
     })
 }
 
@@ -379,7 +378,7 @@ pub unsafe extern "C" fn fmi3EnterEventMode(instance: fmi3Instance) -> fmi3Statu
 
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3Terminate(instance: fmi3Instance) -> fmi3Status {
-    call(instance, Function::Terminate, |i| i.terminate())
+    call(instance, Function::Terminate, |i| i.slave_mut().terminate())
 }
 
 #[unsafe(no_mangle)]
@@ -688,7 +687,7 @@ pub unsafe extern "C" fn fmi3GetFMUState(
     call(instance, Function::GetFmuState, |i| {
         // SAFETY: module contract: FMUState points to an fmi3FMUState.
         let slot = unsafe { out_value(FMUState, "FMUState") }?;
-        *slot = i.get_fmu_state(reuse_of(*slot))? as fmi3FMUState;
+        *slot = i.slave_mut().get_fmu_state(reuse_of(*slot))? as fmi3FMUState;
         Ok(Status::Ok)
     })
 }
@@ -718,7 +717,7 @@ pub unsafe extern "C" fn fmi3FreeFMUState(
         let Some(handle) = reuse_of(*slot) else {
             return Ok(Status::Ok);
         };
-        i.free_fmu_state(handle)?;
+        i.slave_mut().free_fmu_state(handle)?;
         *slot = std::ptr::null_mut();
         Ok(Status::Ok)
     })
@@ -734,7 +733,7 @@ pub unsafe extern "C" fn fmi3SerializedFMUStateSize(
         // SAFETY: module contract: size points to a size_t.
         let size = unsafe { out_value(size, "size") }?;
         let handle = reuse_of(FMUState).ok_or_else(|| FmiError::error("FMUState is NULL"))?;
-        *size = i.serialize_fmu_state(handle)?.len();
+        *size = i.slave().serialize_fmu_state(handle)?.len();
         Ok(Status::Ok)
     })
 }
@@ -748,7 +747,7 @@ pub unsafe extern "C" fn fmi3SerializeFMUState(
 ) -> fmi3Status {
     call(instance, Function::SerializeFmuState, |i| {
         let handle = reuse_of(FMUState).ok_or_else(|| FmiError::error("FMUState is NULL"))?;
-        let bytes = i.serialize_fmu_state(handle)?;
+        let bytes = i.slave().serialize_fmu_state(handle)?;
         if size < bytes.len() {
             return Err(FmiError::error(format!(
                 "the buffer has {size} bytes, the state needs {} (fmi3SerializedFMUStateSize)",
@@ -777,7 +776,9 @@ pub unsafe extern "C" fn fmi3DeserializeFMUState(
                 out_value(FMUState, "FMUState")?,
             )
         };
-        *slot = i.deserialize_fmu_state(bytes, reuse_of(*slot))? as fmi3FMUState;
+        *slot = i
+            .slave_mut()
+            .deserialize_fmu_state(bytes, reuse_of(*slot))? as fmi3FMUState;
         Ok(Status::Ok)
     })
 }
@@ -820,10 +821,11 @@ fn derivative(
                 output(sensitivity, n_sensitivity, "sensitivity")?,
             )
         };
+        let slave = i.slave_mut();
         if adjoint {
-            i.adjoint_derivative(unknowns, knowns, seed, result)
+            slave.adjoint_derivative(unknowns, knowns, seed, result)
         } else {
-            i.directional_derivative(unknowns, knowns, seed, result)
+            slave.directional_derivative(unknowns, knowns, seed, result)
         }
     })
 }
@@ -905,7 +907,8 @@ pub unsafe extern "C" fn fmi3GetOutputDerivatives(
                 output(values, nValues, "values")?,
             )
         };
-        i.get_real_output_derivatives(vrs, orders, values)
+        i.slave_mut()
+            .get_real_output_derivatives(vrs, orders, values)
     })
 }
 
@@ -933,13 +936,14 @@ pub unsafe extern "C" fn fmi3ExitConfigurationMode(instance: fmi3Instance) -> fm
 fn advance_part(instance: fmi3Instance, from: f64, target: f64) -> Result<Option<f64>, Status> {
     with_instance(instance, Function::DoStep, |i| {
         let next = if i.has_intermediate_update() {
-            i.next_intermediate_time(from, target)
+            i.slave().next_intermediate_time(from, target)
         } else {
             None
         };
         let until = next.unwrap_or(target);
-        let span = until - i.time();
-        i.advance_within_step(until, span)?;
+        let slave = i.slave_mut();
+        let span = until - slave.time();
+        slave.advance_within_step(until, span)?;
         Ok(next)
     })
 }
@@ -1010,9 +1014,10 @@ pub unsafe extern "C" fn fmi3DoStep(
                 out_value(earlyReturn, "earlyReturn")?;
                 out_value(lastSuccessfulTime, "lastSuccessfulTime")?;
             }
-            let start = i.time();
+            let slave = i.slave_mut();
+            let start = slave.time();
             Ok((
-                i.begin_step(currentCommunicationPoint, communicationStepSize)?,
+                slave.begin_step(currentCommunicationPoint, communicationStepSize)?,
                 start,
             ))
         });
@@ -1041,13 +1046,13 @@ pub unsafe extern "C" fn fmi3DoStep(
                 // aligned above, and point to the caller's variables.
                 unsafe {
                     *eventHandlingNeeded = FMI3_FALSE;
-                    *terminateSimulation = if c.instance.terminate_requested() {
+                    *terminateSimulation = if c.instance.slave().terminate_requested() {
                         FMI3_TRUE
                     } else {
                         FMI3_FALSE
                     };
                     *earlyReturn = if early { FMI3_TRUE } else { FMI3_FALSE };
-                    *lastSuccessfulTime = c.instance.last_successful_time();
+                    *lastSuccessfulTime = c.instance.slave().last_successful_time();
                 }
             }
         }));

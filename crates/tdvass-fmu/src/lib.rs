@@ -29,6 +29,9 @@
 //!   every FMI version write alike (quick-xml).
 //! - [`pointers`]: instance handles, array and string arguments of the C
 //!   interfaces (the crate's only `unsafe`, shared by every FMI version).
+//! - [`entry`]: what a front-end's instance offers the C glue
+//!   ([`entry::FrontEnd`]): the call under its state table, and a panic
+//!   making it fatal.
 //!
 //! **What this crate owns and must never import.** It owns the behaviour of
 //! an FMU instance that does not depend on the FMI version. It imports the
@@ -38,6 +41,7 @@
 
 #![deny(unsafe_code)]
 
+pub mod entry;
 pub mod limits;
 pub mod markdown;
 pub mod markup;
