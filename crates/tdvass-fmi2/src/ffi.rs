@@ -1,14 +1,19 @@
 //! The C ABI: every fmi2 function of FMI 2.0 Co-Simulation, exported with C
 //! linkage, plus the Model Exchange functions as stubs that return
-//! `fmi2Error` with a log message. (About 900 lines because the standard
-//! has 47 functions, each a few lines of checks; they stay together so that
-//! every `unsafe` of the FMU is in one file.)
+//! `fmi2Error` with a log message. The standard has 47 functions, each a
+//! few lines of conversions; they stay together so that every `unsafe` of
+//! this crate is in one file.
 //!
-//! This layer only null-checks, converts raw pointers to slices and strings,
-//! and calls the safe [`Instance`] through [`FrontEnd::run`] (which enforces
-//! the state table and logs failures). Every entry point runs inside
-//! [`std::panic::catch_unwind`]: a panic becomes `fmi2Fatal` (the instance
-//! goes to `fatal`) instead of unwinding into the host.
+//! This layer holds the C signatures, converts `fmi2Boolean`, `fmi2Byte`
+//! and `fmi2Status`, and calls the safe [`Instance`] through
+//! [`tdvass_fmu::entry`]: [`entry::call`] finds the instance behind the
+//! component, runs the call under the FMI 2.0 state table
+//! ([`FrontEnd::run`], which logs failures) and catches every panic (a
+//! panic becomes `fmi2Fatal` and the instance goes to `fatal` instead of
+//! unwinding into the host); `entry` also holds the bodies of the
+//! FMU-state functions, `fmi2FreeInstance` and `fmi2SetDebugLogging`, which
+//! FMI 3.0 shares. Pointer arguments are checked by
+//! [`tdvass_fmu::pointers`].
 //!
 //! # Safety
 //!
@@ -21,8 +26,7 @@
 //! instance must not be used from two threads at the same time (FMI 2.0
 //! allows that restriction); distinct instances are independent (no global
 //! mutable state).
-// The only module besides the solver's whole-step loop (`solver::kernel`)
-// that may use `unsafe` (the crate denies it elsewhere).
+// The only module of the crate that may use `unsafe` (denied elsewhere).
 #![allow(unsafe_code)]
 #![allow(non_camel_case_types, non_snake_case, clippy::missing_safety_doc)]
 
@@ -31,9 +35,9 @@ use crate::states::Function;
 use crate::{FmiError, Status};
 use libc::{c_char, c_double, c_int, c_uint, c_void, size_t};
 use std::ffi::CStr;
-use std::panic::{AssertUnwindSafe, catch_unwind};
-use tdvass_fmu::entry::FrontEnd;
-use tdvass_fmu::pointers::{self, c_string, copy_str, input, out_value, output, panic_text};
+use std::panic::catch_unwind;
+use tdvass_fmu::entry::{self, FrontEnd, fmu_state};
+use tdvass_fmu::pointers::{self, c_string, copy_str, input, out_value, output};
 
 pub type fmi2Component = *mut c_void;
 pub type fmi2ComponentEnvironment = *mut c_void;
@@ -129,38 +133,17 @@ fn c_logger(
     })
 }
 
-/// Runs `op` on the instance behind `c` as `function`: state table, logging,
-/// panics caught (then `fmi2Fatal`). An invalid `c` gives `fmi2Error`.
-fn with_instance<T>(
-    c: fmi2Component,
-    function: Function,
-    op: impl FnOnce(&mut Instance) -> Result<T, FmiError>,
-) -> Result<T, Status> {
-    // SAFETY: `c` comes from the master, which passes a component of this FMU
-    // (module contract).
-    let Some(h) = (unsafe { pointers::handle::<Instance>(c, HANDLE_MAGIC) }) else {
-        return Err(Status::Error);
-    };
-    let instance = &mut h.instance;
-    match catch_unwind(AssertUnwindSafe(|| instance.run(function, op))) {
-        Ok(result) => result,
-        Err(payload) => {
-            let text = panic_text(&*payload);
-            let _ = catch_unwind(AssertUnwindSafe(|| instance.on_panic(function, &text)));
-            Err(Status::Fatal)
-        }
-    }
-}
-
-/// For functions returning `fmi2Status`.
+/// Runs `op` on the instance behind `c` as `function` ([`entry::call`]:
+/// state table, logging, panics caught, then `fmi2Fatal`). An invalid `c`
+/// gives `fmi2Error`.
 fn call(
     c: fmi2Component,
     function: Function,
     op: impl FnOnce(&mut Instance) -> Result<Status, FmiError>,
 ) -> fmi2Status {
-    match with_instance(c, function, op) {
-        Ok(s) | Err(s) => status(s),
-    }
+    // SAFETY: `c` comes from the master, which passes a component of this
+    // FMU (module contract).
+    status(unsafe { entry::call::<Instance, Instance>(c, HANDLE_MAGIC, function, op) })
 }
 
 fn bools_from(values: &[fmi2Boolean]) -> Vec<bool> {
@@ -193,16 +176,7 @@ pub unsafe extern "C" fn fmi2SetDebugLogging(
 ) -> fmi2Status {
     call(c, Function::SetDebugLogging, |i| {
         // SAFETY: module contract: `categories` holds `nCategories` strings.
-        let pointers = unsafe { input(categories, nCategories, "categories") }?;
-        let mut names = Vec::with_capacity(pointers.len());
-        for (k, &p) in pointers.iter().enumerate() {
-            // SAFETY: each entry is NULL or a NUL-terminated string.
-            let name = unsafe { copy_str(p) }
-                .ok_or_else(|| FmiError::error(format!("categories[{k}] is NULL")))?;
-            names.push(name);
-        }
-        let names: Vec<&str> = names.iter().map(String::as_str).collect();
-        i.set_debug_logging(loggingOn != FMI2_FALSE, &names)
+        unsafe { entry::set_debug_logging(i, loggingOn != FMI2_FALSE, nCategories, categories) }
     })
 }
 
@@ -251,15 +225,8 @@ pub unsafe extern "C" fn fmi2Instantiate(
 
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
-    let _ = catch_unwind(|| {
-        // SAFETY: module contract.
-        if let Some(h) = unsafe { pointers::handle::<Instance>(c, HANDLE_MAGIC) }
-            && h.instance.run(Function::FreeInstance, |_| Ok(())).is_ok()
-        {
-            // SAFETY: a live handle of this FMU; the master passes it no more.
-            unsafe { pointers::free::<Instance>(c, HANDLE_MAGIC) };
-        }
-    });
+    // SAFETY: module contract; the master passes `c` no more.
+    unsafe { entry::free_instance::<Instance, Instance>(c, HANDLE_MAGIC, Function::FreeInstance) }
 }
 
 #[unsafe(no_mangle)]
@@ -429,22 +396,6 @@ pub unsafe extern "C" fn fmi2SetString(
 
 // -------------------------------------------------------------- FMU states
 
-/// The handle stored at `*state`, `None` for NULL.
-///
-/// # Safety
-/// `state` is a valid pointer to an `fmi2FMUstate`.
-unsafe fn state_slot<'a>(
-    state: *mut fmi2FMUstate,
-    what: &str,
-) -> Result<&'a mut fmi2FMUstate, FmiError> {
-    // SAFETY: forwarded contract.
-    unsafe { out_value(state, what) }
-}
-
-fn reuse_of(state: fmi2FMUstate) -> Option<usize> {
-    (!state.is_null()).then_some(state as usize)
-}
-
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetFMUstate(
     c: fmi2Component,
@@ -452,18 +403,13 @@ pub unsafe extern "C" fn fmi2GetFMUstate(
 ) -> fmi2Status {
     call(c, Function::GetFmuState, |i| {
         // SAFETY: module contract: FMUstate points to an fmi2FMUstate.
-        let slot = unsafe { state_slot(FMUstate, "FMUstate") }?;
-        *slot = i.slave_mut().get_fmu_state(reuse_of(*slot))? as fmi2FMUstate;
-        Ok(Status::Ok)
+        unsafe { fmu_state::get(i, FMUstate) }
     })
 }
 
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, FMUstate: fmi2FMUstate) -> fmi2Status {
-    call(c, Function::SetFmuState, |i| {
-        let handle = reuse_of(FMUstate).ok_or_else(|| FmiError::error("FMUstate is NULL"))?;
-        i.slave_mut().set_fmu_state(handle)
-    })
+    call(c, Function::SetFmuState, |i| fmu_state::set(i, FMUstate))
 }
 
 #[unsafe(no_mangle)]
@@ -472,17 +418,9 @@ pub unsafe extern "C" fn fmi2FreeFMUstate(
     FMUstate: *mut fmi2FMUstate,
 ) -> fmi2Status {
     call(c, Function::FreeFmuState, |i| {
-        if FMUstate.is_null() {
-            return Ok(Status::Ok);
-        }
-        // SAFETY: module contract: FMUstate points to an fmi2FMUstate.
-        let slot = unsafe { state_slot(FMUstate, "FMUstate") }?;
-        let Some(handle) = reuse_of(*slot) else {
-            return Ok(Status::Ok);
-        };
-        i.slave_mut().free_fmu_state(handle)?;
-        *slot = std::ptr::null_mut();
-        Ok(Status::Ok)
+        // SAFETY: module contract: FMUstate is NULL or points to an
+        // fmi2FMUstate.
+        unsafe { fmu_state::free(i, FMUstate) }
     })
 }
 
@@ -494,10 +432,7 @@ pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
 ) -> fmi2Status {
     call(c, Function::SerializedFmuStateSize, |i| {
         // SAFETY: module contract: size points to a size_t.
-        let size = unsafe { out_value(size, "size") }?;
-        let handle = reuse_of(FMUstate).ok_or_else(|| FmiError::error("FMUstate is NULL"))?;
-        *size = i.slave().serialize_fmu_state(handle)?.len();
-        Ok(Status::Ok)
+        unsafe { fmu_state::serialized_size(i, FMUstate, size) }
     })
 }
 
@@ -509,18 +444,9 @@ pub unsafe extern "C" fn fmi2SerializeFMUstate(
     size: size_t,
 ) -> fmi2Status {
     call(c, Function::SerializeFmuState, |i| {
-        let handle = reuse_of(FMUstate).ok_or_else(|| FmiError::error("FMUstate is NULL"))?;
-        let bytes = i.slave().serialize_fmu_state(handle)?;
-        if size < bytes.len() {
-            return Err(FmiError::error(format!(
-                "the buffer has {size} bytes, the state needs {} (fmi2SerializedFMUstateSize)",
-                bytes.len()
-            )));
-        }
-        // SAFETY: module contract: serializedState holds `size` writable bytes.
-        let out = unsafe { output(serializedState as *mut u8, bytes.len(), "serializedState") }?;
-        out.copy_from_slice(&bytes);
-        Ok(Status::Ok)
+        // SAFETY: module contract: serializedState holds `size` writable
+        // bytes (fmi2Byte is a byte).
+        unsafe { fmu_state::serialize(i, FMUstate, serializedState as *mut u8, size) }
     })
 }
 
@@ -532,17 +458,9 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
     FMUstate: *mut fmi2FMUstate,
 ) -> fmi2Status {
     call(c, Function::DeSerializeFmuState, |i| {
-        // SAFETY: module contract: `size` readable bytes and a state slot.
-        let (bytes, slot) = unsafe {
-            (
-                input(serializedState as *const u8, size, "serializedState")?,
-                state_slot(FMUstate, "FMUstate")?,
-            )
-        };
-        *slot = i
-            .slave_mut()
-            .deserialize_fmu_state(bytes, reuse_of(*slot))? as fmi2FMUstate;
-        Ok(Status::Ok)
+        // SAFETY: module contract: `size` readable bytes (fmi2Byte is a
+        // byte) and a state slot.
+        unsafe { fmu_state::deserialize(i, serializedState as *const u8, size, FMUstate) }
     })
 }
 
@@ -713,15 +631,13 @@ pub unsafe extern "C" fn fmi2GetStringStatus(
 
 // ------------------------------------------- Model Exchange (not supported)
 
+/// Logs that the Model Exchange function `function` was called (when `c`
+/// is a live component) and returns `fmi2Error`.
 fn model_exchange_only(c: fmi2Component, function: &str) -> fmi2Status {
-    let refused = catch_unwind(AssertUnwindSafe(|| {
-        // SAFETY: module contract.
-        if let Some(h) = unsafe { pointers::handle::<Instance>(c, HANDLE_MAGIC) } {
-            h.instance.refuse_model_exchange(function);
-        }
-    }));
-    let _ = refused;
-    status(Status::Error)
+    let message =
+        || format!("{function}: Model Exchange function; this FMU implements Co-Simulation only");
+    // SAFETY: module contract.
+    status(unsafe { entry::log_refusal::<Instance, Instance>(c, HANDLE_MAGIC, message) })
 }
 
 #[unsafe(no_mangle)]

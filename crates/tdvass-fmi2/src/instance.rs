@@ -79,6 +79,13 @@ impl FrontEnd for Instance {
     }
 }
 
+/// The component handle of [`crate::ffi`] holds the instance itself.
+impl AsMut<Instance> for Instance {
+    fn as_mut(&mut self) -> &mut Instance {
+        self
+    }
+}
+
 impl Instance {
     /// `fmi2Instantiate`: checks the request and creates the instance. A
     /// refusal is logged through `logger` and returns `None`.
@@ -162,21 +169,6 @@ impl Instance {
     /// The resources directory given at instantiation.
     pub fn resource_path(&self) -> Option<&std::path::Path> {
         self.resource_path.as_deref()
-    }
-
-    /// Logs that a Model Exchange function was called.
-    pub fn refuse_model_exchange(&self, function: &str) -> Status {
-        self.slave.logger().log(
-            Status::Error,
-            &format!("{function}: Model Exchange function; this FMU implements Co-Simulation only"),
-        );
-        Status::Error
-    }
-
-    /// `fmi2SetDebugLogging`: `categories` empty means all. Unknown
-    /// categories refuse the whole call.
-    pub fn set_debug_logging(&mut self, on: bool, categories: &[&str]) -> Result<Status, FmiError> {
-        self.slave.logger_mut().set_categories(on, categories)
     }
 
     // ----------------------------------------------------------------- status

@@ -4,9 +4,9 @@
 //! version-neutral [`Slave`] that does everything else, called explicitly
 //! ([`FrontEnd::slave_mut`]). Where FMI 3.0 adds to a slave's function,
 //! the instance has its own method ([`Instance::reset`],
-//! [`Instance::enter_initialization_mode`], [`Instance::set_fmu_state`],
-//! the typed getters and setters) and the C layer calls that one. No FFI
-//! here; [`crate::ffi`] calls the instance through [`FrontEnd::run`].
+//! [`Instance::enter_initialization_mode`], the typed getters and setters)
+//! and the C layer calls that one. No FFI here; [`crate::ffi`] calls the
+//! instance through [`FrontEnd::run`].
 
 use crate::states::{self, Function, State};
 use crate::types::{ValueType, fmi3_type};
@@ -67,7 +67,8 @@ pub struct Instance {
 }
 
 /// The state table is [`states::check`] on [`Instance::state`]; beyond the
-/// slave, a panic ends an intermediate update.
+/// slave, a panic ends an intermediate update and a restored FMU state ends
+/// Configuration Mode.
 impl FrontEnd for Instance {
     type Function = Function;
 
@@ -89,6 +90,15 @@ impl FrontEnd for Instance {
 
     fn after_panic(&mut self) {
         self.intermediate = None;
+    }
+
+    /// An FMU state does not hold Configuration Mode: restoring one taken
+    /// after instantiation ends it (the instance is then in the restored
+    /// state, where every variable is accessible).
+    fn fmu_state_restored(&mut self) {
+        if self.slave.phase() != Phase::Instantiated {
+            self.configuration = false;
+        }
     }
 }
 
@@ -209,21 +219,6 @@ impl Instance {
         }
     }
 
-    /// Logs why `function` (of Model Exchange, Scheduled Execution, event
-    /// mode or clocks) does not apply, and returns Error.
-    pub fn refuse_not_applicable(&self, function: &str, reason: &str) -> Status {
-        self.slave.logger().log(
-            Status::Error,
-            &format!("{function}: {reason}; this FMU implements Co-Simulation only, without event mode or clocks"),
-        );
-        Status::Error
-    }
-
-    /// `fmi3SetDebugLogging`: `categories` empty means all.
-    pub fn set_debug_logging(&mut self, on: bool, categories: &[&str]) -> Result<Status, FmiError> {
-        self.slave.logger_mut().set_categories(on, categories)
-    }
-
     /// `fmi3EnterInitializationMode`: the experiment's times, then
     /// Initialization Mode.
     pub fn enter_initialization_mode(
@@ -247,17 +242,6 @@ impl Instance {
     pub fn exit_configuration_mode(&mut self) -> Result<Status, FmiError> {
         self.configuration = false;
         Ok(Status::Ok)
-    }
-
-    /// `fmi3SetFMUState`. An FMU state does not hold Configuration Mode:
-    /// restoring one taken after instantiation ends it (the instance is
-    /// then in the restored state, where every variable is accessible).
-    pub fn set_fmu_state(&mut self, handle: usize) -> Result<Status, FmiError> {
-        let status = self.slave.set_fmu_state(handle)?;
-        if self.slave.phase() != Phase::Instantiated {
-            self.configuration = false;
-        }
-        Ok(status)
     }
 
     /// `fmi3Reset`: the slave's [`Slave::reset`] (back to Instantiated with

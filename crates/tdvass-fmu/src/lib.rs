@@ -29,9 +29,11 @@
 //!   every FMI version write alike (quick-xml).
 //! - [`pointers`]: instance handles, array and string arguments of the C
 //!   interfaces (the crate's only `unsafe`, shared by every FMI version).
-//! - [`entry`]: what a front-end's instance offers the C glue
-//!   ([`entry::FrontEnd`]): the call under its state table, and a panic
-//!   making it fatal.
+//! - [`entry`]: what the C entry points of every FMI version do around an
+//!   instance: the call under the front-end's state table with panics
+//!   caught ([`entry::with_instance`], [`entry::call`]), `FreeInstance`,
+//!   `SetDebugLogging` and the FMU-state functions; a front-end's instance
+//!   implements [`entry::FrontEnd`].
 //!
 //! **What this crate owns and must never import.** It owns the behaviour of
 //! an FMU instance that does not depend on the FMI version. It imports the

@@ -210,6 +210,11 @@ impl Slave {
         );
     }
 
+    /// How the front-end names what the slave's messages mention.
+    pub fn dialect(&self) -> &Dialect {
+        &self.dialect
+    }
+
     /// The logger.
     pub fn logger(&self) -> &Logger {
         &self.logger
