@@ -329,3 +329,6 @@ pub mod fmu_state {
         Ok(Status::Ok)
     }
 }
+
+#[cfg(test)]
+mod tests;

@@ -397,4 +397,4 @@ impl Slave {
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

@@ -9,11 +9,12 @@ use std::cell::RefCell;
 use std::rc::Rc;
 use tdvass::model::V_S;
 
-type Log = Rc<RefCell<Vec<(Status, String, String)>>>;
+/// What a slave logged: `(status, category, message)`.
+pub(crate) type Log = Rc<RefCell<Vec<(Status, String, String)>>>;
 
 /// The names of a made-up front-end: the slave's messages use whatever its
 /// dialect says (the variables are the ones both FMI versions have).
-const TEST_DIALECT: Dialect = Dialect {
+pub(crate) const TEST_DIALECT: Dialect = Dialect {
     version: FmiVersion::Fmi2,
     prefix: "test",
     last_successful_time: "testLastSuccessfulTime",
@@ -25,7 +26,8 @@ const TEST_DIALECT: Dialect = Dialect {
     input_slope_remedy: "call testSetRealInputDerivatives",
 };
 
-fn new_slave(logging_on: bool) -> (Slave, Log) {
+/// A slave speaking [`TEST_DIALECT`] and the log it writes to.
+pub(crate) fn new_slave(logging_on: bool) -> (Slave, Log) {
     let log: Log = Rc::default();
     let sink = log.clone();
     let logger = Logger::new(
@@ -44,7 +46,8 @@ fn start(s: &mut Slave) {
     s.exit_initialization_mode().unwrap();
 }
 
-fn initialized() -> (Slave, Log) {
+/// A slave in `stepComplete` at t = 0 (stop time 15 s).
+pub(crate) fn initialized() -> (Slave, Log) {
     let (mut s, log) = new_slave(false);
     s.setup_experiment(None, 0.0, Some(15.0)).unwrap();
     start(&mut s);
@@ -353,9 +356,14 @@ fn debug_logging_categories() {
     s.reset().unwrap();
     assert_eq!(log.borrow().len(), before + 1);
     // Errors are always reported.
-    s.logger().log(Status::Error, "refused");
+    let refused = FmiError::error("not allowed in state instantiated");
+    assert_eq!(s.report_failure("testTerminate", &refused), Status::Error);
     assert_eq!(log.borrow().len(), before + 2);
-    assert_eq!(log.borrow().last().unwrap().1, "logStatusError");
+    assert_eq!(
+        log.borrow().last().unwrap().2,
+        "testTerminate: not allowed in state instantiated"
+    );
+    assert_eq!(s.phase(), Phase::Instantiated);
 }
 
 /// PVASS on an ISO 8608 road at 30 m/s for 2 s: class H loses the tire
