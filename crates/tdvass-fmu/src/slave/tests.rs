@@ -366,6 +366,23 @@ fn debug_logging_categories() {
     assert_eq!(s.phase(), Phase::Instantiated);
 }
 
+/// Sets PVASS on an ISO 8608 road of `class` at 30 m/s with the tire
+/// model `tire_contact`, and initializes.
+fn pvass_at_30(s: &mut Slave, class: i32, tire_contact: i32) {
+    s.set_integer(
+        &[
+            vr("variant"),
+            vr("road"),
+            vr("road_class"),
+            vr("tire_contact"),
+        ],
+        &[2, 2, class, tire_contact],
+    )
+    .unwrap();
+    s.set_real(&[vr("vehicle_speed")], &[30.0]).unwrap();
+    start(s);
+}
+
 /// PVASS on an ISO 8608 road at 30 m/s for 2 s: class H loses the tire
 /// contact (one warning, naming time, variable and value, and a growing
 /// `contact_loss_time`), class A does not.
@@ -373,13 +390,7 @@ fn debug_logging_categories() {
 fn a_loss_of_tire_contact_is_logged_once() {
     for (class, loses) in [(8, true), (1, false)] {
         let (mut s, log) = new_slave(false);
-        s.set_integer(
-            &[vr("variant"), vr("road"), vr("road_class")],
-            &[2, 2, class],
-        )
-        .unwrap();
-        s.set_real(&[vr("vehicle_speed")], &[30.0]).unwrap();
-        start(&mut s);
+        pvass_at_30(&mut s, class, 0);
         let mut t = 0.0;
         for _ in 0..200 {
             s.do_step(t, 0.01).unwrap();
@@ -426,18 +437,7 @@ fn the_unilateral_tire_logs_each_lift_off_as_an_event() {
         message.contains("`tire_contact`") && message.contains("invalid value 2"),
         "{message}"
     );
-    s.set_integer(
-        &[
-            vr("variant"),
-            vr("road"),
-            vr("road_class"),
-            vr("tire_contact"),
-        ],
-        &[2, 2, 8, 1],
-    )
-    .unwrap();
-    s.set_real(&[vr("vehicle_speed")], &[30.0]).unwrap();
-    start(&mut s);
+    pvass_at_30(&mut s, 8, 1);
     let static_load = (345.0 + 4.05) * 9.80665 + 40.5 * 9.80665;
     let limit = static_load / 190000.0;
     let (mut t, mut flights, mut contacts) = (0.0, 0, 0);
@@ -499,13 +499,7 @@ fn the_unilateral_tire_logs_each_lift_off_as_an_event() {
 fn the_bilateral_tire_counts_its_would_be_lift_offs() {
     for (class, loses) in [(8, true), (1, false)] {
         let (mut s, log) = new_slave(true);
-        s.set_integer(
-            &[vr("variant"), vr("road"), vr("road_class")],
-            &[2, 2, class],
-        )
-        .unwrap();
-        s.set_real(&[vr("vehicle_speed")], &[30.0]).unwrap();
-        start(&mut s);
+        pvass_at_30(&mut s, class, 0);
         s.do_step(0.0, 2.0).unwrap();
         let count = lift_off_count(&mut s);
         assert_eq!(count > 0, loses, "class {class}: {count}");
