@@ -1,14 +1,19 @@
 //! The C ABI: every fmi2 function of FMI 2.0 Co-Simulation, exported with C
 //! linkage, plus the Model Exchange functions as stubs that return
-//! `fmi2Error` with a log message. (About 900 lines because the standard
-//! has 47 functions, each a few lines of checks; they stay together so that
-//! every `unsafe` of the FMU is in one file.)
+//! `fmi2Error` with a log message. The standard has 47 functions, each a
+//! few lines of conversions; they stay together so that every `unsafe` of
+//! this crate is in one file.
 //!
-//! This layer only null-checks, converts raw pointers to slices and strings,
-//! and calls the safe [`Instance`] through [`Instance::run`] (which enforces
-//! the state table and logs failures). Every entry point runs inside
-//! [`std::panic::catch_unwind`]: a panic becomes `fmi2Fatal` (the instance
-//! goes to `fatal`) instead of unwinding into the host.
+//! This layer holds the C signatures, converts `fmi2Boolean`, `fmi2Byte`
+//! and `fmi2Status`, and calls the safe [`Instance`] through
+//! [`tdvass_fmu::entry`]: [`entry::call`] finds the instance behind the
+//! component, runs the call under the FMI 2.0 state table
+//! ([`FrontEnd::run`], which logs failures) and catches every panic (a
+//! panic becomes `fmi2Fatal` and the instance goes to `fatal` instead of
+//! unwinding into the host); `entry` also holds the bodies of the
+//! FMU-state functions, `fmi2FreeInstance` and `fmi2SetDebugLogging`, which
+//! FMI 3.0 shares. Pointer arguments are checked by
+//! [`tdvass_fmu::pointers`].
 //!
 //! # Safety
 //!
@@ -21,8 +26,7 @@
 //! instance must not be used from two threads at the same time (FMI 2.0
 //! allows that restriction); distinct instances are independent (no global
 //! mutable state).
-// The only module besides the solver's whole-step loop (`solver::kernel`)
-// that may use `unsafe` (the crate denies it elsewhere).
+// The only module of the crate that may use `unsafe` (denied elsewhere).
 #![allow(unsafe_code)]
 #![allow(non_camel_case_types, non_snake_case, clippy::missing_safety_doc)]
 
@@ -31,8 +35,9 @@ use crate::states::Function;
 use crate::{FmiError, Status};
 use libc::{c_char, c_double, c_int, c_uint, c_void, size_t};
 use std::ffi::CStr;
-use std::panic::{AssertUnwindSafe, catch_unwind};
-use tdvass_fmu::pointers::{self, c_string, copy_str, input, out_value, output, panic_text};
+use std::panic::catch_unwind;
+use tdvass_fmu::entry::{self, FrontEnd, fmu_state};
+use tdvass_fmu::pointers::{self, c_string, copy_str, input, out_value, output};
 
 pub type fmi2Component = *mut c_void;
 pub type fmi2ComponentEnvironment = *mut c_void;
@@ -128,38 +133,17 @@ fn c_logger(
     })
 }
 
-/// Runs `op` on the instance behind `c` as `function`: state table, logging,
-/// panics caught (then `fmi2Fatal`). An invalid `c` gives `fmi2Error`.
-fn with_instance<T>(
-    c: fmi2Component,
-    function: Function,
-    op: impl FnOnce(&mut Instance) -> Result<T, FmiError>,
-) -> Result<T, Status> {
-    // SAFETY: `c` comes from the master, which passes a component of this FMU
-    // (module contract).
-    let Some(h) = (unsafe { pointers::handle::<Instance>(c, HANDLE_MAGIC) }) else {
-        return Err(Status::Error);
-    };
-    let instance = &mut h.instance;
-    match catch_unwind(AssertUnwindSafe(|| instance.run(function, op))) {
-        Ok(result) => result,
-        Err(payload) => {
-            let text = panic_text(&*payload);
-            let _ = catch_unwind(AssertUnwindSafe(|| instance.on_panic(function, &text)));
-            Err(Status::Fatal)
-        }
-    }
-}
-
-/// For functions returning `fmi2Status`.
+/// Runs `op` on the instance behind `c` as `function` ([`entry::call`]:
+/// state table, logging, panics caught, then `fmi2Fatal`). An invalid `c`
+/// gives `fmi2Error`.
 fn call(
     c: fmi2Component,
     function: Function,
     op: impl FnOnce(&mut Instance) -> Result<Status, FmiError>,
 ) -> fmi2Status {
-    match with_instance(c, function, op) {
-        Ok(s) | Err(s) => status(s),
-    }
+    // SAFETY: `c` comes from the master, which passes a component of this
+    // FMU (module contract).
+    status(unsafe { entry::call::<Instance, Instance>(c, HANDLE_MAGIC, function, op) })
 }
 
 fn bools_from(values: &[fmi2Boolean]) -> Vec<bool> {
@@ -192,16 +176,7 @@ pub unsafe extern "C" fn fmi2SetDebugLogging(
 ) -> fmi2Status {
     call(c, Function::SetDebugLogging, |i| {
         // SAFETY: module contract: `categories` holds `nCategories` strings.
-        let pointers = unsafe { input(categories, nCategories, "categories") }?;
-        let mut names = Vec::with_capacity(pointers.len());
-        for (k, &p) in pointers.iter().enumerate() {
-            // SAFETY: each entry is NULL or a NUL-terminated string.
-            let name = unsafe { copy_str(p) }
-                .ok_or_else(|| FmiError::error(format!("categories[{k}] is NULL")))?;
-            names.push(name);
-        }
-        let names: Vec<&str> = names.iter().map(String::as_str).collect();
-        i.set_debug_logging(loggingOn != FMI2_FALSE, &names)
+        unsafe { entry::set_debug_logging(i, loggingOn != FMI2_FALSE, nCategories, categories) }
     })
 }
 
@@ -250,15 +225,8 @@ pub unsafe extern "C" fn fmi2Instantiate(
 
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
-    let _ = catch_unwind(|| {
-        // SAFETY: module contract.
-        if let Some(h) = unsafe { pointers::handle::<Instance>(c, HANDLE_MAGIC) }
-            && h.instance.run(Function::FreeInstance, |_| Ok(())).is_ok()
-        {
-            // SAFETY: a live handle of this FMU; the master passes it no more.
-            unsafe { pointers::free::<Instance>(c, HANDLE_MAGIC) };
-        }
-    });
+    // SAFETY: module contract; the master passes `c` no more.
+    unsafe { entry::free_instance::<Instance, Instance>(c, HANDLE_MAGIC, Function::FreeInstance) }
 }
 
 #[unsafe(no_mangle)]
@@ -271,7 +239,7 @@ pub unsafe extern "C" fn fmi2SetupExperiment(
     stopTime: fmi2Real,
 ) -> fmi2Status {
     call(c, Function::SetupExperiment, |i| {
-        i.setup_experiment(
+        i.slave_mut().setup_experiment(
             (toleranceDefined != FMI2_FALSE).then_some(tolerance),
             startTime,
             (stopTimeDefined != FMI2_FALSE).then_some(stopTime),
@@ -282,25 +250,27 @@ pub unsafe extern "C" fn fmi2SetupExperiment(
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2Status {
     call(c, Function::EnterInitializationMode, |i: &mut Instance| {
-        i.enter_initialization_mode()
+        i.slave_mut().enter_initialization_mode()
     })
 }
 
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Status {
     call(c, Function::ExitInitializationMode, |i: &mut Instance| {
-        i.exit_initialization_mode()
+        i.slave_mut().exit_initialization_mode()
     })
 }
 
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2Terminate(c: fmi2Component) -> fmi2Status {
-    call(c, Function::Terminate, |i: &mut Instance| i.terminate())
+    call(c, Function::Terminate, |i: &mut Instance| {
+        i.slave_mut().terminate()
+    })
 }
 
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
-    call(c, Function::Reset, |i: &mut Instance| i.reset())
+    call(c, Function::Reset, |i: &mut Instance| i.slave_mut().reset())
 }
 
 // ------------------------------------------------------------- get and set
@@ -315,7 +285,7 @@ pub unsafe extern "C" fn fmi2GetReal(
     call(c, Function::GetReal, |i| {
         // SAFETY: module contract (arrays of nvr elements).
         let (vrs, values) = unsafe { (input(vr, nvr, "vr")?, output(value, nvr, "value")?) };
-        i.get_real(vrs, values)
+        i.slave_mut().get_real(vrs, values)
     })
 }
 
@@ -329,7 +299,7 @@ pub unsafe extern "C" fn fmi2GetInteger(
     call(c, Function::GetInteger, |i| {
         // SAFETY: module contract (arrays of nvr elements).
         let (vrs, values) = unsafe { (input(vr, nvr, "vr")?, output(value, nvr, "value")?) };
-        i.get_integer(vrs, values)
+        i.slave_mut().get_integer(vrs, values)
     })
 }
 
@@ -344,7 +314,7 @@ pub unsafe extern "C" fn fmi2GetBoolean(
         // SAFETY: module contract (arrays of nvr elements).
         let (vrs, values) = unsafe { (input(vr, nvr, "vr")?, output(value, nvr, "value")?) };
         let mut flags = vec![false; vrs.len()];
-        let s = i.get_boolean(vrs, &mut flags)?;
+        let s = i.slave_mut().get_boolean(vrs, &mut flags)?;
         for (v, f) in values.iter_mut().zip(flags) {
             *v = if f { FMI2_TRUE } else { FMI2_FALSE };
         }
@@ -363,7 +333,7 @@ pub unsafe extern "C" fn fmi2GetString(
         // SAFETY: module contract (arrays of nvr elements). No String
         // variable exists, so nothing is ever written.
         let (vrs, _) = unsafe { (input(vr, nvr, "vr")?, output(value, nvr, "value")?) };
-        i.get_string(vrs)
+        i.slave_mut().get_string(vrs)
     })
 }
 
@@ -377,7 +347,7 @@ pub unsafe extern "C" fn fmi2SetReal(
     call(c, Function::SetReal, |i| {
         // SAFETY: module contract (arrays of nvr elements).
         let (vrs, values) = unsafe { (input(vr, nvr, "vr")?, input(value, nvr, "value")?) };
-        i.set_real(vrs, values)
+        i.slave_mut().set_real(vrs, values)
     })
 }
 
@@ -391,7 +361,7 @@ pub unsafe extern "C" fn fmi2SetInteger(
     call(c, Function::SetInteger, |i| {
         // SAFETY: module contract (arrays of nvr elements).
         let (vrs, values) = unsafe { (input(vr, nvr, "vr")?, input(value, nvr, "value")?) };
-        i.set_integer(vrs, values)
+        i.slave_mut().set_integer(vrs, values)
     })
 }
 
@@ -405,7 +375,7 @@ pub unsafe extern "C" fn fmi2SetBoolean(
     call(c, Function::SetBoolean, |i| {
         // SAFETY: module contract (arrays of nvr elements).
         let (vrs, values) = unsafe { (input(vr, nvr, "vr")?, input(value, nvr, "value")?) };
-        i.set_boolean(vrs, &bools_from(values))
+        i.slave_mut().set_boolean(vrs, &bools_from(values))
     })
 }
 
@@ -420,27 +390,11 @@ pub unsafe extern "C" fn fmi2SetString(
         // SAFETY: module contract (arrays of nvr elements). The strings are
         // never read: no String variable exists.
         let (vrs, _) = unsafe { (input(vr, nvr, "vr")?, input(value, nvr, "value")?) };
-        i.set_string(vrs)
+        i.slave_mut().set_string(vrs)
     })
 }
 
 // -------------------------------------------------------------- FMU states
-
-/// The handle stored at `*state`, `None` for NULL.
-///
-/// # Safety
-/// `state` is a valid pointer to an `fmi2FMUstate`.
-unsafe fn state_slot<'a>(
-    state: *mut fmi2FMUstate,
-    what: &str,
-) -> Result<&'a mut fmi2FMUstate, FmiError> {
-    // SAFETY: forwarded contract.
-    unsafe { out_value(state, what) }
-}
-
-fn reuse_of(state: fmi2FMUstate) -> Option<usize> {
-    (!state.is_null()).then_some(state as usize)
-}
 
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetFMUstate(
@@ -449,18 +403,13 @@ pub unsafe extern "C" fn fmi2GetFMUstate(
 ) -> fmi2Status {
     call(c, Function::GetFmuState, |i| {
         // SAFETY: module contract: FMUstate points to an fmi2FMUstate.
-        let slot = unsafe { state_slot(FMUstate, "FMUstate") }?;
-        *slot = i.get_fmu_state(reuse_of(*slot))? as fmi2FMUstate;
-        Ok(Status::Ok)
+        unsafe { fmu_state::get(i, FMUstate) }
     })
 }
 
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, FMUstate: fmi2FMUstate) -> fmi2Status {
-    call(c, Function::SetFmuState, |i| {
-        let handle = reuse_of(FMUstate).ok_or_else(|| FmiError::error("FMUstate is NULL"))?;
-        i.set_fmu_state(handle)
-    })
+    call(c, Function::SetFmuState, |i| fmu_state::set(i, FMUstate))
 }
 
 #[unsafe(no_mangle)]
@@ -469,17 +418,9 @@ pub unsafe extern "C" fn fmi2FreeFMUstate(
     FMUstate: *mut fmi2FMUstate,
 ) -> fmi2Status {
     call(c, Function::FreeFmuState, |i| {
-        if FMUstate.is_null() {
-            return Ok(Status::Ok);
-        }
-        // SAFETY: module contract: FMUstate points to an fmi2FMUstate.
-        let slot = unsafe { state_slot(FMUstate, "FMUstate") }?;
-        let Some(handle) = reuse_of(*slot) else {
-            return Ok(Status::Ok);
-        };
-        i.free_fmu_state(handle)?;
-        *slot = std::ptr::null_mut();
-        Ok(Status::Ok)
+        // SAFETY: module contract: FMUstate is NULL or points to an
+        // fmi2FMUstate.
+        unsafe { fmu_state::free(i, FMUstate) }
     })
 }
 
@@ -491,10 +432,7 @@ pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
 ) -> fmi2Status {
     call(c, Function::SerializedFmuStateSize, |i| {
         // SAFETY: module contract: size points to a size_t.
-        let size = unsafe { out_value(size, "size") }?;
-        let handle = reuse_of(FMUstate).ok_or_else(|| FmiError::error("FMUstate is NULL"))?;
-        *size = i.serialize_fmu_state(handle)?.len();
-        Ok(Status::Ok)
+        unsafe { fmu_state::serialized_size(i, FMUstate, size) }
     })
 }
 
@@ -506,18 +444,9 @@ pub unsafe extern "C" fn fmi2SerializeFMUstate(
     size: size_t,
 ) -> fmi2Status {
     call(c, Function::SerializeFmuState, |i| {
-        let handle = reuse_of(FMUstate).ok_or_else(|| FmiError::error("FMUstate is NULL"))?;
-        let bytes = i.serialize_fmu_state(handle)?;
-        if size < bytes.len() {
-            return Err(FmiError::error(format!(
-                "the buffer has {size} bytes, the state needs {} (fmi2SerializedFMUstateSize)",
-                bytes.len()
-            )));
-        }
-        // SAFETY: module contract: serializedState holds `size` writable bytes.
-        let out = unsafe { output(serializedState as *mut u8, bytes.len(), "serializedState") }?;
-        out.copy_from_slice(&bytes);
-        Ok(Status::Ok)
+        // SAFETY: module contract: serializedState holds `size` writable
+        // bytes (fmi2Byte is a byte).
+        unsafe { fmu_state::serialize(i, FMUstate, serializedState as *mut u8, size) }
     })
 }
 
@@ -529,15 +458,9 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
     FMUstate: *mut fmi2FMUstate,
 ) -> fmi2Status {
     call(c, Function::DeSerializeFmuState, |i| {
-        // SAFETY: module contract: `size` readable bytes and a state slot.
-        let (bytes, slot) = unsafe {
-            (
-                input(serializedState as *const u8, size, "serializedState")?,
-                state_slot(FMUstate, "FMUstate")?,
-            )
-        };
-        *slot = i.deserialize_fmu_state(bytes, reuse_of(*slot))? as fmi2FMUstate;
-        Ok(Status::Ok)
+        // SAFETY: module contract: `size` readable bytes (fmi2Byte is a
+        // byte) and a state slot.
+        unsafe { fmu_state::deserialize(i, serializedState as *const u8, size, FMUstate) }
     })
 }
 
@@ -563,7 +486,8 @@ pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
                 output(dvUnknown, nUnknown, "dvUnknown")?,
             )
         };
-        i.directional_derivative(unknowns, knowns, seed, result)
+        i.slave_mut()
+            .directional_derivative(unknowns, knowns, seed, result)
     })
 }
 
@@ -584,7 +508,8 @@ pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
                 input(value, nvr, "value")?,
             )
         };
-        i.set_real_input_derivatives(vrs, orders, values)
+        i.slave_mut()
+            .set_real_input_derivatives(vrs, orders, values)
     })
 }
 
@@ -605,7 +530,8 @@ pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
                 output(value, nvr, "value")?,
             )
         };
-        i.get_real_output_derivatives(vrs, orders, values)
+        i.slave_mut()
+            .get_real_output_derivatives(vrs, orders, values)
     })
 }
 
@@ -619,7 +545,8 @@ pub unsafe extern "C" fn fmi2DoStep(
     _noSetFMUStatePriorToCurrentPoint: fmi2Boolean,
 ) -> fmi2Status {
     call(c, Function::DoStep, |i| {
-        i.do_step(currentCommunicationPoint, communicationStepSize)
+        i.slave_mut()
+            .do_step(currentCommunicationPoint, communicationStepSize)
     })
 }
 
@@ -704,15 +631,13 @@ pub unsafe extern "C" fn fmi2GetStringStatus(
 
 // ------------------------------------------- Model Exchange (not supported)
 
+/// Logs that the Model Exchange function `function` was called (when `c`
+/// is a live component) and returns `fmi2Error`.
 fn model_exchange_only(c: fmi2Component, function: &str) -> fmi2Status {
-    let refused = catch_unwind(AssertUnwindSafe(|| {
-        // SAFETY: module contract.
-        if let Some(h) = unsafe { pointers::handle::<Instance>(c, HANDLE_MAGIC) } {
-            h.instance.refuse_model_exchange(function);
-        }
-    }));
-    let _ = refused;
-    status(Status::Error)
+    let message =
+        || format!("{function}: Model Exchange function; this FMU implements Co-Simulation only");
+    // SAFETY: module contract.
+    status(unsafe { entry::log_refusal::<Instance, Instance>(c, HANDLE_MAGIC, message) })
 }
 
 #[unsafe(no_mangle)]

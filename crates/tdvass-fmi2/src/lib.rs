@@ -10,13 +10,17 @@
 //!   which function is allowed in which state.
 //! - [`instance`]: the FMI 2.0 [`instance::Instance`]: the
 //!   instantiation checks, the state table, the status kinds and a
-//!   [`Slave`](tdvass_fmu::Slave) that does the rest. Every method returns
-//!   `Result<_, FmiError>`.
+//!   [`Slave`](tdvass_fmu::Slave) that does the rest, called explicitly
+//!   (the instance is a [`tdvass_fmu::entry::FrontEnd`]). Every method
+//!   returns `Result<_, FmiError>`.
 //! - [`uri`]: parsing of `fmuResourceLocation`.
 //! - [`description`]: the FMI 2.0 `modelDescription.xml` and
 //!   `documentation/index.html` (quick-xml, never written by hand).
-//! - [`ffi`]: the thin `extern "C"` layer: null checks, pointer-to-slice
-//!   conversion, `catch_unwind` around every entry point. Nothing else.
+//! - [`ffi`]: the thin `extern "C"` layer: the C signatures and the
+//!   conversions of FMI 2.0's types and statuses. What every FMI version
+//!   does alike is [`tdvass_fmu::entry`] (the state table and
+//!   `catch_unwind` around every entry point, the FMU-state functions) and
+//!   [`tdvass_fmu::pointers`] (null checks, pointer-to-slice conversion).
 //!
 //! Behaviour decisions (also in the generated documentation):
 //! - A diverging run (unstable g, tau) makes `fmi2DoStep` return

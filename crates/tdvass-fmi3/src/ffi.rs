@@ -1,14 +1,20 @@
 //! The C ABI: every fmi3 function of the FMI 3.0 standard, exported with C
 //! linkage. The Co-Simulation functions reach the safe [`Instance`]
-//! through [`Instance::run`] (which enforces the state table and logs
-//! failures); Model Exchange and Scheduled Execution instantiation return
-//! NULL with the reason logged, and the functions of Model Exchange, event
-//! mode, clocks and Scheduled Execution return `fmi3Error` with the reason
-//! logged. Every entry point runs inside [`std::panic::catch_unwind`]: a
-//! panic becomes `fmi3Fatal` instead of unwinding into the host.
+//! through [`tdvass_fmu::entry`] ([`entry::call`], [`entry::with_instance`]:
+//! the FMI 3.0 state table through [`FrontEnd::run`], which logs failures,
+//! and every panic caught); Model Exchange and Scheduled Execution
+//! instantiation return NULL with the reason logged, and the functions of
+//! Model Exchange, event mode, clocks and Scheduled Execution return
+//! `fmi3Error` with the reason logged. Every entry point runs inside
+//! [`std::panic::catch_unwind`]: a panic becomes `fmi3Fatal` instead of
+//! unwinding into the host.
 //!
-//! Pointer handling (tagged handles, arrays, strings) is
-//! [`tdvass_fmu::pointers`], shared with the FMI 2.0 FMU.
+//! What both FMI versions do alike (the guarded call, `fmi3FreeInstance`,
+//! `fmi3SetDebugLogging`, the FMU-state functions) is [`tdvass_fmu::entry`],
+//! and pointer handling (tagged handles, arrays, strings) is
+//! [`tdvass_fmu::pointers`], both shared with the FMI 2.0 FMU. This layer
+//! holds the C signatures, the conversions of FMI 3.0's types and statuses,
+//! and the intermediate-update loop of `fmi3DoStep`.
 //!
 //! # Safety
 //!
@@ -22,8 +28,8 @@
 //! `intermediateUpdate` callback the master may call the getters and
 //! setters of the same instance (no reference to it is held across the
 //! callback). `fmi3Boolean` is read as a byte (0 false, anything else true).
-//! (About 1000 lines because the standard has about 90 functions; they
-//! stay in one file so that every `unsafe` of the FMI 3.0 layer is here.)
+//! (The standard has about 90 functions; they stay in one file so that
+//! every `unsafe` of the FMI 3.0 layer is here.)
 // The only module of the crate that may use `unsafe` (denied elsewhere).
 #![allow(unsafe_code)]
 #![allow(non_camel_case_types, non_snake_case, clippy::missing_safety_doc)]
@@ -35,7 +41,8 @@ use crate::{FmiError, Status};
 use libc::{c_char, c_int, c_void, size_t};
 use std::ffi::CStr;
 use std::panic::{AssertUnwindSafe, catch_unwind};
-use tdvass_fmu::pointers::{self, c_string, copy_str, input, out_value, output, panic_text};
+use tdvass_fmu::entry::{self, FrontEnd, fmu_state};
+use tdvass_fmu::pointers::{self, c_string, copy_str, input, out_value, output};
 use tdvass_fmu::slave::LogSink;
 
 pub type fmi3Instance = *mut c_void;
@@ -101,6 +108,12 @@ pub struct Component {
     intermediate_update: fmi3IntermediateUpdateCallback,
 }
 
+impl AsMut<Instance> for Component {
+    fn as_mut(&mut self) -> &mut Instance {
+        &mut self.instance
+    }
+}
+
 fn status(s: Status) -> fmi3Status {
     s as fmi3Status
 }
@@ -128,32 +141,19 @@ unsafe fn component<'a>(instance: fmi3Instance) -> Option<&'a mut Component> {
     unsafe { pointers::handle::<Component>(instance, HANDLE_MAGIC) }.map(|h| &mut h.instance)
 }
 
-/// Runs `op` on the instance behind `instance` as `function`: state table,
-/// logging, panics caught (then `fmi3Fatal`). An invalid `instance` gives
-/// `fmi3Error`.
+/// Runs `op` on the instance behind `instance` as `function`
+/// ([`entry::with_instance`]: state table, logging, panics caught, then
+/// `fmi3Fatal`). An invalid `instance` gives `fmi3Error`.
 fn with_instance<T>(
     instance: fmi3Instance,
     function: Function,
     op: impl FnOnce(&mut Instance) -> Result<T, FmiError>,
 ) -> Result<T, Status> {
     // SAFETY: module contract.
-    let Some(c) = (unsafe { component(instance) }) else {
-        return Err(Status::Error);
-    };
-    let instance = &mut c.instance;
-    match catch_unwind(AssertUnwindSafe(|| instance.run(function, op))) {
-        Ok(result) => result,
-        Err(payload) => {
-            let text = panic_text(&*payload);
-            let _ = catch_unwind(AssertUnwindSafe(|| {
-                instance.on_panic(function.name(), &text)
-            }));
-            Err(Status::Fatal)
-        }
-    }
+    unsafe { entry::with_instance::<Component, Instance, T>(instance, HANDLE_MAGIC, function, op) }
 }
 
-/// For functions returning `fmi3Status`.
+/// [`with_instance`] for functions returning `fmi3Status`.
 fn call(
     instance: fmi3Instance,
     function: Function,
@@ -167,13 +167,13 @@ fn call(
 /// For functions that do not apply to this FMU: logs why (when `instance`
 /// is valid) and returns `fmi3Error`.
 fn not_applicable(instance: fmi3Instance, function: &str, reason: &str) -> fmi3Status {
-    let _ = catch_unwind(AssertUnwindSafe(|| {
-        // SAFETY: module contract.
-        if let Some(c) = unsafe { component(instance) } {
-            c.instance.refuse_not_applicable(function, reason);
-        }
-    }));
-    status(Status::Error)
+    let message = || {
+        format!(
+            "{function}: {reason}; this FMU implements Co-Simulation only, without event mode or clocks"
+        )
+    };
+    // SAFETY: module contract.
+    status(unsafe { entry::log_refusal::<Component, Instance>(instance, HANDLE_MAGIC, message) })
 }
 
 fn bools_from(values: &[fmi3Boolean]) -> Vec<bool> {
@@ -199,16 +199,7 @@ pub unsafe extern "C" fn fmi3SetDebugLogging(
 ) -> fmi3Status {
     call(instance, Function::SetDebugLogging, |i| {
         // SAFETY: module contract: `categories` holds `nCategories` strings.
-        let pointers = unsafe { input(categories, nCategories, "categories") }?;
-        let mut names = Vec::with_capacity(pointers.len());
-        for (k, &p) in pointers.iter().enumerate() {
-            // SAFETY: each entry is NULL or a NUL-terminated string.
-            let name = unsafe { copy_str(p) }
-                .ok_or_else(|| FmiError::error(format!("categories[{k}] is NULL")))?;
-            names.push(name);
-        }
-        let names: Vec<&str> = names.iter().map(String::as_str).collect();
-        i.set_debug_logging(loggingOn != FMI3_FALSE, &names)
+        unsafe { entry::set_debug_logging(i, loggingOn != FMI3_FALSE, nCategories, categories) }
     })
 }
 
@@ -336,15 +327,10 @@ pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
 
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3FreeInstance(instance: fmi3Instance) {
-    let _ = catch_unwind(AssertUnwindSafe(|| {
-        // SAFETY: module contract.
-        if let Some(c) = unsafe { component(instance) }
-            && c.instance.run(Function::FreeInstance, |_| Ok(())).is_ok()
-        {
-            // SAFETY: a live handle of this FMU; the master passes it no more.
-            unsafe { pointers::free::<Component>(instance, HANDLE_MAGIC) };
-        }
-    }));
+    // SAFETY: module contract; the master passes `instance` no more.
+    unsafe {
+        entry::free_instance::<Component, Instance>(instance, HANDLE_MAGIC, Function::FreeInstance)
+    }
 }
 
 #[unsafe(no_mangle)]
@@ -368,7 +354,7 @@ pub unsafe extern "C" fn fmi3EnterInitializationMode(
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3ExitInitializationMode(instance: fmi3Instance) -> fmi3Status {
     call(instance, Function::ExitInitializationMode, |i| {
-        i.exit_initialization_mode()
+        i.slave_mut().exit_initialization_mode()
     })
 }
 
@@ -379,7 +365,7 @@ pub unsafe extern "C" fn fmi3EnterEventMode(instance: fmi3Instance) -> fmi3Statu
 
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3Terminate(instance: fmi3Instance) -> fmi3Status {
-    call(instance, Function::Terminate, |i| i.terminate())
+    call(instance, Function::Terminate, |i| i.slave_mut().terminate())
 }
 
 #[unsafe(no_mangle)]
@@ -676,10 +662,6 @@ pub unsafe extern "C" fn fmi3GetVariableDependencies(
 
 // -------------------------------------------------------------- FMU states
 
-fn reuse_of(state: fmi3FMUState) -> Option<usize> {
-    (!state.is_null()).then_some(state as usize)
-}
-
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3GetFMUState(
     instance: fmi3Instance,
@@ -687,9 +669,7 @@ pub unsafe extern "C" fn fmi3GetFMUState(
 ) -> fmi3Status {
     call(instance, Function::GetFmuState, |i| {
         // SAFETY: module contract: FMUState points to an fmi3FMUState.
-        let slot = unsafe { out_value(FMUState, "FMUState") }?;
-        *slot = i.get_fmu_state(reuse_of(*slot))? as fmi3FMUState;
-        Ok(Status::Ok)
+        unsafe { fmu_state::get(i, FMUState) }
     })
 }
 
@@ -699,8 +679,7 @@ pub unsafe extern "C" fn fmi3SetFMUState(
     FMUState: fmi3FMUState,
 ) -> fmi3Status {
     call(instance, Function::SetFmuState, |i| {
-        let handle = reuse_of(FMUState).ok_or_else(|| FmiError::error("FMUState is NULL"))?;
-        i.set_fmu_state(handle)
+        fmu_state::set(i, FMUState)
     })
 }
 
@@ -710,17 +689,9 @@ pub unsafe extern "C" fn fmi3FreeFMUState(
     FMUState: *mut fmi3FMUState,
 ) -> fmi3Status {
     call(instance, Function::FreeFmuState, |i| {
-        if FMUState.is_null() {
-            return Ok(Status::Ok);
-        }
-        // SAFETY: module contract: FMUState points to an fmi3FMUState.
-        let slot = unsafe { out_value(FMUState, "FMUState") }?;
-        let Some(handle) = reuse_of(*slot) else {
-            return Ok(Status::Ok);
-        };
-        i.free_fmu_state(handle)?;
-        *slot = std::ptr::null_mut();
-        Ok(Status::Ok)
+        // SAFETY: module contract: FMUState is NULL or points to an
+        // fmi3FMUState.
+        unsafe { fmu_state::free(i, FMUState) }
     })
 }
 
@@ -732,10 +703,7 @@ pub unsafe extern "C" fn fmi3SerializedFMUStateSize(
 ) -> fmi3Status {
     call(instance, Function::SerializedFmuStateSize, |i| {
         // SAFETY: module contract: size points to a size_t.
-        let size = unsafe { out_value(size, "size") }?;
-        let handle = reuse_of(FMUState).ok_or_else(|| FmiError::error("FMUState is NULL"))?;
-        *size = i.serialize_fmu_state(handle)?.len();
-        Ok(Status::Ok)
+        unsafe { fmu_state::serialized_size(i, FMUState, size) }
     })
 }
 
@@ -747,18 +715,8 @@ pub unsafe extern "C" fn fmi3SerializeFMUState(
     size: size_t,
 ) -> fmi3Status {
     call(instance, Function::SerializeFmuState, |i| {
-        let handle = reuse_of(FMUState).ok_or_else(|| FmiError::error("FMUState is NULL"))?;
-        let bytes = i.serialize_fmu_state(handle)?;
-        if size < bytes.len() {
-            return Err(FmiError::error(format!(
-                "the buffer has {size} bytes, the state needs {} (fmi3SerializedFMUStateSize)",
-                bytes.len()
-            )));
-        }
         // SAFETY: module contract: serializedState holds `size` writable bytes.
-        let out = unsafe { output(serializedState, bytes.len(), "serializedState") }?;
-        out.copy_from_slice(&bytes);
-        Ok(Status::Ok)
+        unsafe { fmu_state::serialize(i, FMUState, serializedState, size) }
     })
 }
 
@@ -771,14 +729,7 @@ pub unsafe extern "C" fn fmi3DeserializeFMUState(
 ) -> fmi3Status {
     call(instance, Function::DeserializeFmuState, |i| {
         // SAFETY: module contract: `size` readable bytes and a state slot.
-        let (bytes, slot) = unsafe {
-            (
-                input(serializedState, size, "serializedState")?,
-                out_value(FMUState, "FMUState")?,
-            )
-        };
-        *slot = i.deserialize_fmu_state(bytes, reuse_of(*slot))? as fmi3FMUState;
-        Ok(Status::Ok)
+        unsafe { fmu_state::deserialize(i, serializedState, size, FMUState) }
     })
 }
 
@@ -820,10 +771,11 @@ fn derivative(
                 output(sensitivity, n_sensitivity, "sensitivity")?,
             )
         };
+        let slave = i.slave_mut();
         if adjoint {
-            i.adjoint_derivative(unknowns, knowns, seed, result)
+            slave.adjoint_derivative(unknowns, knowns, seed, result)
         } else {
-            i.directional_derivative(unknowns, knowns, seed, result)
+            slave.directional_derivative(unknowns, knowns, seed, result)
         }
     })
 }
@@ -905,7 +857,8 @@ pub unsafe extern "C" fn fmi3GetOutputDerivatives(
                 output(values, nValues, "values")?,
             )
         };
-        i.get_real_output_derivatives(vrs, orders, values)
+        i.slave_mut()
+            .get_real_output_derivatives(vrs, orders, values)
     })
 }
 
@@ -933,13 +886,14 @@ pub unsafe extern "C" fn fmi3ExitConfigurationMode(instance: fmi3Instance) -> fm
 fn advance_part(instance: fmi3Instance, from: f64, target: f64) -> Result<Option<f64>, Status> {
     with_instance(instance, Function::DoStep, |i| {
         let next = if i.has_intermediate_update() {
-            i.next_intermediate_time(from, target)
+            i.slave().next_intermediate_time(from, target)
         } else {
             None
         };
         let until = next.unwrap_or(target);
-        let span = until - i.time();
-        i.advance_within_step(until, span)?;
+        let slave = i.slave_mut();
+        let span = until - slave.time();
+        slave.advance_within_step(until, span)?;
         Ok(next)
     })
 }
@@ -1010,9 +964,10 @@ pub unsafe extern "C" fn fmi3DoStep(
                 out_value(earlyReturn, "earlyReturn")?;
                 out_value(lastSuccessfulTime, "lastSuccessfulTime")?;
             }
-            let start = i.time();
+            let slave = i.slave_mut();
+            let start = slave.time();
             Ok((
-                i.begin_step(currentCommunicationPoint, communicationStepSize)?,
+                slave.begin_step(currentCommunicationPoint, communicationStepSize)?,
                 start,
             ))
         });
@@ -1041,13 +996,13 @@ pub unsafe extern "C" fn fmi3DoStep(
                 // aligned above, and point to the caller's variables.
                 unsafe {
                     *eventHandlingNeeded = FMI3_FALSE;
-                    *terminateSimulation = if c.instance.terminate_requested() {
+                    *terminateSimulation = if c.instance.slave().terminate_requested() {
                         FMI3_TRUE
                     } else {
                         FMI3_FALSE
                     };
                     *earlyReturn = if early { FMI3_TRUE } else { FMI3_FALSE };
-                    *lastSuccessfulTime = c.instance.last_successful_time();
+                    *lastSuccessfulTime = c.instance.slave().last_successful_time();
                 }
             }
         }));

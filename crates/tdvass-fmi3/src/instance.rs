@@ -1,16 +1,19 @@
 //! The FMI 3.0 instance: what `fmi3InstantiateCoSimulation` checks, the
 //! FMI 3.0 state table around every call, the FMI 3.0 types of the values,
 //! Configuration Mode and the intermediate updates, around a
-//! version-neutral [`Slave`] that does everything else (reached through
-//! `Deref`). No FFI here; [`crate::ffi`] calls these methods through
-//! [`Instance::run`].
+//! version-neutral [`Slave`] that does everything else, called explicitly
+//! ([`FrontEnd::slave_mut`]). Where FMI 3.0 adds to a slave's function,
+//! the instance has its own method ([`Instance::reset`],
+//! [`Instance::enter_initialization_mode`], the typed getters and setters)
+//! and the C layer calls that one. No FFI here; [`crate::ffi`] calls the
+//! instance through [`FrontEnd::run`].
 
 use crate::states::{self, Function, State};
 use crate::types::{ValueType, fmi3_type};
 use crate::{FmiError, Status};
-use std::ops::{Deref, DerefMut};
 use std::path::PathBuf;
 use tdvass_fmu::Phase;
+use tdvass_fmu::entry::FrontEnd;
 use tdvass_fmu::slave::{Dialect, LogSink, Logger};
 use tdvass_fmu::variables::{Causality, FmiVersion, Variable, by_name, by_vr_in};
 
@@ -63,16 +66,39 @@ pub struct Instance {
     intermediate: Option<IntermediatePoint>,
 }
 
-impl Deref for Instance {
-    type Target = Slave;
-    fn deref(&self) -> &Slave {
+/// The state table is [`states::check`] on [`Instance::state`]; beyond the
+/// slave, a panic ends an intermediate update and a restored FMU state ends
+/// Configuration Mode.
+impl FrontEnd for Instance {
+    type Function = Function;
+
+    fn name(function: Function) -> &'static str {
+        function.name()
+    }
+
+    fn check_state(&self, function: Function) -> Result<(), FmiError> {
+        states::check(function, self.state())
+    }
+
+    fn slave(&self) -> &Slave {
         &self.slave
     }
-}
 
-impl DerefMut for Instance {
-    fn deref_mut(&mut self) -> &mut Slave {
+    fn slave_mut(&mut self) -> &mut Slave {
         &mut self.slave
+    }
+
+    fn after_panic(&mut self) {
+        self.intermediate = None;
+    }
+
+    /// An FMU state does not hold Configuration Mode: restoring one taken
+    /// after instantiation ends it (the instance is then in the restored
+    /// state, where every variable is accessible).
+    fn fmu_state_restored(&mut self) {
+        if self.slave.phase() != Phase::Instantiated {
+            self.configuration = false;
+        }
     }
 }
 
@@ -139,7 +165,7 @@ impl Instance {
             configuration: false,
             intermediate: None,
         };
-        instance.logger().log(
+        instance.slave.logger().log(
             Status::Ok,
             &format!(
                 "fmi3InstantiateCoSimulation: instance `{}` of {} (token {}), resources {}, intermediate updates {}, early return {}",
@@ -193,54 +219,6 @@ impl Instance {
         }
     }
 
-    /// Runs `op` as `function`: refuses it (Error, logged "fmi3X: not
-    /// allowed in state Y") when the state table forbids it, and logs any
-    /// failure with the function name. A refused call changes nothing;
-    /// Fatal moves the instance to `Fatal`.
-    pub fn run<T>(
-        &mut self,
-        function: Function,
-        op: impl FnOnce(&mut Self) -> Result<T, FmiError>,
-    ) -> Result<T, Status> {
-        let result = states::check(function, self.state()).and_then(|()| op(self));
-        result.map_err(|e| {
-            self.logger()
-                .log(e.status, &format!("{}: {}", function.name(), e.message));
-            if e.status == Status::Fatal {
-                self.slave.set_phase(Phase::Fatal);
-            }
-            e.status
-        })
-    }
-
-    /// After a panic inside `function` (caught by the FFI layer): the
-    /// instance may be inconsistent, so it goes to `Fatal`.
-    pub fn on_panic(&mut self, function: &str, message: &str) {
-        self.slave.set_phase(Phase::Fatal);
-        self.intermediate = None;
-        self.logger().log(
-            Status::Fatal,
-            &format!(
-                "{function}: internal error (panic: {message}); the instance is unusable, free it"
-            ),
-        );
-    }
-
-    /// Logs why `function` (of Model Exchange, Scheduled Execution, event
-    /// mode or clocks) does not apply, and returns Error.
-    pub fn refuse_not_applicable(&self, function: &str, reason: &str) -> Status {
-        self.logger().log(
-            Status::Error,
-            &format!("{function}: {reason}; this FMU implements Co-Simulation only, without event mode or clocks"),
-        );
-        Status::Error
-    }
-
-    /// `fmi3SetDebugLogging`: `categories` empty means all.
-    pub fn set_debug_logging(&mut self, on: bool, categories: &[&str]) -> Result<Status, FmiError> {
-        self.slave.logger_mut().set_categories(on, categories)
-    }
-
     /// `fmi3EnterInitializationMode`: the experiment's times, then
     /// Initialization Mode.
     pub fn enter_initialization_mode(
@@ -266,18 +244,9 @@ impl Instance {
         Ok(Status::Ok)
     }
 
-    /// `fmi3SetFMUState`. An FMU state does not hold Configuration Mode:
-    /// restoring one taken after instantiation ends it (the instance is
-    /// then in the restored state, where every variable is accessible).
-    pub fn set_fmu_state(&mut self, handle: usize) -> Result<Status, FmiError> {
-        let status = self.slave.set_fmu_state(handle)?;
-        if self.slave.phase() != Phase::Instantiated {
-            self.configuration = false;
-        }
-        Ok(status)
-    }
-
-    /// `fmi3Reset`: back to Instantiated with every start value.
+    /// `fmi3Reset`: the slave's [`Slave::reset`] (back to Instantiated with
+    /// every start value), out of Configuration Mode and any intermediate
+    /// update.
     pub fn reset(&mut self) -> Result<Status, FmiError> {
         self.configuration = false;
         self.intermediate = None;
@@ -501,7 +470,7 @@ impl Instance {
 
 impl Drop for Instance {
     fn drop(&mut self) {
-        self.logger().log(
+        self.slave.logger().log(
             Status::Ok,
             &format!(
                 "fmi3FreeInstance: `{}` freed with {} FMU state(s)",

@@ -28,16 +28,27 @@
 //! - [`markup`]: what the model descriptions and documentation pages of
 //!   every FMI version write alike (quick-xml).
 //! - [`pointers`]: instance handles, array and string arguments of the C
-//!   interfaces (the crate's only `unsafe`, shared by every FMI version).
+//!   interfaces, checked (NULL, alignment, length, the handle's tag).
+//! - [`entry`]: what the C entry points of every FMI version do around an
+//!   instance: the call under the front-end's state table with panics
+//!   caught ([`entry::with_instance`], [`entry::call`]), `FreeInstance`,
+//!   `SetDebugLogging` and the FMU-state functions; a front-end's instance
+//!   implements [`entry::FrontEnd`].
 //!
 //! **What this crate owns and must never import.** It owns the behaviour of
-//! an FMU instance that does not depend on the FMI version. It imports the
-//! physics from `tdvass` and nothing else of the workspace: no C types, no
-//! FMI version's names or state table, no command line. Its only `unsafe`
-//! is [`pointers`], the checked conversions every C interface needs.
+//! an FMU instance that does not depend on the FMI version, and the C glue
+//! every version shares. Where the versions differ it holds data, not
+//! code: which variables exist in which version ([`variables::FmiVersion`],
+//! [`Variable::fmi3_only`]) and how a front-end names its functions
+//! ([`slave::Dialect`]). It imports the physics from `tdvass` and nothing
+//! else of the workspace: no front-end's C types, exported functions or
+//! state table, no command line. Its `unsafe` is in [`pointers`] and
+//! [`entry`] only (denied everywhere else), each block with its `SAFETY`
+//! comment.
 
 #![deny(unsafe_code)]
 
+pub mod entry;
 pub mod limits;
 pub mod markdown;
 pub mod markup;

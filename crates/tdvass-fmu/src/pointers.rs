@@ -1,9 +1,14 @@
-//! The C side of every FMI version, written once: instance handles, array
-//! and string arguments, and panic messages. Each function checks what can
-//! be checked (NULL, alignment, length, the handle's tag) and states the
-//! rest of its contract; the `extern "C"` layers of the front-ends call
-//! them and contain nothing else unsafe.
-// The only `unsafe` of this crate (the crate denies it elsewhere).
+//! The pointers of the C interfaces of every FMI version, written once:
+//! instance handles, array and string arguments, and panic messages. Each
+//! function checks what can be checked (NULL, alignment, length, the
+//! handle's tag) and states the rest of its contract in its `# Safety`
+//! section. [`crate::entry`] and the `extern "C"` layers of the front-ends
+//! call them for their pointer arguments; beyond these calls and those of
+//! `entry`, the front-ends' `unsafe` calls the master's callbacks and reads
+//! or writes through a few pointers after the same checks (NULL,
+//! alignment).
+// Converts raw pointers (with `crate::entry`, the only `unsafe` of this
+// crate, which denies it elsewhere).
 #![allow(unsafe_code)]
 
 use crate::FmiError;

@@ -179,10 +179,40 @@ impl Slave {
         self.state.phase
     }
 
-    /// Moves the slave to `phase` (the front-end's state table decides
-    /// when: a fatal error, a panic).
-    pub fn set_phase(&mut self, phase: Phase) {
+    /// Moves the slave to `phase`. Private: the life-cycle methods (which
+    /// a front-end calls only where its state table allows them) and the
+    /// two failures below are the only changes of phase.
+    fn set_phase(&mut self, phase: Phase) {
         self.state.phase = phase;
+    }
+
+    /// Reports the failure `e` of the call `function` (its C name, which
+    /// prefixes the message) and returns its status. A `Fatal` failure
+    /// leaves the slave in [`Phase::Fatal`].
+    pub fn report_failure(&mut self, function: &str, e: &FmiError) -> Status {
+        self.logger
+            .log(e.status, &format!("{function}: {}", e.message));
+        if e.status == Status::Fatal {
+            self.set_phase(Phase::Fatal);
+        }
+        e.status
+    }
+
+    /// After a panic inside `function` (its C name): the slave may be
+    /// inconsistent, so it goes to [`Phase::Fatal`], and says so.
+    pub fn report_panic(&mut self, function: &str, message: &str) {
+        self.set_phase(Phase::Fatal);
+        self.logger.log(
+            Status::Fatal,
+            &format!(
+                "{function}: internal error (panic: {message}); the instance is unusable, free it"
+            ),
+        );
+    }
+
+    /// How the front-end names what the slave's messages mention.
+    pub fn dialect(&self) -> &Dialect {
+        &self.dialect
     }
 
     /// The logger.
@@ -365,3 +395,6 @@ impl Slave {
             .unwrap_or(self.state.start_time)
     }
 }
+
+#[cfg(test)]
+pub(crate) mod tests;
