@@ -246,7 +246,7 @@ fn unilateral_runs_do_not_depend_on_how_they_are_split_or_saved() {
 }
 
 #[test]
-fn hard_input_is_integrated_or_refused_never_looped_on() {
+fn hard_input_is_integrated_not_looped_on() {
     let stiff_tire = Params {
         k_t: 1e9,
         ..Params::default()
@@ -282,22 +282,18 @@ fn hard_input_is_integrated_or_refused_never_looped_on() {
             initial_state,
             ..unilateral(Variant::Tdvass, road)
         };
-        match Simulator::new(config).and_then(|mut sim| sim.run_for(1.0)) {
-            Ok(summary) => {
-                let holding = summary.road_holding.unwrap();
-                println!("{label}: {} lift-offs", holding.lift_off_count);
-                assert!(summary.objective.is_finite(), "{label}");
-                assert!(holding.contact_loss_time.is_finite(), "{label}");
-                if label == "airborne start" {
-                    assert!(holding.lift_off_count >= 1);
-                    assert!(holding.first_contact_loss.unwrap().time < 1e-12);
-                }
-            }
-            Err(e) => {
-                let message = e.to_string();
-                assert!(!message.is_empty(), "{label}");
-                println!("{label}: refused: {message}");
-            }
+        // Each is integrated (the switch limit of one step is unit-tested
+        // in `solver::contact`).
+        let summary = Simulator::new(config)
+            .and_then(|mut sim| sim.run_for(1.0))
+            .unwrap_or_else(|e| panic!("{label}: {e}"));
+        let holding = summary.road_holding.unwrap();
+        println!("{label}: {} lift-offs", holding.lift_off_count);
+        assert!(summary.objective.is_finite(), "{label}");
+        assert!(holding.contact_loss_time.is_finite(), "{label}");
+        assert!(holding.lift_off_count >= 1, "{label}");
+        if label == "airborne start" {
+            assert!(holding.first_contact_loss.unwrap().time < 1e-12);
         }
     }
 }
