@@ -676,6 +676,21 @@ use Variability::{Fixed, Tunable};
 const SPECTRUM_DEPENDENCIES: &[&str] = &[
     "variant", "m_s", "m_h", "m_t", "k_s", "k_h", "k_t", "c_s", "c_h", "g", "tau",
 ];
+/// What the tire load and the lift-offs depend on initially (the static
+/// load through the masses and k_t, the road, the tire law, the wheel).
+const TIRE_LOAD_DEPENDENCIES: &[&str] = &[
+    "variant",
+    "m_s",
+    "m_h",
+    "m_t",
+    "k_t",
+    "road",
+    "road_amplitude",
+    "road_angular_frequency",
+    "tire_contact",
+    "x_t_start",
+    "x_g",
+];
 const ROAD_DEPENDENCIES: &[&str] = &["road", "road_amplitude", "road_angular_frequency", "x_g"];
 
 /// How many variables both versions have: the FMI 3.0 additions follow
@@ -1245,19 +1260,7 @@ const TABLE: &[Variable] = &[
         "Dynamic tire load k_t (x_g - x_t) = -k_t TDD (no tire damping); below minus the static load the tire would leave the road (tire_contact = 1: it never goes below, the wheel flies)",
         &["x_g"],
         // tire_contact = 1 bounds it below by minus the static load.
-        &[
-            "variant",
-            "m_s",
-            "m_h",
-            "m_t",
-            "k_t",
-            "road",
-            "road_amplitude",
-            "road_angular_frequency",
-            "tire_contact",
-            "x_t_start",
-            "x_g",
-        ],
+        TIRE_LOAD_DEPENDENCIES,
     ),
     output(
         "rms_dynamic_tire_load_ratio",
@@ -1289,19 +1292,7 @@ const TABLE: &[Variable] = &[
         access: Access::IntegerOutput(IntegerOutputId::LiftOffCount),
         description: "Number of lift-offs since the start time (a start without contact counts one): tire_contact = 1, the switches from contact to flight; tire_contact = 0, the times the dynamic tire load went below minus the static load",
         feedthrough: &[],
-        initial_dependencies: &[
-            "variant",
-            "m_s",
-            "m_h",
-            "m_t",
-            "k_t",
-            "road",
-            "road_amplitude",
-            "road_angular_frequency",
-            "tire_contact",
-            "x_t_start",
-            "x_g",
-        ],
+        initial_dependencies: TIRE_LOAD_DEPENDENCIES,
         enumeration: None,
         dimensions: &[],
         // Discrete: it changes at communication points, not inside a step.
