@@ -22,6 +22,30 @@ pub fn iso(class: RoadClass, speed: f64) -> RoadSpec {
     })
 }
 
+/// The delay in steps of `step` (0 without a delay); the step must divide
+/// tau.
+fn delay_steps(tau: f64, step: f64) -> usize {
+    let m = if tau > 0.0 {
+        (tau / step).round() as usize
+    } else {
+        0
+    };
+    assert!(
+        m == 0 || ((m as f64) * step - tau).abs() < 1e-12 * tau,
+        "step must divide tau"
+    );
+    m
+}
+
+/// The cubic Hermite interpolant through `[x0, v0]` at 0 and `[x1, v1]`
+/// at h, at offset s.
+fn hermite_value([x0, v0, x1, v1]: [f64; 4], h: f64, s: f64) -> f64 {
+    let slope = (x1 - x0) / h;
+    let c2 = (3.0 * slope - 2.0 * v0 - v1) / h;
+    let c3 = (v0 + v1 - 2.0 * slope) / (h * h);
+    x0 + s * (v0 + s * (c2 + s * c3))
+}
+
 /// Classical RK4 with the method of steps for
 /// `X' = A X + b x_t(t − tau) + e x_g(t)`, a constant history X0 for t < 0,
 /// and a step that divides tau. Delayed values at half steps come from the
@@ -35,15 +59,7 @@ pub fn rk4_method_of_steps(
     step: f64,
     duration: f64,
 ) -> State {
-    let m = if tau > 0.0 {
-        (tau / step).round() as usize
-    } else {
-        0
-    };
-    assert!(
-        m == 0 || ((m as f64) * step - tau).abs() < 1e-12 * tau,
-        "step must divide tau"
-    );
+    let m = delay_steps(tau, step);
     let n = (duration / step).round() as usize;
     assert!(
         (n as f64 * step - duration).abs() < 1e-9 * duration,
@@ -63,11 +79,7 @@ pub fn rk4_method_of_steps(
             return xa;
         }
         let [xb, vb] = nodes[k - m + 1];
-        let (s, h) = (frac * step, step);
-        let slope = (xb - xa) / h;
-        let c2 = (3.0 * slope - 2.0 * va - vb) / h;
-        let c3 = (va + vb - 2.0 * slope) / (h * h);
-        xa + s * (va + s * (c2 + s * c3))
+        hermite_value([xa, va, xb, vb], step, frac * step)
     };
     let mut x = x0;
     for k in 0..n {
@@ -170,15 +182,7 @@ pub fn rk4_unilateral(
 ) -> SwitchedRun {
     let k_t = plant.params.k_t;
     let m_t = plant.params.m_t;
-    let m = if tau > 0.0 {
-        (tau / step).round() as usize
-    } else {
-        0
-    };
-    assert!(
-        m == 0 || ((m as f64) * step - tau).abs() < 1e-12 * tau,
-        "step must divide tau"
-    );
+    let m = delay_steps(tau, step);
     let n = (duration / step).round() as usize;
     let derivative = |x: &State, delayed: f64, xg: f64| {
         let mut dx = plant.derivative(x, delayed, xg);
@@ -200,11 +204,7 @@ pub fn rk4_unilateral(
             return xa;
         }
         let [xb, vb] = nodes[k - m + 1];
-        let (s, h) = (frac * step, step);
-        let slope = (xb - xa) / h;
-        let c2 = (3.0 * slope - 2.0 * va - vb) / h;
-        let c3 = (va + vb - 2.0 * slope) / (h * h);
-        xa + s * (va + s * (c2 + s * c3))
+        hermite_value([xa, va, xb, vb], step, frac * step)
     };
     let outputs = |x: &State, t: f64| {
         [
