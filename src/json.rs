@@ -1,6 +1,7 @@
-//! All JSON formatting of the command line: one `to_json` per report of
-//! the `tdvass` library (which knows nothing of JSON). Keys are those of
-//! the interface (README, "Command line").
+//! The JSON of the `tdvass` library's reports (which knows nothing of
+//! JSON): one `to_json` per report type. The subcommands in `cli.rs`
+//! assemble their output objects from these and from their own
+//! arguments. Keys are those of the interface (docs/cli.md).
 
 use serde_json::{Value, json};
 use tdvass::analysis::frf::FrfPeaks;

@@ -45,16 +45,10 @@ fn temporary(name: &str) -> PathBuf {
     std::env::temp_dir().join(format!("tdvass-cli-{}-{name}", std::process::id()))
 }
 
-/// The "Command line" section of README.md.
-fn readme_command_line_section() -> String {
-    let readme =
-        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/README.md")).unwrap();
-    let start = readme
-        .find("\n## Command line")
-        .expect("README.md has a Command line section");
-    let rest = &readme[start + 1..];
-    let end = rest.find("\n## ").unwrap_or(rest.len());
-    rest[..end].to_string()
+/// The command line's reference, docs/cli.md.
+fn command_line_reference() -> String {
+    std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/cli.md"))
+        .expect("docs/cli.md documents the command line")
 }
 
 #[test]
@@ -395,14 +389,14 @@ fn a_long_simulation_reports_progress_and_an_endless_one_is_refused() {
 
 #[test]
 fn map_and_simulate_json_keys_are_documented_in_the_readme() {
-    let readme = readme_command_line_section();
+    let readme = command_line_reference();
     let map = tdvass_json(&["map", "--g-points", "2", "--tau-points", "2"]);
     let simulate = tdvass_json(&["simulate", "--duration", "0.1"]);
     for value in [map, simulate] {
         for key in value.as_object().unwrap().keys() {
             assert!(
                 readme.contains(&format!("`{key}`")),
-                "JSON key `{key}` is not documented in the Command line section of README.md"
+                "JSON key `{key}` is not documented in docs/cli.md"
             );
         }
     }

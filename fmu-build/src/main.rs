@@ -58,8 +58,8 @@ use zig::ZigTools;
 /// `tools/draw_icon.py`.
 const ICON: &[u8] = include_bytes!("../assets/icon.png");
 
-/// The README, whose FMU variable table is generated.
-const README: &str = "README.md";
+/// The FMU reference, whose variable table is generated.
+const VARIABLE_TABLE_DOC: &str = "docs/fmu.md";
 
 /// The FMI versions of the FMU.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -624,12 +624,13 @@ struct CheckedIn {
 }
 
 /// The checked-in copies: the model description of each FMU, and the
-/// variable table in README.md (between its markers).
+/// variable table in docs/fmu.md (between its markers).
 fn checked_in(root: &Path, fmus: &[Fmu]) -> Result<Vec<CheckedIn>> {
     let read = |path: &str| fs::read_to_string(root.join(path)).ok();
-    let readme = read(README).ok_or(format!("{README} cannot be read"))?;
-    let readme_expected = splice_into(&readme).ok_or(format!(
-        "{README} lacks the lines `{BEGIN_MARKER}` and `{END_MARKER}` around the variable table"
+    let reference =
+        read(VARIABLE_TABLE_DOC).ok_or(format!("{VARIABLE_TABLE_DOC} cannot be read"))?;
+    let reference_expected = splice_into(&reference).ok_or(format!(
+        "{VARIABLE_TABLE_DOC} lacks the lines `{BEGIN_MARKER}` and `{END_MARKER}` around the variable table"
     ))?;
     let mut copies: Vec<CheckedIn> = fmus
         .iter()
@@ -640,9 +641,9 @@ fn checked_in(root: &Path, fmus: &[Fmu]) -> Result<Vec<CheckedIn>> {
         })
         .collect();
     copies.push(CheckedIn {
-        path: README,
-        expected: readme_expected,
-        current: Some(readme),
+        path: VARIABLE_TABLE_DOC,
+        expected: reference_expected,
+        current: Some(reference),
     });
     Ok(copies)
 }
@@ -674,7 +675,7 @@ fn check_only(root: &Path, fmus: &[Fmu]) -> Result<()> {
             fmu.identity
         );
     }
-    eprintln!("fmu-build: the variable table of {README} is up to date");
+    eprintln!("fmu-build: the variable table of {VARIABLE_TABLE_DOC} is up to date");
     Ok(())
 }
 

@@ -1,5 +1,7 @@
-"""Runs every ```sh and ```python block of README.md and examples/README.md
-(a block in another language, such as a MATLAB call, must be marked not run).
+"""Runs every ```sh and ```python block of README.md, docs/*.md and
+examples/README.md (a block in another language, such as a MATLAB call,
+must be marked not run), and checks that every relative link in them leads
+to a file, and every #anchor to a heading, that exists.
 
 A block runs as a user would paste it: from the repository root, sh blocks
 with bash (stopping at the first failing command, `tdvass` on the PATH from
@@ -25,7 +27,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-DOCUMENTS = ("README.md", "examples/README.md")
+DOCUMENTS = ("README.md", *sorted(f"docs/{p.name}" for p in (ROOT / "docs").glob("*.md")), "examples/README.md")
 FENCE = re.compile(r"^```(\w+)[^\n]*\n(.*?)^```\s*$", re.MULTILINE | re.DOTALL)
 NOT_RUN = re.compile(r"<!--\s*not run:\s*(.*?)\s*-->\s*$", re.DOTALL)
 RUNNABLE = {"sh", "bash", "python"}
@@ -52,6 +54,38 @@ def blocks():
             line = text.count("\n", 0, match.start()) + 1
             found.append((document, line, language, code, reason))
     return found
+
+
+LINK = re.compile(r"(?<!!)\[[^\]]*\]\(([^)\s]+)\)")
+
+
+def _anchor(heading: str) -> str:
+    """GitHub's anchor of a heading: lower case, punctuation other than
+    hyphens and underscores dropped, spaces to hyphens."""
+    text = re.sub(r"[`*]", "", heading.strip().lower())
+    return re.sub(r"[^\w\- ]", "", text).replace(" ", "-")
+
+
+def _anchors(path: Path) -> set[str]:
+    text = FENCE.sub("", path.read_text(encoding="utf-8"))
+    return {_anchor(m.group(1)) for m in re.finditer(r"^#+\s+(.*)$", text, re.MULTILINE)}
+
+
+def test_every_relative_link_leads_somewhere():
+    broken = []
+    for document in DOCUMENTS:
+        source = ROOT / document
+        text = FENCE.sub("", source.read_text(encoding="utf-8"))
+        for target in LINK.findall(text):
+            if re.match(r"[a-z]+:", target):
+                continue  # https:, mailto:
+            path, _, anchor = target.partition("#")
+            resolved = (source.parent / path).resolve() if path else source
+            if not resolved.exists():
+                broken.append(f"{document}: {target} (no {path})")
+            elif anchor and resolved.suffix == ".md" and anchor not in _anchors(resolved):
+                broken.append(f"{document}: {target} (no heading #{anchor} in {resolved.relative_to(ROOT)})")
+    assert not broken, "broken links:\n" + "\n".join(broken)
 
 
 def test_every_block_is_found_and_every_skip_has_a_reason():

@@ -1,6 +1,6 @@
 """Divergence, extreme but admissible values, and calls that could hang.
 
-Decision (documented in the README): a divergence makes fmi2DoStep return
+Decision (documented in docs/testing.md, Robustness): a divergence makes fmi2DoStep return
 fmi2Discard; the instance goes to stepFailed at the last good internal grid
 node, fmi2GetRealStatus(fmi2LastSuccessfulTime) tells where, and
 fmi2GetBooleanStatus(fmi2Terminated) is true. No output is ever NaN or Inf.
