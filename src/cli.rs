@@ -405,30 +405,19 @@ fn write_history(
     for i in 0..=rows {
         sim.advance_to((i as f64 * interval).min(duration))?;
         let o = sim.outputs();
-        let s = o.state;
         let (comfort, holding) = metric_outputs(&o);
-        writeln!(
-            csv,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-            o.time,
-            s[0],
-            s[1],
-            s[2],
-            s[3],
-            s[4],
-            s[5],
-            o.performance.body_acceleration,
-            o.performance.suspension_deflection,
-            o.performance.tire_deflection,
-            o.road_displacement,
-            o.control_force,
+        // The state, BA, SDD, TDD, x_g and u: the first columns of the core values.
+        let core = &o.core_values()[..11];
+        let reals = std::iter::once(o.time).chain(core.iter().copied()).chain([
             comfort.weighted_body_acceleration,
             o.dynamic_tire_load,
             holding.contact_loss_time,
             holding.max_suspension_deflection,
-            holding.lift_off_count
-        )
-        .map_err(write_error)?;
+        ]);
+        for value in reals {
+            write!(csv, "{value},").map_err(write_error)?;
+        }
+        writeln!(csv, "{}", holding.lift_off_count).map_err(write_error)?;
         progress.update(o.time);
     }
     csv.flush().map_err(write_error)?;

@@ -40,6 +40,16 @@ fn failure(args: &[&str]) -> String {
     run.stderr
 }
 
+/// The smallest controller optimization: two particles, one iteration.
+const TINY_CONTROLLER_PSO: [&str; 6] = [
+    "optimize",
+    "controller",
+    "--particles",
+    "2",
+    "--iterations",
+    "1",
+];
+
 /// A file name in the temporary directory, unique to this test process.
 fn temporary(name: &str) -> PathBuf {
     std::env::temp_dir().join(format!("tdvass-cli-{}-{name}", std::process::id()))
@@ -680,17 +690,7 @@ fn the_tolerance_sets_the_internal_step_and_bad_ones_are_refused_naming_the_valu
     // The cap bounds the step the tolerance gives.
     let capped = tdvass_json(&["simulate", "--duration", "1", "--max-internal-step", "1e-4"]);
     assert_eq!(step(&capped), 1e-4);
-    for subcommand in [
-        &["simulate"][..],
-        &[
-            "optimize",
-            "controller",
-            "--particles",
-            "2",
-            "--iterations",
-            "1",
-        ][..],
-    ] {
+    for subcommand in [&["simulate"][..], &TINY_CONTROLLER_PSO[..]] {
         for (bad, shown) in [("0.5", "0.5"), ("-1e-6", "-0.000001"), ("NaN", "NaN")] {
             let flag = format!("--tolerance={bad}");
             let mut args = subcommand.to_vec();
@@ -824,18 +824,13 @@ fn optimize_takes_the_tire_contact_with_both_objectives() {
     // Without lift-offs the two tires are the same model: the same scores,
     // bit for bit.
     let controller = |contact: &str| {
-        tdvass_json(&[
-            "optimize",
-            "controller",
-            "--particles",
-            "2",
-            "--iterations",
-            "1",
-            "--duration",
-            "1",
-            "--tire-contact",
-            contact,
-        ])
+        tdvass_json(
+            &[
+                &TINY_CONTROLLER_PSO[..],
+                &["--duration", "1", "--tire-contact", contact],
+            ]
+            .concat(),
+        )
     };
     let (unilateral, bilateral) = (controller("unilateral"), controller("bilateral"));
     assert_eq!(unilateral["objective"], bilateral["objective"]);
