@@ -10,7 +10,7 @@ Platforms and how the harness runs there:
            qemu-user (`qemu-aarch64 -L /usr/aarch64-linux-gnu`)
 
 The FMI 3.0 FMU (tdvass-fmi3.fmu) carries all three, under the platform
-tuples x86_64-linux, x86_64-windows and aarch64-linux; harness3.c runs them
+tuples x86_64-linux, x86_64-windows and aarch64-linux; harness_fmi3.c runs them
 under the same runners (the `platforms3` and `results3` fixtures, results
 in target/platforms/fmi3/).
 
@@ -40,7 +40,7 @@ HARNESS_VARIABLES = {
     "variant": 1, "g": 10, "tau": 11, "road": 12, "road_class": 15, "road_seed": 18, "x_s": 31,
 }
 
-# The same for harness3.c (FMI 3.0): name -> (value reference, element).
+# The same for harness_fmi3.c (FMI 3.0): name -> (value reference, element).
 HARNESS3_VARIABLES = {
     "variant": (1, "Enumeration"), "road": (12, "Enumeration"), "road_class": (15, "Enumeration"),
     "road_seed": (18, "Int32"),
@@ -266,7 +266,7 @@ def description3(fmu3) -> Description:
         if variable.get("causality") == "output" and variable.tag == "Float64" and variable.find("Dimension") is None:
             outputs.append(vr)
     for name, expected in HARNESS3_VARIABLES.items():
-        assert variables.get(name) == expected, f"harness3.c sets `{name}` as {expected}"
+        assert variables.get(name) == expected, f"harness_fmi3.c sets `{name}` as {expected}"
     assert outputs, "the description declares no Float64 output"
     return Description(root.get("instantiationToken"), outputs, {n: vr for n, (vr, _) in variables.items()})
 
@@ -278,14 +278,14 @@ def platforms3(fmu3) -> dict[str, Platform]:
     return {
         "linux64": Platform("linux64", ["gcc", "-ldl"], "gcc",
                             extracted(fmu3, "binaries/x86_64-linux/tdvass.so", "fmi3/x86_64-linux/tdvass.so"),
-                            [], "harness3", "harness3.c", work),
+                            [], "harness_fmi3", "harness_fmi3.c", work),
         "win64": Platform("win64", ["x86_64-w64-mingw32-gcc", "-static"], "gcc-mingw-w64-x86-64",
                           extracted(fmu3, "binaries/x86_64-windows/tdvass.dll", "fmi3/x86_64-windows/tdvass.dll"),
-                          [require_tool(str(WINE), "wine64")], "harness3.exe", "harness3.c", work),
+                          [require_tool(str(WINE), "wine64")], "harness_fmi3.exe", "harness_fmi3.c", work),
         "aarch64": Platform("aarch64", ["aarch64-linux-gnu-gcc", "-ldl"], "gcc-aarch64-linux-gnu",
                             extracted(fmu3, "binaries/aarch64-linux/tdvass.so", "fmi3/aarch64-linux/tdvass.so"),
                             [require_tool("qemu-aarch64", "qemu-user"), "-L", str(AARCH64_SYSROOT)],
-                            "harness3", "harness3.c", work),
+                            "harness_fmi3", "harness_fmi3.c", work),
     }
 
 
@@ -294,7 +294,7 @@ _results3: dict[str, Results] = {}
 
 @pytest.fixture(scope="session")
 def results3(platforms3, description3):
-    """As `results`, for harness3.c and the FMI 3.0 binaries."""
+    """As `results`, for harness_fmi3.c and the FMI 3.0 binaries."""
 
     def get(name: str) -> Results:
         if name in _results3:
@@ -311,7 +311,7 @@ def results3(platforms3, description3):
                    platform.host_path(out), platform.host_path(state_in)]
         env = wine_environment() if name == "win64" else None
         result = run(command, env=env, cwd=platform.dir)
-        assert re.search(r"^harness3: \d+ outputs x 15000 steps", result.stdout, re.M), result.stdout
+        assert re.search(r"^harness_fmi3: \d+ outputs x 15000 steps", result.stdout, re.M), result.stdout
         _results3[name] = Results(name, out)
         return _results3[name]
 

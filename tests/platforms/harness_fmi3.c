@@ -6,7 +6,7 @@
  * platform's binary of tdvass-fmi3.fmu. The FMI 3.0 types are declared in
  * tests/include/fmi3_types.h.
  *
- *   harness3 LIB TOKEN OUTPUT_VRS OUT_DIR STATE_IN
+ *   harness_fmi3 LIB TOKEN OUTPUT_VRS OUT_DIR STATE_IN
  *
  *   LIB         the library (binaries/<platform tuple>/tdvass.so or .dll)
  *   TOKEN       the instantiationToken of the FMU's modelDescription.xml
@@ -90,7 +90,7 @@ static void logger(fmi3InstanceEnvironment env, fmi3Status status, fmi3String ca
 }
 
 static void fail(const char *what, int line) {
-    fprintf(stderr, "harness3.c:%d: %s (last message: %s)\n", line, what, last_message);
+    fprintf(stderr, "harness_fmi3.c:%d: %s (last message: %s)\n", line, what, last_message);
     exit(1);
 }
 
@@ -371,7 +371,7 @@ int main(int argc, char **argv) {
     free(foreign);
 
     long calls = intermediate(dir);
-    printf("harness3: %zu outputs x %d steps, state of %zu bytes, %ld intermediate updates, results in %s\n",
+    printf("harness_fmi3: %zu outputs x %d steps, state of %zu bytes, %ld intermediate updates, results in %s\n",
            n_outputs, STEPS, size, calls, dir);
     return 0;
 }

@@ -1,4 +1,4 @@
-"""The FMI 3.0 binaries of tdvass-fmi3.fmu through harness3.c on every
+"""The FMI 3.0 binaries of tdvass-fmi3.fmu through harness_fmi3.c on every
 platform: x86_64-linux natively, x86_64-windows under wine, aarch64-linux
 under qemu. As for FMI 2.0 (test_platforms.py), every output at every
 communication point, the FMU-state round trip and the outputs read inside
@@ -8,7 +8,7 @@ relative; the serialized state is the same bytes everywhere."""
 import pytest
 from test_platforms import ALL_PLATFORMS, OTHER_PLATFORMS, SAVE_AT, after_save, compare
 
-INTERMEDIATE_STEPS = 100  # harness3.c: steps run with the callback
+INTERMEDIATE_STEPS = 100  # harness_fmi3.c: steps run with the callback
 STEP = 1e-3
 
 
