@@ -612,7 +612,7 @@ impl Road {
     /// Checks an external input value and slope (finite).
     pub fn check_input(value: f64, slope: f64) -> Result<()> {
         finite("x_g", value)?;
-        finite("x_g derivative", slope)
+        finite("slope of x_g", slope)
     }
 
     /// Sets the external input (only for [`RoadSpec::Input`]): from time
