@@ -165,6 +165,12 @@ pub(super) struct Segment<'a> {
 /// `BEFORE`: all the delayed nodes lie before the start; `FILTER`: the W_k
 /// filter steps along ([`FilterGridStep`]) and its `a_w²`, `a_w⁴` are
 /// summed like the RMS sums.
+///
+/// It stays one function on purpose: it is the loop every run spends its
+/// time in, and its state (x, the road, the sums, the ring slot) lives in
+/// locals that the compiler keeps in registers across the whole segment;
+/// the const parameters give one specialized copy per case instead of
+/// branches inside it.
 #[inline(always)]
 pub(super) fn segment<
     R: NodeRoad,
