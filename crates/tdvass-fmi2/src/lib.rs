@@ -14,8 +14,6 @@
 //!   (the instance is a [`tdvass_fmu::entry::FrontEnd`]). Every method
 //!   returns `Result<_, FmiError>`.
 //! - [`uri`]: parsing of `fmuResourceLocation`.
-//! - [`description`]: the FMI 2.0 `modelDescription.xml` and
-//!   `documentation/index.html` (quick-xml, never written by hand).
 //! - [`ffi`]: the thin `extern "C"` layer: the C signatures and the
 //!   conversions of FMI 2.0's types and statuses. What every FMI version
 //!   does alike is [`tdvass_fmu::entry`] (the state table and
@@ -47,15 +45,16 @@
 //!   Higher orders are ignored with `fmi2Warning`.
 //!
 //! **What this crate owns and must never import.** It owns the FMI 2.0
-//! layer: the C ABI, the FMI 2.0 state table, the status kinds and the
-//! generated 2.0 description; it builds the FMU's shared library. It
-//! imports the slave from `tdvass-fmu` and the physics from `tdvass`, and
-//! nothing from the command line (`tdvass-cli`) or another FMI version.
+//! layer: the C ABI, the FMI 2.0 state table and the status kinds; it
+//! builds the FMU's shared library, which holds runtime code only (the
+//! model description and documentation are written at build time by
+//! `tdvass-describe`). It imports the slave from `tdvass-fmu` and the
+//! physics from `tdvass`, and nothing from the command line (`tdvass-cli`)
+//! or another FMI version.
 //! `unsafe` lives in [`ffi`] only (denied everywhere else).
 
 #![deny(unsafe_code)]
 
-pub mod description;
 pub mod ffi;
 pub mod instance;
 pub mod states;
@@ -66,7 +65,7 @@ pub use states::{Function, MachineState};
 pub use tdvass_fmu::{
     DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, FmiError, LOG_CATEGORIES,
     MODEL_IDENTIFIER, MODEL_NAME, Status, TIME_TOLERANCE, VARIABLES, Variable, guid, limits,
-    markdown, snapshot, variables,
+    snapshot, variables,
 };
 
 /// `fmi2GetVersion`.

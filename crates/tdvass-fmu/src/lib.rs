@@ -5,9 +5,10 @@
 //! - [`variables`]: the **one table** of FMU variables. Value references,
 //!   types, causality, variability, start values, units, admissible ranges,
 //!   descriptions and how each variable is read or written; get/set
-//!   dispatch, the model descriptions of every FMI version, the
-//!   documentation, the GUID and the CLI's defaults (checked by tests) are
-//!   derived from it.
+//!   dispatch, the GUID and the instantiation token, the CLI's defaults
+//!   (checked by tests) and, at build time, the model descriptions and
+//!   documentation of every FMI version (`tdvass-describe`) are derived
+//!   from it.
 //! - [`settings`]: the values of an instance, built on the library's
 //!   [`Params`](tdvass::model::Params) and [`Weights`](tdvass::metrics::Weights),
 //!   and the [`SimulationConfig`](tdvass::solver::SimulationConfig) they
@@ -24,9 +25,6 @@
 //!   (set/get by value reference, `do_step(t, h)`, input value and slope,
 //!   snapshots, partials). Every method returns `Result<_, FmiError>`.
 //! - [`phase`]: the life-cycle phase each front-end's state table checks.
-//! - [`markdown`]: the variable table as Markdown for the README.
-//! - [`markup`]: what the model descriptions and documentation pages of
-//!   every FMI version write alike (quick-xml).
 //! - [`pointers`]: instance handles, array and string arguments of the C
 //!   interfaces, checked (NULL, alignment, length, the handle's tag).
 //! - [`entry`]: what the C entry points of every FMI version do around an
@@ -42,7 +40,8 @@
 //! [`Variable::fmi3_only`]) and how a front-end names its functions
 //! ([`slave::Dialect`]). It imports the physics from `tdvass` and nothing
 //! else of the workspace: no front-end's C types, exported functions or
-//! state table, no command line. Its `unsafe` is in [`pointers`] and
+//! state table, no command line, no writer of descriptions or
+//! documentation (those are `tdvass-describe`'s, at build time). Its `unsafe` is in [`pointers`] and
 //! [`entry`] only (denied everywhere else), each block with its `SAFETY`
 //! comment.
 
@@ -50,8 +49,6 @@
 
 pub mod entry;
 pub mod limits;
-pub mod markdown;
-pub mod markup;
 pub mod outputs;
 pub mod phase;
 pub mod pointers;

@@ -2,16 +2,17 @@
 //! variable table and the declarations of the model description.
 
 use super::{CO_SIMULATION_CAPABILITIES, enumerations, value_text};
-use crate::types::{Fmi3Type, fmi3_type};
-use crate::{
-    DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, LOG_CATEGORIES, MODEL_IDENTIFIER,
-    MODEL_NAME, instantiation_token,
-};
-use tdvass_fmu::markup::{
+use crate::markup::{
     MODEL_DESCRIPTION, REFERENCE_RESULTS, XmlResult, XmlWriter, diagram, html_page, list,
     paragraph, table, text_element,
 };
+use tdvass_fmi3::instantiation_token;
+use tdvass_fmi3::types::{Fmi3Type, fmi3_type};
 use tdvass_fmu::variables::{ALL_VARIABLES, Causality, Dimension, Variable};
+use tdvass_fmu::{
+    DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, LOG_CATEGORIES, MODEL_IDENTIFIER,
+    MODEL_NAME,
+};
 
 /// The FMI 3.0 type of `v` in words: `Float64`, `Enumeration Variant`,
 /// `Float64 [root_count][2]`.

@@ -1,18 +1,19 @@
-//! `modelDescription.xml` and `documentation/index.html`, generated from the
-//! variable table with quick-xml (no markup is written by hand, so every
-//! value is escaped). The output is deterministic: no timestamps.
+//! The FMI 2.0 `modelDescription.xml` and `documentation/index.html`,
+//! generated from the variable table with quick-xml (no markup is written
+//! by hand, so every value is escaped). The output is deterministic: no
+//! timestamps.
 
-use crate::variables::{Causality, Quantity, UNITS, VARIABLES, VarType, Variable, index_of};
-use crate::{
-    DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, FMI_VERSION, LOG_CATEGORIES,
-    MODEL_IDENTIFIER, MODEL_NAME, guid,
+use crate::markup::{
+    MODEL_DESCRIPTION, REFERENCE_RESULTS, XmlResult, XmlWriter, diagram, finish, html_page, list,
+    number, paragraph, table, text_element, writer,
 };
 use quick_xml::events::{BytesDecl, BytesText, Event};
 use tdvass::solver::DEFAULT_TOLERANCE;
-pub use tdvass_fmu::markup::MODEL_DESCRIPTION;
-use tdvass_fmu::markup::{
-    REFERENCE_RESULTS, XmlResult, XmlWriter, diagram, finish, html_page, list, number, paragraph,
-    table, text_element, writer,
+use tdvass_fmi2::FMI_VERSION;
+use tdvass_fmu::variables::{Causality, Quantity, UNITS, VARIABLES, VarType, Variable, index_of};
+use tdvass_fmu::{
+    DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, LOG_CATEGORIES, MODEL_IDENTIFIER,
+    MODEL_NAME, guid,
 };
 
 fn start_text(v: &Variable) -> Option<String> {

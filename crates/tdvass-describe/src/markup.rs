@@ -4,10 +4,10 @@
 //! the legend of its symbols, and the HTML page around a body (quick-xml,
 //! never written by hand).
 
-use crate::variables::by_name;
 use quick_xml::Writer;
 use quick_xml::events::{BytesText, Event};
 use std::io::Cursor;
+use tdvass_fmu::variables::{Causality, by_name};
 
 /// A writer of XML (or HTML) into memory.
 pub type XmlWriter = Writer<Cursor<Vec<u8>>>;
@@ -85,7 +85,7 @@ fn legend_variables(names: &[&str]) -> String {
                 .unwrap_or_else(|| panic!("the legend names `{name}`, not a variable"));
             let unit = v.unit().map(|u| format!(" {u}")).unwrap_or_default();
             match v.start {
-                Some(start) if v.causality != crate::variables::Causality::Input => {
+                Some(start) if v.causality != Causality::Input => {
                     format!("{name} (start {}{unit})", number(start))
                 }
                 _ => format!(

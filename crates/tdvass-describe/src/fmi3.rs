@@ -8,17 +8,17 @@
 //! capability flags ([`CO_SIMULATION_CAPABILITIES`]), which the C interface
 //! implements.
 
-use crate::types::{Fmi3Type, fmi3_type};
-use crate::{
-    DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, FMI_VERSION, LOG_CATEGORIES,
-    MODEL_IDENTIFIER, MODEL_NAME, instantiation_token,
-};
+use crate::markup::{MODEL_DESCRIPTION, XmlResult, XmlWriter, finish, number, writer};
 use quick_xml::events::{BytesDecl, Event};
 use tdvass::solver::DEFAULT_TOLERANCE;
-pub use tdvass_fmu::markup::MODEL_DESCRIPTION;
-use tdvass_fmu::markup::{XmlResult, XmlWriter, finish, number, writer};
+use tdvass_fmi3::types::{Fmi3Type, fmi3_type};
+use tdvass_fmi3::{FMI_VERSION, instantiation_token};
 use tdvass_fmu::variables::{
     ALL_VARIABLES, Causality, Dimension, Enumeration, Quantity, UNITS, Variable, by_name,
+};
+use tdvass_fmu::{
+    DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, LOG_CATEGORIES, MODEL_IDENTIFIER,
+    MODEL_NAME,
 };
 
 /// The attributes of the `CoSimulation` element after `modelIdentifier`,
