@@ -4,16 +4,15 @@
 //! timestamps.
 
 use crate::markup::{
-    MODEL_DESCRIPTION, REFERENCE_RESULTS, XmlResult, XmlWriter, diagram, finish, html_page, list,
-    number, paragraph, table, text_element, writer,
+    DescriptionFrame, MODEL_DESCRIPTION, REFERENCE_RESULTS, TIRE_CONTACT, XmlResult, XmlWriter,
+    diagram, html_page, list, model_description, number, paragraph, text_element, unit_text,
+    variable_table,
 };
-use quick_xml::events::{BytesDecl, BytesText, Event};
-use tdvass::solver::DEFAULT_TOLERANCE;
+use quick_xml::events::{BytesText, Event};
 use tdvass_fmi2::FMI_VERSION;
-use tdvass_fmu::variables::{Causality, Quantity, UNITS, VARIABLES, VarType, Variable, index_of};
+use tdvass_fmu::variables::{Causality, Quantity, VARIABLES, VarType, Variable, index_of};
 use tdvass_fmu::{
-    DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, LOG_CATEGORIES, MODEL_IDENTIFIER,
-    MODEL_NAME, guid,
+    DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, MODEL_IDENTIFIER, MODEL_NAME, guid,
 };
 
 fn start_text(v: &Variable) -> Option<String> {
@@ -28,37 +27,6 @@ fn bound_text(v: &Variable, b: Option<f64>) -> Option<String> {
         VarType::Integer => format!("{}", b as i64),
         _ => number(b),
     })
-}
-
-fn write_unit_definitions(w: &mut XmlWriter) -> XmlResult {
-    w.create_element("UnitDefinitions")
-        .write_inner_content(|w| {
-            for unit in UNITS {
-                w.create_element("Unit")
-                    .with_attribute(("name", unit.name))
-                    .write_inner_content(|w| {
-                        let exponents: Vec<(String, String)> = unit
-                            .base
-                            .iter()
-                            .map(|(b, e)| (b.to_string(), e.to_string()))
-                            .collect();
-                        w.create_element("BaseUnit")
-                            .with_attributes(
-                                exponents.iter().map(|(b, e)| (b.as_str(), e.as_str())),
-                            )
-                            .write_empty()?;
-                        for (name, factor) in unit.display {
-                            w.create_element("DisplayUnit")
-                                .with_attribute(("name", *name))
-                                .with_attribute(("factor", number(*factor).as_str()))
-                                .write_empty()?;
-                        }
-                        Ok(())
-                    })?;
-            }
-            Ok(())
-        })?;
-    Ok(())
 }
 
 fn write_type_definitions(w: &mut XmlWriter) -> XmlResult {
@@ -178,80 +146,48 @@ fn write_model_structure(w: &mut XmlWriter) -> XmlResult {
     Ok(())
 }
 
+/// The attributes of the `CoSimulation` element after `modelIdentifier`,
+/// in the order written: the capabilities the C interface provides.
+pub const CO_SIMULATION_CAPABILITIES: [(&str, &str); 9] = [
+    ("needsExecutionTool", "false"),
+    ("canHandleVariableCommunicationStepSize", "true"),
+    ("canInterpolateInputs", "true"),
+    ("maxOutputDerivativeOrder", "1"),
+    ("canBeInstantiatedOnlyOncePerProcess", "false"),
+    ("canNotUseMemoryManagementFunctions", "true"),
+    ("canGetAndSetFMUstate", "true"),
+    ("canSerializeFMUstate", "true"),
+    ("providesDirectionalDerivative", "true"),
+];
+
 /// The complete `modelDescription.xml`.
 pub fn model_description_xml() -> String {
-    let mut w = writer();
-    let write = |w: &mut XmlWriter| -> XmlResult {
-        w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
-        let guid = guid();
-        let tool = format!("tdvass fmu-build {}", env!("CARGO_PKG_VERSION"));
-        w.create_element("fmiModelDescription")
-            .with_attribute(("fmiVersion", FMI_VERSION))
-            .with_attribute(("modelName", MODEL_NAME))
-            .with_attribute(("guid", guid.as_str()))
-            .with_attribute(("description", MODEL_DESCRIPTION))
-            .with_attribute(("version", env!("CARGO_PKG_VERSION")))
-            .with_attribute(("license", "MIT"))
-            .with_attribute(("generationTool", tool.as_str()))
-            .with_attribute(("variableNamingConvention", "flat"))
-            .write_inner_content(|w| {
-                w.create_element("CoSimulation")
-                    .with_attribute(("modelIdentifier", MODEL_IDENTIFIER))
-                    .with_attribute(("needsExecutionTool", "false"))
-                    .with_attribute(("canHandleVariableCommunicationStepSize", "true"))
-                    .with_attribute(("canInterpolateInputs", "true"))
-                    .with_attribute(("maxOutputDerivativeOrder", "1"))
-                    .with_attribute(("canBeInstantiatedOnlyOncePerProcess", "false"))
-                    .with_attribute(("canNotUseMemoryManagementFunctions", "true"))
-                    .with_attribute(("canGetAndSetFMUstate", "true"))
-                    .with_attribute(("canSerializeFMUstate", "true"))
-                    .with_attribute(("providesDirectionalDerivative", "true"))
-                    .write_empty()?;
-                write_unit_definitions(w)?;
-                write_type_definitions(w)?;
-                w.create_element("LogCategories").write_inner_content(|w| {
-                    for (name, description) in LOG_CATEGORIES {
-                        w.create_element("Category")
-                            .with_attribute(("name", name))
-                            .with_attribute(("description", description))
-                            .write_empty()?;
-                    }
-                    Ok(())
-                })?;
-                w.create_element("DefaultExperiment")
-                    .with_attribute(("startTime", number(DEFAULT_START_TIME).as_str()))
-                    .with_attribute(("stopTime", number(DEFAULT_STOP_TIME).as_str()))
-                    .with_attribute(("tolerance", number(DEFAULT_TOLERANCE).as_str()))
-                    .with_attribute(("stepSize", number(DEFAULT_STEP_SIZE).as_str()))
-                    .write_empty()?;
-                w.create_element("ModelVariables")
-                    .write_inner_content(|w| {
-                        for (i, v) in VARIABLES.iter().enumerate() {
-                            w.write_event(Event::Comment(BytesText::new(&format!(
-                                " index {} ",
-                                i + 1
-                            ))))?;
-                            write_variable(w, v)?;
-                        }
-                        Ok(())
-                    })?;
-                write_model_structure(w)
-            })?;
-        Ok(())
+    let guid = guid();
+    let frame = DescriptionFrame {
+        fmi_version: FMI_VERSION,
+        token: ("guid", &guid),
+        co_simulation: &CO_SIMULATION_CAPABILITIES,
     };
-    write(&mut w).expect("writing to memory cannot fail");
-    finish(w)
+    model_description(frame, write_type_definitions, |w| {
+        w.create_element("ModelVariables")
+            .write_inner_content(|w| {
+                for (i, v) in VARIABLES.iter().enumerate() {
+                    w.write_event(Event::Comment(BytesText::new(&format!(
+                        " index {} ",
+                        i + 1
+                    ))))?;
+                    write_variable(w, v)?;
+                }
+                Ok(())
+            })?;
+        write_model_structure(w)
+    })
 }
 
 // ------------------------------------------------------------ documentation
 
 fn variable_row(v: &Variable) -> Vec<String> {
     let range = v.range.describe();
-    let unit = match (v.unit(), v.display_unit) {
-        (Some(u), Some(d)) => format!("{u} (shown in {d})"),
-        (Some(u), None) => u.to_string(),
-        (None, _) => "-".to_string(),
-    };
     let kind = format!("{}, {}", v.causality.as_str(), v.variability.as_str());
     vec![
         v.name.to_string(),
@@ -259,7 +195,7 @@ fn variable_row(v: &Variable) -> Vec<String> {
         v.var_type().as_str().to_string(),
         kind,
         start_text(v).unwrap_or_else(|| "calculated".into()),
-        unit,
+        unit_text(v),
         range,
         v.description.to_string(),
     ]
@@ -296,10 +232,7 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
         w,
         "Integration: the precise (fine) integration method of the paper (section 4.1) on an internal grid anchored at the start time. The tolerance (relative, of every output metric: the master's from fmi2SetupExperiment when it defines one, else the DefaultExperiment's 1e-6) sets the internal step, from an error model checked by a step-doubling probe; the step divides tau exactly when tau is longer and is at most max_internal_step when that is > 0. The delayed wheel displacement is a cubic Hermite interpolant of the stored history, the road is exact over each internal step. Results do not depend on how the master splits time into communication steps (except with road = 0, where the input changes at communication points).",
     )?;
-    paragraph(
-        w,
-        "Tire (tire_contact): 0 = bilateral, the paper's linear tire, which pulls as well as pushes; where the dynamic tire load falls below minus the static load W the real tire would leave the road and the linear model no longer holds: contact_loss_time accumulates that time and the first crossing is logged as a warning. 1 = unilateral: the tire cannot pull, so the wheel lifts off where TDD rises through W/k_t and flies (tire force -W) until TDD falls back to it; contact and flight are each integrated exactly, with the switches located inside the internal steps. contact_loss_time is then the flight time, and each lift-off is logged under logEvents with its time, TDD and W/k_t. lift_off_count counts the lift-offs in both modes. The stability results (spectral_abscissa, stable) are those of the linear (bilateral) model.",
-    )?;
+    paragraph(w, TIRE_CONTACT)?;
     text_element(w, "h3", "Static gain of the controlled suspension")?;
     paragraph(
         w,
@@ -318,20 +251,7 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
 
     text_element(w, "h2", "Variables")?;
     let rows: Vec<Vec<String>> = VARIABLES.iter().map(variable_row).collect();
-    table(
-        w,
-        &[
-            "name",
-            "value reference",
-            "type",
-            "causality, variability",
-            "start",
-            "unit",
-            "range",
-            "meaning",
-        ],
-        &rows,
-    )?;
+    variable_table(w, "type", &rows)?;
     paragraph(
         w,
         "Parameters are fixed (settable before the end of initialization) unless tunable: g, w_ba, w_sdd and w_tdd can be changed between communication steps. Values outside the range, NaN or infinite are refused with fmi2Error naming the variable and value; the remaining checks (for example a delay needing too many history nodes) are made by fmi2ExitInitializationMode, which then stays in initialization mode so that the value can be corrected.",

@@ -1,6 +1,8 @@
 use super::*;
 use quick_xml::Reader;
+use quick_xml::events::Event;
 use std::collections::{HashMap, HashSet};
+use tdvass_fmu::LOG_CATEGORIES;
 use tdvass_fmu::variables::{
     Initial, ROAD_CLASS_ITEMS, ROAD_ITEMS, TIRE_CONTACT_ITEMS, VARIABLES, VARIANT_ITEMS,
 };
