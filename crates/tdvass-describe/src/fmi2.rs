@@ -10,7 +10,7 @@ use crate::markup::{
 };
 use quick_xml::events::{BytesText, Event};
 use tdvass_fmi2::FMI_VERSION;
-use tdvass_fmu::variables::{Causality, Quantity, VARIABLES, VarType, Variable, index_of};
+use tdvass_fmu::variables::{COMMON_VARIABLES, Causality, Quantity, VarType, Variable};
 use tdvass_fmu::{
     DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, MODEL_IDENTIFIER, MODEL_NAME, guid,
 };
@@ -88,6 +88,15 @@ fn write_variable(w: &mut XmlWriter, v: &Variable) -> XmlResult {
     Ok(())
 }
 
+/// The 1-based index of the variable called `name` in FMI 2.0's
+/// `ModelVariables`, by which `ModelStructure` refers to it.
+fn index_of(name: &str) -> Option<usize> {
+    COMMON_VARIABLES
+        .iter()
+        .position(|v| v.name == name)
+        .map(|i| i + 1)
+}
+
 fn indices(names: &[&str]) -> String {
     let mut idx: Vec<usize> = names
         .iter()
@@ -104,7 +113,7 @@ fn write_model_structure(w: &mut XmlWriter) -> XmlResult {
     w.create_element("ModelStructure")
         .write_inner_content(|w| {
             w.create_element("Outputs").write_inner_content(|w| {
-                for (i, v) in VARIABLES.iter().enumerate() {
+                for (i, v) in COMMON_VARIABLES.iter().enumerate() {
                     if v.causality != Causality::Output {
                         continue;
                     }
@@ -124,7 +133,7 @@ fn write_model_structure(w: &mut XmlWriter) -> XmlResult {
             })?;
             w.create_element("InitialUnknowns")
                 .write_inner_content(|w| {
-                    for (i, v) in VARIABLES.iter().enumerate() {
+                    for (i, v) in COMMON_VARIABLES.iter().enumerate() {
                         if !matches!(
                             v.causality,
                             Causality::Output | Causality::CalculatedParameter
@@ -171,7 +180,7 @@ pub fn model_description_xml() -> String {
     model_description(frame, write_type_definitions, |w| {
         w.create_element("ModelVariables")
             .write_inner_content(|w| {
-                for (i, v) in VARIABLES.iter().enumerate() {
+                for (i, v) in COMMON_VARIABLES.iter().enumerate() {
                     w.write_event(Event::Comment(BytesText::new(&format!(
                         " index {} ",
                         i + 1
@@ -250,7 +259,7 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
     )?;
 
     text_element(w, "h2", "Variables")?;
-    let rows: Vec<Vec<String>> = VARIABLES.iter().map(variable_row).collect();
+    let rows: Vec<Vec<String>> = COMMON_VARIABLES.iter().map(variable_row).collect();
     variable_table(w, "type", &rows)?;
     paragraph(
         w,
@@ -357,8 +366,8 @@ mod tests {
         assert_eq!(experiment.1["stopTime"], "15");
         assert_eq!(experiment.1["stepSize"], "0.001");
         let vars: Vec<_> = els.iter().filter(|e| e.0 == "ScalarVariable").collect();
-        assert_eq!(vars.len(), VARIABLES.len());
-        for (v, el) in VARIABLES.iter().zip(&vars) {
+        assert_eq!(vars.len(), COMMON_VARIABLES.len());
+        for (v, el) in COMMON_VARIABLES.iter().zip(&vars) {
             assert_eq!(el.1["name"], v.name);
             assert_eq!(el.1["valueReference"], v.vr.to_string());
             assert_eq!(el.1["causality"], v.causality.as_str());
@@ -398,7 +407,7 @@ mod tests {
         let initial_at = els.iter().position(|e| e.0 == "InitialUnknowns").unwrap();
         let outputs: Vec<_> = els[outputs_at + 1..initial_at].iter().collect();
         let initial: Vec<_> = els[initial_at + 1..].iter().collect();
-        let count = |c: Causality| VARIABLES.iter().filter(|v| v.causality == c).count();
+        let count = |c: Causality| COMMON_VARIABLES.iter().filter(|v| v.causality == c).count();
         assert_eq!(outputs.len(), count(Causality::Output));
         assert_eq!(outputs.len(), 23);
         assert_eq!(
@@ -420,7 +429,7 @@ mod tests {
         let html = documentation_html();
         assert!(html.starts_with("<!DOCTYPE html>"));
         elements(html.trim_start_matches("<!DOCTYPE html>"));
-        for v in VARIABLES {
+        for v in COMMON_VARIABLES {
             assert!(html.contains(&format!("<td>{}</td>", v.name)), "{}", v.name);
         }
         assert!(html.contains("1 - g/k_h"));

@@ -12,7 +12,7 @@ use crate::markup::{DescriptionFrame, XmlResult, XmlWriter, model_description, n
 use tdvass_fmi3::types::{Fmi3Type, fmi3_type};
 use tdvass_fmi3::{FMI_VERSION, instantiation_token};
 use tdvass_fmu::variables::{
-    ALL_VARIABLES, Causality, Dimension, Enumeration, Quantity, Variable, by_name,
+    Causality, Dimension, Enumeration, FMI3_VARIABLES, FmiVersion, Quantity, Variable, by_name,
 };
 
 /// The attributes of the `CoSimulation` element after `modelIdentifier`,
@@ -52,7 +52,7 @@ fn value_text(v: &Variable, value: f64) -> String {
 
 /// The value reference of the variable called `name`.
 fn vr_of(name: &str) -> u32 {
-    by_name(name)
+    by_name(FmiVersion::Fmi3, name)
         .unwrap_or_else(|| panic!("unknown variable `{name}`"))
         .vr
 }
@@ -60,7 +60,7 @@ fn vr_of(name: &str) -> u32 {
 /// The enumeration types of the table, each once, in table order.
 pub fn enumerations() -> Vec<&'static Enumeration> {
     let mut out: Vec<&'static Enumeration> = Vec::new();
-    for e in ALL_VARIABLES.iter().filter_map(|v| v.enumeration) {
+    for e in FMI3_VARIABLES.iter().filter_map(|v| v.enumeration) {
         if !out.iter().any(|known| known.type_name == e.type_name) {
             out.push(e);
         }
@@ -212,7 +212,7 @@ fn write_variable(w: &mut XmlWriter, v: &Variable) -> XmlResult {
 fn write_model_structure(w: &mut XmlWriter) -> XmlResult {
     w.create_element("ModelStructure")
         .write_inner_content(|w| {
-            for v in ALL_VARIABLES
+            for v in FMI3_VARIABLES
                 .iter()
                 .filter(|v| v.causality == Causality::Output)
             {
@@ -229,7 +229,7 @@ fn write_model_structure(w: &mut XmlWriter) -> XmlResult {
                 }
                 unknown.write_empty()?;
             }
-            for v in ALL_VARIABLES.iter().filter(|v| is_initial_unknown(v)) {
+            for v in FMI3_VARIABLES.iter().filter(|v| is_initial_unknown(v)) {
                 w.create_element("InitialUnknown")
                     .with_attribute(("valueReference", v.vr.to_string().as_str()))
                     .with_attribute(("dependencies", vr_list(&initial_dependencies(v)).as_str()))
@@ -251,7 +251,7 @@ pub fn model_description_xml() -> String {
     model_description(frame, write_type_definitions, |w| {
         w.create_element("ModelVariables")
             .write_inner_content(|w| {
-                for v in ALL_VARIABLES {
+                for v in FMI3_VARIABLES {
                     write_variable(w, v)?;
                 }
                 Ok(())

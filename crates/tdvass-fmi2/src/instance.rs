@@ -247,7 +247,7 @@ impl Drop for Instance {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::variables::by_name;
+    use crate::variables::{FmiVersion, by_name};
     use std::cell::RefCell;
     use std::rc::Rc;
 
@@ -272,7 +272,7 @@ mod tests {
     }
 
     fn vr(name: &str) -> u32 {
-        by_name(name).unwrap().vr
+        by_name(FmiVersion::Fmi2, name).unwrap().vr
     }
 
     #[test]

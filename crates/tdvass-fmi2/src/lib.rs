@@ -63,8 +63,8 @@ pub mod uri;
 pub use instance::Instance;
 pub use states::{Function, MachineState};
 pub use tdvass_fmu::{
-    DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, FmiError, LOG_CATEGORIES,
-    MODEL_IDENTIFIER, MODEL_NAME, Status, TIME_TOLERANCE, VARIABLES, Variable, guid, limits,
+    COMMON_VARIABLES, DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, FmiError,
+    LOG_CATEGORIES, MODEL_IDENTIFIER, MODEL_NAME, Status, TIME_TOLERANCE, Variable, guid, limits,
     snapshot, variables,
 };
 

@@ -15,7 +15,7 @@ use std::path::PathBuf;
 use tdvass_fmu::Phase;
 use tdvass_fmu::entry::FrontEnd;
 use tdvass_fmu::slave::{Dialect, LogSink, Logger};
-use tdvass_fmu::variables::{Causality, FmiVersion, Variable, by_name, by_vr_in};
+use tdvass_fmu::variables::{Causality, FmiVersion, Variable, by_name, by_vr};
 
 pub use tdvass_fmu::Slave;
 
@@ -136,7 +136,7 @@ impl Instance {
             );
         }
         for &vr in request.required_intermediate_variables {
-            match by_vr_in(FmiVersion::Fmi3, vr) {
+            match by_vr(FmiVersion::Fmi3, vr) {
                 Some(v) if v.intermediate_update => {}
                 Some(v) => {
                     return refuse(format!(
@@ -278,7 +278,7 @@ impl Instance {
     ) -> Result<Vec<&'static Variable>, FmiError> {
         vrs.iter()
             .map(|&vr| {
-                let var = by_vr_in(FmiVersion::Fmi3, vr).ok_or_else(|| {
+                let var = by_vr(FmiVersion::Fmi3, vr).ok_or_else(|| {
                     FmiError::error(format!(
                         "unknown value reference {vr} (for a {})",
                         expected.name()
@@ -452,7 +452,7 @@ impl Instance {
     /// `fmi3GetVariableDependencies`: value references of the inputs `vr`
     /// depends on directly.
     pub fn dependencies(&self, vr: u32) -> Result<Vec<u32>, FmiError> {
-        let var = by_vr_in(FmiVersion::Fmi3, vr)
+        let var = by_vr(FmiVersion::Fmi3, vr)
             .ok_or_else(|| FmiError::error(format!("unknown value reference {vr}")))?;
         if var.causality != Causality::Output {
             return Err(FmiError::error(format!(
@@ -463,7 +463,7 @@ impl Instance {
         Ok(var
             .feedthrough
             .iter()
-            .filter_map(|name| by_name(name).map(|v| v.vr))
+            .filter_map(|name| by_name(FmiVersion::Fmi3, name).map(|v| v.vr))
             .collect())
     }
 }

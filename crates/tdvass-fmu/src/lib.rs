@@ -60,7 +60,7 @@ pub mod variables;
 pub use phase::Phase;
 pub use settings::Settings;
 pub use slave::Slave;
-pub use variables::{VARIABLES, Variable, guid};
+pub use variables::{COMMON_VARIABLES, Variable, guid};
 
 /// The `modelIdentifier` (shared library base name) of the FMUs.
 pub const MODEL_IDENTIFIER: &str = "tdvass";

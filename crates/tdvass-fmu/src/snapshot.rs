@@ -29,7 +29,7 @@ use crate::FmiError;
 use crate::phase::Phase;
 use crate::settings::Settings;
 use crate::slave::SlaveState;
-use crate::variables::{ALL_VARIABLES, Access, FmiVersion, by_vr_in};
+use crate::variables::{Access, FMI3_VARIABLES, FmiVersion, by_vr};
 use tdvass::bytes::{ByteReader, ByteWriter};
 use tdvass::solver::Simulator;
 
@@ -143,7 +143,7 @@ impl<'a> Reader<'a> {
 fn encode_payload(model: &SlaveState) -> Vec<u8> {
     let mut w = ByteWriter::default();
     w.u8(model.phase.code());
-    let settings: Vec<_> = ALL_VARIABLES
+    let settings: Vec<_> = FMI3_VARIABLES
         .iter()
         .filter_map(|v| match v.access {
             Access::Real { get, .. } => Some((v.vr, get(&model.settings).to_bits())),
@@ -187,7 +187,7 @@ fn encode_payload(model: &SlaveState) -> Vec<u8> {
 
 fn decode_settings(r: &mut Reader) -> Result<Settings, FmiError> {
     let mut settings = Settings::start_values();
-    let expected: Vec<_> = ALL_VARIABLES
+    let expected: Vec<_> = FMI3_VARIABLES
         .iter()
         .filter(|v| matches!(v.access, Access::Real { .. } | Access::Integer { .. }))
         .collect();
@@ -203,7 +203,7 @@ fn decode_settings(r: &mut Reader) -> Result<Settings, FmiError> {
         let vr = r.u32("a value reference")?;
         let bits = r.u64("a setting")?;
         let position = expected.iter().position(|v| v.vr == vr);
-        let (Some(i), Some(var)) = (position, by_vr_in(FmiVersion::Fmi3, vr)) else {
+        let (Some(i), Some(var)) = (position, by_vr(FmiVersion::Fmi3, vr)) else {
             return Err(invalid(format_args!(
                 "unknown setting value reference {vr}"
             )));

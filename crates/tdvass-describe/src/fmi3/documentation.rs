@@ -8,7 +8,7 @@ use crate::markup::{
 };
 use tdvass_fmi3::instantiation_token;
 use tdvass_fmi3::types::{Fmi3Type, fmi3_type};
-use tdvass_fmu::variables::{ALL_VARIABLES, Causality, Dimension, Variable};
+use tdvass_fmu::variables::{Causality, Dimension, FMI3_VARIABLES, Variable};
 use tdvass_fmu::{
     DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, LOG_CATEGORIES, MODEL_IDENTIFIER,
     MODEL_NAME,
@@ -98,7 +98,7 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
     )?;
 
     text_element(w, "h2", "Variables")?;
-    let rows: Vec<Vec<String>> = ALL_VARIABLES.iter().map(variable_row).collect();
+    let rows: Vec<Vec<String>> = FMI3_VARIABLES.iter().map(variable_row).collect();
     variable_table(w, "FMI 3.0 type", &rows)?;
     paragraph(
         w,
@@ -111,7 +111,7 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
         "Read and written with fmi3GetInt64 and fmi3SetInt64; the item values are the integer codes of the FMI 2.0 FMU.",
     )?;
     for e in enumerations() {
-        let users: Vec<&str> = ALL_VARIABLES
+        let users: Vec<&str> = FMI3_VARIABLES
             .iter()
             .filter(|v| v.enumeration.is_some_and(|u| u.type_name == e.type_name))
             .map(|v| v.name)
@@ -136,7 +136,7 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
     }
 
     text_element(w, "h3", "Arrays")?;
-    for v in ALL_VARIABLES.iter().filter(|v| !v.dimensions.is_empty()) {
+    for v in FMI3_VARIABLES.iter().filter(|v| !v.dimensions.is_empty()) {
         paragraph(
             w,
             &format!(

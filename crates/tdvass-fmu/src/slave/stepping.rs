@@ -4,7 +4,7 @@
 use super::{HOLD_WARNING_STEP, Slave};
 use crate::limits;
 use crate::phase::Phase;
-use crate::variables::{Access, Causality, VarType, by_vr_in};
+use crate::variables::{Access, Causality, VarType, by_vr};
 use crate::{FmiError, Status, TIME_TOLERANCE};
 
 /// The slope of the straight line that continues the input over a step of
@@ -331,7 +331,7 @@ impl Slave {
         };
         let derivatives = sim.output_derivatives();
         for ((&vr, &order), value) in vrs.iter().zip(orders).zip(values.iter_mut()) {
-            let var = by_vr_in(self.dialect.version, vr)
+            let var = by_vr(self.dialect.version, vr)
                 .ok_or_else(|| FmiError::error(format!("unknown value reference {vr}")))?;
             let id = match var.access {
                 Access::Output(id) => id,
