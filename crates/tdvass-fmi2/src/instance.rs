@@ -5,9 +5,10 @@
 //! instance through [`FrontEnd::run`], which enforces the state table and
 //! logs every failure.
 
-use crate::states::{self, Function, MachineState};
+use crate::states::{self, Function};
 use crate::{FmiError, Status};
 use std::path::PathBuf;
+use tdvass_fmu::Phase;
 use tdvass_fmu::entry::FrontEnd;
 use tdvass_fmu::slave::{Dialect, Logger};
 use tdvass_fmu::variables::FmiVersion;
@@ -67,7 +68,7 @@ impl FrontEnd for Instance {
     }
 
     fn check_state(&self, function: Function) -> Result<(), FmiError> {
-        states::check(function, self.machine_state())
+        states::check(function, self.phase())
     }
 
     fn slave(&self) -> &Slave {
@@ -161,8 +162,8 @@ impl Instance {
         &self.name
     }
 
-    /// The machine state.
-    pub fn machine_state(&self) -> MachineState {
+    /// The phase (the FMI 2.0 state: the slave's phase).
+    pub fn phase(&self) -> Phase {
         self.slave.phase()
     }
 
@@ -352,7 +353,7 @@ mod tests {
         assert_eq!(last.0, Status::Error);
         assert_eq!(last.1, "logStatusError");
         assert_eq!(last.2, "fmi2DoStep: not allowed in state instantiated");
-        assert_eq!(i.machine_state(), MachineState::Instantiated);
+        assert_eq!(i.phase(), Phase::Instantiated);
     }
 
     /// What FMI 2.0 adds to a diverging step (the slave's behaviour is
@@ -389,7 +390,7 @@ mod tests {
             assert!(t < 1e4, "never diverged");
         };
         assert_eq!(status, Status::Discard);
-        assert_eq!(i.machine_state(), MachineState::StepFailed);
+        assert_eq!(i.phase(), Phase::StepFailed);
         let last = i
             .run(Function::GetRealStatus, |i| {
                 i.get_real_status(status_kind::LAST_SUCCESSFUL_TIME)
@@ -413,14 +414,14 @@ mod tests {
         i.run(Function::Terminate, |i| i.slave_mut().terminate())
             .unwrap();
         i.run(Function::Reset, |i| i.slave_mut().reset()).unwrap();
-        assert_eq!(i.machine_state(), MachineState::Instantiated);
+        assert_eq!(i.phase(), Phase::Instantiated);
     }
 
     #[test]
     fn panics_make_the_instance_fatal() {
         let (mut i, log) = new_instance(false);
         i.on_panic(Function::DoStep, "boom");
-        assert_eq!(i.machine_state(), MachineState::Fatal);
+        assert_eq!(i.phase(), Phase::Fatal);
         assert_eq!(log.borrow().last().unwrap().0, Status::Fatal);
         assert!(i.run(Function::Reset, |i| i.slave_mut().reset()).is_err());
     }

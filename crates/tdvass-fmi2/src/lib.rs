@@ -61,11 +61,11 @@ pub mod states;
 pub mod uri;
 
 pub use instance::Instance;
-pub use states::{Function, MachineState};
+pub use states::Function;
 pub use tdvass_fmu::{
     COMMON_VARIABLES, DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, FmiError,
-    LOG_CATEGORIES, MODEL_IDENTIFIER, MODEL_NAME, Status, TIME_TOLERANCE, Variable, guid, limits,
-    snapshot, variables,
+    LOG_CATEGORIES, MODEL_IDENTIFIER, MODEL_NAME, Phase, Status, TIME_TOLERANCE, Variable, guid,
+    limits, snapshot, variables,
 };
 
 /// `fmi2GetVersion`.

@@ -8,7 +8,7 @@
 //! and the C layer calls that one. No FFI here; [`crate::ffi`] calls the
 //! instance through [`FrontEnd::run`].
 
-use crate::states::{self, Function, State};
+use crate::states::{self, Fmi3Phase, Function};
 use crate::types::{ValueType, fmi3_type};
 use crate::{FmiError, Status};
 use std::path::PathBuf;
@@ -66,7 +66,7 @@ pub struct Instance {
     intermediate: Option<IntermediatePoint>,
 }
 
-/// The state table is [`states::check`] on [`Instance::state`]; beyond the
+/// The state table is [`states::check`] on [`Instance::phase`]; beyond the
 /// slave, a panic ends an intermediate update and a restored FMU state ends
 /// Configuration Mode.
 impl FrontEnd for Instance {
@@ -77,7 +77,7 @@ impl FrontEnd for Instance {
     }
 
     fn check_state(&self, function: Function) -> Result<(), FmiError> {
-        states::check(function, self.state())
+        states::check(function, self.phase())
     }
 
     fn slave(&self) -> &Slave {
@@ -204,18 +204,18 @@ impl Instance {
         self.intermediate_update
     }
 
-    /// The FMI 3.0 state.
-    pub fn state(&self) -> State {
+    /// The FMI 3.0 phase (the standard's state).
+    pub fn phase(&self) -> Fmi3Phase {
         match self.slave.phase() {
-            Phase::Instantiated if self.configuration => State::ConfigurationMode,
-            Phase::Instantiated => State::Instantiated,
-            Phase::InitializationMode => State::InitializationMode,
-            Phase::StepComplete if self.intermediate.is_some() => State::IntermediateUpdate,
-            Phase::StepComplete => State::StepMode,
-            Phase::StepFailed => State::StepDiscarded,
-            Phase::Terminated => State::Terminated,
-            Phase::Error => State::Error,
-            Phase::Fatal => State::Fatal,
+            Phase::Instantiated if self.configuration => Fmi3Phase::ConfigurationMode,
+            Phase::Instantiated => Fmi3Phase::Instantiated,
+            Phase::InitializationMode => Fmi3Phase::InitializationMode,
+            Phase::StepComplete if self.intermediate.is_some() => Fmi3Phase::IntermediateUpdate,
+            Phase::StepComplete => Fmi3Phase::StepMode,
+            Phase::StepFailed => Fmi3Phase::StepDiscarded,
+            Phase::Terminated => Fmi3Phase::Terminated,
+            Phase::Error => Fmi3Phase::Error,
+            Phase::Fatal => Fmi3Phase::Fatal,
         }
     }
 
