@@ -45,6 +45,7 @@ use tdvass_describe::markdown::{BEGIN_MARKER, END_MARKER, splice_into};
 use tdvass_describe::markup::DIAGRAM_FILE;
 use tdvass_fmi2::MODEL_IDENTIFIER;
 use tdvass_fmu::slave::Dialect;
+use tdvass_fmu::variables::FmiVersion;
 use zip::write::SimpleFileOptions;
 use zip::{CompressionMethod, DateTime, ZipArchive, ZipWriter};
 
@@ -60,13 +61,6 @@ const ICON: &[u8] = include_bytes!("../assets/icon.png");
 
 /// The README, whose FMU variable table is generated.
 const README: &str = "README.md";
-
-/// The FMI versions of the FMU.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum FmiVersion {
-    Fmi2,
-    Fmi3,
-}
 
 /// One FMU of the build: its crate, its archive and its generated files.
 #[derive(Debug, Clone)]

@@ -422,7 +422,9 @@ pub enum Dimension {
     Structural(&'static str),
 }
 
-/// The FMI versions a variable exists in.
+/// An FMI version of the FMUs: which variables exist in it
+/// ([`variables_of`]), which dialect a slave speaks
+/// ([`crate::slave::Dialect`]) and, for fmu-build, which FMU is packed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum FmiVersion {
     Fmi2,
