@@ -33,7 +33,7 @@
 //!   are refused with `fmi2Error`, so double frees are harmless). To move a
 //!   state between instances (or processes) serialize it: a deserialized
 //!   state carries every parameter value and replaces the target's.
-//! - Beyond the declared ranges, [`tdvass_fmu::limits`] keeps every output finite and
+//! - Beyond the declared ranges, [`tdvass_fmu::guards`] keeps every output finite and
 //!   every call short: initial states and the road within the divergence
 //!   bounds, rates (stiffness, damping, gain over mass) up to 1e12 1/s²,
 //!   weights up to 1e12, and at most 2^22 internal steps (plus road
@@ -64,8 +64,8 @@ pub use instance::Instance;
 pub use states::Function;
 pub use tdvass_fmu::{
     COMMON_VARIABLES, DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, FmiError,
-    LOG_CATEGORIES, MODEL_IDENTIFIER, MODEL_NAME, Phase, Status, TIME_TOLERANCE, Variable, guid,
-    limits, snapshot, variables,
+    LOG_CATEGORIES, MODEL_IDENTIFIER, MODEL_NAME, Phase, Status, TIME_TOLERANCE, Variable, guards,
+    guid, snapshot, variables,
 };
 
 /// `fmi2GetVersion`.

@@ -15,8 +15,9 @@
 //!   describe.
 //! - [`outputs`]: values, time derivatives and partial derivatives of the
 //!   outputs.
-//! - [`limits`]: the per-call limits of a slave (work per step, time
-//!   resolution, finite outputs); the value and rate limits are the
+//! - [`guards`]: the guards of every slave call: the library's value and
+//!   rate limits applied to the FMU's variables, work per step, time
+//!   resolution, finite outputs; the value and rate limits themselves are the
 //!   library's ([`tdvass::limits`]).
 //! - [`snapshot`]: the versioned, checksummed byte format of serialized FMU
 //!   states, written with the library's one codec ([`tdvass::bytes`]).
@@ -48,7 +49,7 @@
 #![deny(unsafe_code)]
 
 pub mod entry;
-pub mod limits;
+pub mod guards;
 pub mod outputs;
 pub mod phase;
 pub mod pointers;

@@ -5,7 +5,7 @@
 //! `Result<_, FmiError>`. Function names in log messages come from the
 //! front-end's [`Dialect`].
 
-use crate::limits;
+use crate::guards;
 use crate::phase::Phase;
 use crate::settings::Settings;
 use crate::variables::FmiVersion;
@@ -283,7 +283,7 @@ impl Slave {
     /// input applied.
     fn build_simulator(&self) -> Result<Simulator, FmiError> {
         let m = &self.state;
-        limits::check_rates(&m.settings)?;
+        guards::check_rates(&m.settings)?;
         let config = m.settings.to_config(m.start_time)?;
         // Checked before `Simulator::new` (which refuses the same start
         // times) for the FMU's message, which gives the limit in seconds.
@@ -294,12 +294,12 @@ impl Slave {
         };
         let choice = Simulator::choose_step(&config)?;
         let step = DelayGrid::new(tau, choice.step_bound)?.step;
-        limits::check_time_resolution("startTime", m.start_time, step)?;
+        guards::check_time_resolution("startTime", m.start_time, step)?;
         let mut sim = Simulator::with_choice(config, choice)?;
         if m.settings.road_is_input() {
             sim.set_road_input(m.settings.x_g, m.input_slope)?;
         }
-        if let Some((name, value)) = limits::non_finite_output(&sim.outputs()) {
+        if let Some((name, value)) = guards::non_finite_output(&sim.outputs()) {
             return Err(FmiError::error(format!(
                 "the settings give a non-finite initial output `{name}` = {value}"
             )));

@@ -219,7 +219,7 @@ fn decode_settings(r: &mut Reader) -> Result<Settings, FmiError> {
                 let value = f64::from_bits(bits);
                 var.range
                     .check(var.name, value)
-                    .and_then(|()| crate::limits::check_variable(var, value))
+                    .and_then(|()| crate::guards::check_variable(var, value))
                     .map_err(|e| invalid(e.message))?;
                 set(&mut settings, value);
             }
@@ -303,7 +303,7 @@ fn decode_payload(bytes: &[u8]) -> Result<SlaveState, FmiError> {
         )));
     }
     if let Some(sim) = &mut sim {
-        crate::limits::check_rates(&settings).map_err(|e| invalid(e.message))?;
+        crate::guards::check_rates(&settings).map_err(|e| invalid(e.message))?;
         let config = settings.to_config(start_time).map_err(invalid)?;
         if *sim.config() != config {
             return Err(invalid("the simulator does not match the settings"));
@@ -318,7 +318,7 @@ fn decode_payload(bytes: &[u8]) -> Result<SlaveState, FmiError> {
                 "simulator time {now} s (committed {committed} s) does not fit its start {start_time} s and internal step {step} s"
             )));
         }
-        if let Some((name, value)) = crate::limits::non_finite_output(&sim.outputs()) {
+        if let Some((name, value)) = crate::guards::non_finite_output(&sim.outputs()) {
             return Err(invalid(format_args!("output `{name}` = {value}")));
         }
     }

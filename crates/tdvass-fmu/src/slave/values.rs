@@ -2,7 +2,7 @@
 //! limit checks, and tunable parameters reaching the running simulation.
 
 use super::{Slave, SpectrumCache};
-use crate::limits;
+use crate::guards;
 use crate::phase::Phase;
 use crate::variables::{
     Access, Calculated, Causality, Dimension, FmiVersion, VarType, Variability, Variable, by_name,
@@ -41,7 +41,7 @@ impl Slave {
             Some(sim) => sim.outputs(),
             None => self.build_simulator()?.outputs(),
         };
-        match limits::non_finite_output(&outputs) {
+        match guards::non_finite_output(&outputs) {
             None => Ok(outputs),
             Some((name, value)) => Err(FmiError::error(format!(
                 "output `{name}` = {value} is not finite at t = {} s",
@@ -245,7 +245,7 @@ impl Slave {
             }
             _ => {
                 var.range.check(var.name, value)?;
-                limits::check_variable(var, value)
+                guards::check_variable(var, value)
             }
         }
     }
@@ -288,7 +288,7 @@ impl Slave {
                     set(&mut candidate, *value);
                 }
             }
-            limits::check_rates(&candidate)?;
+            guards::check_rates(&candidate)?;
         }
         let mut gain_tuned = false;
         for (var, value) in checked {

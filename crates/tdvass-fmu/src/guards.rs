@@ -1,7 +1,8 @@
-//! The limits of one slave call, beyond the declared ranges of the
-//! variable table and the library's numerical limits ([`tdvass::limits`]:
+//! The guards of every slave call, beyond the declared ranges of the
+//! variable table: the library's numerical limits ([`tdvass::limits`]:
 //! values and rates, which the library checks for every configuration, so
-//! the command line refuses the same runaway inputs):
+//! the command line refuses the same runaway inputs) mapped onto the FMU's
+//! variables, and what bounds the work and time of one call:
 //!
 //! - **Values and rates** ([`check_variable`], [`check_input_slope`],
 //!   [`check_rates`]): the library's checks, by the kind of value each
