@@ -10,7 +10,8 @@ use crate::{FmiError, Status};
 use std::path::PathBuf;
 use tdvass_fmu::Phase;
 use tdvass_fmu::entry::FrontEnd;
-use tdvass_fmu::slave::{Dialect, Logger};
+use tdvass_fmu::instantiation::Instantiation;
+use tdvass_fmu::slave::Dialect;
 use tdvass_fmu::variables::FmiVersion;
 
 pub use tdvass_fmu::Slave;
@@ -40,6 +41,10 @@ pub const FMI2_DIALECT: Dialect = Dialect {
     fmu_state: "FMUstate",
     deserialize_state: "DeSerializeFMUstate",
     input_slope_remedy: "call fmi2SetRealInputDerivatives",
+    instantiate: "Instantiate",
+    token_argument: "fmuGUID",
+    given_token: "GUID",
+    own_token: "GUID",
 };
 
 /// What `fmi2Instantiate` was given (strings already copied out of C).
@@ -91,70 +96,42 @@ impl Instance {
     /// `fmi2Instantiate`: checks the request and creates the instance. A
     /// refusal is logged through `logger` and returns `None`.
     pub fn instantiate(request: InstantiateRequest<'_>, logger: LogSink) -> Option<Instance> {
-        let refuse = |message: String| {
-            logger(
-                Status::Error,
-                "logStatusError",
-                &format!("fmi2Instantiate: {message}"),
-            );
-            None
-        };
+        let instantiation = Instantiation::new(FMI2_DIALECT, logger);
         let expected = crate::guid();
-        let name = match request.instance_name {
-            None => return refuse("instanceName is NULL".into()),
-            Some("") => return refuse("instanceName is empty".into()),
-            Some(name) => name.to_string(),
-        };
+        let name = instantiation.instance_name(request.instance_name)?;
         match request.fmu_type {
             FMI2_COSIMULATION => {}
             FMI2_MODEL_EXCHANGE => {
-                return refuse(
-                    "fmuType fmi2ModelExchange is not supported: this FMU implements Co-Simulation only".into(),
+                return instantiation.refuse(
+                    "fmuType fmi2ModelExchange is not supported: this FMU implements Co-Simulation only",
                 );
             }
-            other => return refuse(format!("unknown fmuType {other}")),
+            other => return instantiation.refuse(&format!("unknown fmuType {other}")),
         }
-        match request.guid {
-            None => return refuse("fmuGUID is NULL".into()),
-            Some(g) if g != expected => {
-                return refuse(format!(
-                    "GUID {g} does not match this FMU's GUID {expected} (modelDescription.xml and binary are from different builds)"
-                ));
-            }
-            Some(_) => {}
-        }
+        instantiation.token(request.guid, &expected)?;
         let resource_path = match request.resource_location {
             None | Some("") => None,
             Some(uri) => match crate::uri::resource_path(uri) {
                 Ok(path) => Some(path),
                 Err(reason) => {
-                    return refuse(format!(
+                    return instantiation.refuse(&format!(
                         "fmuResourceLocation `{uri}` is not a valid file URI: {reason}"
                     ));
                 }
             },
         };
-        let logger = Logger::new(logger, request.logging_on);
-        let instance = Instance {
+        let slave = instantiation.slave(
+            &name,
+            expected,
+            request.logging_on,
+            resource_path.as_deref(),
+            "",
+        );
+        Some(Instance {
             name,
             resource_path,
-            slave: Slave::new(FMI2_DIALECT, expected.clone(), logger),
-        };
-        instance.slave.logger().log(
-            Status::Ok,
-            &format!(
-                "fmi2Instantiate: instance `{}` of {} (GUID {}), resources {}",
-                instance.name,
-                crate::MODEL_NAME,
-                expected,
-                instance
-                    .resource_path
-                    .as_ref()
-                    .map(|p| format!("at {}", p.display()))
-                    .unwrap_or_else(|| "not given".into())
-            ),
-        );
-        Some(instance)
+            slave,
+        })
     }
 
     /// The instance name.
@@ -234,14 +211,7 @@ impl Instance {
 
 impl Drop for Instance {
     fn drop(&mut self) {
-        self.slave.logger().log(
-            Status::Ok,
-            &format!(
-                "fmi2FreeInstance: `{}` freed with {} FMU state(s)",
-                self.name,
-                self.slave.fmu_state_count()
-            ),
-        );
+        self.slave.log_freed(&self.name);
     }
 }
 

@@ -14,7 +14,8 @@ use crate::{FmiError, Status};
 use std::path::PathBuf;
 use tdvass_fmu::Phase;
 use tdvass_fmu::entry::FrontEnd;
-use tdvass_fmu::slave::{Dialect, LogSink, Logger};
+use tdvass_fmu::instantiation::Instantiation;
+use tdvass_fmu::slave::{Dialect, LogSink};
 use tdvass_fmu::variables::{Causality, FmiVersion, Variable, by_name, by_vr};
 
 pub use tdvass_fmu::Slave;
@@ -30,6 +31,10 @@ pub const FMI3_DIALECT: Dialect = Dialect {
     fmu_state: "FMUState",
     deserialize_state: "DeserializeFMUState",
     input_slope_remedy: "set x_g in intermediate updates",
+    instantiate: "InstantiateCoSimulation",
+    token_argument: "instantiationToken",
+    given_token: "instantiationToken",
+    own_token: "token",
 };
 
 /// What `fmi3InstantiateCoSimulation` was given (strings copied out of C).
@@ -106,29 +111,11 @@ impl Instance {
     /// `fmi3InstantiateCoSimulation`: checks the request and creates the
     /// instance. A refusal is logged through `logger` and returns `None`.
     pub fn instantiate(request: InstantiateRequest<'_>, logger: LogSink) -> Option<Instance> {
-        let refuse = |message: String| {
-            logger(
-                Status::Error,
-                "logStatusError",
-                &format!("fmi3InstantiateCoSimulation: {message}"),
-            );
-            None
-        };
+        let instantiation = Instantiation::new(FMI3_DIALECT, logger);
+        let refuse = |message: String| instantiation.refuse(&message);
         let expected = crate::instantiation_token();
-        let name = match request.instance_name {
-            None => return refuse("instanceName is NULL".into()),
-            Some("") => return refuse("instanceName is empty".into()),
-            Some(name) => name.to_string(),
-        };
-        match request.instantiation_token {
-            None => return refuse("instantiationToken is NULL".into()),
-            Some(t) if t != expected => {
-                return refuse(format!(
-                    "instantiationToken {t} does not match this FMU's token {expected} (modelDescription.xml and binary are from different builds)"
-                ));
-            }
-            Some(_) => {}
-        }
+        let name = instantiation.instance_name(request.instance_name)?;
+        instantiation.token(request.instantiation_token, &expected)?;
         if request.event_mode_used {
             return refuse(
                 "eventModeUsed = true, but this FMU has no event mode (hasEventMode = false)"
@@ -155,33 +142,35 @@ impl Instance {
             .resource_path
             .filter(|p| !p.is_empty())
             .map(PathBuf::from);
-        let logger = Logger::new(logger, request.logging_on);
-        let instance = Instance {
+        let details = format!(
+            ", intermediate updates {}, early return {}",
+            if request.intermediate_update {
+                "on"
+            } else {
+                "off"
+            },
+            if request.early_return_allowed {
+                "allowed"
+            } else {
+                "not allowed"
+            },
+        );
+        let slave = instantiation.slave(
+            &name,
+            expected,
+            request.logging_on,
+            resource_path.as_deref(),
+            &details,
+        );
+        Some(Instance {
             name,
             resource_path,
-            slave: Slave::new(FMI3_DIALECT, expected.clone(), logger),
+            slave,
             early_return_allowed: request.early_return_allowed,
             intermediate_update: request.intermediate_update,
             configuration: false,
             intermediate: None,
-        };
-        instance.slave.logger().log(
-            Status::Ok,
-            &format!(
-                "fmi3InstantiateCoSimulation: instance `{}` of {} (token {}), resources {}, intermediate updates {}, early return {}",
-                instance.name,
-                crate::MODEL_NAME,
-                expected,
-                instance
-                    .resource_path
-                    .as_ref()
-                    .map(|p| format!("at {}", p.display()))
-                    .unwrap_or_else(|| "not given".into()),
-                if instance.intermediate_update { "on" } else { "off" },
-                if instance.early_return_allowed { "allowed" } else { "not allowed" },
-            ),
-        );
-        Some(instance)
+        })
     }
 
     /// The instance name.
@@ -470,13 +459,6 @@ impl Instance {
 
 impl Drop for Instance {
     fn drop(&mut self) {
-        self.slave.logger().log(
-            Status::Ok,
-            &format!(
-                "fmi3FreeInstance: `{}` freed with {} FMU state(s)",
-                self.name,
-                self.slave.fmu_state_count()
-            ),
-        );
+        self.slave.log_freed(&self.name);
     }
 }

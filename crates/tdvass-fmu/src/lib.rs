@@ -28,6 +28,9 @@
 //! - [`phase`]: the life-cycle phase each front-end's state table checks.
 //! - [`pointers`]: instance handles, array and string arguments of the C
 //!   interfaces, checked (NULL, alignment, length, the handle's tag).
+//! - [`instantiation`]: what the instantiation function of every FMI
+//!   version checks and logs alike (instance name, token, the new slave);
+//!   the slave logs the instance's release ([`Slave::log_freed`]).
 //! - [`entry`]: what the C entry points of every FMI version do around an
 //!   instance: the call under the front-end's state table with panics
 //!   caught ([`entry::with_instance`], [`entry::call`]), `FreeInstance`,
@@ -50,6 +53,7 @@
 
 pub mod entry;
 pub mod guards;
+pub mod instantiation;
 pub mod outputs;
 pub mod phase;
 pub mod pointers;

@@ -45,6 +45,14 @@ pub struct Dialect {
     /// How the master gives the input's course over a step (the hold
     /// warning's remedy).
     pub input_slope_remedy: &'static str,
+    /// The instantiation function, without the prefix.
+    pub instantiate: &'static str,
+    /// The instantiation's argument that carries the token (`fmuGUID`).
+    pub token_argument: &'static str,
+    /// How a refused instantiation names the token the master passed.
+    pub given_token: &'static str,
+    /// How the messages name the FMU's own token (`GUID`, `token`).
+    pub own_token: &'static str,
 }
 
 /// Communication steps longer than this (s) with a held, changing `x_g`

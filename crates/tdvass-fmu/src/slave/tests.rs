@@ -24,6 +24,10 @@ pub(crate) const TEST_DIALECT: Dialect = Dialect {
     fmu_state: "FMUstate",
     deserialize_state: "DeSerializeFMUstate",
     input_slope_remedy: "call testSetRealInputDerivatives",
+    instantiate: "Instantiate",
+    token_argument: "testToken",
+    given_token: "token",
+    own_token: "token",
 };
 
 /// A slave speaking [`TEST_DIALECT`] and the log it writes to.
