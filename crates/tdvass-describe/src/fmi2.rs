@@ -308,50 +308,19 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use quick_xml::Reader;
-    use quick_xml::events::Event;
-    use std::collections::HashMap;
-
-    /// Every element with its attributes, in document order.
-    fn elements(xml: &str) -> Vec<(String, HashMap<String, String>)> {
-        let mut reader = Reader::from_str(xml);
-        let mut out = Vec::new();
-        loop {
-            match reader.read_event().expect("well-formed XML") {
-                Event::Start(e) | Event::Empty(e) => {
-                    let name = e.name().0.to_string();
-                    let attrs = e
-                        .attributes()
-                        .map(|a| {
-                            let a = a.unwrap();
-                            (
-                                a.key.0.to_string(),
-                                a.normalized_value(quick_xml::XmlVersion::Implicit1_0)
-                                    .unwrap()
-                                    .into_owned(),
-                            )
-                        })
-                        .collect();
-                    out.push((name, attrs));
-                }
-                Event::Eof => break,
-                _ => {}
-            }
-        }
-        out
-    }
+    use crate::parsed::elements;
 
     #[test]
     fn model_description_has_every_variable() {
         let xml = model_description_xml();
         let els = elements(&xml);
         let root = &els[0];
-        assert_eq!(root.0, "fmiModelDescription");
-        assert_eq!(root.1["guid"], guid());
-        assert_eq!(root.1["modelName"], "TDVASS");
-        assert_eq!(root.1["fmiVersion"], "2.0");
-        let cs = els.iter().find(|e| e.0 == "CoSimulation").unwrap();
-        assert_eq!(cs.1["modelIdentifier"], "tdvass");
+        assert_eq!(root.name, "fmiModelDescription");
+        assert_eq!(root.attr("guid"), guid());
+        assert_eq!(root.attr("modelName"), "TDVASS");
+        assert_eq!(root.attr("fmiVersion"), "2.0");
+        let cs = els.iter().find(|e| e.name == "CoSimulation").unwrap();
+        assert_eq!(cs.attr("modelIdentifier"), "tdvass");
         for flag in [
             "canHandleVariableCommunicationStepSize",
             "canInterpolateInputs",
@@ -359,23 +328,23 @@ mod tests {
             "canSerializeFMUstate",
             "providesDirectionalDerivative",
         ] {
-            assert_eq!(cs.1[flag], "true", "{flag}");
+            assert_eq!(cs.attr(flag), "true", "{flag}");
         }
-        assert_eq!(cs.1["maxOutputDerivativeOrder"], "1");
-        let experiment = els.iter().find(|e| e.0 == "DefaultExperiment").unwrap();
-        assert_eq!(experiment.1["stopTime"], "15");
-        assert_eq!(experiment.1["stepSize"], "0.001");
-        let vars: Vec<_> = els.iter().filter(|e| e.0 == "ScalarVariable").collect();
+        assert_eq!(cs.attr("maxOutputDerivativeOrder"), "1");
+        let experiment = els.iter().find(|e| e.name == "DefaultExperiment").unwrap();
+        assert_eq!(experiment.attr("stopTime"), "15");
+        assert_eq!(experiment.attr("stepSize"), "0.001");
+        let vars: Vec<_> = els.iter().filter(|e| e.name == "ScalarVariable").collect();
         assert_eq!(vars.len(), COMMON_VARIABLES.len());
         for (v, el) in COMMON_VARIABLES.iter().zip(&vars) {
-            assert_eq!(el.1["name"], v.name);
-            assert_eq!(el.1["valueReference"], v.vr.to_string());
-            assert_eq!(el.1["causality"], v.causality.as_str());
+            assert_eq!(el.attr("name"), v.name);
+            assert_eq!(el.attr("valueReference"), v.vr.to_string());
+            assert_eq!(el.attr("causality"), v.causality.as_str());
         }
         let categories: Vec<_> = els
             .iter()
-            .filter(|e| e.0 == "Category")
-            .map(|e| e.1["name"].as_str())
+            .filter(|e| e.name == "Category")
+            .map(|e| e.attr("name"))
             .collect();
         for c in [
             "logEvents",
@@ -388,23 +357,26 @@ mod tests {
         }
         let mm = els
             .iter()
-            .find(|e| e.0 == "DisplayUnit" && e.1["name"] == "mm")
+            .find(|e| e.name == "DisplayUnit" && e.attr("name") == "mm")
             .unwrap();
-        assert_eq!(mm.1["factor"], "1000");
+        assert_eq!(mm.attr("factor"), "1000");
         let tdd = els
             .iter()
-            .position(|e| e.0 == "ScalarVariable" && e.1["name"] == "tire_deflection")
+            .position(|e| e.name == "ScalarVariable" && e.attr("name") == "tire_deflection")
             .unwrap();
-        assert_eq!(els[tdd + 1].1["displayUnit"], "mm");
-        assert_eq!(els[tdd + 1].1["unit"], "m");
+        assert_eq!(els[tdd + 1].attr("displayUnit"), "mm");
+        assert_eq!(els[tdd + 1].attr("unit"), "m");
     }
 
     #[test]
     fn model_structure_lists_outputs_and_initial_unknowns() {
         let xml = model_description_xml();
         let els = elements(&xml);
-        let outputs_at = els.iter().position(|e| e.0 == "Outputs").unwrap();
-        let initial_at = els.iter().position(|e| e.0 == "InitialUnknowns").unwrap();
+        let outputs_at = els.iter().position(|e| e.name == "Outputs").unwrap();
+        let initial_at = els
+            .iter()
+            .position(|e| e.name == "InitialUnknowns")
+            .unwrap();
         let outputs: Vec<_> = els[outputs_at + 1..initial_at].iter().collect();
         let initial: Vec<_> = els[initial_at + 1..].iter().collect();
         let count = |c: Causality| COMMON_VARIABLES.iter().filter(|v| v.causality == c).count();
@@ -416,12 +388,12 @@ mod tests {
         );
         let x_g = index_of("x_g").unwrap().to_string();
         let tdd = index_of("tire_deflection").unwrap().to_string();
-        let o = outputs.iter().find(|e| e.1["index"] == tdd).unwrap();
-        assert_eq!(o.1["dependencies"], x_g);
-        assert_eq!(o.1["dependenciesKind"], "fixed");
+        let o = outputs.iter().find(|e| e.attr("index") == tdd).unwrap();
+        assert_eq!(o.attr("dependencies"), x_g);
+        assert_eq!(o.attr("dependenciesKind"), "fixed");
         let x_s = index_of("x_s").unwrap().to_string();
-        let o = outputs.iter().find(|e| e.1["index"] == x_s).unwrap();
-        assert_eq!(o.1["dependencies"], "");
+        let o = outputs.iter().find(|e| e.attr("index") == x_s).unwrap();
+        assert_eq!(o.attr("dependencies"), "");
     }
 
     #[test]

@@ -38,3 +38,6 @@ pub mod fmi2;
 pub mod fmi3;
 pub mod markdown;
 pub mod markup;
+
+#[cfg(test)]
+mod parsed;
