@@ -1,5 +1,6 @@
-//! The FMI 2.0 instance: what `fmi2Instantiate` checks, the FMI 2.0 state
-//! table around every call, the status kinds of `fmi2Get*Status`, and a
+//! The FMI 2.0 instance: what `fmi2Instantiate` checks beyond what every
+//! version checks ([`tdvass_fmu::instantiation`]: `fmuType` and
+//! `fmuResourceLocation`), the FMI 2.0 state table around every call, the status kinds of `fmi2Get*Status`, and a
 //! version-neutral [`Slave`] that does everything else, called explicitly
 //! ([`FrontEnd::slave_mut`]). No FFI here; [`crate::ffi`] calls the
 //! instance through [`FrontEnd::run`], which enforces the state table and

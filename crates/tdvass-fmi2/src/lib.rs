@@ -2,13 +2,14 @@
 //!
 //! The physics stays in the safe library ([`tdvass`]) and the behaviour of
 //! an instance in the version-neutral slave ([`tdvass_fmu`]: the one
-//! variable table, settings, limits, the FMU-state format, the
+//! variable table, settings, the guards of every call, the FMU-state format, the
 //! [`Slave`](tdvass_fmu::Slave)); this crate only adapts them to the FMI 2.0
 //! calling convention:
 //!
 //! - [`states`]: the FMI 2.0 state machine as one declarative table of
-//!   which function is allowed in which state.
-//! - [`instance`]: the FMI 2.0 [`instance::Instance`]: the
+//!   which function is allowed in which phase ([`Phase`], the standard's
+//!   state).
+//! - [`instance`]: the FMI 2.0 [`instance::Instance`]: the FMI 2.0
 //!   instantiation checks, the state table, the status kinds and a
 //!   [`Slave`](tdvass_fmu::Slave) that does the rest, called explicitly
 //!   (the instance is a [`tdvass_fmu::entry::FrontEnd`]). Every method

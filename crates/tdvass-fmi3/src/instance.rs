@@ -1,5 +1,6 @@
-//! The FMI 3.0 instance: what `fmi3InstantiateCoSimulation` checks, the
-//! FMI 3.0 state table around every call, the FMI 3.0 types of the values,
+//! The FMI 3.0 instance: what `fmi3InstantiateCoSimulation` checks beyond
+//! what every version checks ([`tdvass_fmu::instantiation`]: event mode and
+//! the intermediate variables), the FMI 3.0 state table around every call, the FMI 3.0 types of the values,
 //! Configuration Mode and the intermediate updates, around a
 //! version-neutral [`Slave`] that does everything else, called explicitly
 //! ([`FrontEnd::slave_mut`]). Where FMI 3.0 adds to a slave's function,

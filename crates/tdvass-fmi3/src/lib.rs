@@ -5,8 +5,10 @@
 //! adapts them to the FMI 3.0 calling convention:
 //!
 //! - [`types`]: the FMI 3.0 type of each variable of the one table.
-//! - [`states`]: the FMI 3.0 state machine as one declarative table.
-//! - [`instance`]: the FMI 3.0 [`instance::Instance`]: the
+//! - [`states`]: the FMI 3.0 state machine as one declarative table of
+//!   which function is allowed in which phase
+//!   ([`states::Fmi3Phase`], the standard's state).
+//! - [`instance`]: the FMI 3.0 [`instance::Instance`]: the FMI 3.0
 //!   instantiation checks, the state table, the FMI 3.0 types,
 //!   Configuration Mode and intermediate updates, around a
 //!   [`Slave`](tdvass_fmu::Slave).
