@@ -1,6 +1,6 @@
 //! The version-neutral co-simulation slave of the tdvass FMUs.
 //!
-//! Everything FMI 2.0 and FMI 3.0 share lives here, once:
+//! Everything FMI 2.0 and FMI 3.0 share at run time lives here, once:
 //!
 //! - [`variables`]: the **one table** of FMU variables. Value references,
 //!   types, causality, variability, start values, units, admissible ranges,
@@ -44,10 +44,11 @@
 //! [`Variable::fmi3_only`]) and how a front-end names its functions
 //! ([`slave::Dialect`]). It imports the physics from `tdvass` and nothing
 //! else of the workspace: no front-end's C types, exported functions or
-//! state table, no command line, no writer of descriptions or
-//! documentation (those are `tdvass-describe`'s, at build time). Its `unsafe` is in [`pointers`] and
-//! [`entry`] only (denied everywhere else), each block with its `SAFETY`
-//! comment.
+//! state table, no command line. It holds runtime code only: the writers
+//! of the model descriptions and documentation are `tdvass-describe`'s, at
+//! build time, so no FMU library links them. Its `unsafe` is in
+//! [`pointers`] and [`entry`] only (denied everywhere else), each block
+//! with its `SAFETY` comment.
 
 #![deny(unsafe_code)]
 
