@@ -487,7 +487,7 @@ fn cli_defaults_are_the_library_defaults_and_the_fmu_start_values() {
         let cli = run[name]
             .as_f64()
             .unwrap_or_else(|| panic!("`{name}` missing in {run}"));
-        let fmu = tdvass_fmu::variables::by_name(name)
+        let fmu = tdvass_fmu::variables::by_name(tdvass_fmu::variables::FmiVersion::Fmi3, name)
             .and_then(|v| v.start)
             .unwrap_or_else(|| panic!("no FMU start value for `{name}`"));
         assert_eq!(
@@ -513,7 +513,7 @@ fn cli_defaults_are_the_library_defaults_and_the_fmu_start_values() {
         let cli = run[name]
             .as_f64()
             .unwrap_or_else(|| panic!("`{name}` missing in {run}"));
-        let fmu = tdvass_fmu::variables::by_name(name)
+        let fmu = tdvass_fmu::variables::by_name(tdvass_fmu::variables::FmiVersion::Fmi3, name)
             .and_then(|v| v.start)
             .unwrap();
         assert_eq!(
@@ -521,12 +521,14 @@ fn cli_defaults_are_the_library_defaults_and_the_fmu_start_values() {
             "`{name}`: CLI default against the FMU start value"
         );
     }
-    let seed = tdvass_fmu::variables::by_name("road_seed")
+    let seed = tdvass_fmu::variables::by_name(tdvass_fmu::variables::FmiVersion::Fmi3, "road_seed")
         .and_then(|v| v.start)
         .unwrap();
     assert_eq!(run["road_seed"].as_f64(), Some(seed));
     // The tire: the library's default, and the item of the FMU's start code.
-    let contact = tdvass_fmu::variables::by_name("tire_contact").unwrap();
+    let contact =
+        tdvass_fmu::variables::by_name(tdvass_fmu::variables::FmiVersion::Fmi3, "tire_contact")
+            .unwrap();
     let start = contact.start.unwrap() as i32;
     let item = contact
         .enumeration
@@ -543,7 +545,7 @@ fn cli_defaults_are_the_library_defaults_and_the_fmu_start_values() {
 fn the_cli_refuses_the_runaway_inputs_the_fmu_refuses_with_the_same_message() {
     use tdvass_fmi2::instance::FMI2_DIALECT;
     use tdvass_fmu::slave::Logger;
-    use tdvass_fmu::variables::by_name;
+    use tdvass_fmu::variables::{FmiVersion, by_name};
     // Each case is within the declared range, beyond a numerical limit.
     for (flag, name, value) in [
         ("--k-t", "k_t", 1e30),
@@ -559,7 +561,7 @@ fn the_cli_refuses_the_runaway_inputs_the_fmu_refuses_with_the_same_message() {
             tdvass_fmu::guid(),
             Logger::new(Box::new(|_, _, _| {}), false),
         );
-        let vr = by_name(name).unwrap().vr;
+        let vr = by_name(FmiVersion::Fmi3, name).unwrap().vr;
         // The FMU refuses the value when it is set, or the settings when
         // the simulation is built.
         let fmu = slave

@@ -27,9 +27,9 @@
 //! anything is compiled or packed, naming the `rustup target add` command,
 //! the Debian package or the Python set that provides it.
 //!
-//! The descriptions and documentation come from the libraries
-//! ([`tdvass_fmi2::description`], [`tdvass_fmi3::description`]), generated
-//! from the variable table. Besides them each FMU carries the icon
+//! The descriptions and documentation come from `tdvass-describe`
+//! ([`tdvass_describe::fmi2`], [`tdvass_describe::fmi3`]), generated from
+//! the variable table; the FMU libraries carry none of that code. Besides them each FMU carries the icon
 //! (`fmu-build/assets/icon.png`, drawn by `tools/draw_icon.py`: `model.png`
 //! in FMI 2.0, `terminalsAndIcons/icon.png` in FMI 3.0, and
 //! `documentation/diagram.png` in both) and the reference results of its
@@ -41,10 +41,11 @@ use std::fs;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
+use tdvass_describe::markdown::{BEGIN_MARKER, END_MARKER, splice_into};
+use tdvass_describe::markup::DIAGRAM_FILE;
 use tdvass_fmi2::MODEL_IDENTIFIER;
-use tdvass_fmi2::markdown::{BEGIN_MARKER, END_MARKER, splice_into};
-use tdvass_fmu::markup::DIAGRAM_FILE;
 use tdvass_fmu::slave::Dialect;
+use tdvass_fmu::variables::FmiVersion;
 use zip::write::SimpleFileOptions;
 use zip::{CompressionMethod, DateTime, ZipArchive, ZipWriter};
 
@@ -60,13 +61,6 @@ const ICON: &[u8] = include_bytes!("../assets/icon.png");
 
 /// The FMU reference, whose variable table is generated.
 const VARIABLE_TABLE_DOC: &str = "docs/fmu.md";
-
-/// The FMI versions of the FMU.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum FmiVersion {
-    Fmi2,
-    Fmi3,
-}
 
 /// One FMU of the build: its crate, its archive and its generated files.
 #[derive(Debug, Clone)]
@@ -107,8 +101,8 @@ impl Fmu {
                 library: "tdvass_fmi2",
                 file_name: "tdvass.fmu",
                 checked_in: "modelDescription/modelDescription.xml",
-                description: tdvass_fmi2::description::model_description_xml(),
-                documentation: tdvass_fmi2::description::documentation_html(),
+                description: tdvass_describe::fmi2::model_description_xml(),
+                documentation: tdvass_describe::fmi2::documentation_html(),
                 identity: format!("GUID {}", tdvass_fmi2::guid()),
                 dialect: tdvass_fmi2::instance::FMI2_DIALECT,
                 token: tdvass_fmi2::guid(),
@@ -120,8 +114,8 @@ impl Fmu {
                 library: "tdvass_fmi3",
                 file_name: "tdvass-fmi3.fmu",
                 checked_in: "modelDescription/fmi3/modelDescription.xml",
-                description: tdvass_fmi3::description::model_description_xml(),
-                documentation: tdvass_fmi3::description::documentation_html(),
+                description: tdvass_describe::fmi3::model_description_xml(),
+                documentation: tdvass_describe::fmi3::documentation_html(),
                 identity: format!("instantiationToken {}", tdvass_fmi3::instantiation_token()),
                 dialect: tdvass_fmi3::instance::FMI3_DIALECT,
                 token: tdvass_fmi3::instantiation_token(),

@@ -13,7 +13,7 @@
 use quick_xml::events::{BytesDecl, Event};
 use std::cell::RefCell;
 use std::rc::Rc;
-use tdvass_fmu::markup::{XmlResult, XmlWriter, finish, writer};
+use tdvass_describe::markup::{XmlResult, XmlWriter, finish, writer};
 use tdvass_fmu::slave::{Dialect, Logger};
 use tdvass_fmu::variables::{Causality, VarType, Variable, variables_of};
 use tdvass_fmu::{

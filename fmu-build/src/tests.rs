@@ -255,7 +255,7 @@ fn png_size(bytes: &[u8]) -> Option<(u32, u32)> {
 
 #[test]
 fn each_fmu_carries_the_icon_the_diagram_and_the_reference_results() {
-    let size = tdvass_fmu::markup::DIAGRAM_SIZE_PX;
+    let size = tdvass_describe::markup::DIAGRAM_SIZE_PX;
     assert_eq!(png_size(ICON), Some((size, size)));
     assert_eq!(png_size(b"not a png"), None);
     let [fmi2, fmi3] = Fmu::all();

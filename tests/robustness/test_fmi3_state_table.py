@@ -54,10 +54,10 @@ def allowed_table() -> dict[str, set[str]]:
     """fmi3 function -> the states (keys of STATE_NAMES) it is allowed in,
     read from the declarative table of states.rs."""
     source = fmi3.STATES_RS.read_text()
-    by_variant = {variant: name for variant, name in re.findall(r'State::(\w+) => "([^"]+)"', source)}
+    by_variant = {variant: name for variant, name in re.findall(r'Fmi3Phase::(\w+) => "([^"]+)"', source)}
     short = {name: key for key, name in STATE_NAMES.items()}
     aliases = {}
-    for part in re.search(r"use State::\{(.*?)\};", source, re.S).group(1).split(","):
+    for part in re.search(r"use Fmi3Phase::\{(.*?)\};", source, re.S).group(1).split(","):
         m = re.fullmatch(r"(\w+)(?:\s+as\s+(\w+))?", part.strip())
         if m:
             aliases[m.group(2) or m.group(1)] = short[by_variant[m.group(1)]]
@@ -66,14 +66,14 @@ def allowed_table() -> dict[str, set[str]]:
         return {aliases[s.strip()] for s in listed.split(",") if s.strip()}
 
     sets = {name: states(listed)
-            for name, listed in re.findall(r"const (\w+): StateSet = StateSet::of\(&\[([^\]]*)\]\);", source)}
+            for name, listed in re.findall(r"const (\w+): PhaseSet = PhaseSet::of\(&\[([^\]]*)\]\);", source)}
     c_names = dict(re.findall(r'^\s*(\w+) => "(fmi3\w+)"', source, re.M))
     block = source[source.index("pub const ALLOWED") :]
     block = block[block.index("use Function::*;") : block.index("\n};")]
     table = {}
-    for function, allowed in re.findall(r"\(\s*(\w+(?:\(ValueType::\w+\))?),\s*(StateSet::of\(&\[[^\]]*\]\)|\w+)",
+    for function, allowed in re.findall(r"\(\s*(\w+(?:\(ValueType::\w+\))?),\s*(PhaseSet::of\(&\[[^\]]*\]\)|\w+)",
                                         block):
-        listed = sets[allowed] if allowed in sets else states(allowed[len("StateSet::of(&[") : -2])
+        listed = sets[allowed] if allowed in sets else states(allowed[len("PhaseSet::of(&[") : -2])
         if function.startswith(("Get(", "Set(")):
             for t in VALUE_TYPES:
                 table[f"fmi3{function[:3]}{t}"] = listed

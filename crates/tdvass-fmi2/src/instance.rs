@@ -1,15 +1,18 @@
-//! The FMI 2.0 instance: what `fmi2Instantiate` checks, the FMI 2.0 state
-//! table around every call, the status kinds of `fmi2Get*Status`, and a
+//! The FMI 2.0 instance: what `fmi2Instantiate` checks beyond what every
+//! version checks ([`tdvass_fmu::instantiation`]: `fmuType` and
+//! `fmuResourceLocation`), the FMI 2.0 state table around every call, the status kinds of `fmi2Get*Status`, and a
 //! version-neutral [`Slave`] that does everything else, called explicitly
 //! ([`FrontEnd::slave_mut`]). No FFI here; [`crate::ffi`] calls the
 //! instance through [`FrontEnd::run`], which enforces the state table and
 //! logs every failure.
 
-use crate::states::{self, Function, MachineState};
+use crate::states::{self, Function};
 use crate::{FmiError, Status};
 use std::path::PathBuf;
+use tdvass_fmu::Phase;
 use tdvass_fmu::entry::FrontEnd;
-use tdvass_fmu::slave::{Dialect, Logger};
+use tdvass_fmu::instantiation::Instantiation;
+use tdvass_fmu::slave::Dialect;
 use tdvass_fmu::variables::FmiVersion;
 
 pub use tdvass_fmu::Slave;
@@ -39,6 +42,10 @@ pub const FMI2_DIALECT: Dialect = Dialect {
     fmu_state: "FMUstate",
     deserialize_state: "DeSerializeFMUstate",
     input_slope_remedy: "call fmi2SetRealInputDerivatives",
+    instantiate: "Instantiate",
+    token_argument: "fmuGUID",
+    given_token: "GUID",
+    own_token: "GUID",
 };
 
 /// What `fmi2Instantiate` was given (strings already copied out of C).
@@ -67,7 +74,7 @@ impl FrontEnd for Instance {
     }
 
     fn check_state(&self, function: Function) -> Result<(), FmiError> {
-        states::check(function, self.machine_state())
+        states::check(function, self.phase())
     }
 
     fn slave(&self) -> &Slave {
@@ -90,70 +97,42 @@ impl Instance {
     /// `fmi2Instantiate`: checks the request and creates the instance. A
     /// refusal is logged through `logger` and returns `None`.
     pub fn instantiate(request: InstantiateRequest<'_>, logger: LogSink) -> Option<Instance> {
-        let refuse = |message: String| {
-            logger(
-                Status::Error,
-                "logStatusError",
-                &format!("fmi2Instantiate: {message}"),
-            );
-            None
-        };
+        let instantiation = Instantiation::new(FMI2_DIALECT, logger);
         let expected = crate::guid();
-        let name = match request.instance_name {
-            None => return refuse("instanceName is NULL".into()),
-            Some("") => return refuse("instanceName is empty".into()),
-            Some(name) => name.to_string(),
-        };
+        let name = instantiation.instance_name(request.instance_name)?;
         match request.fmu_type {
             FMI2_COSIMULATION => {}
             FMI2_MODEL_EXCHANGE => {
-                return refuse(
-                    "fmuType fmi2ModelExchange is not supported: this FMU implements Co-Simulation only".into(),
+                return instantiation.refuse(
+                    "fmuType fmi2ModelExchange is not supported: this FMU implements Co-Simulation only",
                 );
             }
-            other => return refuse(format!("unknown fmuType {other}")),
+            other => return instantiation.refuse(&format!("unknown fmuType {other}")),
         }
-        match request.guid {
-            None => return refuse("fmuGUID is NULL".into()),
-            Some(g) if g != expected => {
-                return refuse(format!(
-                    "GUID {g} does not match this FMU's GUID {expected} (modelDescription.xml and binary are from different builds)"
-                ));
-            }
-            Some(_) => {}
-        }
+        instantiation.token(request.guid, &expected)?;
         let resource_path = match request.resource_location {
             None | Some("") => None,
             Some(uri) => match crate::uri::resource_path(uri) {
                 Ok(path) => Some(path),
                 Err(reason) => {
-                    return refuse(format!(
+                    return instantiation.refuse(&format!(
                         "fmuResourceLocation `{uri}` is not a valid file URI: {reason}"
                     ));
                 }
             },
         };
-        let logger = Logger::new(logger, request.logging_on);
-        let instance = Instance {
+        let slave = instantiation.slave(
+            &name,
+            expected,
+            request.logging_on,
+            resource_path.as_deref(),
+            "",
+        );
+        Some(Instance {
             name,
             resource_path,
-            slave: Slave::new(FMI2_DIALECT, expected.clone(), logger),
-        };
-        instance.slave.logger().log(
-            Status::Ok,
-            &format!(
-                "fmi2Instantiate: instance `{}` of {} (GUID {}), resources {}",
-                instance.name,
-                crate::MODEL_NAME,
-                expected,
-                instance
-                    .resource_path
-                    .as_ref()
-                    .map(|p| format!("at {}", p.display()))
-                    .unwrap_or_else(|| "not given".into())
-            ),
-        );
-        Some(instance)
+            slave,
+        })
     }
 
     /// The instance name.
@@ -161,8 +140,8 @@ impl Instance {
         &self.name
     }
 
-    /// The machine state.
-    pub fn machine_state(&self) -> MachineState {
+    /// The phase (the FMI 2.0 state: the slave's phase).
+    pub fn phase(&self) -> Phase {
         self.slave.phase()
     }
 
@@ -233,21 +212,14 @@ impl Instance {
 
 impl Drop for Instance {
     fn drop(&mut self) {
-        self.slave.logger().log(
-            Status::Ok,
-            &format!(
-                "fmi2FreeInstance: `{}` freed with {} FMU state(s)",
-                self.name,
-                self.slave.fmu_state_count()
-            ),
-        );
+        self.slave.log_freed(&self.name);
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::variables::by_name;
+    use crate::variables::{FmiVersion, by_name};
     use std::cell::RefCell;
     use std::rc::Rc;
 
@@ -272,7 +244,7 @@ mod tests {
     }
 
     fn vr(name: &str) -> u32 {
-        by_name(name).unwrap().vr
+        by_name(FmiVersion::Fmi2, name).unwrap().vr
     }
 
     #[test]
@@ -352,7 +324,7 @@ mod tests {
         assert_eq!(last.0, Status::Error);
         assert_eq!(last.1, "logStatusError");
         assert_eq!(last.2, "fmi2DoStep: not allowed in state instantiated");
-        assert_eq!(i.machine_state(), MachineState::Instantiated);
+        assert_eq!(i.phase(), Phase::Instantiated);
     }
 
     /// What FMI 2.0 adds to a diverging step (the slave's behaviour is
@@ -389,7 +361,7 @@ mod tests {
             assert!(t < 1e4, "never diverged");
         };
         assert_eq!(status, Status::Discard);
-        assert_eq!(i.machine_state(), MachineState::StepFailed);
+        assert_eq!(i.phase(), Phase::StepFailed);
         let last = i
             .run(Function::GetRealStatus, |i| {
                 i.get_real_status(status_kind::LAST_SUCCESSFUL_TIME)
@@ -413,14 +385,14 @@ mod tests {
         i.run(Function::Terminate, |i| i.slave_mut().terminate())
             .unwrap();
         i.run(Function::Reset, |i| i.slave_mut().reset()).unwrap();
-        assert_eq!(i.machine_state(), MachineState::Instantiated);
+        assert_eq!(i.phase(), Phase::Instantiated);
     }
 
     #[test]
     fn panics_make_the_instance_fatal() {
         let (mut i, log) = new_instance(false);
         i.on_panic(Function::DoStep, "boom");
-        assert_eq!(i.machine_state(), MachineState::Fatal);
+        assert_eq!(i.phase(), Phase::Fatal);
         assert_eq!(log.borrow().last().unwrap().0, Status::Fatal);
         assert!(i.run(Function::Reset, |i| i.slave_mut().reset()).is_err());
     }

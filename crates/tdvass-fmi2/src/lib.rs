@@ -2,20 +2,19 @@
 //!
 //! The physics stays in the safe library ([`tdvass`]) and the behaviour of
 //! an instance in the version-neutral slave ([`tdvass_fmu`]: the one
-//! variable table, settings, limits, the FMU-state format, the
+//! variable table, settings, the guards of every call, the FMU-state format, the
 //! [`Slave`](tdvass_fmu::Slave)); this crate only adapts them to the FMI 2.0
 //! calling convention:
 //!
 //! - [`states`]: the FMI 2.0 state machine as one declarative table of
-//!   which function is allowed in which state.
-//! - [`instance`]: the FMI 2.0 [`instance::Instance`]: the
+//!   which function is allowed in which phase ([`Phase`], the standard's
+//!   state).
+//! - [`instance`]: the FMI 2.0 [`instance::Instance`]: the FMI 2.0
 //!   instantiation checks, the state table, the status kinds and a
 //!   [`Slave`](tdvass_fmu::Slave) that does the rest, called explicitly
 //!   (the instance is a [`tdvass_fmu::entry::FrontEnd`]). Every method
 //!   returns `Result<_, FmiError>`.
 //! - [`uri`]: parsing of `fmuResourceLocation`.
-//! - [`description`]: the FMI 2.0 `modelDescription.xml` and
-//!   `documentation/index.html` (quick-xml, never written by hand).
 //! - [`ffi`]: the thin `extern "C"` layer: the C signatures and the
 //!   conversions of FMI 2.0's types and statuses. What every FMI version
 //!   does alike is [`tdvass_fmu::entry`] (the state table and
@@ -35,7 +34,7 @@
 //!   are refused with `fmi2Error`, so double frees are harmless). To move a
 //!   state between instances (or processes) serialize it: a deserialized
 //!   state carries every parameter value and replaces the target's.
-//! - Beyond the declared ranges, [`tdvass_fmu::limits`] keeps every output finite and
+//! - Beyond the declared ranges, [`tdvass_fmu::guards`] keeps every output finite and
 //!   every call short: initial states and the road within the divergence
 //!   bounds, rates (stiffness, damping, gain over mass) up to 1e12 1/s²,
 //!   weights up to 1e12, and at most 2^22 internal steps (plus road
@@ -47,26 +46,27 @@
 //!   Higher orders are ignored with `fmi2Warning`.
 //!
 //! **What this crate owns and must never import.** It owns the FMI 2.0
-//! layer: the C ABI, the FMI 2.0 state table, the status kinds and the
-//! generated 2.0 description; it builds the FMU's shared library. It
-//! imports the slave from `tdvass-fmu` and the physics from `tdvass`, and
-//! nothing from the command line (`tdvass-cli`) or another FMI version.
+//! layer: the C ABI, the FMI 2.0 state table and the status kinds; it
+//! builds the FMU's shared library, which holds runtime code only (the
+//! model description and documentation are written at build time by
+//! `tdvass-describe`). It imports the slave from `tdvass-fmu` and the
+//! physics from `tdvass`, and nothing from the command line (`tdvass-cli`)
+//! or another FMI version.
 //! `unsafe` lives in [`ffi`] only (denied everywhere else).
 
 #![deny(unsafe_code)]
 
-pub mod description;
 pub mod ffi;
 pub mod instance;
 pub mod states;
 pub mod uri;
 
 pub use instance::Instance;
-pub use states::{Function, MachineState};
+pub use states::Function;
 pub use tdvass_fmu::{
-    DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, FmiError, LOG_CATEGORIES,
-    MODEL_IDENTIFIER, MODEL_NAME, Status, TIME_TOLERANCE, VARIABLES, Variable, guid, limits,
-    markdown, snapshot, variables,
+    COMMON_VARIABLES, DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, FmiError,
+    LOG_CATEGORIES, MODEL_IDENTIFIER, MODEL_NAME, Phase, Status, TIME_TOLERANCE, Variable, guards,
+    guid, snapshot, variables,
 };
 
 /// `fmi2GetVersion`.

@@ -1,6 +1,8 @@
 //! The FMI 2.0 Co-Simulation state machine, as one declarative table
-//! ([`ALLOWED`]) of which function may be called in which state, checked by
-//! one function ([`check`]).
+//! ([`ALLOWED`]) of which function may be called in which phase (the
+//! standard's state), checked by one function ([`check`]). The phases are
+//! the slave's own ([`Phase`]), which FMI 2.0 names alike
+//! ([`Phase::name`]).
 //!
 //! The table follows the state table of the FMI 2.0 standard (section
 //! 4.2.4). This FMU steps synchronously, so `stepInProgress` and
@@ -13,29 +15,27 @@
 
 use crate::FmiError;
 
-/// The state of an instance: the version-neutral [`tdvass_fmu::Phase`] of the slave,
-/// named by the FMI 2.0 standard's state names ([`tdvass_fmu::Phase::name`]).
-pub use tdvass_fmu::Phase as MachineState;
+use tdvass_fmu::Phase;
 
-/// A set of states.
+/// A set of phases.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct StateSet(u8);
+pub struct PhaseSet(u8);
 
-impl StateSet {
-    /// The set of `states`.
-    pub const fn of(states: &[MachineState]) -> StateSet {
+impl PhaseSet {
+    /// The set of `phases`.
+    pub const fn of(phases: &[Phase]) -> PhaseSet {
         let mut bits = 0;
         let mut i = 0;
-        while i < states.len() {
-            bits |= states[i].bit();
+        while i < phases.len() {
+            bits |= phases[i].bit();
             i += 1;
         }
-        StateSet(bits)
+        PhaseSet(bits)
     }
 
-    /// Whether `state` is in the set.
-    pub fn contains(self, state: MachineState) -> bool {
-        self.0 & state.bit() != 0
+    /// Whether `phase` is in the set.
+    pub fn contains(self, phase: Phase) -> bool {
+        self.0 & phase.bit() != 0
     }
 }
 
@@ -114,43 +114,43 @@ impl Function {
         }
     }
 
-    /// The states in which the function may be called.
-    pub fn allowed_states(self) -> StateSet {
+    /// The phases in which the function may be called.
+    pub fn allowed_phases(self) -> PhaseSet {
         ALLOWED
             .iter()
             .find(|(f, _)| *f == self)
             .map(|(_, set)| *set)
-            .unwrap_or(StateSet(0))
+            .unwrap_or(PhaseSet(0))
     }
 }
 
-use MachineState::{
+use Phase::{
     Error as Err_, Fatal, InitializationMode as Init, Instantiated as Inst, StepComplete as Done,
     StepFailed as Failed, Terminated as Term,
 };
 
-/// Every state but `fatal`.
-const NOT_FATAL: StateSet = StateSet::of(&[Inst, Init, Done, Failed, Term, Err_]);
+/// Every phase but `fatal`.
+const NOT_FATAL: PhaseSet = PhaseSet::of(&[Inst, Init, Done, Failed, Term, Err_]);
 /// Where values can be read.
-const READABLE: StateSet = StateSet::of(&[Init, Done, Failed, Term, Err_]);
+const READABLE: PhaseSet = PhaseSet::of(&[Init, Done, Failed, Term, Err_]);
 /// Where values can be set (which ones depends on causality and variability).
-const SETTABLE: StateSet = StateSet::of(&[Inst, Init, Done]);
+const SETTABLE: PhaseSet = PhaseSet::of(&[Inst, Init, Done]);
 /// Where the step status can be inquired.
-const STATUS: StateSet = StateSet::of(&[Done, Failed, Term]);
+const STATUS: PhaseSet = PhaseSet::of(&[Done, Failed, Term]);
 
-/// The state table: which function is allowed in which state.
-pub const ALLOWED: &[(Function, StateSet)] = {
+/// The state table: which function is allowed in which phase.
+pub const ALLOWED: &[(Function, PhaseSet)] = {
     use Function::*;
     &[
         (SetDebugLogging, NOT_FATAL),
         (
             FreeInstance,
-            StateSet::of(&[Inst, Init, Done, Failed, Term, Err_, Fatal]),
+            PhaseSet::of(&[Inst, Init, Done, Failed, Term, Err_, Fatal]),
         ),
-        (SetupExperiment, StateSet::of(&[Inst])),
-        (EnterInitializationMode, StateSet::of(&[Inst])),
-        (ExitInitializationMode, StateSet::of(&[Init])),
-        (Terminate, StateSet::of(&[Done, Failed])),
+        (SetupExperiment, PhaseSet::of(&[Inst])),
+        (EnterInitializationMode, PhaseSet::of(&[Inst])),
+        (ExitInitializationMode, PhaseSet::of(&[Init])),
+        (Terminate, PhaseSet::of(&[Done, Failed])),
         (Reset, NOT_FATAL),
         (GetReal, READABLE),
         (GetInteger, READABLE),
@@ -170,11 +170,11 @@ pub const ALLOWED: &[(Function, StateSet)] = {
         (SetRealInputDerivatives, SETTABLE),
         (
             GetRealOutputDerivatives,
-            StateSet::of(&[Done, Failed, Term, Err_]),
+            PhaseSet::of(&[Done, Failed, Term, Err_]),
         ),
-        (DoStep, StateSet::of(&[Done])),
+        (DoStep, PhaseSet::of(&[Done])),
         // Only in stepInProgress, which a synchronous fmi2DoStep never leaves behind.
-        (CancelStep, StateSet::of(&[])),
+        (CancelStep, PhaseSet::of(&[])),
         (GetStatus, STATUS),
         (GetRealStatus, STATUS),
         (GetIntegerStatus, STATUS),
@@ -183,15 +183,15 @@ pub const ALLOWED: &[(Function, StateSet)] = {
     ]
 };
 
-/// Refuses `function` in `state` with "not allowed in state Y" (the caller
-/// prefixes the function name).
-pub fn check(function: Function, state: MachineState) -> Result<(), FmiError> {
-    if function.allowed_states().contains(state) {
+/// Refuses `function` in `phase` with "not allowed in state Y" (the caller
+/// prefixes the function name; the message speaks the standard's word).
+pub fn check(function: Function, phase: Phase) -> Result<(), FmiError> {
+    if function.allowed_phases().contains(phase) {
         Ok(())
     } else {
         Err(FmiError::error(format!(
             "not allowed in state {}",
-            state.name()
+            phase.name()
         )))
     }
 }
@@ -256,7 +256,7 @@ mod tests {
                 .iter()
                 .find(|(f, _)| f.name() == *name)
                 .unwrap_or_else(|| panic!("{name} missing"));
-            for (state, mark) in MachineState::ALL.iter().zip(row.chars()) {
+            for (state, mark) in Phase::ALL.iter().zip(row.chars()) {
                 assert_eq!(
                     set.contains(*state),
                     mark == 'x',
@@ -275,9 +275,9 @@ mod tests {
 
     #[test]
     fn state_codes_round_trip() {
-        for s in MachineState::ALL {
-            assert_eq!(MachineState::from_code(s.code()), Some(s));
+        for s in Phase::ALL {
+            assert_eq!(Phase::from_code(s.code()), Some(s));
         }
-        assert_eq!(MachineState::from_code(7), None);
+        assert_eq!(Phase::from_code(7), None);
     }
 }

@@ -1,5 +1,6 @@
-//! The FMI 3.0 instance: what `fmi3InstantiateCoSimulation` checks, the
-//! FMI 3.0 state table around every call, the FMI 3.0 types of the values,
+//! The FMI 3.0 instance: what `fmi3InstantiateCoSimulation` checks beyond
+//! what every version checks ([`tdvass_fmu::instantiation`]: event mode and
+//! the intermediate variables), the FMI 3.0 state table around every call, the FMI 3.0 types of the values,
 //! Configuration Mode and the intermediate updates, around a
 //! version-neutral [`Slave`] that does everything else, called explicitly
 //! ([`FrontEnd::slave_mut`]). Where FMI 3.0 adds to a slave's function,
@@ -8,14 +9,15 @@
 //! and the C layer calls that one. No FFI here; [`crate::ffi`] calls the
 //! instance through [`FrontEnd::run`].
 
-use crate::states::{self, Function, State};
+use crate::states::{self, Fmi3Phase, Function};
 use crate::types::{ValueType, fmi3_type};
 use crate::{FmiError, Status};
 use std::path::PathBuf;
 use tdvass_fmu::Phase;
 use tdvass_fmu::entry::FrontEnd;
-use tdvass_fmu::slave::{Dialect, LogSink, Logger};
-use tdvass_fmu::variables::{Causality, FmiVersion, Variable, by_name, by_vr_in};
+use tdvass_fmu::instantiation::Instantiation;
+use tdvass_fmu::slave::{Dialect, LogSink};
+use tdvass_fmu::variables::{Causality, FmiVersion, Variable, by_name, by_vr};
 
 pub use tdvass_fmu::Slave;
 
@@ -30,6 +32,10 @@ pub const FMI3_DIALECT: Dialect = Dialect {
     fmu_state: "FMUState",
     deserialize_state: "DeserializeFMUState",
     input_slope_remedy: "set x_g in intermediate updates",
+    instantiate: "InstantiateCoSimulation",
+    token_argument: "instantiationToken",
+    given_token: "instantiationToken",
+    own_token: "token",
 };
 
 /// What `fmi3InstantiateCoSimulation` was given (strings copied out of C).
@@ -66,7 +72,7 @@ pub struct Instance {
     intermediate: Option<IntermediatePoint>,
 }
 
-/// The state table is [`states::check`] on [`Instance::state`]; beyond the
+/// The state table is [`states::check`] on [`Instance::phase`]; beyond the
 /// slave, a panic ends an intermediate update and a restored FMU state ends
 /// Configuration Mode.
 impl FrontEnd for Instance {
@@ -77,7 +83,7 @@ impl FrontEnd for Instance {
     }
 
     fn check_state(&self, function: Function) -> Result<(), FmiError> {
-        states::check(function, self.state())
+        states::check(function, self.phase())
     }
 
     fn slave(&self) -> &Slave {
@@ -106,29 +112,11 @@ impl Instance {
     /// `fmi3InstantiateCoSimulation`: checks the request and creates the
     /// instance. A refusal is logged through `logger` and returns `None`.
     pub fn instantiate(request: InstantiateRequest<'_>, logger: LogSink) -> Option<Instance> {
-        let refuse = |message: String| {
-            logger(
-                Status::Error,
-                "logStatusError",
-                &format!("fmi3InstantiateCoSimulation: {message}"),
-            );
-            None
-        };
+        let instantiation = Instantiation::new(FMI3_DIALECT, logger);
+        let refuse = |message: String| instantiation.refuse(&message);
         let expected = crate::instantiation_token();
-        let name = match request.instance_name {
-            None => return refuse("instanceName is NULL".into()),
-            Some("") => return refuse("instanceName is empty".into()),
-            Some(name) => name.to_string(),
-        };
-        match request.instantiation_token {
-            None => return refuse("instantiationToken is NULL".into()),
-            Some(t) if t != expected => {
-                return refuse(format!(
-                    "instantiationToken {t} does not match this FMU's token {expected} (modelDescription.xml and binary are from different builds)"
-                ));
-            }
-            Some(_) => {}
-        }
+        let name = instantiation.instance_name(request.instance_name)?;
+        instantiation.token(request.instantiation_token, &expected)?;
         if request.event_mode_used {
             return refuse(
                 "eventModeUsed = true, but this FMU has no event mode (hasEventMode = false)"
@@ -136,7 +124,7 @@ impl Instance {
             );
         }
         for &vr in request.required_intermediate_variables {
-            match by_vr_in(FmiVersion::Fmi3, vr) {
+            match by_vr(FmiVersion::Fmi3, vr) {
                 Some(v) if v.intermediate_update => {}
                 Some(v) => {
                     return refuse(format!(
@@ -155,33 +143,35 @@ impl Instance {
             .resource_path
             .filter(|p| !p.is_empty())
             .map(PathBuf::from);
-        let logger = Logger::new(logger, request.logging_on);
-        let instance = Instance {
+        let details = format!(
+            ", intermediate updates {}, early return {}",
+            if request.intermediate_update {
+                "on"
+            } else {
+                "off"
+            },
+            if request.early_return_allowed {
+                "allowed"
+            } else {
+                "not allowed"
+            },
+        );
+        let slave = instantiation.slave(
+            &name,
+            expected,
+            request.logging_on,
+            resource_path.as_deref(),
+            &details,
+        );
+        Some(Instance {
             name,
             resource_path,
-            slave: Slave::new(FMI3_DIALECT, expected.clone(), logger),
+            slave,
             early_return_allowed: request.early_return_allowed,
             intermediate_update: request.intermediate_update,
             configuration: false,
             intermediate: None,
-        };
-        instance.slave.logger().log(
-            Status::Ok,
-            &format!(
-                "fmi3InstantiateCoSimulation: instance `{}` of {} (token {}), resources {}, intermediate updates {}, early return {}",
-                instance.name,
-                crate::MODEL_NAME,
-                expected,
-                instance
-                    .resource_path
-                    .as_ref()
-                    .map(|p| format!("at {}", p.display()))
-                    .unwrap_or_else(|| "not given".into()),
-                if instance.intermediate_update { "on" } else { "off" },
-                if instance.early_return_allowed { "allowed" } else { "not allowed" },
-            ),
-        );
-        Some(instance)
+        })
     }
 
     /// The instance name.
@@ -204,18 +194,18 @@ impl Instance {
         self.intermediate_update
     }
 
-    /// The FMI 3.0 state.
-    pub fn state(&self) -> State {
+    /// The FMI 3.0 phase (the standard's state).
+    pub fn phase(&self) -> Fmi3Phase {
         match self.slave.phase() {
-            Phase::Instantiated if self.configuration => State::ConfigurationMode,
-            Phase::Instantiated => State::Instantiated,
-            Phase::InitializationMode => State::InitializationMode,
-            Phase::StepComplete if self.intermediate.is_some() => State::IntermediateUpdate,
-            Phase::StepComplete => State::StepMode,
-            Phase::StepFailed => State::StepDiscarded,
-            Phase::Terminated => State::Terminated,
-            Phase::Error => State::Error,
-            Phase::Fatal => State::Fatal,
+            Phase::Instantiated if self.configuration => Fmi3Phase::ConfigurationMode,
+            Phase::Instantiated => Fmi3Phase::Instantiated,
+            Phase::InitializationMode => Fmi3Phase::InitializationMode,
+            Phase::StepComplete if self.intermediate.is_some() => Fmi3Phase::IntermediateUpdate,
+            Phase::StepComplete => Fmi3Phase::StepMode,
+            Phase::StepFailed => Fmi3Phase::StepDiscarded,
+            Phase::Terminated => Fmi3Phase::Terminated,
+            Phase::Error => Fmi3Phase::Error,
+            Phase::Fatal => Fmi3Phase::Fatal,
         }
     }
 
@@ -278,7 +268,7 @@ impl Instance {
     ) -> Result<Vec<&'static Variable>, FmiError> {
         vrs.iter()
             .map(|&vr| {
-                let var = by_vr_in(FmiVersion::Fmi3, vr).ok_or_else(|| {
+                let var = by_vr(FmiVersion::Fmi3, vr).ok_or_else(|| {
                     FmiError::error(format!(
                         "unknown value reference {vr} (for a {})",
                         expected.name()
@@ -452,7 +442,7 @@ impl Instance {
     /// `fmi3GetVariableDependencies`: value references of the inputs `vr`
     /// depends on directly.
     pub fn dependencies(&self, vr: u32) -> Result<Vec<u32>, FmiError> {
-        let var = by_vr_in(FmiVersion::Fmi3, vr)
+        let var = by_vr(FmiVersion::Fmi3, vr)
             .ok_or_else(|| FmiError::error(format!("unknown value reference {vr}")))?;
         if var.causality != Causality::Output {
             return Err(FmiError::error(format!(
@@ -463,20 +453,13 @@ impl Instance {
         Ok(var
             .feedthrough
             .iter()
-            .filter_map(|name| by_name(name).map(|v| v.vr))
+            .filter_map(|name| by_name(FmiVersion::Fmi3, name).map(|v| v.vr))
             .collect())
     }
 }
 
 impl Drop for Instance {
     fn drop(&mut self) {
-        self.slave.logger().log(
-            Status::Ok,
-            &format!(
-                "fmi3FreeInstance: `{}` freed with {} FMU state(s)",
-                self.name,
-                self.slave.fmu_state_count()
-            ),
-        );
+        self.slave.log_freed(&self.name);
     }
 }

@@ -5,25 +5,28 @@
 //! adapts them to the FMI 3.0 calling convention:
 //!
 //! - [`types`]: the FMI 3.0 type of each variable of the one table.
-//! - [`states`]: the FMI 3.0 state machine as one declarative table.
-//! - [`instance`]: the FMI 3.0 [`instance::Instance`]: the
+//! - [`states`]: the FMI 3.0 state machine as one declarative table of
+//!   which function is allowed in which phase
+//!   ([`states::Fmi3Phase`], the standard's state).
+//! - [`instance`]: the FMI 3.0 [`instance::Instance`]: the FMI 3.0
 //!   instantiation checks, the state table, the FMI 3.0 types,
 //!   Configuration Mode and intermediate updates, around a
 //!   [`Slave`](tdvass_fmu::Slave).
-//! - [`description`]: the FMI 3.0 `modelDescription.xml` and
-//!   `documentation/index.html`.
 //! - [`ffi`]: every fmi3 function with C linkage: null checks, pointers to
 //!   slices (through [`tdvass_fmu::pointers`]), `catch_unwind` around every
 //!   entry point, and the intermediate-update loop of `fmi3DoStep`, which
 //!   holds no reference to the instance while the master's callback runs.
 //!
 //! **What this crate owns and must never import.** It owns the FMI 3.0
-//! layer. It imports the slave from `tdvass-fmu` and the physics from
-//! `tdvass`, and nothing from the command line or the FMI 2.0 front-end.
+//! layer: the C ABI, the FMI 3.0 state table and the FMI 3.0 types; it
+//! builds the FMU's shared library, which holds runtime code only (the
+//! model description and documentation are written at build time by
+//! `tdvass-describe`). It imports the slave from `tdvass-fmu` and the
+//! physics from `tdvass`, and nothing from the command line or the FMI 2.0
+//! front-end.
 
 #![deny(unsafe_code)]
 
-pub mod description;
 pub mod ffi;
 pub mod instance;
 pub mod states;

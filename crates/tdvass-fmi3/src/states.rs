@@ -1,15 +1,15 @@
 //! The FMI 3.0 Co-Simulation state machine, as one declarative table
-//! ([`ALLOWED`]) of which function may be called in which state, checked by
-//! one function ([`check`]).
+//! ([`ALLOWED`]) of which function may be called in which phase (the
+//! standard's state, [`Fmi3Phase`]), checked by one function ([`check`]).
 //!
 //! The table follows the state machine of the FMI 3.0 standard (section
 //! 4.2) for an FMU without event mode, clocks or tunable structural
 //! parameters, so Event Mode, Reconfiguration Mode and Clock Activation
 //! Mode never occur. Two refinements:
-//! - Step Mode after a discarded step ([`State::StepDiscarded`]): the
+//! - Step Mode after a discarded step ([`Fmi3Phase::StepDiscarded`]): the
 //!   master may read values, restore an FMU state, reset or terminate, but
 //!   not step on.
-//! - Inside an intermediate update ([`State::IntermediateUpdate`]) only
+//! - Inside an intermediate update ([`Fmi3Phase::IntermediateUpdate`]) only
 //!   getters and setters are allowed (the instance then admits only the
 //!   variables marked `intermediateUpdate`); freeing or resetting the
 //!   instance from its own callback is refused.
@@ -22,9 +22,11 @@
 use crate::FmiError;
 use crate::types::ValueType;
 
-/// State of an FMI 3.0 instance.
+/// The phase of an FMI 3.0 instance (the standard's state): the slave's
+/// [`tdvass_fmu::Phase`], refined by Configuration Mode and the
+/// intermediate update.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum State {
+pub enum Fmi3Phase {
     Instantiated,
     ConfigurationMode,
     InitializationMode,
@@ -36,32 +38,32 @@ pub enum State {
     Fatal,
 }
 
-impl State {
-    /// Every state.
-    pub const ALL: [State; 9] = [
-        State::Instantiated,
-        State::ConfigurationMode,
-        State::InitializationMode,
-        State::StepMode,
-        State::StepDiscarded,
-        State::IntermediateUpdate,
-        State::Terminated,
-        State::Error,
-        State::Fatal,
+impl Fmi3Phase {
+    /// Every phase.
+    pub const ALL: [Fmi3Phase; 9] = [
+        Fmi3Phase::Instantiated,
+        Fmi3Phase::ConfigurationMode,
+        Fmi3Phase::InitializationMode,
+        Fmi3Phase::StepMode,
+        Fmi3Phase::StepDiscarded,
+        Fmi3Phase::IntermediateUpdate,
+        Fmi3Phase::Terminated,
+        Fmi3Phase::Error,
+        Fmi3Phase::Fatal,
     ];
 
     /// The standard's name of the state.
     pub fn name(self) -> &'static str {
         match self {
-            State::Instantiated => "Instantiated",
-            State::ConfigurationMode => "Configuration Mode",
-            State::InitializationMode => "Initialization Mode",
-            State::StepMode => "Step Mode",
-            State::StepDiscarded => "Step Mode after a discarded step",
-            State::IntermediateUpdate => "Intermediate Update Mode",
-            State::Terminated => "Terminated",
-            State::Error => "Error",
-            State::Fatal => "Fatal",
+            Fmi3Phase::Instantiated => "Instantiated",
+            Fmi3Phase::ConfigurationMode => "Configuration Mode",
+            Fmi3Phase::InitializationMode => "Initialization Mode",
+            Fmi3Phase::StepMode => "Step Mode",
+            Fmi3Phase::StepDiscarded => "Step Mode after a discarded step",
+            Fmi3Phase::IntermediateUpdate => "Intermediate Update Mode",
+            Fmi3Phase::Terminated => "Terminated",
+            Fmi3Phase::Error => "Error",
+            Fmi3Phase::Fatal => "Fatal",
         }
     }
 
@@ -70,25 +72,25 @@ impl State {
     }
 }
 
-/// A set of states.
+/// A set of phases.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct StateSet(u16);
+pub struct PhaseSet(u16);
 
-impl StateSet {
-    /// The set of `states`.
-    pub const fn of(states: &[State]) -> StateSet {
+impl PhaseSet {
+    /// The set of `phases`.
+    pub const fn of(phases: &[Fmi3Phase]) -> PhaseSet {
         let mut bits = 0;
         let mut i = 0;
-        while i < states.len() {
-            bits |= states[i].bit();
+        while i < phases.len() {
+            bits |= phases[i].bit();
             i += 1;
         }
-        StateSet(bits)
+        PhaseSet(bits)
     }
 
-    /// Whether `state` is in the set.
-    pub fn contains(self, state: State) -> bool {
-        self.0 & state.bit() != 0
+    /// Whether `phase` is in the set.
+    pub fn contains(self, phase: Fmi3Phase) -> bool {
+        self.0 & phase.bit() != 0
     }
 }
 
@@ -149,8 +151,8 @@ impl Function {
         }
     }
 
-    /// The states in which the function may be called.
-    pub fn allowed_states(self) -> StateSet {
+    /// The phases in which the function may be called.
+    pub fn allowed_phases(self) -> PhaseSet {
         let key = match self {
             Function::Get(_) => Function::Get(ValueType::Float64),
             Function::Set(_) => Function::Set(ValueType::Float64),
@@ -160,41 +162,41 @@ impl Function {
             .iter()
             .find(|(f, _)| *f == key)
             .map(|(_, set)| *set)
-            .unwrap_or(StateSet(0))
+            .unwrap_or(PhaseSet(0))
     }
 }
 
-use State::{
+use Fmi3Phase::{
     ConfigurationMode as Conf, Error as Err_, Fatal, InitializationMode as Init,
     Instantiated as Inst, IntermediateUpdate as Inter, StepDiscarded as Disc, StepMode as Step,
     Terminated as Term,
 };
 
-/// Every state but `Fatal` and the intermediate update.
-const NOT_FATAL: StateSet = StateSet::of(&[Inst, Conf, Init, Step, Disc, Term, Err_]);
+/// Every phase but `Fatal` and the intermediate update.
+const NOT_FATAL: PhaseSet = PhaseSet::of(&[Inst, Conf, Init, Step, Disc, Term, Err_]);
 /// Where values can be read (inside an intermediate update: the
 /// intermediate variables only; in Configuration Mode: structural
 /// parameters only).
-const READABLE: StateSet = StateSet::of(&[Conf, Init, Step, Disc, Inter, Term, Err_]);
+const READABLE: PhaseSet = PhaseSet::of(&[Conf, Init, Step, Disc, Inter, Term, Err_]);
 /// Where values can be set (which ones depends on causality, variability
 /// and, inside an intermediate update, on the variable's flag).
-const SETTABLE: StateSet = StateSet::of(&[Inst, Conf, Init, Step, Inter]);
+const SETTABLE: PhaseSet = PhaseSet::of(&[Inst, Conf, Init, Step, Inter]);
 /// Where the model's partial derivatives can be evaluated.
-const LINEARIZABLE: StateSet = StateSet::of(&[Init, Step, Disc, Term, Err_]);
+const LINEARIZABLE: PhaseSet = PhaseSet::of(&[Init, Step, Disc, Term, Err_]);
 
-/// The state table: which function is allowed in which state. Getters and
+/// The state table: which function is allowed in which phase. Getters and
 /// setters of every type share one row each.
-pub const ALLOWED: &[(Function, StateSet)] = {
+pub const ALLOWED: &[(Function, PhaseSet)] = {
     use Function::*;
     &[
         (SetDebugLogging, NOT_FATAL),
         (
             FreeInstance,
-            StateSet::of(&[Inst, Conf, Init, Step, Disc, Term, Err_, Fatal]),
+            PhaseSet::of(&[Inst, Conf, Init, Step, Disc, Term, Err_, Fatal]),
         ),
-        (EnterInitializationMode, StateSet::of(&[Inst])),
-        (ExitInitializationMode, StateSet::of(&[Init])),
-        (Terminate, StateSet::of(&[Step, Disc])),
+        (EnterInitializationMode, PhaseSet::of(&[Inst])),
+        (ExitInitializationMode, PhaseSet::of(&[Init])),
+        (Terminate, PhaseSet::of(&[Step, Disc])),
         (Reset, NOT_FATAL),
         (Get(ValueType::Float64), READABLE),
         (Set(ValueType::Float64), SETTABLE),
@@ -208,25 +210,25 @@ pub const ALLOWED: &[(Function, StateSet)] = {
         (DeserializeFmuState, NOT_FATAL),
         (GetDirectionalDerivative, LINEARIZABLE),
         (GetAdjointDerivative, LINEARIZABLE),
-        (EnterConfigurationMode, StateSet::of(&[Inst])),
-        (ExitConfigurationMode, StateSet::of(&[Conf])),
+        (EnterConfigurationMode, PhaseSet::of(&[Inst])),
+        (ExitConfigurationMode, PhaseSet::of(&[Conf])),
         (
             GetOutputDerivatives,
-            StateSet::of(&[Step, Disc, Term, Err_]),
+            PhaseSet::of(&[Step, Disc, Term, Err_]),
         ),
-        (DoStep, StateSet::of(&[Step])),
+        (DoStep, PhaseSet::of(&[Step])),
     ]
 };
 
-/// Refuses `function` in `state` with "not allowed in state Y" (the caller
+/// Refuses `function` in `phase` with "not allowed in state Y" (the caller
 /// prefixes the function name).
-pub fn check(function: Function, state: State) -> Result<(), FmiError> {
-    if function.allowed_states().contains(state) {
+pub fn check(function: Function, phase: Fmi3Phase) -> Result<(), FmiError> {
+    if function.allowed_phases().contains(phase) {
         Ok(())
     } else {
         Err(FmiError::error(format!(
             "not allowed in state {}",
-            state.name()
+            phase.name()
         )))
     }
 }
@@ -295,7 +297,7 @@ mod tests {
     fn the_table_is_the_restated_one() {
         for (name, row) in EXPECTED {
             let function = by_name(name);
-            for (state, mark) in State::ALL.iter().zip(row.chars()) {
+            for (state, mark) in Fmi3Phase::ALL.iter().zip(row.chars()) {
                 assert_eq!(
                     check(function, *state).is_ok(),
                     mark == 'x',
@@ -308,7 +310,7 @@ mod tests {
 
     #[test]
     fn refusals_name_the_state() {
-        let e = check(Function::DoStep, State::InitializationMode).unwrap_err();
+        let e = check(Function::DoStep, Fmi3Phase::InitializationMode).unwrap_err();
         assert_eq!(e.message, "not allowed in state Initialization Mode");
     }
 }

@@ -138,11 +138,11 @@ impl Fmi3Type {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use tdvass_fmu::variables::{ALL_VARIABLES, by_name};
+    use tdvass_fmu::variables::{FMI3_VARIABLES, FmiVersion, by_name};
 
     #[test]
     fn every_variable_has_the_type_the_interface_names() {
-        let type_of = |name: &str| fmi3_type(by_name(name).unwrap());
+        let type_of = |name: &str| fmi3_type(by_name(FmiVersion::Fmi3, name).unwrap());
         assert_eq!(type_of("variant"), Fmi3Type::Enumeration);
         assert_eq!(type_of("road"), Fmi3Type::Enumeration);
         assert_eq!(type_of("road_class"), Fmi3Type::Enumeration);
@@ -153,7 +153,7 @@ mod tests {
         assert_eq!(type_of("root_count"), Fmi3Type::UInt64);
         assert_eq!(type_of("rightmost_roots"), Fmi3Type::Float64);
         assert!(
-            ALL_VARIABLES
+            FMI3_VARIABLES
                 .iter()
                 .all(|v| v.var_type() != VarType::String)
         );

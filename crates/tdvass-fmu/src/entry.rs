@@ -34,7 +34,10 @@ pub trait FrontEnd: Sized {
     /// when `function` may not be called in the current state.
     fn check_state(&self, function: Self::Function) -> Result<(), FmiError>;
 
-    /// The slave.
+    /// The slave. (Each front-end's instance holds its slave beside what
+    /// its version adds, so these two accessors are all the glue asks of
+    /// its layout; what instantiation checks alike is
+    /// [`crate::instantiation`].)
     fn slave(&self) -> &Slave;
 
     /// The slave, to call it.

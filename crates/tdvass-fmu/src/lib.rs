@@ -1,21 +1,23 @@
 //! The version-neutral co-simulation slave of the tdvass FMUs.
 //!
-//! Everything FMI 2.0 and FMI 3.0 share lives here, once:
+//! Everything FMI 2.0 and FMI 3.0 share at run time lives here, once:
 //!
 //! - [`variables`]: the **one table** of FMU variables. Value references,
 //!   types, causality, variability, start values, units, admissible ranges,
 //!   descriptions and how each variable is read or written; get/set
-//!   dispatch, the model descriptions of every FMI version, the
-//!   documentation, the GUID and the CLI's defaults (checked by tests) are
-//!   derived from it.
+//!   dispatch, the GUID and the instantiation token, the CLI's defaults
+//!   (checked by tests) and, at build time, the model descriptions and
+//!   documentation of every FMI version (`tdvass-describe`) are derived
+//!   from it.
 //! - [`settings`]: the values of an instance, built on the library's
 //!   [`Params`](tdvass::model::Params) and [`Weights`](tdvass::metrics::Weights),
 //!   and the [`SimulationConfig`](tdvass::solver::SimulationConfig) they
 //!   describe.
 //! - [`outputs`]: values, time derivatives and partial derivatives of the
 //!   outputs.
-//! - [`limits`]: the per-call limits of a slave (work per step, time
-//!   resolution, finite outputs); the value and rate limits are the
+//! - [`guards`]: the guards of every slave call: the library's value and
+//!   rate limits applied to the FMU's variables, work per step, time
+//!   resolution, finite outputs; the value and rate limits themselves are the
 //!   library's ([`tdvass::limits`]).
 //! - [`snapshot`]: the versioned, checksummed byte format of serialized FMU
 //!   states, written with the library's one codec ([`tdvass::bytes`]).
@@ -24,11 +26,11 @@
 //!   (set/get by value reference, `do_step(t, h)`, input value and slope,
 //!   snapshots, partials). Every method returns `Result<_, FmiError>`.
 //! - [`phase`]: the life-cycle phase each front-end's state table checks.
-//! - [`markdown`]: the variable table as Markdown for the README.
-//! - [`markup`]: what the model descriptions and documentation pages of
-//!   every FMI version write alike (quick-xml).
 //! - [`pointers`]: instance handles, array and string arguments of the C
 //!   interfaces, checked (NULL, alignment, length, the handle's tag).
+//! - [`instantiation`]: what the instantiation function of every FMI
+//!   version checks and logs alike (instance name, token, the new slave);
+//!   the slave logs the instance's release ([`Slave::log_freed`]).
 //! - [`entry`]: what the C entry points of every FMI version do around an
 //!   instance: the call under the front-end's state table with panics
 //!   caught ([`entry::with_instance`], [`entry::call`]), `FreeInstance`,
@@ -42,16 +44,17 @@
 //! [`Variable::fmi3_only`]) and how a front-end names its functions
 //! ([`slave::Dialect`]). It imports the physics from `tdvass` and nothing
 //! else of the workspace: no front-end's C types, exported functions or
-//! state table, no command line. Its `unsafe` is in [`pointers`] and
-//! [`entry`] only (denied everywhere else), each block with its `SAFETY`
-//! comment.
+//! state table, no command line. It holds runtime code only: the writers
+//! of the model descriptions and documentation are `tdvass-describe`'s, at
+//! build time, so no FMU library links them. Its `unsafe` is in
+//! [`pointers`] and [`entry`] only (denied everywhere else), each block
+//! with its `SAFETY` comment.
 
 #![deny(unsafe_code)]
 
 pub mod entry;
-pub mod limits;
-pub mod markdown;
-pub mod markup;
+pub mod guards;
+pub mod instantiation;
 pub mod outputs;
 pub mod phase;
 pub mod pointers;
@@ -63,7 +66,7 @@ pub mod variables;
 pub use phase::Phase;
 pub use settings::Settings;
 pub use slave::Slave;
-pub use variables::{VARIABLES, Variable, guid};
+pub use variables::{COMMON_VARIABLES, Variable, guid};
 
 /// The `modelIdentifier` (shared library base name) of the FMUs.
 pub const MODEL_IDENTIFIER: &str = "tdvass";

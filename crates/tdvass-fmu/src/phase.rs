@@ -1,9 +1,11 @@
 //! The phase of a slave: where it is in its life cycle.
 
-/// The phase of a co-simulation slave. FMI 2.0 calls it the state of the
-/// instance (with these names); FMI 3.0's Step Mode is [`Phase::StepComplete`]
-/// (and [`Phase::StepFailed`] after a discarded step). The codes are stored
-/// in serialized FMU states.
+/// The phase of a co-simulation slave. The FMI standards call it the state
+/// of the instance: FMI 2.0's states are these phases, with these names;
+/// the FMI 3.0 front-end refines them (its `Fmi3Phase` adds Configuration
+/// Mode and the intermediate update; its Step Mode is
+/// [`Phase::StepComplete`], and [`Phase::StepFailed`] after a discarded
+/// step). The codes are stored in serialized FMU states.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Phase {
     Instantiated,
@@ -16,7 +18,7 @@ pub enum Phase {
 }
 
 impl Phase {
-    /// Every state.
+    /// Every phase.
     pub const ALL: [Phase; 7] = [
         Phase::Instantiated,
         Phase::InitializationMode,
@@ -27,7 +29,7 @@ impl Phase {
         Phase::Fatal,
     ];
 
-    /// The name FMI 2.0 gives the state (`stepComplete`, ...).
+    /// The name FMI 2.0 gives the phase, its state (`stepComplete`, ...).
     pub fn name(self) -> &'static str {
         match self {
             Phase::Instantiated => "instantiated",

@@ -3,7 +3,7 @@
 //! FMU's integer codes; [`Settings::to_config`] turns them into a
 //! [`SimulationConfig`]. Start values come from the one variable table.
 
-use crate::variables::{ALL_VARIABLES, Access};
+use crate::variables::{Access, FMI3_VARIABLES};
 use tdvass::TireContact;
 use tdvass::metrics::Weights;
 use tdvass::model::{Params, State, Variant};
@@ -11,7 +11,7 @@ use tdvass::road::{RandomRoad, RoadClass, RoadSpec, RoadType};
 use tdvass::solver::{DEFAULT_TOLERANCE, Metrics, SimulationConfig};
 
 /// Every setting of an instance: the parameters and the input. Start values
-/// come from [`ALL_VARIABLES`] ([`Settings::start_values`]).
+/// come from [`FMI3_VARIABLES`] ([`Settings::start_values`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Settings {
     /// `variant` code: 1 CS, 2 PVASS, 3 TDVASS.
@@ -51,7 +51,7 @@ pub struct Settings {
 }
 
 impl Settings {
-    /// The settings with every start value of [`ALL_VARIABLES`].
+    /// The settings with every start value of [`FMI3_VARIABLES`].
     pub fn start_values() -> Settings {
         let zero_params = Params {
             m_s: 0.0,
@@ -90,7 +90,7 @@ impl Settings {
             intermediate_update_interval: 0.0,
             root_count: 0,
         };
-        for v in ALL_VARIABLES {
+        for v in FMI3_VARIABLES {
             match (v.access, v.start) {
                 (Access::Real { set, .. }, Some(start)) => set(&mut s, start),
                 (Access::Integer { set, .. }, Some(start)) => set(&mut s, start as i32),

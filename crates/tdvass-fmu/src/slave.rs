@@ -5,7 +5,7 @@
 //! `Result<_, FmiError>`. Function names in log messages come from the
 //! front-end's [`Dialect`].
 
-use crate::limits;
+use crate::guards;
 use crate::phase::Phase;
 use crate::settings::Settings;
 use crate::variables::FmiVersion;
@@ -45,6 +45,14 @@ pub struct Dialect {
     /// How the master gives the input's course over a step (the hold
     /// warning's remedy).
     pub input_slope_remedy: &'static str,
+    /// The instantiation function, without the prefix.
+    pub instantiate: &'static str,
+    /// The instantiation's argument that carries the token (`fmuGUID`).
+    pub token_argument: &'static str,
+    /// How a refused instantiation names the token the master passed.
+    pub given_token: &'static str,
+    /// How the messages name the FMU's own token (`GUID`, `token`).
+    pub own_token: &'static str,
 }
 
 /// Communication steps longer than this (s) with a held, changing `x_g`
@@ -283,7 +291,7 @@ impl Slave {
     /// input applied.
     fn build_simulator(&self) -> Result<Simulator, FmiError> {
         let m = &self.state;
-        limits::check_rates(&m.settings)?;
+        guards::check_rates(&m.settings)?;
         let config = m.settings.to_config(m.start_time)?;
         // Checked before `Simulator::new` (which refuses the same start
         // times) for the FMU's message, which gives the limit in seconds.
@@ -294,12 +302,12 @@ impl Slave {
         };
         let choice = Simulator::choose_step(&config)?;
         let step = DelayGrid::new(tau, choice.step_bound)?.step;
-        limits::check_time_resolution("startTime", m.start_time, step)?;
+        guards::check_time_resolution("startTime", m.start_time, step)?;
         let mut sim = Simulator::with_choice(config, choice)?;
         if m.settings.road_is_input() {
             sim.set_road_input(m.settings.x_g, m.input_slope)?;
         }
-        if let Some((name, value)) = limits::non_finite_output(&sim.outputs()) {
+        if let Some((name, value)) = guards::non_finite_output(&sim.outputs()) {
             return Err(FmiError::error(format!(
                 "the settings give a non-finite initial output `{name}` = {value}"
             )));

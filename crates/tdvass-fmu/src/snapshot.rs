@@ -29,7 +29,7 @@ use crate::FmiError;
 use crate::phase::Phase;
 use crate::settings::Settings;
 use crate::slave::SlaveState;
-use crate::variables::{ALL_VARIABLES, Access, FmiVersion, by_vr_in};
+use crate::variables::{Access, FMI3_VARIABLES, FmiVersion, by_vr};
 use tdvass::bytes::{ByteReader, ByteWriter};
 use tdvass::solver::Simulator;
 
@@ -143,7 +143,7 @@ impl<'a> Reader<'a> {
 fn encode_payload(model: &SlaveState) -> Vec<u8> {
     let mut w = ByteWriter::default();
     w.u8(model.phase.code());
-    let settings: Vec<_> = ALL_VARIABLES
+    let settings: Vec<_> = FMI3_VARIABLES
         .iter()
         .filter_map(|v| match v.access {
             Access::Real { get, .. } => Some((v.vr, get(&model.settings).to_bits())),
@@ -187,7 +187,7 @@ fn encode_payload(model: &SlaveState) -> Vec<u8> {
 
 fn decode_settings(r: &mut Reader) -> Result<Settings, FmiError> {
     let mut settings = Settings::start_values();
-    let expected: Vec<_> = ALL_VARIABLES
+    let expected: Vec<_> = FMI3_VARIABLES
         .iter()
         .filter(|v| matches!(v.access, Access::Real { .. } | Access::Integer { .. }))
         .collect();
@@ -203,7 +203,7 @@ fn decode_settings(r: &mut Reader) -> Result<Settings, FmiError> {
         let vr = r.u32("a value reference")?;
         let bits = r.u64("a setting")?;
         let position = expected.iter().position(|v| v.vr == vr);
-        let (Some(i), Some(var)) = (position, by_vr_in(FmiVersion::Fmi3, vr)) else {
+        let (Some(i), Some(var)) = (position, by_vr(FmiVersion::Fmi3, vr)) else {
             return Err(invalid(format_args!(
                 "unknown setting value reference {vr}"
             )));
@@ -219,7 +219,7 @@ fn decode_settings(r: &mut Reader) -> Result<Settings, FmiError> {
                 let value = f64::from_bits(bits);
                 var.range
                     .check(var.name, value)
-                    .and_then(|()| crate::limits::check_variable(var, value))
+                    .and_then(|()| crate::guards::check_variable(var, value))
                     .map_err(|e| invalid(e.message))?;
                 set(&mut settings, value);
             }
@@ -303,7 +303,7 @@ fn decode_payload(bytes: &[u8]) -> Result<SlaveState, FmiError> {
         )));
     }
     if let Some(sim) = &mut sim {
-        crate::limits::check_rates(&settings).map_err(|e| invalid(e.message))?;
+        crate::guards::check_rates(&settings).map_err(|e| invalid(e.message))?;
         let config = settings.to_config(start_time).map_err(invalid)?;
         if *sim.config() != config {
             return Err(invalid("the simulator does not match the settings"));
@@ -318,7 +318,7 @@ fn decode_payload(bytes: &[u8]) -> Result<SlaveState, FmiError> {
                 "simulator time {now} s (committed {committed} s) does not fit its start {start_time} s and internal step {step} s"
             )));
         }
-        if let Some((name, value)) = crate::limits::non_finite_output(&sim.outputs()) {
+        if let Some((name, value)) = crate::guards::non_finite_output(&sim.outputs()) {
             return Err(invalid(format_args!("output `{name}` = {value}")));
         }
     }

@@ -1,4 +1,7 @@
-//! The one table of FMU variables, [`VARIABLES`].
+//! The one table of FMU variables: [`COMMON_VARIABLES`], the variables of
+//! both FMI versions (all of FMI 2.0's), and [`FMI3_VARIABLES`], the same
+//! followed by the FMI 3.0 additions. [`variables_of`] gives a version's,
+//! and [`by_vr`] and [`by_name`] search it.
 //!
 //! Each variable is declared once: name, value reference, causality,
 //! variability, physical quantity (hence type definition and unit), display
@@ -6,8 +9,8 @@
 //! when it is set), description, its direct dependencies (ModelStructure) and
 //! how it is read or written ([`Access`]). Everything else is derived: the
 //! get/set dispatch of [`crate::Slave`], the `modelDescription.xml` of
-//! every FMI version and `documentation/index.html` (in the front-end
-//! crates), the serialized settings ([`crate::snapshot`]), the GUID
+//! every FMI version and `documentation/index.html` (at build time, by
+//! `tdvass-describe`), the serialized settings ([`crate::snapshot`]), the GUID
 //! ([`guid`]) and the command line's defaults (checked by its tests).
 //!
 //! Value references are unique across all types.
@@ -419,7 +422,9 @@ pub enum Dimension {
     Structural(&'static str),
 }
 
-/// The FMI versions a variable exists in.
+/// An FMI version of the FMUs: which variables exist in it
+/// ([`variables_of`]), which dialect a slave speaks
+/// ([`crate::slave::Dialect`]) and, for fmu-build, which FMU is packed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum FmiVersion {
     Fmi2,
@@ -533,32 +538,23 @@ impl Variable {
     }
 }
 
-/// The variables of `version`, in `ModelVariables` order.
+/// The variables of `version`, in `ModelVariables` order:
+/// [`COMMON_VARIABLES`] for FMI 2.0, [`FMI3_VARIABLES`] for FMI 3.0.
 pub fn variables_of(version: FmiVersion) -> &'static [Variable] {
     match version {
-        FmiVersion::Fmi2 => VARIABLES,
-        FmiVersion::Fmi3 => ALL_VARIABLES,
+        FmiVersion::Fmi2 => COMMON_VARIABLES,
+        FmiVersion::Fmi3 => FMI3_VARIABLES,
     }
 }
 
-/// Looks a variable of FMI 2.0 (the common variables) up by value reference.
-pub fn by_vr(vr: u32) -> Option<&'static Variable> {
-    VARIABLES.iter().find(|v| v.vr == vr)
-}
-
-/// Looks a variable of `version` up by value reference.
-pub fn by_vr_in(version: FmiVersion, vr: u32) -> Option<&'static Variable> {
+/// The variable of `version` ([`variables_of`]) with value reference `vr`.
+pub fn by_vr(version: FmiVersion, vr: u32) -> Option<&'static Variable> {
     variables_of(version).iter().find(|v| v.vr == vr)
 }
 
-/// Looks a variable up by name (any version).
-pub fn by_name(name: &str) -> Option<&'static Variable> {
-    ALL_VARIABLES.iter().find(|v| v.name == name)
-}
-
-/// 1-based index of a variable in `ModelVariables`.
-pub fn index_of(name: &str) -> Option<usize> {
-    VARIABLES.iter().position(|v| v.name == name).map(|i| i + 1)
+/// The variable of `version` ([`variables_of`]) called `name`.
+pub fn by_name(version: FmiVersion, name: &str) -> Option<&'static Variable> {
+    variables_of(version).iter().find(|v| v.name == name)
 }
 
 macro_rules! real {
@@ -705,11 +701,11 @@ const fn common_count(table: &[Variable]) -> usize {
 
 /// The variables of both FMI versions, in `ModelVariables` order (the
 /// FMI 2.0 FMU's variables).
-pub static VARIABLES: &[Variable] = TABLE.split_at(common_count(TABLE)).0;
+pub static COMMON_VARIABLES: &[Variable] = TABLE.split_at(common_count(TABLE)).0;
 
-/// Every variable of the FMI 3.0 FMU: [`VARIABLES`], then the FMI 3.0
+/// Every variable of the FMI 3.0 FMU: [`COMMON_VARIABLES`], then the FMI 3.0
 /// additions.
-pub static ALL_VARIABLES: &[Variable] = TABLE;
+pub static FMI3_VARIABLES: &[Variable] = TABLE;
 
 /// The one table: every variable, the common ones first.
 const TABLE: &[Variable] = &[
@@ -1420,7 +1416,7 @@ pub fn guid_of(variables: &[Variable]) -> String {
 /// of FMI 3.0, with the enumeration types and array dimensions.
 pub fn instantiation_token() -> String {
     let mut text = String::from("tdvass FMI 3.0 Co-Simulation interface\n");
-    for v in ALL_VARIABLES {
+    for v in FMI3_VARIABLES {
         text.push_str(&format!(
             "{}\t{}\t{}\t{}\t{}\t{}\t{:?}\n",
             v.name,
@@ -1437,7 +1433,7 @@ pub fn instantiation_token() -> String {
 
 /// The GUID of this FMU.
 pub fn guid() -> String {
-    guid_of(VARIABLES)
+    guid_of(COMMON_VARIABLES)
 }
 
 #[cfg(test)]

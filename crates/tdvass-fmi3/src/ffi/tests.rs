@@ -3,10 +3,10 @@
 //! from the callback), early return, the types of the values, FMU states.
 
 use super::*;
-use tdvass_fmu::variables::by_name;
+use tdvass_fmu::variables::{FmiVersion, by_name};
 
 fn vr(name: &str) -> u32 {
-    by_name(name).unwrap().vr
+    by_name(FmiVersion::Fmi3, name).unwrap().vr
 }
 
 /// What the intermediate-update callback sees and does.

@@ -3,7 +3,7 @@
 
 use super::Slave;
 use crate::outputs::{Known, Linearization, OutputId};
-use crate::variables::{Access, Causality, by_vr_in};
+use crate::variables::{Access, Causality, by_vr};
 use crate::{FmiError, Status};
 use tdvass::model::{V_S, Variant};
 
@@ -16,7 +16,7 @@ impl Slave {
         let known: Vec<Known> = knowns
             .iter()
             .map(|&vr| {
-                let var = by_vr_in(self.dialect.version, vr).ok_or_else(|| FmiError::error(format!("unknown value reference {vr}")))?;
+                let var = by_vr(self.dialect.version, vr).ok_or_else(|| FmiError::error(format!("unknown value reference {vr}")))?;
                 match var.access {
                     Access::Real { .. } if var.causality == Causality::Input => Ok(Known::RoadInput),
                     Access::Output(OutputId::State(i)) => Ok(Known::State(i)),
@@ -30,7 +30,7 @@ impl Slave {
         let outputs: Vec<OutputId> = unknowns
             .iter()
             .map(|&vr| {
-                let var = by_vr_in(self.dialect.version, vr)
+                let var = by_vr(self.dialect.version, vr)
                     .ok_or_else(|| FmiError::error(format!("unknown value reference {vr}")))?;
                 match var.access {
                     Access::Output(id) => Ok(id),

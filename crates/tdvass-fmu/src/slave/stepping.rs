@@ -2,9 +2,9 @@
 //! slope or extrapolated) and the output derivatives.
 
 use super::{HOLD_WARNING_STEP, Slave};
-use crate::limits;
+use crate::guards;
 use crate::phase::Phase;
-use crate::variables::{Access, Causality, VarType, by_vr_in};
+use crate::variables::{Access, Causality, VarType, by_vr};
 use crate::{FmiError, Status, TIME_TOLERANCE};
 
 /// The slope of the straight line that continues the input over a step of
@@ -80,10 +80,10 @@ impl Slave {
         };
         let (settings, step) = (&self.state.settings, sim.grid().step);
         // The function's name is formatted only for the message.
-        if limits::step_work(settings, step, target - now) > limits::MAX_WORK_PER_STEP {
-            limits::check_step_work(settings, step, target - now, &self.call("DoStep"))?;
+        if guards::step_work(settings, step, target - now) > guards::MAX_WORK_PER_STEP {
+            guards::check_step_work(settings, step, target - now, &self.call("DoStep"))?;
         }
-        limits::check_time_resolution("the step end", target, step)?;
+        guards::check_time_resolution("the step end", target, step)?;
         Ok(target)
     }
 
@@ -133,7 +133,7 @@ impl Slave {
         match advanced {
             // `advance_to` bounds every state (its divergence check); the
             // outputs, computed only when a getter asks, follow from them.
-            Ok(()) => match limits::non_finite_state(&sim.state()) {
+            Ok(()) => match guards::non_finite_state(&sim.state()) {
                 None => {
                     self.state.last_successful_time = sim.time();
                     // The bilateral tire warns once where the linear model
@@ -243,7 +243,7 @@ impl Slave {
                 .flatten()
                 .collect();
             let slope = extrapolation_slope(&values, h);
-            limits::check_input_slope(slope).map_err(|e| {
+            guards::check_input_slope(slope).map_err(|e| {
                 FmiError::error(format!(
                     "input_extrapolation = {mode}: the slope {slope} m/s through x_g = {x_g} m at {now} s and the values before it is refused: {}",
                     e.message
@@ -297,7 +297,7 @@ impl Slave {
                 )));
             }
             if order == 1 {
-                limits::check_input_slope(value)?;
+                guards::check_input_slope(value)?;
                 slope = Some(value);
             } else {
                 ignored.push(order);
@@ -331,7 +331,7 @@ impl Slave {
         };
         let derivatives = sim.output_derivatives();
         for ((&vr, &order), value) in vrs.iter().zip(orders).zip(values.iter_mut()) {
-            let var = by_vr_in(self.dialect.version, vr)
+            let var = by_vr(self.dialect.version, vr)
                 .ok_or_else(|| FmiError::error(format!("unknown value reference {vr}")))?;
             let id = match var.access {
                 Access::Output(id) => id,

@@ -2,10 +2,11 @@
 //! limit checks, and tunable parameters reaching the running simulation.
 
 use super::{Slave, SpectrumCache};
-use crate::limits;
+use crate::guards;
 use crate::phase::Phase;
 use crate::variables::{
-    Access, Calculated, Causality, Dimension, VarType, Variability, Variable, by_name, by_vr_in,
+    Access, Calculated, Causality, Dimension, FmiVersion, VarType, Variability, Variable, by_name,
+    by_vr,
 };
 use crate::{FmiError, Status};
 use tdvass::analysis::spectrum::CharacteristicRootSolver;
@@ -14,7 +15,7 @@ use tdvass::solver::Outputs;
 
 impl Slave {
     pub(super) fn variable(&self, vr: u32, ty: VarType) -> Result<&'static Variable, FmiError> {
-        let var = by_vr_in(self.dialect.version, vr).ok_or_else(|| {
+        let var = by_vr(self.dialect.version, vr).ok_or_else(|| {
             FmiError::error(format!(
                 "unknown value reference {vr} (for a {})",
                 ty.as_str()
@@ -40,7 +41,7 @@ impl Slave {
             Some(sim) => sim.outputs(),
             None => self.build_simulator()?.outputs(),
         };
-        match limits::non_finite_output(&outputs) {
+        match guards::non_finite_output(&outputs) {
             None => Ok(outputs),
             Some((name, value)) => Err(FmiError::error(format!(
                 "output `{name}` = {value} is not finite at t = {} s",
@@ -83,7 +84,9 @@ impl Slave {
             .iter()
             .map(|d| match d {
                 Dimension::Fixed(n) => *n as usize,
-                Dimension::Structural(name) => match by_name(name).map(|v| v.access) {
+                Dimension::Structural(name) => match by_name(FmiVersion::Fmi3, name)
+                    .map(|v| v.access)
+                {
                     Some(Access::Integer { get, .. }) => get(&self.state.settings).max(0) as usize,
                     _ => 0,
                 },
@@ -242,7 +245,7 @@ impl Slave {
             }
             _ => {
                 var.range.check(var.name, value)?;
-                limits::check_variable(var, value)
+                guards::check_variable(var, value)
             }
         }
     }
@@ -285,7 +288,7 @@ impl Slave {
                     set(&mut candidate, *value);
                 }
             }
-            limits::check_rates(&candidate)?;
+            guards::check_rates(&candidate)?;
         }
         let mut gain_tuned = false;
         for (var, value) in checked {

@@ -1,16 +1,16 @@
 use super::*;
 use crate::outputs::{Known, Linearization};
-use crate::variables::ALL_VARIABLES;
+use crate::variables::FMI3_VARIABLES;
 use std::collections::HashSet;
 use tdvass::model::Params;
 use tdvass::solver::SimulationConfig;
 
 #[test]
 fn names_and_value_references_are_unique() {
-    let names: HashSet<_> = VARIABLES.iter().map(|v| v.name).collect();
-    let vrs: HashSet<_> = VARIABLES.iter().map(|v| v.vr).collect();
-    assert_eq!(names.len(), VARIABLES.len());
-    assert_eq!(vrs.len(), VARIABLES.len());
+    let names: HashSet<_> = COMMON_VARIABLES.iter().map(|v| v.name).collect();
+    let vrs: HashSet<_> = COMMON_VARIABLES.iter().map(|v| v.vr).collect();
+    assert_eq!(names.len(), COMMON_VARIABLES.len());
+    assert_eq!(vrs.len(), COMMON_VARIABLES.len());
 }
 
 #[test]
@@ -69,22 +69,27 @@ fn interface_of_the_spec_is_present() {
         ]
     };
     for (name, causality, ty) in spec {
-        let v = by_name(name).unwrap_or_else(|| panic!("{name} missing"));
+        let v = by_name(FmiVersion::Fmi3, name).unwrap_or_else(|| panic!("{name} missing"));
         assert_eq!(v.causality, causality, "{name}");
         assert_eq!(v.var_type(), ty, "{name}");
     }
-    let tunable: Vec<_> = VARIABLES
+    let tunable: Vec<_> = COMMON_VARIABLES
         .iter()
         .filter(|v| v.causality == Causality::Parameter && v.variability == Tunable)
         .map(|v| v.name)
         .collect();
     assert_eq!(tunable, ["g", "w_ba", "w_sdd", "w_tdd"]);
-    assert_eq!(by_name("tire_deflection").unwrap().display_unit, Some("mm"));
+    assert_eq!(
+        by_name(FmiVersion::Fmi3, "tire_deflection")
+            .unwrap()
+            .display_unit,
+        Some("mm")
+    );
 }
 
 #[test]
 fn start_values_are_admissible_and_match_the_library_defaults() {
-    for v in VARIABLES {
+    for v in COMMON_VARIABLES {
         match v.causality {
             Causality::Parameter | Causality::Input => {
                 let start = v.start.unwrap_or_else(|| panic!("{} has no start", v.name));
@@ -127,7 +132,8 @@ fn table_ranges_are_the_ones_the_model_enforces() {
         f64::NEG_INFINITY,
     ];
     for (name, _) in Params::default().named_values() {
-        let variable = by_name(name).unwrap_or_else(|| panic!("`{name}` is not in the table"));
+        let variable = by_name(FmiVersion::Fmi3, name)
+            .unwrap_or_else(|| panic!("`{name}` is not in the table"));
         for probe in probes {
             let mut params = Params::default();
             match name {
@@ -155,7 +161,7 @@ fn table_ranges_are_the_ones_the_model_enforces() {
 #[test]
 fn every_variable_is_readable_and_settings_round_trip() {
     let mut s = Settings::start_values();
-    for (i, v) in ALL_VARIABLES.iter().enumerate() {
+    for (i, v) in FMI3_VARIABLES.iter().enumerate() {
         match v.access {
             Access::Real { get, set } => {
                 set(&mut s, 1000.0 + i as f64);
@@ -173,14 +179,14 @@ fn every_variable_is_readable_and_settings_round_trip() {
         }
     }
     // Distinct fields: every value written is still there.
-    for (i, v) in ALL_VARIABLES.iter().enumerate() {
+    for (i, v) in FMI3_VARIABLES.iter().enumerate() {
         match v.access {
             Access::Real { get, .. } => assert_eq!(get(&s), 1000.0 + i as f64, "{}", v.name),
             Access::Integer { get, .. } => assert_eq!(get(&s), 1000 + i as i32, "{}", v.name),
             _ => {}
         }
     }
-    let outputs: Vec<_> = VARIABLES
+    let outputs: Vec<_> = COMMON_VARIABLES
         .iter()
         .filter(|v| v.causality == Causality::Output)
         .collect();
@@ -202,7 +208,7 @@ fn every_variable_is_readable_and_settings_round_trip() {
 #[test]
 fn tire_contact_codes_are_the_library_codes() {
     use tdvass::TireContact;
-    let v = by_name("tire_contact").unwrap();
+    let v = by_name(FmiVersion::Fmi3, "tire_contact").unwrap();
     assert_eq!(v.variability, Fixed);
     assert_eq!(v.start, Some(TireContact::default().code() as f64));
     let items = v.enumeration.unwrap().items;
@@ -230,7 +236,7 @@ fn tire_contact_codes_are_the_library_codes() {
 
 #[test]
 fn units_and_dependencies_are_declared() {
-    for v in VARIABLES {
+    for v in COMMON_VARIABLES {
         if let Some(unit) = v.unit() {
             let def = UNITS.iter().find(|u| u.name == unit).expect(unit);
             if let Some(d) = v.display_unit {
@@ -238,10 +244,13 @@ fn units_and_dependencies_are_declared() {
             }
         }
         for dep in v.feedthrough {
-            assert_eq!(by_name(dep).unwrap().causality, Causality::Input);
+            assert_eq!(
+                by_name(FmiVersion::Fmi3, dep).unwrap().causality,
+                Causality::Input
+            );
         }
         for dep in v.initial_dependencies {
-            let known = by_name(dep).unwrap_or_else(|| panic!("{dep}"));
+            let known = by_name(FmiVersion::Fmi3, dep).unwrap_or_else(|| panic!("{dep}"));
             assert!(matches!(
                 known.causality,
                 Causality::Input | Causality::Parameter
@@ -271,17 +280,17 @@ fn guid_is_stable_and_tracks_the_interface() {
     assert_eq!(g, guid());
     assert_eq!(g.len(), 38);
     assert!(g.starts_with('{') && g.ends_with('}'));
-    let mut changed: Vec<Variable> = VARIABLES.to_vec();
+    let mut changed: Vec<Variable> = COMMON_VARIABLES.to_vec();
     changed[3].vr = 999;
     assert_ne!(guid_of(&changed), g);
-    let mut renamed: Vec<Variable> = VARIABLES.to_vec();
+    let mut renamed: Vec<Variable> = COMMON_VARIABLES.to_vec();
     renamed[0].name = "variant2";
     assert_ne!(guid_of(&renamed), g);
-    let mut retuned: Vec<Variable> = VARIABLES.to_vec();
+    let mut retuned: Vec<Variable> = COMMON_VARIABLES.to_vec();
     retuned[1].variability = Tunable;
     assert_ne!(guid_of(&retuned), g);
     // Descriptions and start values are not part of the interface.
-    let mut described: Vec<Variable> = VARIABLES.to_vec();
+    let mut described: Vec<Variable> = COMMON_VARIABLES.to_vec();
     described[1].description = "another text";
     described[1].start = Some(1.0);
     assert_eq!(guid_of(&described), g);
@@ -335,9 +344,9 @@ fn partials_of_the_outputs() {
 
 #[test]
 fn the_fmi3_additions_follow_the_common_variables() {
-    let first = ALL_VARIABLES.iter().position(|v| v.fmi3_only).unwrap();
-    assert!(ALL_VARIABLES[first..].iter().all(|v| v.fmi3_only));
-    assert_eq!(VARIABLES.len(), first);
-    assert!(VARIABLES.iter().all(|v| v.is_in(FmiVersion::Fmi2)));
-    assert!(!ALL_VARIABLES[first].is_in(FmiVersion::Fmi2));
+    let first = FMI3_VARIABLES.iter().position(|v| v.fmi3_only).unwrap();
+    assert!(FMI3_VARIABLES[first..].iter().all(|v| v.fmi3_only));
+    assert_eq!(COMMON_VARIABLES.len(), first);
+    assert!(COMMON_VARIABLES.iter().all(|v| v.is_in(FmiVersion::Fmi2)));
+    assert!(!FMI3_VARIABLES[first].is_in(FmiVersion::Fmi2));
 }

@@ -1,7 +1,8 @@
-//! The limits of one slave call, beyond the declared ranges of the
-//! variable table and the library's numerical limits ([`tdvass::limits`]:
+//! The guards of every slave call, beyond the declared ranges of the
+//! variable table: the library's numerical limits ([`tdvass::limits`]:
 //! values and rates, which the library checks for every configuration, so
-//! the command line refuses the same runaway inputs):
+//! the command line refuses the same runaway inputs) mapped onto the FMU's
+//! variables, and what bounds the work and time of one call:
 //!
 //! - **Values and rates** ([`check_variable`], [`check_input_slope`],
 //!   [`check_rates`]): the library's checks, by the kind of value each
@@ -19,7 +20,7 @@
 
 use crate::FmiError;
 use crate::settings::Settings;
-use crate::variables::{ALL_VARIABLES, Access, VARIABLES, Variable};
+use crate::variables::{Access, COMMON_VARIABLES, FMI3_VARIABLES, Variable};
 use tdvass::limits::Bound;
 use tdvass::road::RoadType;
 use tdvass::solver::Outputs;
@@ -48,7 +49,7 @@ pub fn check_input_slope(value: f64) -> Result<(), FmiError> {
 
 /// Every single-value limit of `settings`.
 pub fn check_values(settings: &Settings) -> Result<(), FmiError> {
-    for v in ALL_VARIABLES {
+    for v in FMI3_VARIABLES {
         match v.access {
             Access::Real { get, .. } => check_variable(v, get(settings))?,
             Access::Integer { get, .. } => check_variable(v, get(settings) as f64)?,
@@ -133,7 +134,7 @@ pub fn non_finite_state(state: &tdvass::model::State) -> Option<(&'static str, f
 
 /// The first output of `outputs` that is not finite, with its value.
 pub fn non_finite_output(outputs: &Outputs) -> Option<(&'static str, f64)> {
-    VARIABLES.iter().find_map(|v| match v.access {
+    COMMON_VARIABLES.iter().find_map(|v| match v.access {
         Access::Output(id) => {
             let value = id.value(outputs);
             (!value.is_finite()).then_some((v.name, value))
@@ -156,7 +157,8 @@ mod tests {
 
     #[test]
     fn limits_name_variable_and_value() {
-        let var = |name| crate::variables::by_name(name).unwrap();
+        let var =
+            |name| crate::variables::by_name(crate::variables::FmiVersion::Fmi3, name).unwrap();
         let e = check_variable(var("x_s_start"), -2e3).unwrap_err().message;
         assert!(e.contains("`x_s_start`") && e.contains("-2000"), "{e}");
         let e = check_variable(var("w_tdd"), 1e300).unwrap_err().message;
@@ -170,7 +172,7 @@ mod tests {
             "{e}"
         );
         // The table maps its variables onto the library's kinds of value.
-        let bounded: Vec<_> = ALL_VARIABLES
+        let bounded: Vec<_> = FMI3_VARIABLES
             .iter()
             .filter_map(|v| v.bound.map(|b| (v.name, b)))
             .collect();

@@ -1,18 +1,18 @@
-//! `modelDescription.xml` and `documentation/index.html`, generated from the
-//! variable table with quick-xml (no markup is written by hand, so every
-//! value is escaped). The output is deterministic: no timestamps.
+//! The FMI 2.0 `modelDescription.xml` and `documentation/index.html`,
+//! generated from the variable table with quick-xml (no markup is written
+//! by hand, so every value is escaped). The output is deterministic: no
+//! timestamps.
 
-use crate::variables::{Causality, Quantity, UNITS, VARIABLES, VarType, Variable, index_of};
-use crate::{
-    DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, FMI_VERSION, LOG_CATEGORIES,
-    MODEL_IDENTIFIER, MODEL_NAME, guid,
+use crate::markup::{
+    DescriptionFrame, MODEL_DESCRIPTION, REFERENCE_RESULTS, TIRE_CONTACT, XmlResult, XmlWriter,
+    diagram, html_page, list, model_description, number, paragraph, text_element, unit_text,
+    variable_table,
 };
-use quick_xml::events::{BytesDecl, BytesText, Event};
-use tdvass::solver::DEFAULT_TOLERANCE;
-pub use tdvass_fmu::markup::MODEL_DESCRIPTION;
-use tdvass_fmu::markup::{
-    REFERENCE_RESULTS, XmlResult, XmlWriter, diagram, finish, html_page, list, number, paragraph,
-    table, text_element, writer,
+use quick_xml::events::{BytesText, Event};
+use tdvass_fmi2::FMI_VERSION;
+use tdvass_fmu::variables::{COMMON_VARIABLES, Causality, Quantity, VarType, Variable};
+use tdvass_fmu::{
+    DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, MODEL_IDENTIFIER, MODEL_NAME, guid,
 };
 
 fn start_text(v: &Variable) -> Option<String> {
@@ -27,37 +27,6 @@ fn bound_text(v: &Variable, b: Option<f64>) -> Option<String> {
         VarType::Integer => format!("{}", b as i64),
         _ => number(b),
     })
-}
-
-fn write_unit_definitions(w: &mut XmlWriter) -> XmlResult {
-    w.create_element("UnitDefinitions")
-        .write_inner_content(|w| {
-            for unit in UNITS {
-                w.create_element("Unit")
-                    .with_attribute(("name", unit.name))
-                    .write_inner_content(|w| {
-                        let exponents: Vec<(String, String)> = unit
-                            .base
-                            .iter()
-                            .map(|(b, e)| (b.to_string(), e.to_string()))
-                            .collect();
-                        w.create_element("BaseUnit")
-                            .with_attributes(
-                                exponents.iter().map(|(b, e)| (b.as_str(), e.as_str())),
-                            )
-                            .write_empty()?;
-                        for (name, factor) in unit.display {
-                            w.create_element("DisplayUnit")
-                                .with_attribute(("name", *name))
-                                .with_attribute(("factor", number(*factor).as_str()))
-                                .write_empty()?;
-                        }
-                        Ok(())
-                    })?;
-            }
-            Ok(())
-        })?;
-    Ok(())
 }
 
 fn write_type_definitions(w: &mut XmlWriter) -> XmlResult {
@@ -119,6 +88,15 @@ fn write_variable(w: &mut XmlWriter, v: &Variable) -> XmlResult {
     Ok(())
 }
 
+/// The 1-based index of the variable called `name` in FMI 2.0's
+/// `ModelVariables`, by which `ModelStructure` refers to it.
+fn index_of(name: &str) -> Option<usize> {
+    COMMON_VARIABLES
+        .iter()
+        .position(|v| v.name == name)
+        .map(|i| i + 1)
+}
+
 fn indices(names: &[&str]) -> String {
     let mut idx: Vec<usize> = names
         .iter()
@@ -135,7 +113,7 @@ fn write_model_structure(w: &mut XmlWriter) -> XmlResult {
     w.create_element("ModelStructure")
         .write_inner_content(|w| {
             w.create_element("Outputs").write_inner_content(|w| {
-                for (i, v) in VARIABLES.iter().enumerate() {
+                for (i, v) in COMMON_VARIABLES.iter().enumerate() {
                     if v.causality != Causality::Output {
                         continue;
                     }
@@ -155,7 +133,7 @@ fn write_model_structure(w: &mut XmlWriter) -> XmlResult {
             })?;
             w.create_element("InitialUnknowns")
                 .write_inner_content(|w| {
-                    for (i, v) in VARIABLES.iter().enumerate() {
+                    for (i, v) in COMMON_VARIABLES.iter().enumerate() {
                         if !matches!(
                             v.causality,
                             Causality::Output | Causality::CalculatedParameter
@@ -177,80 +155,48 @@ fn write_model_structure(w: &mut XmlWriter) -> XmlResult {
     Ok(())
 }
 
+/// The attributes of the `CoSimulation` element after `modelIdentifier`,
+/// in the order written: the capabilities the C interface provides.
+pub const CO_SIMULATION_CAPABILITIES: [(&str, &str); 9] = [
+    ("needsExecutionTool", "false"),
+    ("canHandleVariableCommunicationStepSize", "true"),
+    ("canInterpolateInputs", "true"),
+    ("maxOutputDerivativeOrder", "1"),
+    ("canBeInstantiatedOnlyOncePerProcess", "false"),
+    ("canNotUseMemoryManagementFunctions", "true"),
+    ("canGetAndSetFMUstate", "true"),
+    ("canSerializeFMUstate", "true"),
+    ("providesDirectionalDerivative", "true"),
+];
+
 /// The complete `modelDescription.xml`.
 pub fn model_description_xml() -> String {
-    let mut w = writer();
-    let write = |w: &mut XmlWriter| -> XmlResult {
-        w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
-        let guid = guid();
-        let tool = format!("tdvass fmu-build {}", env!("CARGO_PKG_VERSION"));
-        w.create_element("fmiModelDescription")
-            .with_attribute(("fmiVersion", FMI_VERSION))
-            .with_attribute(("modelName", MODEL_NAME))
-            .with_attribute(("guid", guid.as_str()))
-            .with_attribute(("description", MODEL_DESCRIPTION))
-            .with_attribute(("version", env!("CARGO_PKG_VERSION")))
-            .with_attribute(("license", "MIT"))
-            .with_attribute(("generationTool", tool.as_str()))
-            .with_attribute(("variableNamingConvention", "flat"))
-            .write_inner_content(|w| {
-                w.create_element("CoSimulation")
-                    .with_attribute(("modelIdentifier", MODEL_IDENTIFIER))
-                    .with_attribute(("needsExecutionTool", "false"))
-                    .with_attribute(("canHandleVariableCommunicationStepSize", "true"))
-                    .with_attribute(("canInterpolateInputs", "true"))
-                    .with_attribute(("maxOutputDerivativeOrder", "1"))
-                    .with_attribute(("canBeInstantiatedOnlyOncePerProcess", "false"))
-                    .with_attribute(("canNotUseMemoryManagementFunctions", "true"))
-                    .with_attribute(("canGetAndSetFMUstate", "true"))
-                    .with_attribute(("canSerializeFMUstate", "true"))
-                    .with_attribute(("providesDirectionalDerivative", "true"))
-                    .write_empty()?;
-                write_unit_definitions(w)?;
-                write_type_definitions(w)?;
-                w.create_element("LogCategories").write_inner_content(|w| {
-                    for (name, description) in LOG_CATEGORIES {
-                        w.create_element("Category")
-                            .with_attribute(("name", name))
-                            .with_attribute(("description", description))
-                            .write_empty()?;
-                    }
-                    Ok(())
-                })?;
-                w.create_element("DefaultExperiment")
-                    .with_attribute(("startTime", number(DEFAULT_START_TIME).as_str()))
-                    .with_attribute(("stopTime", number(DEFAULT_STOP_TIME).as_str()))
-                    .with_attribute(("tolerance", number(DEFAULT_TOLERANCE).as_str()))
-                    .with_attribute(("stepSize", number(DEFAULT_STEP_SIZE).as_str()))
-                    .write_empty()?;
-                w.create_element("ModelVariables")
-                    .write_inner_content(|w| {
-                        for (i, v) in VARIABLES.iter().enumerate() {
-                            w.write_event(Event::Comment(BytesText::new(&format!(
-                                " index {} ",
-                                i + 1
-                            ))))?;
-                            write_variable(w, v)?;
-                        }
-                        Ok(())
-                    })?;
-                write_model_structure(w)
-            })?;
-        Ok(())
+    let guid = guid();
+    let frame = DescriptionFrame {
+        fmi_version: FMI_VERSION,
+        token: ("guid", &guid),
+        co_simulation: &CO_SIMULATION_CAPABILITIES,
     };
-    write(&mut w).expect("writing to memory cannot fail");
-    finish(w)
+    model_description(frame, write_type_definitions, |w| {
+        w.create_element("ModelVariables")
+            .write_inner_content(|w| {
+                for (i, v) in COMMON_VARIABLES.iter().enumerate() {
+                    w.write_event(Event::Comment(BytesText::new(&format!(
+                        " index {} ",
+                        i + 1
+                    ))))?;
+                    write_variable(w, v)?;
+                }
+                Ok(())
+            })?;
+        write_model_structure(w)
+    })
 }
 
 // ------------------------------------------------------------ documentation
 
 fn variable_row(v: &Variable) -> Vec<String> {
     let range = v.range.describe();
-    let unit = match (v.unit(), v.display_unit) {
-        (Some(u), Some(d)) => format!("{u} (shown in {d})"),
-        (Some(u), None) => u.to_string(),
-        (None, _) => "-".to_string(),
-    };
     let kind = format!("{}, {}", v.causality.as_str(), v.variability.as_str());
     vec![
         v.name.to_string(),
@@ -258,7 +204,7 @@ fn variable_row(v: &Variable) -> Vec<String> {
         v.var_type().as_str().to_string(),
         kind,
         start_text(v).unwrap_or_else(|| "calculated".into()),
-        unit,
+        unit_text(v),
         range,
         v.description.to_string(),
     ]
@@ -295,10 +241,7 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
         w,
         "Integration: the precise (fine) integration method of the paper (section 4.1) on an internal grid anchored at the start time. The tolerance (relative, of every output metric: the master's from fmi2SetupExperiment when it defines one, else the DefaultExperiment's 1e-6) sets the internal step, from an error model checked by a step-doubling probe; the step divides tau exactly when tau is longer and is at most max_internal_step when that is > 0. The delayed wheel displacement is a cubic Hermite interpolant of the stored history, the road is exact over each internal step. Results do not depend on how the master splits time into communication steps (except with road = 0, where the input changes at communication points).",
     )?;
-    paragraph(
-        w,
-        "Tire (tire_contact): 0 = bilateral, the paper's linear tire, which pulls as well as pushes; where the dynamic tire load falls below minus the static load W the real tire would leave the road and the linear model no longer holds: contact_loss_time accumulates that time and the first crossing is logged as a warning. 1 = unilateral: the tire cannot pull, so the wheel lifts off where TDD rises through W/k_t and flies (tire force -W) until TDD falls back to it; contact and flight are each integrated exactly, with the switches located inside the internal steps. contact_loss_time is then the flight time, and each lift-off is logged under logEvents with its time, TDD and W/k_t. lift_off_count counts the lift-offs in both modes. The stability results (spectral_abscissa, stable) are those of the linear (bilateral) model.",
-    )?;
+    paragraph(w, TIRE_CONTACT)?;
     text_element(w, "h3", "Static gain of the controlled suspension")?;
     paragraph(
         w,
@@ -316,21 +259,8 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
     )?;
 
     text_element(w, "h2", "Variables")?;
-    let rows: Vec<Vec<String>> = VARIABLES.iter().map(variable_row).collect();
-    table(
-        w,
-        &[
-            "name",
-            "value reference",
-            "type",
-            "causality, variability",
-            "start",
-            "unit",
-            "range",
-            "meaning",
-        ],
-        &rows,
-    )?;
+    let rows: Vec<Vec<String>> = COMMON_VARIABLES.iter().map(variable_row).collect();
+    variable_table(w, "type", &rows)?;
     paragraph(
         w,
         "Parameters are fixed (settable before the end of initialization) unless tunable: g, w_ba, w_sdd and w_tdd can be changed between communication steps. Values outside the range, NaN or infinite are refused with fmi2Error naming the variable and value; the remaining checks (for example a delay needing too many history nodes) are made by fmi2ExitInitializationMode, which then stays in initialization mode so that the value can be corrected.",
@@ -378,50 +308,19 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use quick_xml::Reader;
-    use quick_xml::events::Event;
-    use std::collections::HashMap;
-
-    /// Every element with its attributes, in document order.
-    fn elements(xml: &str) -> Vec<(String, HashMap<String, String>)> {
-        let mut reader = Reader::from_str(xml);
-        let mut out = Vec::new();
-        loop {
-            match reader.read_event().expect("well-formed XML") {
-                Event::Start(e) | Event::Empty(e) => {
-                    let name = e.name().0.to_string();
-                    let attrs = e
-                        .attributes()
-                        .map(|a| {
-                            let a = a.unwrap();
-                            (
-                                a.key.0.to_string(),
-                                a.normalized_value(quick_xml::XmlVersion::Implicit1_0)
-                                    .unwrap()
-                                    .into_owned(),
-                            )
-                        })
-                        .collect();
-                    out.push((name, attrs));
-                }
-                Event::Eof => break,
-                _ => {}
-            }
-        }
-        out
-    }
+    use crate::parsed::elements;
 
     #[test]
     fn model_description_has_every_variable() {
         let xml = model_description_xml();
         let els = elements(&xml);
         let root = &els[0];
-        assert_eq!(root.0, "fmiModelDescription");
-        assert_eq!(root.1["guid"], guid());
-        assert_eq!(root.1["modelName"], "TDVASS");
-        assert_eq!(root.1["fmiVersion"], "2.0");
-        let cs = els.iter().find(|e| e.0 == "CoSimulation").unwrap();
-        assert_eq!(cs.1["modelIdentifier"], "tdvass");
+        assert_eq!(root.name, "fmiModelDescription");
+        assert_eq!(root.attr("guid"), guid());
+        assert_eq!(root.attr("modelName"), "TDVASS");
+        assert_eq!(root.attr("fmiVersion"), "2.0");
+        let cs = els.iter().find(|e| e.name == "CoSimulation").unwrap();
+        assert_eq!(cs.attr("modelIdentifier"), "tdvass");
         for flag in [
             "canHandleVariableCommunicationStepSize",
             "canInterpolateInputs",
@@ -429,23 +328,23 @@ mod tests {
             "canSerializeFMUstate",
             "providesDirectionalDerivative",
         ] {
-            assert_eq!(cs.1[flag], "true", "{flag}");
+            assert_eq!(cs.attr(flag), "true", "{flag}");
         }
-        assert_eq!(cs.1["maxOutputDerivativeOrder"], "1");
-        let experiment = els.iter().find(|e| e.0 == "DefaultExperiment").unwrap();
-        assert_eq!(experiment.1["stopTime"], "15");
-        assert_eq!(experiment.1["stepSize"], "0.001");
-        let vars: Vec<_> = els.iter().filter(|e| e.0 == "ScalarVariable").collect();
-        assert_eq!(vars.len(), VARIABLES.len());
-        for (v, el) in VARIABLES.iter().zip(&vars) {
-            assert_eq!(el.1["name"], v.name);
-            assert_eq!(el.1["valueReference"], v.vr.to_string());
-            assert_eq!(el.1["causality"], v.causality.as_str());
+        assert_eq!(cs.attr("maxOutputDerivativeOrder"), "1");
+        let experiment = els.iter().find(|e| e.name == "DefaultExperiment").unwrap();
+        assert_eq!(experiment.attr("stopTime"), "15");
+        assert_eq!(experiment.attr("stepSize"), "0.001");
+        let vars: Vec<_> = els.iter().filter(|e| e.name == "ScalarVariable").collect();
+        assert_eq!(vars.len(), COMMON_VARIABLES.len());
+        for (v, el) in COMMON_VARIABLES.iter().zip(&vars) {
+            assert_eq!(el.attr("name"), v.name);
+            assert_eq!(el.attr("valueReference"), v.vr.to_string());
+            assert_eq!(el.attr("causality"), v.causality.as_str());
         }
         let categories: Vec<_> = els
             .iter()
-            .filter(|e| e.0 == "Category")
-            .map(|e| e.1["name"].as_str())
+            .filter(|e| e.name == "Category")
+            .map(|e| e.attr("name"))
             .collect();
         for c in [
             "logEvents",
@@ -458,26 +357,29 @@ mod tests {
         }
         let mm = els
             .iter()
-            .find(|e| e.0 == "DisplayUnit" && e.1["name"] == "mm")
+            .find(|e| e.name == "DisplayUnit" && e.attr("name") == "mm")
             .unwrap();
-        assert_eq!(mm.1["factor"], "1000");
+        assert_eq!(mm.attr("factor"), "1000");
         let tdd = els
             .iter()
-            .position(|e| e.0 == "ScalarVariable" && e.1["name"] == "tire_deflection")
+            .position(|e| e.name == "ScalarVariable" && e.attr("name") == "tire_deflection")
             .unwrap();
-        assert_eq!(els[tdd + 1].1["displayUnit"], "mm");
-        assert_eq!(els[tdd + 1].1["unit"], "m");
+        assert_eq!(els[tdd + 1].attr("displayUnit"), "mm");
+        assert_eq!(els[tdd + 1].attr("unit"), "m");
     }
 
     #[test]
     fn model_structure_lists_outputs_and_initial_unknowns() {
         let xml = model_description_xml();
         let els = elements(&xml);
-        let outputs_at = els.iter().position(|e| e.0 == "Outputs").unwrap();
-        let initial_at = els.iter().position(|e| e.0 == "InitialUnknowns").unwrap();
+        let outputs_at = els.iter().position(|e| e.name == "Outputs").unwrap();
+        let initial_at = els
+            .iter()
+            .position(|e| e.name == "InitialUnknowns")
+            .unwrap();
         let outputs: Vec<_> = els[outputs_at + 1..initial_at].iter().collect();
         let initial: Vec<_> = els[initial_at + 1..].iter().collect();
-        let count = |c: Causality| VARIABLES.iter().filter(|v| v.causality == c).count();
+        let count = |c: Causality| COMMON_VARIABLES.iter().filter(|v| v.causality == c).count();
         assert_eq!(outputs.len(), count(Causality::Output));
         assert_eq!(outputs.len(), 23);
         assert_eq!(
@@ -486,12 +388,12 @@ mod tests {
         );
         let x_g = index_of("x_g").unwrap().to_string();
         let tdd = index_of("tire_deflection").unwrap().to_string();
-        let o = outputs.iter().find(|e| e.1["index"] == tdd).unwrap();
-        assert_eq!(o.1["dependencies"], x_g);
-        assert_eq!(o.1["dependenciesKind"], "fixed");
+        let o = outputs.iter().find(|e| e.attr("index") == tdd).unwrap();
+        assert_eq!(o.attr("dependencies"), x_g);
+        assert_eq!(o.attr("dependenciesKind"), "fixed");
         let x_s = index_of("x_s").unwrap().to_string();
-        let o = outputs.iter().find(|e| e.1["index"] == x_s).unwrap();
-        assert_eq!(o.1["dependencies"], "");
+        let o = outputs.iter().find(|e| e.attr("index") == x_s).unwrap();
+        assert_eq!(o.attr("dependencies"), "");
     }
 
     #[test]
@@ -499,7 +401,7 @@ mod tests {
         let html = documentation_html();
         assert!(html.starts_with("<!DOCTYPE html>"));
         elements(html.trim_start_matches("<!DOCTYPE html>"));
-        for v in VARIABLES {
+        for v in COMMON_VARIABLES {
             assert!(html.contains(&format!("<td>{}</td>", v.name)), "{}", v.name);
         }
         assert!(html.contains("1 - g/k_h"));

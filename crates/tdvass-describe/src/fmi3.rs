@@ -8,17 +8,11 @@
 //! capability flags ([`CO_SIMULATION_CAPABILITIES`]), which the C interface
 //! implements.
 
-use crate::types::{Fmi3Type, fmi3_type};
-use crate::{
-    DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, FMI_VERSION, LOG_CATEGORIES,
-    MODEL_IDENTIFIER, MODEL_NAME, instantiation_token,
-};
-use quick_xml::events::{BytesDecl, Event};
-use tdvass::solver::DEFAULT_TOLERANCE;
-pub use tdvass_fmu::markup::MODEL_DESCRIPTION;
-use tdvass_fmu::markup::{XmlResult, XmlWriter, finish, number, writer};
+use crate::markup::{DescriptionFrame, XmlResult, XmlWriter, model_description, number};
+use tdvass_fmi3::types::{Fmi3Type, fmi3_type};
+use tdvass_fmi3::{FMI_VERSION, instantiation_token};
 use tdvass_fmu::variables::{
-    ALL_VARIABLES, Causality, Dimension, Enumeration, Quantity, UNITS, Variable, by_name,
+    Causality, Dimension, Enumeration, FMI3_VARIABLES, FmiVersion, Quantity, Variable, by_name,
 };
 
 /// The attributes of the `CoSimulation` element after `modelIdentifier`,
@@ -58,7 +52,7 @@ fn value_text(v: &Variable, value: f64) -> String {
 
 /// The value reference of the variable called `name`.
 fn vr_of(name: &str) -> u32 {
-    by_name(name)
+    by_name(FmiVersion::Fmi3, name)
         .unwrap_or_else(|| panic!("unknown variable `{name}`"))
         .vr
 }
@@ -66,7 +60,7 @@ fn vr_of(name: &str) -> u32 {
 /// The enumeration types of the table, each once, in table order.
 pub fn enumerations() -> Vec<&'static Enumeration> {
     let mut out: Vec<&'static Enumeration> = Vec::new();
-    for e in ALL_VARIABLES.iter().filter_map(|v| v.enumeration) {
+    for e in FMI3_VARIABLES.iter().filter_map(|v| v.enumeration) {
         if !out.iter().any(|known| known.type_name == e.type_name) {
             out.push(e);
         }
@@ -118,32 +112,6 @@ fn is_initial_unknown(v: &Variable) -> bool {
         v.causality,
         Causality::Output | Causality::CalculatedParameter
     )
-}
-
-fn write_unit_definitions(w: &mut XmlWriter) -> XmlResult {
-    w.create_element("UnitDefinitions")
-        .write_inner_content(|w| {
-            for unit in UNITS {
-                w.create_element("Unit")
-                    .with_attribute(("name", unit.name))
-                    .write_inner_content(|w| {
-                        let exponents: Vec<(&str, String)> =
-                            unit.base.iter().map(|(b, e)| (*b, e.to_string())).collect();
-                        w.create_element("BaseUnit")
-                            .with_attributes(exponents.iter().map(|(b, e)| (*b, e.as_str())))
-                            .write_empty()?;
-                        for (name, factor) in unit.display {
-                            w.create_element("DisplayUnit")
-                                .with_attribute(("name", *name))
-                                .with_attribute(("factor", number(*factor).as_str()))
-                                .write_empty()?;
-                        }
-                        Ok(())
-                    })?;
-            }
-            Ok(())
-        })?;
-    Ok(())
 }
 
 fn write_type_definitions(w: &mut XmlWriter) -> XmlResult {
@@ -244,7 +212,7 @@ fn write_variable(w: &mut XmlWriter, v: &Variable) -> XmlResult {
 fn write_model_structure(w: &mut XmlWriter) -> XmlResult {
     w.create_element("ModelStructure")
         .write_inner_content(|w| {
-            for v in ALL_VARIABLES
+            for v in FMI3_VARIABLES
                 .iter()
                 .filter(|v| v.causality == Causality::Output)
             {
@@ -261,7 +229,7 @@ fn write_model_structure(w: &mut XmlWriter) -> XmlResult {
                 }
                 unknown.write_empty()?;
             }
-            for v in ALL_VARIABLES.iter().filter(|v| is_initial_unknown(v)) {
+            for v in FMI3_VARIABLES.iter().filter(|v| is_initial_unknown(v)) {
                 w.create_element("InitialUnknown")
                     .with_attribute(("valueReference", v.vr.to_string().as_str()))
                     .with_attribute(("dependencies", vr_list(&initial_dependencies(v)).as_str()))
@@ -274,55 +242,22 @@ fn write_model_structure(w: &mut XmlWriter) -> XmlResult {
 
 /// The complete FMI 3.0 `modelDescription.xml`.
 pub fn model_description_xml() -> String {
-    let mut w = writer();
-    let write = |w: &mut XmlWriter| -> XmlResult {
-        w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
-        let token = instantiation_token();
-        let tool = format!("tdvass fmu-build {}", env!("CARGO_PKG_VERSION"));
-        w.create_element("fmiModelDescription")
-            .with_attribute(("fmiVersion", FMI_VERSION))
-            .with_attribute(("modelName", MODEL_NAME))
-            .with_attribute(("instantiationToken", token.as_str()))
-            .with_attribute(("description", MODEL_DESCRIPTION))
-            .with_attribute(("version", env!("CARGO_PKG_VERSION")))
-            .with_attribute(("license", "MIT"))
-            .with_attribute(("generationTool", tool.as_str()))
-            .with_attribute(("variableNamingConvention", "flat"))
-            .write_inner_content(|w| {
-                w.create_element("CoSimulation")
-                    .with_attribute(("modelIdentifier", MODEL_IDENTIFIER))
-                    .with_attributes(CO_SIMULATION_CAPABILITIES)
-                    .write_empty()?;
-                write_unit_definitions(w)?;
-                write_type_definitions(w)?;
-                w.create_element("LogCategories").write_inner_content(|w| {
-                    for (name, description) in LOG_CATEGORIES {
-                        w.create_element("Category")
-                            .with_attribute(("name", name))
-                            .with_attribute(("description", description))
-                            .write_empty()?;
-                    }
-                    Ok(())
-                })?;
-                w.create_element("DefaultExperiment")
-                    .with_attribute(("startTime", number(DEFAULT_START_TIME).as_str()))
-                    .with_attribute(("stopTime", number(DEFAULT_STOP_TIME).as_str()))
-                    .with_attribute(("tolerance", number(DEFAULT_TOLERANCE).as_str()))
-                    .with_attribute(("stepSize", number(DEFAULT_STEP_SIZE).as_str()))
-                    .write_empty()?;
-                w.create_element("ModelVariables")
-                    .write_inner_content(|w| {
-                        for v in ALL_VARIABLES {
-                            write_variable(w, v)?;
-                        }
-                        Ok(())
-                    })?;
-                write_model_structure(w)
-            })?;
-        Ok(())
+    let token = instantiation_token();
+    let frame = DescriptionFrame {
+        fmi_version: FMI_VERSION,
+        token: ("instantiationToken", &token),
+        co_simulation: &CO_SIMULATION_CAPABILITIES,
     };
-    write(&mut w).expect("writing to memory cannot fail");
-    finish(w)
+    model_description(frame, write_type_definitions, |w| {
+        w.create_element("ModelVariables")
+            .write_inner_content(|w| {
+                for v in FMI3_VARIABLES {
+                    write_variable(w, v)?;
+                }
+                Ok(())
+            })?;
+        write_model_structure(w)
+    })
 }
 
 mod documentation;

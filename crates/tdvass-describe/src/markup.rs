@@ -1,13 +1,20 @@
 //! What the generated model descriptions and documentation pages of every
-//! FMI version write alike: the one-line model description, numbers,
+//! FMI version write alike: the frame of a model description (its root
+//! element, `CoSimulation`, the unit definitions, the log categories and
+//! the default experiment), the one-line model description, numbers,
 //! elements with text, paragraphs, lists, tables, the model's diagram with
 //! the legend of its symbols, and the HTML page around a body (quick-xml,
 //! never written by hand).
 
-use crate::variables::by_name;
 use quick_xml::Writer;
-use quick_xml::events::{BytesText, Event};
+use quick_xml::events::{BytesDecl, BytesText, Event};
 use std::io::Cursor;
+use tdvass::solver::DEFAULT_TOLERANCE;
+use tdvass_fmu::variables::{Causality, FmiVersion, UNITS, Variable, by_name};
+use tdvass_fmu::{
+    DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, LOG_CATEGORIES, MODEL_IDENTIFIER,
+    MODEL_NAME,
+};
 
 /// A writer of XML (or HTML) into memory.
 pub type XmlWriter = Writer<Cursor<Vec<u8>>>;
@@ -75,17 +82,143 @@ pub const DIAGRAM_LEGEND: &[(&str, &str, &[&str])] = &[
     ),
 ];
 
+/// What the model description of one FMI version states in the frame
+/// every version shares ([`model_description`]).
+#[derive(Debug, Clone, Copy)]
+pub struct DescriptionFrame<'a> {
+    /// `fmiVersion`.
+    pub fmi_version: &'a str,
+    /// The attribute that identifies the interface, after `modelName`:
+    /// `("guid", ...)` or `("instantiationToken", ...)`.
+    pub token: (&'a str, &'a str),
+    /// The attributes of the `CoSimulation` element after
+    /// `modelIdentifier`, in the order written.
+    pub co_simulation: &'a [(&'a str, &'a str)],
+}
+
+/// A complete `modelDescription.xml`: the XML declaration, the root
+/// element, `CoSimulation`, `UnitDefinitions`, then the version's
+/// `TypeDefinitions` (`write_type_definitions`), `LogCategories`,
+/// `DefaultExperiment`, then the version's `ModelVariables` and
+/// `ModelStructure` (`write_model`).
+pub fn model_description(
+    frame: DescriptionFrame<'_>,
+    write_type_definitions: impl Fn(&mut XmlWriter) -> XmlResult,
+    write_model: impl Fn(&mut XmlWriter) -> XmlResult,
+) -> String {
+    let mut w = writer();
+    let write = |w: &mut XmlWriter| -> XmlResult {
+        w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))?;
+        let tool = format!("tdvass fmu-build {}", env!("CARGO_PKG_VERSION"));
+        w.create_element("fmiModelDescription")
+            .with_attribute(("fmiVersion", frame.fmi_version))
+            .with_attribute(("modelName", MODEL_NAME))
+            .with_attribute(frame.token)
+            .with_attribute(("description", MODEL_DESCRIPTION))
+            .with_attribute(("version", env!("CARGO_PKG_VERSION")))
+            .with_attribute(("license", "MIT"))
+            .with_attribute(("generationTool", tool.as_str()))
+            .with_attribute(("variableNamingConvention", "flat"))
+            .write_inner_content(|w| {
+                w.create_element("CoSimulation")
+                    .with_attribute(("modelIdentifier", MODEL_IDENTIFIER))
+                    .with_attributes(frame.co_simulation.iter().copied())
+                    .write_empty()?;
+                write_unit_definitions(w)?;
+                write_type_definitions(w)?;
+                w.create_element("LogCategories").write_inner_content(|w| {
+                    for (name, description) in LOG_CATEGORIES {
+                        w.create_element("Category")
+                            .with_attribute(("name", name))
+                            .with_attribute(("description", description))
+                            .write_empty()?;
+                    }
+                    Ok(())
+                })?;
+                w.create_element("DefaultExperiment")
+                    .with_attribute(("startTime", number(DEFAULT_START_TIME).as_str()))
+                    .with_attribute(("stopTime", number(DEFAULT_STOP_TIME).as_str()))
+                    .with_attribute(("tolerance", number(DEFAULT_TOLERANCE).as_str()))
+                    .with_attribute(("stepSize", number(DEFAULT_STEP_SIZE).as_str()))
+                    .write_empty()?;
+                write_model(w)
+            })?;
+        Ok(())
+    };
+    write(&mut w).expect("writing to memory cannot fail");
+    finish(w)
+}
+
+/// `UnitDefinitions`: every unit of the table with its base-unit exponents
+/// and display units (the same in FMI 2.0 and 3.0).
+fn write_unit_definitions(w: &mut XmlWriter) -> XmlResult {
+    w.create_element("UnitDefinitions")
+        .write_inner_content(|w| {
+            for unit in UNITS {
+                w.create_element("Unit")
+                    .with_attribute(("name", unit.name))
+                    .write_inner_content(|w| {
+                        let exponents: Vec<(&str, String)> =
+                            unit.base.iter().map(|(b, e)| (*b, e.to_string())).collect();
+                        w.create_element("BaseUnit")
+                            .with_attributes(exponents.iter().map(|(b, e)| (*b, e.as_str())))
+                            .write_empty()?;
+                        for (name, factor) in unit.display {
+                            w.create_element("DisplayUnit")
+                                .with_attribute(("name", *name))
+                                .with_attribute(("factor", number(*factor).as_str()))
+                                .write_empty()?;
+                        }
+                        Ok(())
+                    })?;
+            }
+            Ok(())
+        })?;
+    Ok(())
+}
+
+/// What the documentation of every version says of the tire.
+pub const TIRE_CONTACT: &str = "Tire (tire_contact): 0 = bilateral, the paper's linear tire, which pulls as well as pushes; where the dynamic tire load falls below minus the static load W the real tire would leave the road and the linear model no longer holds: contact_loss_time accumulates that time and the first crossing is logged as a warning. 1 = unilateral: the tire cannot pull, so the wheel lifts off where TDD rises through W/k_t and flies (tire force -W) until TDD falls back to it; contact and flight are each integrated exactly, with the switches located inside the internal steps. contact_loss_time is then the flight time, and each lift-off is logged under logEvents with its time, TDD and W/k_t. lift_off_count counts the lift-offs in both modes. The stability results (spectral_abscissa, stable) are those of the linear (bilateral) model.";
+
+/// The unit cell of a variable's row: `m (shown in mm)`, `kg`, `-`.
+pub fn unit_text(v: &Variable) -> String {
+    match (v.unit(), v.display_unit) {
+        (Some(u), Some(d)) => format!("{u} (shown in {d})"),
+        (Some(u), None) => u.to_string(),
+        (None, _) => "-".to_string(),
+    }
+}
+
+/// The table of variables of a documentation page, one of `rows` per
+/// variable; `type_header` names the type column.
+pub fn variable_table(w: &mut XmlWriter, type_header: &str, rows: &[Vec<String>]) -> XmlResult {
+    table(
+        w,
+        &[
+            "name",
+            "value reference",
+            type_header,
+            "causality, variability",
+            "start",
+            "unit",
+            "range",
+            "meaning",
+        ],
+        rows,
+    )
+}
+
 /// The variables of a legend row, with their start values and units
 /// (`m_s (start 345 kg)`, `x_s (output, m)`).
 fn legend_variables(names: &[&str]) -> String {
     names
         .iter()
         .map(|name| {
-            let v = by_name(name)
+            let v = by_name(FmiVersion::Fmi2, name)
                 .unwrap_or_else(|| panic!("the legend names `{name}`, not a variable"));
             let unit = v.unit().map(|u| format!(" {u}")).unwrap_or_default();
             match v.start {
-                Some(start) if v.causality != crate::variables::Causality::Input => {
+                Some(start) if v.causality != Causality::Input => {
                     format!("{name} (start {}{unit})", number(start))
                 }
                 _ => format!(

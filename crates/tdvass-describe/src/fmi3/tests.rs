@@ -1,69 +1,10 @@
 use super::*;
-use quick_xml::Reader;
+use crate::parsed::{Element, elements};
 use std::collections::{HashMap, HashSet};
+use tdvass_fmu::LOG_CATEGORIES;
 use tdvass_fmu::variables::{
-    Initial, ROAD_CLASS_ITEMS, ROAD_ITEMS, TIRE_CONTACT_ITEMS, VARIABLES, VARIANT_ITEMS,
+    COMMON_VARIABLES, Initial, ROAD_CLASS_ITEMS, ROAD_ITEMS, TIRE_CONTACT_ITEMS, VARIANT_ITEMS,
 };
-
-/// One element: its name, its attributes and the index of its parent.
-#[derive(Debug)]
-struct Element {
-    name: String,
-    attributes: HashMap<String, String>,
-    parent: Option<usize>,
-}
-
-impl Element {
-    fn get(&self, key: &str) -> Option<&str> {
-        self.attributes.get(key).map(String::as_str)
-    }
-
-    fn attr(&self, key: &str) -> &str {
-        self.get(key)
-            .unwrap_or_else(|| panic!("<{}> has no `{key}`: {:?}", self.name, self.attributes))
-    }
-}
-
-/// Every element in document order.
-fn elements(xml: &str) -> Vec<Element> {
-    let mut reader = Reader::from_str(xml);
-    let mut out: Vec<Element> = Vec::new();
-    let mut open: Vec<usize> = Vec::new();
-    loop {
-        let event = reader.read_event().expect("well-formed XML");
-        let (e, empty) = match event {
-            Event::Start(e) => (e, false),
-            Event::Empty(e) => (e, true),
-            Event::End(_) => {
-                open.pop();
-                continue;
-            }
-            Event::Eof => break,
-            _ => continue,
-        };
-        let attributes = e
-            .attributes()
-            .map(|a| {
-                let a = a.unwrap();
-                (
-                    a.key.0.to_string(),
-                    a.normalized_value(quick_xml::XmlVersion::Implicit1_0)
-                        .unwrap()
-                        .into_owned(),
-                )
-            })
-            .collect();
-        out.push(Element {
-            name: e.name().0.to_string(),
-            attributes,
-            parent: open.last().copied(),
-        });
-        if !empty {
-            open.push(out.len() - 1);
-        }
-    }
-    out
-}
 
 /// The children of the first element called `parent`.
 fn children<'a>(els: &'a [Element], parent: &str) -> Vec<&'a Element> {
@@ -137,7 +78,7 @@ fn root_co_simulation_and_experiment() {
 fn every_variable_has_the_values_of_the_table() {
     let els = elements(&model_description_xml());
     let vars = children(&els, "ModelVariables");
-    assert_eq!(vars.len(), ALL_VARIABLES.len());
+    assert_eq!(vars.len(), FMI3_VARIABLES.len());
     // Exactly one independent variable: a Float64 in s without start or
     // initial.
     let independent: Vec<&&Element> = vars
@@ -151,7 +92,7 @@ fn every_variable_has_the_values_of_the_table() {
     assert_eq!(time.attr("variability"), "continuous");
     assert_eq!(time.attr("unit"), "s");
     assert!(time.get("start").is_none() && time.get("initial").is_none());
-    for (v, el) in ALL_VARIABLES.iter().zip(&vars) {
+    for (v, el) in FMI3_VARIABLES.iter().zip(&vars) {
         assert_eq!(el.name, fmi3_type(v).as_str(), "{}", v.name);
         assert_eq!(el.attr("name"), v.name);
         assert_eq!(el.attr("valueReference"), v.vr.to_string());
@@ -189,7 +130,7 @@ fn every_variable_has_the_values_of_the_table() {
     let vrs: HashSet<&str> = vars.iter().map(|e| e.attr("valueReference")).collect();
     assert_eq!(vrs.len(), vars.len());
     // The FMI 2.0 variables keep their names and value references.
-    for v in VARIABLES {
+    for v in COMMON_VARIABLES {
         assert!(
             vars.iter()
                 .any(|e| e.attr("name") == v.name && e.attr("valueReference") == v.vr.to_string())
@@ -331,7 +272,7 @@ fn arrays_have_their_dimensions() {
         roots[1].attributes,
         HashMap::from([("start".to_string(), "2".to_string())])
     );
-    for v in ALL_VARIABLES {
+    for v in FMI3_VARIABLES {
         assert_eq!(
             dimensions(at(v.name)).len(),
             v.dimensions.len(),
@@ -374,7 +315,7 @@ fn model_structure_lists_outputs_and_initial_unknowns_by_value_reference() {
             .iter()
             .all(|e| e.name == "Output")
     );
-    let expected_outputs: Vec<String> = ALL_VARIABLES
+    let expected_outputs: Vec<String> = FMI3_VARIABLES
         .iter()
         .filter(|v| v.causality == Causality::Output)
         .map(|v| v.vr.to_string())
@@ -382,7 +323,7 @@ fn model_structure_lists_outputs_and_initial_unknowns_by_value_reference() {
     let listed: Vec<&str> = outputs.iter().map(|e| e.attr("valueReference")).collect();
     assert_eq!(listed, expected_outputs);
     assert_eq!(outputs.len(), 23);
-    let expected_initial: Vec<String> = ALL_VARIABLES
+    let expected_initial: Vec<String> = FMI3_VARIABLES
         .iter()
         .filter(|v| is_initial_unknown(v))
         .map(|v| v.vr.to_string())
@@ -391,8 +332,8 @@ fn model_structure_lists_outputs_and_initial_unknowns_by_value_reference() {
     assert_eq!(listed, expected_initial);
     assert_eq!(initial.len(), 26);
 
-    let by_vr = |vr: u32| ALL_VARIABLES.iter().find(|v| v.vr == vr).unwrap();
-    let x_g = by_name("x_g").unwrap().vr;
+    let by_vr = |vr: u32| FMI3_VARIABLES.iter().find(|v| v.vr == vr).unwrap();
+    let x_g = by_name(FmiVersion::Fmi3, "x_g").unwrap().vr;
     for o in &outputs {
         let deps = vr_list_of(o.attr("dependencies"));
         // At communication points outputs depend directly on the input only.
@@ -404,13 +345,21 @@ fn model_structure_lists_outputs_and_initial_unknowns_by_value_reference() {
     }
     let tdd = outputs
         .iter()
-        .find(|e| e.attr("valueReference") == by_name("tire_deflection").unwrap().vr.to_string())
+        .find(|e| {
+            e.attr("valueReference")
+                == by_name(FmiVersion::Fmi3, "tire_deflection")
+                    .unwrap()
+                    .vr
+                    .to_string()
+        })
         .unwrap();
     assert_eq!(tdd.attr("dependencies"), x_g.to_string());
     assert_eq!(tdd.attr("dependenciesKind"), "fixed");
     let x_s = outputs
         .iter()
-        .find(|e| e.attr("valueReference") == by_name("x_s").unwrap().vr.to_string())
+        .find(|e| {
+            e.attr("valueReference") == by_name(FmiVersion::Fmi3, "x_s").unwrap().vr.to_string()
+        })
         .unwrap();
     assert_eq!(x_s.attr("dependencies"), "");
     assert!(x_s.get("dependenciesKind").is_none());
@@ -433,9 +382,18 @@ fn model_structure_lists_outputs_and_initial_unknowns_by_value_reference() {
     }
     let roots = initial
         .iter()
-        .find(|e| e.attr("valueReference") == by_name("rightmost_roots").unwrap().vr.to_string())
+        .find(|e| {
+            e.attr("valueReference")
+                == by_name(FmiVersion::Fmi3, "rightmost_roots")
+                    .unwrap()
+                    .vr
+                    .to_string()
+        })
         .unwrap();
-    assert!(vr_list_of(roots.attr("dependencies")).contains(&by_name("root_count").unwrap().vr));
+    assert!(
+        vr_list_of(roots.attr("dependencies"))
+            .contains(&by_name(FmiVersion::Fmi3, "root_count").unwrap().vr)
+    );
 }
 
 #[test]
@@ -446,7 +404,7 @@ fn documentation_describes_every_variable_and_capability() {
     assert!(html.contains("FMI 3.0 Co-Simulation FMU"));
     assert!(html.contains(&instantiation_token()));
     assert!(html.contains("<td>time</td>"));
-    for v in ALL_VARIABLES {
+    for v in FMI3_VARIABLES {
         assert!(html.contains(&format!("<td>{}</td>", v.name)), "{}", v.name);
     }
     for e in enumerations() {

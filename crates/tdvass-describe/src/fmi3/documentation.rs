@@ -2,16 +2,17 @@
 //! variable table and the declarations of the model description.
 
 use super::{CO_SIMULATION_CAPABILITIES, enumerations, value_text};
-use crate::types::{Fmi3Type, fmi3_type};
-use crate::{
+use crate::markup::{
+    MODEL_DESCRIPTION, REFERENCE_RESULTS, TIRE_CONTACT, XmlResult, XmlWriter, diagram, html_page,
+    list, paragraph, table, text_element, unit_text, variable_table,
+};
+use tdvass_fmi3::instantiation_token;
+use tdvass_fmi3::types::{Fmi3Type, fmi3_type};
+use tdvass_fmu::variables::{Causality, Dimension, FMI3_VARIABLES, Variable};
+use tdvass_fmu::{
     DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, LOG_CATEGORIES, MODEL_IDENTIFIER,
-    MODEL_NAME, instantiation_token,
+    MODEL_NAME,
 };
-use tdvass_fmu::markup::{
-    MODEL_DESCRIPTION, REFERENCE_RESULTS, XmlResult, XmlWriter, diagram, html_page, list,
-    paragraph, table, text_element,
-};
-use tdvass_fmu::variables::{ALL_VARIABLES, Causality, Dimension, Variable};
 
 /// The FMI 3.0 type of `v` in words: `Float64`, `Enumeration Variant`,
 /// `Float64 [root_count][2]`.
@@ -34,11 +35,6 @@ fn type_text(v: &Variable) -> String {
 }
 
 fn variable_row(v: &Variable) -> Vec<String> {
-    let unit = match (v.unit(), v.display_unit) {
-        (Some(u), Some(d)) => format!("{u} (shown in {d})"),
-        (Some(u), None) => u.to_string(),
-        (None, _) => "-".to_string(),
-    };
     let start = match (v.start, v.enumeration) {
         (Some(s), Some(e)) => {
             let code = s as i32;
@@ -62,7 +58,7 @@ fn variable_row(v: &Variable) -> Vec<String> {
         type_text(v),
         kind,
         start,
-        unit,
+        unit_text(v),
         v.range.describe(),
         v.description.to_string(),
     ]
@@ -95,31 +91,15 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
         w,
         "State X = [x_s, v_s, x_h, v_h, x_t, v_t]: body, annular absorber and wheel displacements and velocities. The plant is dX/dt = A X + b x_t(t - tau) + e x_g(t) (Eq. 2 of the paper). TDVASS feeds the delayed wheel displacement back as the control force u = g x_t(t - tau); PVASS is the same structure with g = 0; CS is the conventional 2-DOF quarter car, for which x_h and v_h mirror x_t and v_t. The outputs are the states, BA = d2x_s/dt2, SDD = x_s - x_t, TDD = x_t - x_g, their running RMS values from the start time and the objective J (Eq. 6).",
     )?;
-    paragraph(
-        w,
-        "Tire (tire_contact): 0 = bilateral, the paper's linear tire, which pulls as well as pushes; where the dynamic tire load falls below minus the static load W the real tire would leave the road and the linear model no longer holds: contact_loss_time accumulates that time and the first crossing is logged as a warning. 1 = unilateral: the tire cannot pull, so the wheel lifts off where TDD rises through W/k_t and flies (tire force -W) until TDD falls back to it; contact and flight are each integrated exactly, with the switches located inside the internal steps. contact_loss_time is then the flight time, and each lift-off is logged under logEvents with its time, TDD and W/k_t. lift_off_count counts the lift-offs in both modes. The stability results (spectral_abscissa, stable) are those of the linear (bilateral) model.",
-    )?;
+    paragraph(w, TIRE_CONTACT)?;
     paragraph(
         w,
         "Integration: the precise integration method of the paper on an internal grid anchored at the start time. The tolerance (relative, of every output metric: the master's from fmi3EnterInitializationMode when it defines one, else the DefaultExperiment's 1e-6) sets the internal step, from an error model checked by a step-doubling probe; the step divides tau exactly when tau is longer and is at most max_internal_step when that is > 0. Results do not depend on how the importer splits time into communication steps (except with road = input, where the input changes at communication points or intermediate updates).",
     )?;
 
     text_element(w, "h2", "Variables")?;
-    let rows: Vec<Vec<String>> = ALL_VARIABLES.iter().map(variable_row).collect();
-    table(
-        w,
-        &[
-            "name",
-            "value reference",
-            "FMI 3.0 type",
-            "causality, variability",
-            "start",
-            "unit",
-            "range",
-            "meaning",
-        ],
-        &rows,
-    )?;
+    let rows: Vec<Vec<String>> = FMI3_VARIABLES.iter().map(variable_row).collect();
+    variable_table(w, "FMI 3.0 type", &rows)?;
     paragraph(
         w,
         "Parameters are fixed (settable before the end of initialization) unless tunable. Values outside the range, NaN or infinite are refused with fmi3Error naming the variable and value. The independent variable time is read with fmi3GetFloat64 and never set; it starts at the startTime of fmi3EnterInitializationMode.",
@@ -131,7 +111,7 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
         "Read and written with fmi3GetInt64 and fmi3SetInt64; the item values are the integer codes of the FMI 2.0 FMU.",
     )?;
     for e in enumerations() {
-        let users: Vec<&str> = ALL_VARIABLES
+        let users: Vec<&str> = FMI3_VARIABLES
             .iter()
             .filter(|v| v.enumeration.is_some_and(|u| u.type_name == e.type_name))
             .map(|v| v.name)
@@ -156,7 +136,7 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
     }
 
     text_element(w, "h3", "Arrays")?;
-    for v in ALL_VARIABLES.iter().filter(|v| !v.dimensions.is_empty()) {
+    for v in FMI3_VARIABLES.iter().filter(|v| !v.dimensions.is_empty()) {
         paragraph(
             w,
             &format!(
