@@ -1,5 +1,5 @@
 //! What is written about the tdvass FMUs, at build time: their model
-//! descriptions, documentation pages and the README's table of variables,
+//! descriptions, documentation pages and the table of variables in docs/fmu.md,
 //! all generated from the one variable table
 //! ([`tdvass_fmu::variables`]). `fmu-build` is its only user: it packs the
 //! descriptions and pages into the FMUs and keeps the checked-in copies
@@ -13,7 +13,7 @@
 //!   description and its unit definitions, numbers, text elements,
 //!   paragraphs, lists, tables, the model's diagram with its legend, and
 //!   the HTML page around a body.
-//! - [`markdown`]: the variable table as Markdown for the README.
+//! - [`markdown`]: the variable table as Markdown for docs/fmu.md.
 //!
 //! Every document is written with quick-xml (no markup by hand, so every
 //! value is escaped) and is deterministic: no timestamps.
