@@ -370,14 +370,37 @@ impl DenseOutput {
     }
 
     /// The Taylor polynomial of order `order` of `e^{Mσ} z` by Horner's
-    /// rule.
+    /// rule, `y ← z + (σ/k) M y` for k = K … 1, column by column, with
+    /// the structure of M ([`Self::derivative`]).
     #[inline]
     fn taylor<const C: usize>(&self, z: &Augmented<C>, sigma: f64, order: usize) -> Augmented<C> {
         let mut y = *z;
-        if sigma != 0.0 {
+        if sigma == 0.0 {
+            return y;
+        }
+        let a: [[f64; 6]; 6] = std::array::from_fn(|j| std::array::from_fn(|i| self.a[(i, j)]));
+        let (b, e, w) = (&self.b, &self.e, self.angular_frequency);
+        for c in 0..C {
+            let z: [f64; AUGMENTED] = std::array::from_fn(|i| z[(i, c)]);
+            let mut v = z;
             for k in (1..=order).rev() {
-                y = z + self.derivative(&y) * (sigma / k as f64);
+                let s = sigma / k as f64;
+                let (u, road) = (v[DELAY_INPUT], v[LINEAR_ROAD] + v[HARMONIC_ROAD]);
+                let x: [f64; 6] = std::array::from_fn(|i| v[i]);
+                let ax = super::operators::combine6(&a, &x);
+                let mut next = z;
+                for i in 0..6 {
+                    next[i] += s * (ax[i] + (b[i] * u + e[i] * road));
+                }
+                for i in 0..3 {
+                    next[DELAY_INPUT + i] += s * v[DELAY_INPUT + i + 1];
+                }
+                next[LINEAR_ROAD] += s * v[LINEAR_ROAD + 1];
+                next[HARMONIC_ROAD] += s * (w * v[HARMONIC_ROAD + 1]);
+                next[HARMONIC_ROAD + 1] += s * (-w * v[HARMONIC_ROAD]);
+                v = next;
             }
+            y.column_mut(c).copy_from_slice(&v);
         }
         y
     }
@@ -466,13 +489,15 @@ impl DenseOutput {
 }
 
 /// The plant's augmented vector at time `at`: the state, the delayed
-/// input (zero without one), the road piece's generator state.
+/// input (zero without one), the road piece's generator state; `phase`
+/// gives `(sin, cos)` of an angle (the harmonic road's `ω at`).
 #[inline]
 pub(super) fn augmented(
     x: &State,
     delayed: Option<&Vector4<f64>>,
     road: &RoadPiece,
     at: f64,
+    phase: impl FnOnce(f64) -> (f64, f64),
 ) -> Augmented<1> {
     let mut z = Augmented::<1>::zeros();
     z.fixed_rows_mut::<6>(0).copy_from(x);
@@ -488,12 +513,38 @@ pub(super) fn augmented(
             amplitude,
             angular_frequency,
         } => {
-            let (sin, cos) = crate::math::sin_cos(angular_frequency * at);
+            let (sin, cos) = phase(angular_frequency * at);
             z[HARMONIC_ROAD] = amplitude * sin;
             z[HARMONIC_ROAD + 1] = amplitude * cos;
         }
     }
     z
+}
+
+/// The last two `(sin, cos)` of [`crate::math::sin_cos`] by their angle's
+/// bits: the pieces of a step start at the same few times (its node,
+/// `t_k + tau`), asked for again by each point inside it.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Phases([(u64, (f64, f64)); 2]);
+
+impl Default for Phases {
+    fn default() -> Self {
+        Phases([(f64::NAN.to_bits(), (f64::NAN, f64::NAN)); 2])
+    }
+}
+
+impl Phases {
+    /// `sin_cos(angle)`, the same to the bit.
+    #[inline]
+    pub(super) fn sin_cos(&mut self, angle: f64) -> (f64, f64) {
+        let bits = angle.to_bits();
+        if let Some((_, value)) = self.0.iter().find(|(b, _)| *b == bits) {
+            return *value;
+        }
+        let value = crate::math::sin_cos(angle);
+        self.0 = [self.0[1], (bits, value)];
+        value
+    }
 }
 
 #[cfg(test)]

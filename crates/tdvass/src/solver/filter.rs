@@ -362,7 +362,7 @@ impl Simulator {
             } else {
                 // The plant's state by the same operations as
                 // `integrate_within_step`, the filter's from its own rows.
-                let z = super::dense::augmented(&x, delayed.as_ref(), &drive, start);
+                let z = self.augmented(&x, delayed.as_ref(), &drive, start);
                 w = self.partial_filter_step(length, &z, &w);
                 x = self.partial_step(length, &z);
             }

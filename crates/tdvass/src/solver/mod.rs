@@ -274,6 +274,8 @@ pub struct Simulator {
     /// its arguments, the mode and the operators, cleared when an operator
     /// or the road input changes).
     next_node: Option<NextNode>,
+    /// The harmonic road's last phases (a cache of `sin_cos`).
+    phases: dense::Phases,
     road: Road,
     /// Index k of the grid node at or before the committed time.
     grid_index: u64,
@@ -451,6 +453,7 @@ impl Simulator {
             grid_step,
             dense: None,
             next_node: None,
+            phases: dense::Phases::default(),
             road,
             grid_index: 0,
             committed_time: config.start_time,
@@ -693,6 +696,17 @@ impl Simulator {
         })
     }
 
+    /// The augmented vector of a partial step from `at` ([`dense::augmented`]).
+    fn augmented(
+        &mut self,
+        x: &State,
+        delayed: Option<&Vector4<f64>>,
+        road: &RoadPiece,
+        at: f64,
+    ) -> dense::Augmented<1> {
+        dense::augmented(x, delayed, road, at, |angle| self.phases.sin_cos(angle))
+    }
+
     /// The exact map of a partial step of length `length` (quantized to
     /// 2^-40 h, see [`dense`]) applied to the augmented vectors `z`: the
     /// first 6 rows of `e^{M length} z`.
@@ -744,7 +758,7 @@ impl Simulator {
                 self.full_step
                     .apply(&state, delayed.as_ref(), &drive, start)
             } else {
-                let z = dense::augmented(&state, delayed.as_ref(), &drive, start);
+                let z = self.augmented(&state, delayed.as_ref(), &drive, start);
                 self.partial_step(length, &z)
             };
             if end == to {
@@ -784,6 +798,9 @@ impl Simulator {
 
     /// [`Self::inner_delay_next_node`] without its cache.
     fn solve_next_node(&mut self, k: u64, from: f64, x: State) -> (State, [f64; 2]) {
+        if let Some(node) = self.whole_step_from_node(k, from, &x) {
+            return (node, [node[X_T], node[V_T]]);
+        }
         let next = self.grid_time(k + 1);
         let (state, sensitivity) = self.integrate_inner_delay(k, from, x, next);
         let pick = tire_pick();
@@ -792,6 +809,55 @@ impl Simulator {
             .solve(&(pick * state))
             .unwrap_or(Vector2::repeat(f64::NAN));
         (state + sensitivity * end, [end[0], end[1]])
+    }
+
+    /// Node k + 1 by the whole-step map of the grid (the 2×2 solve folded
+    /// in, as the whole-step loop takes it) from node k itself (time
+    /// `from`, state `x`), when the step lies in one road piece and the
+    /// wheel is on the road; `None` otherwise.
+    fn whole_step_from_node(&mut self, k: u64, from: f64, x: &State) -> Option<State> {
+        if from != self.grid_time(k) || self.in_flight() {
+            return None;
+        }
+        #[cfg(test)]
+        if dense::tests::EXACT.get() {
+            // The reference of the tests solves for the node as before.
+            return None;
+        }
+        let next = self.grid_time(k + 1);
+        let piece = self.piece_from(from);
+        if piece.end() < next && !self.coincide(piece.end(), next) {
+            return None;
+        }
+        let m = self.grid.delay_steps();
+        let nodes = if k < m {
+            let x = self.config.initial_state[X_T];
+            [x, 0.0, x, 0.0]
+        } else {
+            let len = self.history.len() as u64;
+            let [x0, v0] = self.history[((k - m) % len) as usize];
+            let [x1, v1] = self.history[((k - m + 1) % len) as usize];
+            [x0, v0, x1, v1]
+        };
+        let step = &self.grid_step;
+        let road = match piece {
+            RoadPiece::Harmonic {
+                amplitude,
+                angular_frequency,
+            } => {
+                let (sin, cos) = self.phases.sin_cos(angular_frequency * from);
+                operators::combine2(&step.harmonic, &[amplitude * sin, amplitude * cos])
+            }
+            RoadPiece::Linear { .. } => {
+                operators::combine2(&step.linear, &[piece.value(from), piece.slope(from)])
+            }
+        };
+        let inputs = operators::add6(operators::combine4(&step.nodes, &nodes), road);
+        let x: [f64; 6] = (*x).into();
+        Some(State::from(operators::add6(
+            operators::combine6(&step.transition, &x),
+            inputs,
+        )))
     }
 
     /// Delay inside the step: integrates from (from, x) to `to` inside grid
@@ -837,7 +903,7 @@ impl Simulator {
                     .copy_from(&interpolant.fixed_view::<4, 2>(0, 2));
                 interpolant * Vector4::new(node_x, node_v, 0.0, 0.0)
             };
-            z.set_column(0, &dense::augmented(&state, Some(&delayed), &piece, start));
+            z.set_column(0, &self.augmented(&state, Some(&delayed), &piece, start));
             let next = self.partial_step(end - start, &z);
             state = next.column(0).into_owned();
             sensitivity = next.fixed_columns::<2>(1).into_owned();
@@ -888,7 +954,7 @@ impl Simulator {
                     (start - switch).max(0.0),
                 )
             };
-            let z = dense::augmented(&state, Some(&delayed), &piece, start);
+            let z = self.augmented(&state, Some(&delayed), &piece, start);
             state = self.partial_step(end_time - start, &z);
             if end_time == to {
                 return state;
