@@ -704,7 +704,46 @@ impl Simulator {
         road: &RoadPiece,
         at: f64,
     ) -> dense::Augmented<1> {
-        dense::augmented(x, delayed, road, at, |angle| self.phases.sin_cos(angle))
+        dense::augmented(x, delayed, road, at, || self.harmonic_at(road, at))
+    }
+
+    /// The harmonic road's `A [sin ω t, cos ω t]` at the start `t` of a
+    /// partial step. At the node of the grid index it is the phase the
+    /// whole-step loop carries ([`Self::harmonic_phase`]), and at `tau`
+    /// after it (the delay inside the step) that phase rotated by `ω tau`:
+    /// the pieces of a step start there, and each point inside it asks
+    /// again. Elsewhere `sin_cos` (its last two values kept). Each is a
+    /// function of `t` and the grid index alone.
+    fn harmonic_at(&mut self, road: &RoadPiece, t: f64) -> [f64; 2] {
+        let RoadPiece::Harmonic {
+            amplitude,
+            angular_frequency,
+        } = *road
+        else {
+            return [0.0; 2];
+        };
+        let k = self.grid_index;
+        let node = self.grid_time(k);
+        if t == node {
+            return self.node_phase(k);
+        }
+        if self.grid.delay_inside_step() && t == node + self.grid.inner_delay() {
+            let [z0, z1] = self.node_phase(k);
+            let (s, c) = self
+                .phases
+                .sin_cos(angular_frequency * self.grid.inner_delay());
+            return [c * z0 + s * z1, c * z1 - s * z0];
+        }
+        let (sin, cos) = self.phases.sin_cos(angular_frequency * t);
+        [amplitude * sin, amplitude * cos]
+    }
+
+    /// [`Self::harmonic_phase`] at node k, kept for the whole-step loop
+    /// (the same value).
+    fn node_phase(&mut self, k: u64) -> [f64; 2] {
+        let z = self.harmonic_phase(k);
+        self.phase = Some((k, z));
+        z
     }
 
     /// The exact map of a partial step of length `length` (quantized to
@@ -839,19 +878,17 @@ impl Simulator {
             let [x1, v1] = self.history[((k - m + 1) % len) as usize];
             [x0, v0, x1, v1]
         };
-        let step = &self.grid_step;
         let road = match piece {
-            RoadPiece::Harmonic {
-                amplitude,
-                angular_frequency,
-            } => {
-                let (sin, cos) = self.phases.sin_cos(angular_frequency * from);
-                operators::combine2(&step.harmonic, &[amplitude * sin, amplitude * cos])
+            RoadPiece::Harmonic { .. } => {
+                let phase = self.node_phase(k);
+                operators::combine2(&self.grid_step.harmonic, &phase)
             }
-            RoadPiece::Linear { .. } => {
-                operators::combine2(&step.linear, &[piece.value(from), piece.slope(from)])
-            }
+            RoadPiece::Linear { .. } => operators::combine2(
+                &self.grid_step.linear,
+                &[piece.value(from), piece.slope(from)],
+            ),
         };
+        let step = &self.grid_step;
         let inputs = operators::add6(operators::combine4(&step.nodes, &nodes), road);
         let x: [f64; 6] = (*x).into();
         Some(State::from(operators::add6(
