@@ -11,60 +11,79 @@
 //! state, and with the delay inside the step the two columns of its 6×2
 //! sensitivity), and only its first 6 rows (the state) or the filter rows.
 //!
-//! **Method.** σ is quantized as before to `κ 2^-40 h` (κ an integer; the
-//! time error is at most `2^-41 h`, 4.5e-16 s at h = 1 ms, which moves the
-//! state by at most that times `|dX/dt|`). κ splits into its high bits
-//! `j = ⌊κ 2^{n−40}⌋` (the step in units of `h 2^-n`, `0 ≤ j ≤ 2^n`) and
-//! the remainder `σ_f = (κ mod 2^{40−n}) 2^-40 h < h 2^-n`. Then
+//! **Method.** σ is quantized as before to `κ 2^-40 h` (κ the nearest
+//! integer; the time error is at most `2^-41 h`, 4.5e-16 s at h = 1 ms,
+//! which moves the state by at most that times `|dX/dt|`). κ splits into
+//! its high bits `j = ⌊κ 2^{n−40}⌋` (the length in units of `h 2^-n`,
+//! `0 ≤ j ≤ 2^n`) and the rest `σ_f = (κ mod 2^{40−n}) 2^-40 h < h 2^-n`,
+//! and `σ = j h 2^-n + σ_f` exactly. Then
 //!
 //! ```text
-//! e^{Mσ} z = (I + T_j) y,   y = Σ_{k=0}^{K} (M σ_f)^k z / k!
+//! e^{Mσ} z = (I + T_j) y,   y = Σ_{k=0}^{K} (M σ_f)^k z / k!  (+ the truncation)
 //! ```
 //!
-//! where `T_j = e^{M j h 2^-n} − I` is built once per mode (lazily, at the
-//! first point inside a step) and `y` is a Taylor polynomial of order K
-//! evaluated by Horner's rule on the vector (K products of M with a
-//! vector: M is sparse, 60 multiplications for the plant's 14 dimensions).
-//! A point costs those K products and one product of the 6×14 rows of
-//! `T_j` with `y` (8×22 for the filter).
+//! where `T_j = e^{M j h 2^-n} − I` comes from a table built once per mode
+//! (lazily, at the first point inside a step, so a simulator that never
+//! stops inside a step, as in the PSO, never builds it) and `y` is the
+//! Taylor polynomial of order K, by Horner's rule on the vector
+//! (`y ← z + (σ_f/k) M y`, k = K … 1) with the structure of M (the plant's
+//! 6×6 block and two columns, the shifts of the cubic, the road's
+//! generator: about 60 multiplications a term for the 14 dimensions). A
+//! point costs those K terms and the product of the kept 6×14 rows of
+//! `T_j` with `y` (8×22 for the filter's rows, only when a getter asks for
+//! the comfort outputs).
 //!
 //! **The table.** The ladder `L_i = e^{M h 2^{i−n}} − I`, `i = 0 … n`,
 //! starts from [`expm::precise_exp_increment`] at `h 2^-n` and doubles by
-//! `L_{i+1} = 2 L_i + L_i L_i` (Zhong's 2^N squaring: the increments are
-//! kept apart from the identity, so a short step keeps its relative
-//! accuracy); it costs about one exponential of the whole step. An entry
-//! `T_j` is composed from the ladder entries of j's bits, lowest first
-//! (`T ← T + L_i + T L_i`, the rows that are kept only), and each prefix
-//! is kept: a new j costs one row-block product. The operations that give
+//! `L_{i+1} = 2 L_i + L_i L_i` (the 2^N algorithm's squaring: the
+//! increments are kept apart from the identity, so a short step keeps its
+//! relative accuracy); it costs about one exponential of the whole step.
+//! An entry `T_j` is composed from the ladder entries of j's bits, lowest
+//! first (`T ← T + L_i + T L_i`, the kept rows of T only), and each prefix
+//! is kept: a new j costs one row-block product (at most `2^n + 1` entries,
+//! 65 × 6×14 numbers for the plant at n = 6). The operations that give
 //! `T_j` depend on j alone, never on which entries were built before, so
 //! the result is the same to the bit whatever the order of the calls, on
-//! every platform (IEEE +, −, ×, ÷ only).
+//! every platform (IEEE +, −, ×, ÷ only). The table is a cache of a
+//! function of the operators: it is not saved with the state and is
+//! dropped when they change (`set_gain`).
 //!
 //! **Bound.** Let `D` be a diagonal of powers of two that balances M
-//! (Osborne's iteration, radix 2) and `ν = ‖D⁻¹ M D‖_∞`. The truncated
-//! series then satisfies, in exact arithmetic,
+//! (Osborne's iteration, radix 2: [`balanced_norm`]) and
+//! `ν = ‖D⁻¹ M D‖_∞`. The truncated series satisfies, in exact arithmetic,
 //!
 //! ```text
 //! ‖D⁻¹ (e^{Mσ_f} z − y)‖_∞ ≤ θ^{K+1} / (K+1)! / (1 − θ/(K+2)) ‖D⁻¹ z‖_∞,
 //! θ = ν h 2^-n ≥ ν σ_f,
 //! ```
 //!
-//! and K is the least order that brings the factor below `2^-56`
-//! ([`TRUNCATION`]); the table's factor `‖D⁻¹ (I + T_j) D‖_∞ ≤ e^{ν h}` can
-//! amplify it. n is the least of 6 … 12 with `θ ≤ 1/16` (6 for the
-//! default plant at h ≤ 3 ms: θ ≈ 3e-3, K = 5 to 6). So the truncation is
-//! below `e^{νh} 2^-56 ‖D⁻¹ z‖_∞` in the balanced norm, some 1e-17
-//! relative, against a tolerance of 1e-6 and more: the error is the
-//! rounding of the products (the same order as that of a full exponential,
-//! 1e-15 to 1e-13 relative; the unit tests compare both for random offsets
-//! in every delay regime, with and without the filter and in flight).
+//! K is the least order that brings the factor to [`TRUNCATION`] = 2^-56
+//! or below, and n the least of 6 … 12 with `θ ≤ 1/16`. The table's factor
+//! `‖D⁻¹ (I + T_j) D‖_∞ ≤ e^{ν j h 2^-n} ≤ e^{ν h}` carries it to the
+//! result: the truncation error is at most `e^{νh} 2^-56 ‖D⁻¹ z‖_∞` in the
+//! balanced norm. For the default TDVASS plant (ν ≈ 700 1/s, its fastest
+//! mode 450 rad/s) at the FMU's h = 1 ms: n = 6, θ = 0.011, K = 6, and the
+//! factor is 3.6e-18 (7e-18 with e^{νh} = 2); the filter's 22 dimensions
+//! take K = 7 to 8. What remains is the rounding of the products, of the
+//! order of that of a full exponential: for random offsets the plant's
+//! rows agree with the full exponential of the quantized length to 8e-16
+//! and the filter's to 3e-15 relative, and through the simulator states
+//! and outputs agree to 1.5e-14 of their largest values in every delay
+//! regime, with the filter and with the unilateral tire (unit tests
+//! below), against tolerances of 1e-8 and more.
+//!
+//! **Pieces of fixed length.** With the delay inside the step every step
+//! has the pieces `[t_k, t_k + tau)` and `[t_k + tau, t_{k+1})`; their
+//! offsets are kept as 6×14 matrices (the map above applied to the
+//! identity's columns, the same matrix whenever it is built), one product
+//! each.
 //!
 //! **Caller independence.** A point inside a step is reached from the last
 //! committed point and is not committed itself, so a master's
-//! communication points never feed back into the grid nodes; what is
-//! committed inside a step (a road breakpoint, a switch of the tire
-//! contact, a change of an external road input) is located from committed
-//! values alone, as before.
+//! communication points never feed back into the grid nodes (unit test
+//! `in_step_points_leave_the_nodes_unchanged`); what is committed inside a
+//! step (a road breakpoint, a switch of the tire contact, a change of an
+//! external road input) is located from committed values alone, as before.
 
 use super::expm;
 use super::filter::{Filter, FilterCoupling, WITH_FILTER, with_filter_matrix};
