@@ -547,8 +547,9 @@ pub fn by_vr(vr: u32) -> Option<&'static Variable> {
 }
 
 /// Looks a variable of `version` up by value reference: in constant time
-/// through [`vr_table`] (a getter asks for every value reference of every
-/// call), the same variable as a search of [`variables_of`] would find.
+/// through a table built at the first lookup (a getter asks for every
+/// value reference of every call), the same variable as a search of
+/// [`variables_of`] would find.
 pub fn by_vr_in(version: FmiVersion, vr: u32) -> Option<&'static Variable> {
     match vr_table(version).get(vr as usize) {
         Some(found) => *found,
