@@ -547,9 +547,43 @@ pub fn variables_of(version: FmiVersion) -> &'static [Variable] {
     }
 }
 
-/// The variable of `version` ([`variables_of`]) with value reference `vr`.
+/// Looks a variable of `version` up by value reference: in constant time
+/// through a table built at the first lookup (a getter asks for every
+/// value reference of every call), the same variable as a search of
+/// [`variables_of`] would find.
 pub fn by_vr(version: FmiVersion, vr: u32) -> Option<&'static Variable> {
-    variables_of(version).iter().find(|v| v.vr == vr)
+    match vr_table(version).get(vr as usize) {
+        Some(found) => *found,
+        None => variables_of(version).iter().find(|v| v.vr == vr),
+    }
+}
+
+/// The variables of `version` by value reference (the first of each, as a
+/// search finds it), for the references below the largest one in use
+/// (at most 4096); built at the first lookup.
+fn vr_table(version: FmiVersion) -> &'static [Option<&'static Variable>] {
+    static TABLES: [std::sync::OnceLock<Vec<Option<&'static Variable>>>; 2] =
+        [std::sync::OnceLock::new(), std::sync::OnceLock::new()];
+    let slot = match version {
+        FmiVersion::Fmi2 => 0,
+        FmiVersion::Fmi3 => 1,
+    };
+    TABLES[slot].get_or_init(|| {
+        let variables = variables_of(version);
+        let len = variables
+            .iter()
+            .map(|v| v.vr as usize + 1)
+            .filter(|&n| n <= 4096)
+            .max()
+            .unwrap_or(0);
+        let mut table = vec![None; len];
+        for v in variables {
+            if let Some(entry @ None) = table.get_mut(v.vr as usize) {
+                *entry = Some(v);
+            }
+        }
+        table
+    })
 }
 
 /// The variable of `version` ([`variables_of`]) called `name`.

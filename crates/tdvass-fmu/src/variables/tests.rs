@@ -350,3 +350,18 @@ fn the_fmi3_additions_follow_the_common_variables() {
     assert!(COMMON_VARIABLES.iter().all(|v| v.is_in(FmiVersion::Fmi2)));
     assert!(!FMI3_VARIABLES[first].is_in(FmiVersion::Fmi2));
 }
+
+#[test]
+fn the_value_reference_table_finds_what_a_search_finds() {
+    for version in [FmiVersion::Fmi2, FmiVersion::Fmi3] {
+        let largest = variables_of(version).iter().map(|v| v.vr).max().unwrap();
+        for vr in (0..=largest + 10).chain([u32::MAX]) {
+            let searched = variables_of(version).iter().find(|v| v.vr == vr);
+            assert_eq!(
+                by_vr(version, vr).map(|v| v.name),
+                searched.map(|v| v.name),
+                "{version:?} {vr}"
+            );
+        }
+    }
+}

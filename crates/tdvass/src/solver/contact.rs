@@ -24,7 +24,7 @@
 //! ends of each road piece brackets its first fall through 0 (the root
 //! test of `solver::holding`). The bracket is then checked and narrowed on
 //! the exact dense output (the state from the committed point by the exact
-//! partial step), by Newton's method on `φ' = ±(x_g' − v_t)`, a state,
+//! partial step of `solver::dense`), by Newton's method on `φ' = ±(x_g' − v_t)`, a state,
 //! kept inside the bracket by bisection, to [`LOCATION_TOLERANCE`]. The
 //! switch time is committed like a change of an external road input (the
 //! RMS run closes there), the mode flips, and the step goes on from there.
@@ -52,7 +52,6 @@ use crate::error::{Error, Result};
 use crate::model::{State, X_T};
 use crate::road::{RoadPiece, RoadSpec};
 use nalgebra::Matrix6;
-use std::collections::HashMap;
 
 /// The accuracy to which a switch time is located (s).
 pub const LOCATION_TOLERANCE: f64 = 1e-13;
@@ -84,7 +83,7 @@ pub(super) struct ModeOperators {
     pub(super) solver_matrix: Matrix6<f64>,
     pub(super) solver_matrix_norm: f64,
     pub(super) full_step: StepOperator,
-    pub(super) partial_steps: HashMap<u64, StepOperator>,
+    pub(super) dense: Option<Box<super::dense::DenseOutput>>,
 }
 
 /// Lift-offs since the front-end last took them.
@@ -154,7 +153,7 @@ impl Simulator {
             solver_matrix_norm: super::operators::infinity_norm(&a),
             full_step: StepOperator::new(&a, &b, &e, omega, self.grid.step, self.coupling.as_ref()),
             solver_matrix: a,
-            partial_steps: HashMap::new(),
+            dense: None,
         }
     }
 
@@ -172,8 +171,7 @@ impl Simulator {
         std::mem::swap(&mut self.solver_matrix, &mut other.solver_matrix);
         std::mem::swap(&mut self.solver_matrix_norm, &mut other.solver_matrix_norm);
         std::mem::swap(&mut self.full_step, &mut other.full_step);
-        std::mem::swap(&mut self.partial_steps, &mut other.partial_steps);
-        self.location_steps.clear();
+        std::mem::swap(&mut self.dense, &mut other.dense);
     }
 
     /// Puts the operators of the mode the holding state says, the contact
@@ -246,15 +244,7 @@ impl Simulator {
         let x = if t == tc {
             xc
         } else {
-            // The plant alone, from operators without the W_k filter rows
-            // (the plant's step is the same to the bit with them or
-            // without), kept apart from the filter-carrying ones.
-            let coupling = self.coupling.take();
-            std::mem::swap(&mut self.partial_steps, &mut self.location_steps);
-            let x = self.integrate_within_step(k, tc, xc, t);
-            std::mem::swap(&mut self.partial_steps, &mut self.location_steps);
-            self.coupling = coupling;
-            x
+            self.integrate_within_step(k, tc, xc, t)
         };
         self.switch_function(t, &x, piece)
     }

@@ -22,6 +22,14 @@ const SCALED_NORM_EXPONENT: i32 = 10;
 /// With `τ = 1 / 2^N`: `T_a = Mτ + (Mτ)²/2 + (Mτ)³/6 + (Mτ)⁴/24`, then N times
 /// `T_a ← 2 T_a + T_a T_a` (that is `(I + T_a)² − I`), and `e^M = I + T_a`.
 pub fn precise_exp<const D: usize>(m: &SMatrix<f64, D, D>) -> SMatrix<f64, D, D> {
+    SMatrix::identity() + precise_exp_increment(m)
+}
+
+/// `e^{M} − I`, the increment `T_a` of [`precise_exp`] before the identity
+/// is added (the same operations: `precise_exp(m)` is
+/// `I + precise_exp_increment(m)` to the bit). Kept apart from the
+/// identity, a short step's increment keeps its relative accuracy.
+pub fn precise_exp_increment<const D: usize>(m: &SMatrix<f64, D, D>) -> SMatrix<f64, D, D> {
     let norm = m.abs().row_sum().max();
     let squarings = if norm > 0.0 && norm.is_finite() {
         (ceil_log2(norm) + SCALED_NORM_EXPONENT).max(0) as u32
@@ -35,7 +43,7 @@ pub fn precise_exp<const D: usize>(m: &SMatrix<f64, D, D>) -> SMatrix<f64, D, D>
     for _ in 0..squarings {
         increment = increment * 2.0 + increment * increment;
     }
-    SMatrix::identity() + increment
+    increment
 }
 
 /// The least integer e with `2^e >= x`, for a finite x > 0, from its bits

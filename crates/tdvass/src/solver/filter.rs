@@ -36,7 +36,7 @@ use nalgebra::{Matrix6, RowSVector, SMatrix, SVector, Vector4};
 pub(crate) type Filter = SVector<f64, WK_STATES>;
 
 /// Dimension of the plant's augmented system plus the filter.
-const WITH_FILTER: usize = AUGMENTED + WK_STATES;
+pub(super) const WITH_FILTER: usize = AUGMENTED + WK_STATES;
 
 /// Columns of an 8-row matrix, as plain arrays for the whole-step loop.
 pub(super) type FilterColumns<const N: usize> = [[f64; WK_STATES]; N];
@@ -111,22 +111,7 @@ impl FilterRows {
         coupling: &FilterCoupling,
         length: f64,
     ) -> FilterRows {
-        let mut big = SMatrix::<f64, WITH_FILTER, WITH_FILTER>::zeros();
-        big.fixed_view_mut::<AUGMENTED, AUGMENTED>(0, 0)
-            .copy_from(m);
-        let b_w = &coupling.wk.input_vector;
-        for i in 0..WK_STATES {
-            let row = AUGMENTED + i;
-            for j in 0..6 {
-                big[(row, j)] = b_w[i] * coupling.acceleration_row[j];
-            }
-            big[(row, DELAY_INPUT)] = b_w[i] * coupling.acceleration_delayed;
-            // x_g is the first state of either road generator.
-            big[(row, LINEAR_ROAD)] = b_w[i] * coupling.acceleration_road;
-            big[(row, HARMONIC_ROAD)] = b_w[i] * coupling.acceleration_road;
-        }
-        big.fixed_view_mut::<WK_STATES, WK_STATES>(AUGMENTED, AUGMENTED)
-            .copy_from(&coupling.wk.state_matrix);
+        let big = with_filter_matrix(m, coupling);
         let exp = expm::precise_exp(&(big * length));
         let rows = |column: usize| {
             exp.fixed_view::<WK_STATES, 2>(AUGMENTED, column)
@@ -163,6 +148,32 @@ impl FilterRows {
         next += super::operators::road_input(&self.linear_road, &self.harmonic_road, road, at);
         next
     }
+}
+
+/// The 22-dimensional augmented matrix of the module documentation, from
+/// the plant's 14-dimensional one `m` ([`super::operators::augmented_matrix`])
+/// and the coupling.
+pub(super) fn with_filter_matrix(
+    m: &SMatrix<f64, AUGMENTED, AUGMENTED>,
+    coupling: &FilterCoupling,
+) -> SMatrix<f64, WITH_FILTER, WITH_FILTER> {
+    let mut big = SMatrix::<f64, WITH_FILTER, WITH_FILTER>::zeros();
+    big.fixed_view_mut::<AUGMENTED, AUGMENTED>(0, 0)
+        .copy_from(m);
+    let b_w = &coupling.wk.input_vector;
+    for i in 0..WK_STATES {
+        let row = AUGMENTED + i;
+        for j in 0..6 {
+            big[(row, j)] = b_w[i] * coupling.acceleration_row[j];
+        }
+        big[(row, DELAY_INPUT)] = b_w[i] * coupling.acceleration_delayed;
+        // x_g is the first state of either road generator.
+        big[(row, LINEAR_ROAD)] = b_w[i] * coupling.acceleration_road;
+        big[(row, HARMONIC_ROAD)] = b_w[i] * coupling.acceleration_road;
+    }
+    big.fixed_view_mut::<WK_STATES, WK_STATES>(AUGMENTED, AUGMENTED)
+        .copy_from(&coupling.wk.state_matrix);
+    big
 }
 
 /// The filter's whole grid step from a grid node in the whole-step loop's
@@ -342,19 +353,40 @@ impl Simulator {
                 .resolves_delay()
                 .then(|| self.delayed_vector_at(k, start, from, &x));
             let length = end - start;
-            let op = if self.coincide(length, self.grid.step) {
-                self.full_step.clone()
-            } else {
-                self.partial_operator(length).clone()
-            };
-            let rows = op.filter.as_ref().expect("the filter is on");
             let drive = self.forcing(&piece);
-            w = rows.apply(&w, &x, delayed.as_ref(), &drive, start);
-            x = op.apply(&x, delayed.as_ref(), &drive, start);
+            if self.coincide(length, self.grid.step) {
+                let op = &self.full_step;
+                let rows = op.filter.as_ref().expect("the filter is on");
+                w = rows.apply(&w, &x, delayed.as_ref(), &drive, start);
+                x = op.apply(&x, delayed.as_ref(), &drive, start);
+            } else {
+                // The plant's state by the same operations as
+                // `integrate_within_step`, the filter's from its own rows.
+                let z = self.augmented(&x, delayed.as_ref(), &drive, start);
+                w = self.partial_filter_step(length, &z, &w);
+                x = self.partial_step(length, &z);
+            }
             if end == to {
                 return w;
             }
             start = end;
+        }
+    }
+
+    /// The W_k filter state after a partial step of length `length` from
+    /// the plant's augmented vector `z` and the filter state `w`
+    /// ([`super::dense`]).
+    fn partial_filter_step(
+        &mut self,
+        length: f64,
+        z: &super::dense::Augmented<1>,
+        w: &Filter,
+    ) -> Filter {
+        let key = super::dense::offset_key(length, self.grid.step);
+        self.dense_output();
+        match (self.dense.as_mut(), self.coupling.as_ref()) {
+            (Some(dense), Some(coupling)) => dense.filter(key, z, w, coupling),
+            _ => Filter::zeros(),
         }
     }
 

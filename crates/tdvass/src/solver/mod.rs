@@ -17,7 +17,12 @@
 //!
 //! All the step matrices come from one exponential of an augmented matrix
 //! (the plant plus the input generators), computed by the 2^N algorithm in
-//! [`expm::precise_exp`].
+//! [`expm::precise_exp`]. A partial step (a point inside a step: a
+//! communication point, a road breakpoint, a switch of the tire contact)
+//! applies the same exponential at its length to the augmented vector
+//! through a table of the step's binary fractions and a short Taylor
+//! polynomial, with a stated bound (`dense`), at about the cost of a
+//! whole step.
 //!
 //! **Caller independence.** States are committed only on an internal grid
 //! anchored at the start time (`t_k = t_0 + k h`); road breakpoints inside a
@@ -45,7 +50,8 @@
 //!
 //! **Files.** `accuracy` (the step from the tolerance), `grid` (the
 //! internal step and how the delay lies on it),
-//! `operators` (the exact step maps), `kernel` (the whole-step loop and its
+//! `operators` (the exact step maps), `dense` (the partial steps),
+//! `kernel` (the whole-step loop and its
 //! AVX2 build: all of the solver's `unsafe`; the crate denies it elsewhere),
 //! `steps` (whole steps and steps that a road breakpoint splits), `contact`
 //! (the unilateral tire: flight, and the switches located inside steps),
@@ -56,6 +62,7 @@
 
 pub mod accuracy;
 mod contact;
+mod dense;
 pub mod expm;
 mod filter;
 mod grid;
@@ -75,12 +82,13 @@ use filter::{Filter, FilterCoupling, FilterGridStep};
 pub use grid::{DelayGrid, DelayRegime};
 use holding::Holding;
 use nalgebra::{Matrix2, Matrix6, SMatrix, Vector2, Vector4};
-use operators::{GridStep, StepOperator, hermite, hermite_matrix, infinity_norm, tire_pick};
+use operators::{
+    DELAY_INPUT, GridStep, StepOperator, hermite, hermite_matrix, infinity_norm, tire_pick,
+};
 pub use outputs::{
     ComfortValues, ContactLoss, OutputDerivatives, Outputs, RoadHolding, RunSummary,
 };
 pub use persist::STATE_FORMAT_VERSION;
-use std::collections::HashMap;
 use time_average::{INTEGRALS, SquareIntegral};
 
 pub use accuracy::{DEFAULT_TOLERANCE, StepChoice};
@@ -105,10 +113,6 @@ pub const MIN_RESOLVED_DELAY: f64 = 1e-7;
 pub const DIVERGENCE_DISPLACEMENT: f64 = 1e3;
 /// Velocity bound (m/s): beyond it the run is declared divergent.
 pub const DIVERGENCE_VELOCITY: f64 = 1e6;
-/// Cached operators for partial steps (the cache is cleared when full).
-const OPERATOR_CACHE_SIZE: usize = 512;
-/// Resolution of partial step lengths: 2^-40 of the grid step.
-const PARTIAL_STEP_RESOLUTION: f64 = 1099511627776.0;
 /// The harmonic road's phase `A [sin ω t_k, cos ω t_k]` at grid node k is
 /// evaluated exactly at every node `k ≡ 0 (mod PHASE_ANCHOR)` and carried
 /// to the following nodes by the rotation over one step (a power of two, so
@@ -235,6 +239,18 @@ impl Default for SimulationConfig {
     }
 }
 
+/// Node k + 1 (its state and `(x_t, v_t)`) reached from `(from, state)`
+/// in step k, with the delay inside the step.
+#[derive(Debug, Clone, Copy)]
+struct NextNode {
+    k: u64,
+    from: f64,
+    state: State,
+    flight: bool,
+    node: State,
+    end: [f64; 2],
+}
+
 /// The simulator: a quarter car on a road, advanced in time by the precise
 /// integration method. `Clone` is a complete snapshot of it.
 #[derive(Debug, Clone)]
@@ -251,10 +267,15 @@ pub struct Simulator {
     full_step: StepOperator,
     /// `full_step` in the form of the whole-step loop.
     grid_step: GridStep,
-    partial_steps: HashMap<u64, StepOperator>,
-    /// Cached partial steps of the plant alone, for locating the switches
-    /// of a unilateral tire (`contact`).
-    location_steps: HashMap<u64, StepOperator>,
+    /// The partial steps' maps ([`dense`]), built at the first point
+    /// inside a step: a cache of functions of the operators, not state.
+    dense: Option<Box<dense::DenseOutput>>,
+    /// The last [`Self::inner_delay_next_node`] (a cache of a function of
+    /// its arguments, the mode and the operators, cleared when an operator
+    /// or the road input changes).
+    next_node: Option<NextNode>,
+    /// The harmonic road's last phases (a cache of `sin_cos`).
+    phases: dense::Phases,
     road: Road,
     /// Index k of the grid node at or before the committed time.
     grid_index: u64,
@@ -430,8 +451,9 @@ impl Simulator {
             grid,
             full_step,
             grid_step,
-            partial_steps: HashMap::new(),
-            location_steps: HashMap::new(),
+            dense: None,
+            next_node: None,
+            phases: dense::Phases::default(),
             road,
             grid_index: 0,
             committed_time: config.start_time,
@@ -646,24 +668,94 @@ impl Simulator {
         hermite(nodes, self.grid.step, offset)
     }
 
-    fn partial_operator(&mut self, length: f64) -> &StepOperator {
-        let key = (length / self.grid.step * PARTIAL_STEP_RESOLUTION).round() as u64;
-        if self.partial_steps.len() >= OPERATOR_CACHE_SIZE && !self.partial_steps.contains_key(&key)
-        {
-            self.partial_steps.clear();
-        }
-        let (a, b, e) = (self.solver_matrix, self.solver_input_column(), self.plant.e);
-        let omega = match self.config.road {
+    /// The angular frequency ω of the harmonic road (0 for the others).
+    fn road_angular_frequency(&self) -> f64 {
+        match self.config.road {
             RoadSpec::Harmonic {
                 angular_frequency, ..
             } => angular_frequency,
             _ => 0.0,
+        }
+    }
+
+    /// The dense output of the mode in force, built at its first use.
+    fn dense_output(&mut self) -> &mut dense::DenseOutput {
+        let (a, b, e) = (self.solver_matrix, self.solver_input_column(), self.plant.e);
+        let (omega, h) = (self.road_angular_frequency(), self.grid.step);
+        let grid = self.grid;
+        self.dense.get_or_insert_with(|| {
+            let dense = dense::DenseOutput::new(&a, &b, &e, omega, h);
+            // With the delay inside the step, the pieces [t_k, t_k + tau)
+            // and [t_k + tau, t_{k+1}) of every step have fixed lengths.
+            Box::new(if grid.delay_inside_step() {
+                let tau = grid.inner_delay();
+                dense.with_fixed(&[dense::offset_key(tau, h), dense::offset_key(h - tau, h)])
+            } else {
+                dense
+            })
+        })
+    }
+
+    /// The augmented vector of a partial step from `at` ([`dense::augmented`]).
+    fn augmented(
+        &mut self,
+        x: &State,
+        delayed: Option<&Vector4<f64>>,
+        road: &RoadPiece,
+        at: f64,
+    ) -> dense::Augmented<1> {
+        dense::augmented(x, delayed, road, at, || self.harmonic_at(road, at))
+    }
+
+    /// The harmonic road's `A [sin ω t, cos ω t]` at the start `t` of a
+    /// partial step. At the node of the grid index it is the phase the
+    /// whole-step loop carries ([`Self::harmonic_phase`]), and at `tau`
+    /// after it (the delay inside the step) that phase rotated by `ω tau`:
+    /// the pieces of a step start there, and each point inside it asks
+    /// again. Elsewhere `sin_cos` (its last two values kept). Each is a
+    /// function of `t` and the grid index alone.
+    fn harmonic_at(&mut self, road: &RoadPiece, t: f64) -> [f64; 2] {
+        let RoadPiece::Harmonic {
+            amplitude,
+            angular_frequency,
+        } = *road
+        else {
+            return [0.0; 2];
         };
-        let quantized = key as f64 / PARTIAL_STEP_RESOLUTION * self.grid.step;
-        let coupling = self.coupling.as_ref();
-        self.partial_steps
-            .entry(key)
-            .or_insert_with(|| StepOperator::new(&a, &b, &e, omega, quantized, coupling))
+        let k = self.grid_index;
+        let node = self.grid_time(k);
+        if t == node {
+            return self.node_phase(k);
+        }
+        if self.grid.delay_inside_step() && t == node + self.grid.inner_delay() {
+            let [z0, z1] = self.node_phase(k);
+            let (s, c) = self
+                .phases
+                .sin_cos(angular_frequency * self.grid.inner_delay());
+            return [c * z0 + s * z1, c * z1 - s * z0];
+        }
+        let (sin, cos) = self.phases.sin_cos(angular_frequency * t);
+        [amplitude * sin, amplitude * cos]
+    }
+
+    /// [`Self::harmonic_phase`] at node k, kept for the whole-step loop
+    /// (the same value).
+    fn node_phase(&mut self, k: u64) -> [f64; 2] {
+        let z = self.harmonic_phase(k);
+        self.phase = Some((k, z));
+        z
+    }
+
+    /// The exact map of a partial step of length `length` (quantized to
+    /// 2^-40 h, see [`dense`]) applied to the augmented vectors `z`: the
+    /// first 6 rows of `e^{M length} z`.
+    fn partial_step<const C: usize>(
+        &mut self,
+        length: f64,
+        z: &dense::Augmented<C>,
+    ) -> SMatrix<f64, 6, C> {
+        let key = dense::offset_key(length, self.grid.step);
+        self.dense_output().plant(key, z)
     }
 
     fn solver_input_column(&self) -> State {
@@ -683,8 +775,7 @@ impl Simulator {
             if to == next {
                 return node;
             }
-            let (state, sensitivity) = self.integrate_inner_delay(k, from, x, to);
-            return state + sensitivity * Vector2::from(end);
+            return self.integrate_inner_delay_to(k, from, x, to, end);
         }
         let step_start = self.grid_time(k);
         let mut start = from;
@@ -706,8 +797,8 @@ impl Simulator {
                 self.full_step
                     .apply(&state, delayed.as_ref(), &drive, start)
             } else {
-                self.partial_operator(length)
-                    .apply(&state, delayed.as_ref(), &drive, start)
+                let z = self.augmented(&state, delayed.as_ref(), &drive, start);
+                self.partial_step(length, &z)
             };
             if end == to {
                 return state;
@@ -722,6 +813,33 @@ impl Simulator {
     /// interpolates (a 2×2 solve; NaN if it is singular, which the
     /// divergence check reports).
     fn inner_delay_next_node(&mut self, k: u64, from: f64, x: State) -> (State, [f64; 2]) {
+        let flight = self.in_flight();
+        if let Some(c) = &self.next_node
+            && (c.k, c.from.to_bits(), c.flight) == (k, from.to_bits(), flight)
+            && c.state
+                .iter()
+                .zip(x.iter())
+                .all(|(a, b)| a.to_bits() == b.to_bits())
+        {
+            return (c.node, c.end);
+        }
+        let (node, end) = self.solve_next_node(k, from, x);
+        self.next_node = Some(NextNode {
+            k,
+            from,
+            state: x,
+            flight,
+            node,
+            end,
+        });
+        (node, end)
+    }
+
+    /// [`Self::inner_delay_next_node`] without its cache.
+    fn solve_next_node(&mut self, k: u64, from: f64, x: State) -> (State, [f64; 2]) {
+        if let Some(node) = self.whole_step_from_node(k, from, &x) {
+            return (node, [node[X_T], node[V_T]]);
+        }
         let next = self.grid_time(k + 1);
         let (state, sensitivity) = self.integrate_inner_delay(k, from, x, next);
         let pick = tire_pick();
@@ -730,6 +848,53 @@ impl Simulator {
             .solve(&(pick * state))
             .unwrap_or(Vector2::repeat(f64::NAN));
         (state + sensitivity * end, [end[0], end[1]])
+    }
+
+    /// Node k + 1 by the whole-step map of the grid (the 2×2 solve folded
+    /// in, as the whole-step loop takes it) from node k itself (time
+    /// `from`, state `x`), when the step lies in one road piece and the
+    /// wheel is on the road; `None` otherwise.
+    fn whole_step_from_node(&mut self, k: u64, from: f64, x: &State) -> Option<State> {
+        if from != self.grid_time(k) || self.in_flight() {
+            return None;
+        }
+        #[cfg(test)]
+        if dense::tests::EXACT.get() {
+            // The reference of the tests solves for the node as before.
+            return None;
+        }
+        let next = self.grid_time(k + 1);
+        let piece = self.piece_from(from);
+        if piece.end() < next && !self.coincide(piece.end(), next) {
+            return None;
+        }
+        let m = self.grid.delay_steps();
+        let nodes = if k < m {
+            let x = self.config.initial_state[X_T];
+            [x, 0.0, x, 0.0]
+        } else {
+            let len = self.history.len() as u64;
+            let [x0, v0] = self.history[((k - m) % len) as usize];
+            let [x1, v1] = self.history[((k - m + 1) % len) as usize];
+            [x0, v0, x1, v1]
+        };
+        let road = match piece {
+            RoadPiece::Harmonic { .. } => {
+                let phase = self.node_phase(k);
+                operators::combine2(&self.grid_step.harmonic, &phase)
+            }
+            RoadPiece::Linear { .. } => operators::combine2(
+                &self.grid_step.linear,
+                &[piece.value(from), piece.slope(from)],
+            ),
+        };
+        let step = &self.grid_step;
+        let inputs = operators::add6(operators::combine4(&step.nodes, &nodes), road);
+        let x: [f64; 6] = (*x).into();
+        Some(State::from(operators::add6(
+            operators::combine6(&step.transition, &x),
+            inputs,
+        )))
     }
 
     /// Delay inside the step: integrates from (from, x) to `to` inside grid
@@ -762,23 +927,76 @@ impl Simulator {
             if earlier && end > switch && !self.coincide(end, switch) {
                 end = switch;
             }
-            let op = self.partial_operator(end - start).clone();
             let piece = self.forcing(&piece);
-            if earlier {
-                let delayed = self.delayed_input(k, h - tau + (start - step_start));
-                state = op.apply(&state, Some(&delayed), &piece, start);
-                sensitivity = op.transition * sensitivity;
+            // The state and the two columns of its sensitivity, in one
+            // application of the partial step.
+            let mut z = dense::Augmented::<3>::zeros();
+            z.fixed_view_mut::<6, 2>(0, 1).copy_from(&sensitivity);
+            let delayed = if earlier {
+                self.delayed_input(k, h - tau + (start - step_start))
             } else {
                 let interpolant = hermite_matrix(h, (start - switch).max(0.0));
-                let delayed = interpolant * Vector4::new(node_x, node_v, 0.0, 0.0);
-                state = op.apply(&state, Some(&delayed), &piece, start);
-                sensitivity = op.transition * sensitivity
-                    + op.delayed_input * interpolant.fixed_view::<4, 2>(0, 2);
-            }
+                z.fixed_view_mut::<4, 2>(DELAY_INPUT, 1)
+                    .copy_from(&interpolant.fixed_view::<4, 2>(0, 2));
+                interpolant * Vector4::new(node_x, node_v, 0.0, 0.0)
+            };
+            z.set_column(0, &self.augmented(&state, Some(&delayed), &piece, start));
+            let next = self.partial_step(end - start, &z);
+            state = next.column(0).into_owned();
+            sensitivity = next.fixed_columns::<2>(1).into_owned();
             if end == to {
                 return (state, sensitivity);
             }
             start = end;
+        }
+    }
+
+    /// Delay inside the step, node k + 1's `(x_t, v_t)` = `end` known
+    /// ([`Self::inner_delay_next_node`]): the state at `to` in grid step k
+    /// from (from, x), split as [`Self::integrate_inner_delay`] (the same
+    /// value, with the end node in the delayed input from the start instead
+    /// of through the sensitivity: one vector per piece instead of three).
+    fn integrate_inner_delay_to(
+        &mut self,
+        k: u64,
+        from: f64,
+        x: State,
+        to: f64,
+        end: [f64; 2],
+    ) -> State {
+        let (h, tau) = (self.grid.step, self.grid.inner_delay());
+        let step_start = self.grid_time(k);
+        let switch = step_start + tau;
+        let [node_x, node_v] = self.history[(k % self.history.len() as u64) as usize];
+        let mut start = from;
+        let mut state = x;
+        loop {
+            let piece = self.piece_from(start);
+            let mut end_time = if piece.end() < to && !self.coincide(piece.end(), to) {
+                piece.end()
+            } else {
+                to
+            };
+            let earlier = start < switch && !self.coincide(start, switch);
+            if earlier && end_time > switch && !self.coincide(end_time, switch) {
+                end_time = switch;
+            }
+            let piece = self.forcing(&piece);
+            let delayed = if earlier {
+                self.delayed_input(k, h - tau + (start - step_start))
+            } else {
+                hermite(
+                    [node_x, node_v, end[0], end[1]],
+                    h,
+                    (start - switch).max(0.0),
+                )
+            };
+            let z = self.augmented(&state, Some(&delayed), &piece, start);
+            state = self.partial_step(end_time - start, &z);
+            if end_time == to {
+                return state;
+            }
+            start = end_time;
         }
     }
 
@@ -987,6 +1205,7 @@ impl Simulator {
         // Checked before the RMS run is closed, so that a refused value
         // changes nothing.
         Road::check_input(value, slope)?;
+        self.next_node = None;
         let start = self.close_run_for_input();
         self.road.set_input(start, value, slope)?;
         self.reanchor_after_input();
@@ -1012,8 +1231,8 @@ impl Simulator {
         self.solver_matrix_norm = infinity_norm(&matrix);
         self.full_step = step;
         self.grid_step = grid_step;
-        self.partial_steps.clear();
-        self.location_steps.clear();
+        self.dense = None;
+        self.next_node = None;
         // The contact operators were rebuilt: the flight ones follow, and
         // a flight in progress goes on with them.
         self.enter_recorded_mode();

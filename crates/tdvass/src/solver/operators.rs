@@ -46,17 +46,7 @@ impl StepOperator {
         length: f64,
         coupling: Option<&FilterCoupling>,
     ) -> Self {
-        let mut m = SMatrix::<f64, AUGMENTED, AUGMENTED>::zeros();
-        m.fixed_view_mut::<6, 6>(0, 0).copy_from(a);
-        m.fixed_view_mut::<6, 1>(0, DELAY_INPUT).copy_from(b);
-        for i in 0..3 {
-            m[(DELAY_INPUT + i, DELAY_INPUT + i + 1)] = 1.0;
-        }
-        m.fixed_view_mut::<6, 1>(0, LINEAR_ROAD).copy_from(e);
-        m[(LINEAR_ROAD, LINEAR_ROAD + 1)] = 1.0;
-        m.fixed_view_mut::<6, 1>(0, HARMONIC_ROAD).copy_from(e);
-        m[(HARMONIC_ROAD, HARMONIC_ROAD + 1)] = angular_frequency;
-        m[(HARMONIC_ROAD + 1, HARMONIC_ROAD)] = -angular_frequency;
+        let m = augmented_matrix(a, b, e, angular_frequency);
         let exp = expm::precise_exp(&(m * length));
         StepOperator {
             transition: exp.fixed_view::<6, 6>(0, 0).into_owned(),
@@ -82,6 +72,30 @@ impl StepOperator {
         next += road_input(&self.linear_road, &self.harmonic_road, road, at);
         next
     }
+}
+
+/// The augmented matrix M of the step maps (unscaled): the plant `a`,
+/// the delayed input's column `b` and the cubic's generator, the road
+/// column `e` for either road's generator (a line, a sine of angular
+/// frequency `angular_frequency`).
+pub(super) fn augmented_matrix(
+    a: &Matrix6<f64>,
+    b: &State,
+    e: &State,
+    angular_frequency: f64,
+) -> SMatrix<f64, AUGMENTED, AUGMENTED> {
+    let mut m = SMatrix::<f64, AUGMENTED, AUGMENTED>::zeros();
+    m.fixed_view_mut::<6, 6>(0, 0).copy_from(a);
+    m.fixed_view_mut::<6, 1>(0, DELAY_INPUT).copy_from(b);
+    for i in 0..3 {
+        m[(DELAY_INPUT + i, DELAY_INPUT + i + 1)] = 1.0;
+    }
+    m.fixed_view_mut::<6, 1>(0, LINEAR_ROAD).copy_from(e);
+    m[(LINEAR_ROAD, LINEAR_ROAD + 1)] = 1.0;
+    m.fixed_view_mut::<6, 1>(0, HARMONIC_ROAD).copy_from(e);
+    m[(HARMONIC_ROAD, HARMONIC_ROAD + 1)] = angular_frequency;
+    m[(HARMONIC_ROAD + 1, HARMONIC_ROAD)] = -angular_frequency;
+    m
 }
 
 /// The road's part of an exact step map starting at time `at`, for the
@@ -126,11 +140,12 @@ pub(super) fn hermite(nodes: [f64; 4], h: f64, offset: f64) -> Vector4<f64> {
 /// The 4×4 matrix of [`hermite`]: `[u, u', u'', u''']` at offset σ is
 /// `hermite_matrix(h, σ) [x_0, v_0, x_1, v_1]`.
 pub(super) fn hermite_matrix(h: f64, offset: f64) -> Matrix4<f64> {
-    Matrix4::from_fn(|i, j| {
-        let mut nodes = [0.0; 4];
-        nodes[j] = 1.0;
-        hermite(nodes, h, offset)[i]
-    })
+    Matrix4::from_columns(&[
+        hermite([1.0, 0.0, 0.0, 0.0], h, offset),
+        hermite([0.0, 1.0, 0.0, 0.0], h, offset),
+        hermite([0.0, 0.0, 1.0, 0.0], h, offset),
+        hermite([0.0, 0.0, 0.0, 1.0], h, offset),
+    ])
 }
 
 /// `C`: the 2×6 map from X to a history node `(x_t, v_t)`.

@@ -265,8 +265,8 @@ impl Simulator {
         if piece.end() >= t {
             let (xc, x) = (self.committed_state, self.current_state);
             let (a, b) = (
-                self.margin_at(tc, &xc, &piece),
-                self.margin_at(t, &x, &piece),
+                self.margin_kept(tc, &xc, &piece),
+                self.margin_kept(t, &x, &piece),
             );
             if !super::holding::may_lose_contact(t - tc, a, b) {
                 return None;

@@ -262,6 +262,26 @@ impl Simulator {
         )
     }
 
+    /// [`Self::margin_at`], the harmonic road's `sin` and `cos` from the
+    /// kept `sin_cos` (the same bits).
+    pub(super) fn margin_kept(&mut self, t: f64, x: &State, piece: &RoadPiece) -> [f64; 2] {
+        let RoadPiece::Harmonic {
+            amplitude,
+            angular_frequency,
+        } = *piece
+        else {
+            return self.margin_at(t, x, piece);
+        };
+        let (sin, cos) = self.phases.sin_cos(angular_frequency * t);
+        let x: [f64; 6] = (*x).into();
+        margin(
+            self.grid_step.contact.limit,
+            &x,
+            amplitude * sin,
+            amplitude * angular_frequency * cos,
+        )
+    }
+
     /// `∫ f` over `[from.0, to]` inside grid step k (state `to_state` at
     /// `to`: plant and filter), split at road breakpoints, and the squares
     /// at `to` from the left with the road piece they used; `w_from`: the
