@@ -69,7 +69,17 @@ pub fn documentation_html() -> String {
     html_page(&format!("{MODEL_NAME} FMI 3.0 FMU"), write_body)
 }
 
+/// The page: the introduction, then one function per part.
 fn write_body(w: &mut XmlWriter) -> XmlResult {
+    write_introduction(w)?;
+    write_model(w)?;
+    write_variables(w)?;
+    write_co_simulation(w)?;
+    write_experiment_and_references(w)
+}
+
+/// The title, the identity of the FMU and how it relates to the FMI 2.0 one.
+fn write_introduction(w: &mut XmlWriter) -> XmlResult {
     text_element(w, "h1", &format!("{MODEL_NAME}: FMI 3.0 Co-Simulation FMU"))?;
     paragraph(w, MODEL_DESCRIPTION)?;
     paragraph(
@@ -85,6 +95,11 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
         "The model, its variables, value references, units, ranges and start values are those of the FMI 2.0 FMU of the same build (tdvass.fmu), from the same variable table. FMI 3.0 adds named enumerations for the integer settings, the rightmost characteristic roots as an array sized by a structural parameter, intermediate update with early return, and adjoint derivatives.",
     )?;
 
+    Ok(())
+}
+
+/// The model: its diagram, equations, tire and integration.
+fn write_model(w: &mut XmlWriter) -> XmlResult {
     text_element(w, "h2", "The model")?;
     diagram(w)?;
     paragraph(
@@ -97,6 +112,11 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
         "Integration: the precise integration method of the paper on an internal grid anchored at the start time. The tolerance (relative, of every output metric: the master's from fmi3EnterInitializationMode when it defines one, else the DefaultExperiment's 1e-6) sets the internal step, from an error model checked by a step-doubling probe; the step divides tau exactly when tau is longer and is at most max_internal_step when that is > 0. Results do not depend on how the importer splits time into communication steps (except with road = input, where the input changes at communication points or intermediate updates).",
     )?;
 
+    Ok(())
+}
+
+/// The variables, their enumerations and arrays.
+fn write_variables(w: &mut XmlWriter) -> XmlResult {
     text_element(w, "h2", "Variables")?;
     let rows: Vec<Vec<String>> = FMI3_VARIABLES.iter().map(variable_row).collect();
     variable_table(w, "FMI 3.0 type", &rows)?;
@@ -152,6 +172,11 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
         "A structural parameter that sizes an array can only be changed in Configuration Mode (fmi3EnterConfigurationMode after instantiation); its start value is the size an importer that ignores structural parameters sees.",
     )?;
 
+    Ok(())
+}
+
+/// The capabilities, intermediate update and model structure.
+fn write_co_simulation(w: &mut XmlWriter) -> XmlResult {
     text_element(w, "h2", "Co-Simulation capabilities")?;
     let rows: Vec<Vec<String>> = CO_SIMULATION_CAPABILITIES
         .iter()
@@ -175,6 +200,11 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
         "Dependencies are value references. Only tire_deflection and road_displacement depend directly on the input x_g at communication points (with a factor fixed by road); the initial values of the outputs and calculated parameters depend on the parameters named in ModelStructure, and rightmost_roots also on root_count.",
     )?;
 
+    Ok(())
+}
+
+/// The default experiment, logging and references.
+fn write_experiment_and_references(w: &mut XmlWriter) -> XmlResult {
     text_element(w, "h2", "Default experiment")?;
     paragraph(
         w,
