@@ -14,14 +14,14 @@ set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
 
-# name | what it runs | minutes on two cores (measured: tests/run_all.sh, docs/testing.md)
+# name | what it runs | minutes on two cores (measured from a fresh clone: docs/testing.md)
 phases=(
-    "rust|cargo fmt --check, clippy -D warnings, rustdoc -D warnings, cargo test (workspace, release)|4"
-    "fmu|fmu-build --check (generated descriptions current), every platform's FMUs, the FMI 3.0 schema, a second build byte-identical|7"
-    "python|the fmpy suite and the examples (tests/python), the peers' smoke run|4"
-    "robustness|bad input, the state table, divergence, hangs, valgrind, threads (tests/robustness)|7"
+    "rust|cargo fmt --check, clippy -D warnings, rustdoc -D warnings, cargo test (workspace, release)|9"
+    "fmu|fmu-build --check (generated descriptions current), every platform's FMUs, the FMI 3.0 schema, a second build byte-identical|5"
+    "python|the fmpy suite and the examples (tests/python), the peers' smoke run|2"
+    "robustness|bad input, the state table, divergence, hangs, valgrind, threads (tests/robustness)|10"
     "platforms|one C harness on linux64, win64 under wine and aarch64 under qemu; the glibc 2.17 policy (tests/platforms)|1"
-    "fuzz|libFuzzer smoke run of the three fuzz targets, TDVASS_FUZZ_SECONDS (60) on each core (fuzz/run.sh smoke)|2"
+    "fuzz|libFuzzer smoke run of the three fuzz targets, TDVASS_FUZZ_SECONDS (60) on each core (fuzz/run.sh smoke)|3"
     "interop|other masters: fmpy CLI, libcosim, ecos, fmutool -check, the Rust fmi crate (tests/interop)|1"
 )
 times_file="${CARGO_TARGET_DIR:-target}/run_all-times.tsv"
