@@ -2,7 +2,9 @@
 //! derivatives, and the summary of a run.
 
 use super::Simulator;
-use super::time_average::{Accumulated, WEIGHTED_FOURTH, WEIGHTED_SQUARE, rms_from_integral};
+use super::time_average::{
+    Accumulated, INTEGRALS, WEIGHTED_FOURTH, WEIGHTED_SQUARE, rms_from_integral,
+};
 use crate::metrics::RmsValues;
 use crate::model::{Performance, State, X_S, X_T};
 use crate::road::RoadPiece;
@@ -127,6 +129,18 @@ impl Outputs {
     }
 }
 
+/// The outputs that are time averages from the start (see [`Outputs`]),
+/// for a reader that needs only them ([`Simulator::time_averages`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct TimeAverages {
+    /// Running RMS values of BA, SDD and TDD.
+    pub rms: RmsValues,
+    /// J of Eq. (6) from the running RMS values.
+    pub objective: f64,
+    /// `RMS(dynamic tire load) / W`.
+    pub rms_dynamic_tire_load_ratio: f64,
+}
+
 /// First time derivatives of the outputs.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct OutputDerivatives {
@@ -200,11 +214,12 @@ impl Simulator {
         }
         let t = self.current_time;
         let x = self.current_state;
-        let road = self.road_piece_now().value(t);
+        let piece = self.road_piece_now();
+        let [road, _] = self.road_at(&piece, t);
         let (delayed, _) = self.delayed_tire_now();
         let now = self.accumulated_now();
         let duration = t - self.config.start_time;
-        let rms = rms_from_integral(now.integral, duration);
+        let averages = self.time_averages_of(&now.integral, duration);
         let performance = Performance::at(&self.plant, &x, road);
         let k_t = self.config.params.k_t;
         let outputs = Outputs {
@@ -213,11 +228,11 @@ impl Simulator {
             performance,
             road_displacement: road,
             control_force: self.config.params.effective_gain(self.config.variant) * delayed,
-            rms,
-            objective: rms.objective(&self.config.weights),
+            rms: averages.rms,
+            objective: averages.objective,
             comfort: self.comfort_values(&now, duration),
             dynamic_tire_load: self.tire_load(k_t * (road - x[X_T])),
-            rms_dynamic_tire_load_ratio: k_t * rms.tire_deflection / self.static_load(),
+            rms_dynamic_tire_load_ratio: averages.rms_dynamic_tire_load_ratio,
             road_holding: self.config.metrics.road_holding().then(|| RoadHolding {
                 contact_loss_time: now.holding.lost_steps as f64 * self.grid.step
                     + now.holding.lost_time
@@ -235,6 +250,34 @@ impl Simulator {
         };
         self.outputs_cache = Some(outputs);
         outputs
+    }
+
+    /// The time averages among the outputs at the current time, the same
+    /// values as [`Self::outputs`] gives, at less cost when the other
+    /// outputs are not needed: the integrals from the start are closed at
+    /// the current time, the instantaneous outputs are not computed.
+    pub fn time_averages(&mut self) -> TimeAverages {
+        if let Some(outputs) = &self.outputs_cache {
+            return TimeAverages {
+                rms: outputs.rms,
+                objective: outputs.objective,
+                rms_dynamic_tire_load_ratio: outputs.rms_dynamic_tire_load_ratio,
+            };
+        }
+        let integral = self.square_integral_now();
+        let duration = self.current_time - self.config.start_time;
+        self.time_averages_of(&integral, duration)
+    }
+
+    /// The time averages from the integrals `∫ y² dt` over `duration`.
+    fn time_averages_of(&self, integral: &[f64; INTEGRALS], duration: f64) -> TimeAverages {
+        let rms = rms_from_integral(*integral, duration);
+        TimeAverages {
+            rms,
+            objective: rms.objective(&self.config.weights),
+            rms_dynamic_tire_load_ratio: self.config.params.k_t * rms.tire_deflection
+                / self.static_load(),
+        }
     }
 
     /// The static tire load W (N) of the configured variant

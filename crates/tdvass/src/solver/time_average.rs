@@ -230,13 +230,12 @@ impl Simulator {
         piece: &RoadPiece,
     ) -> Squares {
         let p = self.delayed_vector_at(k, t, from, x);
-        let (road, road_rate) = (piece.value(t), piece.slope(t));
-        let drive = self.forcing(piece);
+        let [road, road_rate] = self.road_at(piece, t);
+        let [drive, drive_rate] = self.road_at(&self.forcing(piece), t);
         let b = self.solver_input_column();
-        let dx = self.solver_matrix * x + b * p[0] + self.plant.e * drive.value(t);
-        let acceleration_rate = (self.solver_matrix.row(V_S) * dx)[0]
-            + b[V_S] * p[1]
-            + self.plant.e[V_S] * drive.slope(t);
+        let dx = self.solver_matrix * x + b * p[0] + self.plant.e * drive;
+        let acceleration_rate =
+            (self.solver_matrix.row(V_S) * dx)[0] + b[V_S] * p[1] + self.plant.e[V_S] * drive_rate;
         let y = [
             self.plant.body_acceleration(x),
             x[X_S] - x[X_T],
@@ -265,21 +264,27 @@ impl Simulator {
     /// [`Self::margin_at`], the harmonic road's `sin` and `cos` from the
     /// kept `sin_cos` (the same bits).
     pub(super) fn margin_kept(&mut self, t: f64, x: &State, piece: &RoadPiece) -> [f64; 2] {
-        let RoadPiece::Harmonic {
-            amplitude,
-            angular_frequency,
-        } = *piece
-        else {
-            return self.margin_at(t, x, piece);
-        };
-        let (sin, cos) = self.phases.sin_cos(angular_frequency * t);
+        let [road, road_rate] = self.road_at(piece, t);
         let x: [f64; 6] = (*x).into();
-        margin(
-            self.grid_step.contact.limit,
-            &x,
-            amplitude * sin,
-            amplitude * angular_frequency * cos,
-        )
+        margin(self.grid_step.contact.limit, &x, road, road_rate)
+    }
+
+    /// `[x_g, dx_g/dt]` of `piece` at `t`: [`RoadPiece::value`] and
+    /// [`RoadPiece::slope`] to the bit, the harmonic road's `sin` and `cos`
+    /// from the kept `sin_cos` (one evaluation serves both, and the other
+    /// users of the same instant).
+    #[inline]
+    pub(super) fn road_at(&mut self, piece: &RoadPiece, t: f64) -> [f64; 2] {
+        match *piece {
+            RoadPiece::Harmonic {
+                amplitude,
+                angular_frequency,
+            } => {
+                let (sin, cos) = self.phases.sin_cos(angular_frequency * t);
+                [amplitude * sin, amplitude * angular_frequency * cos]
+            }
+            RoadPiece::Linear { .. } => [piece.value(t), piece.slope(t)],
+        }
     }
 
     /// `∫ f` over `[from.0, to]` inside grid step k (state `to_state` at
