@@ -2,9 +2,7 @@
 //! derivatives, and the summary of a run.
 
 use super::Simulator;
-use super::time_average::{
-    Accumulated, INTEGRALS, WEIGHTED_FOURTH, WEIGHTED_SQUARE, rms_from_integral,
-};
+use super::time_average::{Accumulated, WEIGHTED_FOURTH, WEIGHTED_SQUARE, rms_from_integral};
 use crate::metrics::RmsValues;
 use crate::model::{Performance, State, X_S, X_T};
 use crate::road::RoadPiece;
@@ -264,14 +262,14 @@ impl Simulator {
                 rms_dynamic_tire_load_ratio: outputs.rms_dynamic_tire_load_ratio,
             };
         }
-        let integral = self.square_integral_now();
+        let integral = self.rms_integral_now();
         let duration = self.current_time - self.config.start_time;
         self.time_averages_of(&integral, duration)
     }
 
     /// The time averages from the integrals `∫ y² dt` over `duration`.
-    fn time_averages_of(&self, integral: &[f64; INTEGRALS], duration: f64) -> TimeAverages {
-        let rms = rms_from_integral(*integral, duration);
+    fn time_averages_of(&self, integral: &[f64], duration: f64) -> TimeAverages {
+        let rms = rms_from_integral(integral, duration);
         TimeAverages {
             rms,
             objective: rms.objective(&self.config.weights),

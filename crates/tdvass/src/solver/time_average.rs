@@ -156,7 +156,8 @@ pub(crate) struct Accumulated {
 
 /// RMS values from `∫ y²` over a duration (0 for a zero duration; a
 /// rounding-negative integral counts as 0).
-pub(crate) fn rms_from_integral(integral: [f64; INTEGRALS], duration: f64) -> RmsValues {
+/// `integral` holds at least those of BA², SDD², TDD², in that order.
+pub(crate) fn rms_from_integral(integral: &[f64], duration: f64) -> RmsValues {
     if duration <= 0.0 {
         return RmsValues::default();
     }
@@ -229,6 +230,24 @@ impl Simulator {
         from: (f64, State),
         piece: &RoadPiece,
     ) -> Squares {
+        let (y, rate) = self.performance_and_rates_at(k, t, x, from, piece);
+        let weighted = match &self.coupling {
+            Some(coupling) => [coupling.weighted(w), coupling.weighted_rate(w, y[0])],
+            None => [0.0; 2],
+        };
+        Squares::of(y, rate, weighted)
+    }
+
+    /// BA, SDD, TDD and their rates at time `t` of step k with state `x`,
+    /// the road given by `piece` (see [`Self::squares_at`]).
+    fn performance_and_rates_at(
+        &mut self,
+        k: u64,
+        t: f64,
+        x: &State,
+        from: (f64, State),
+        piece: &RoadPiece,
+    ) -> ([f64; 3], [f64; 3]) {
         let p = self.delayed_vector_at(k, t, from, x);
         let [road, road_rate] = self.road_at(piece, t);
         let [drive, drive_rate] = self.road_at(&self.forcing(piece), t);
@@ -242,11 +261,7 @@ impl Simulator {
             x[X_T] - road,
         ];
         let rate = [acceleration_rate, dx[X_S] - dx[X_T], dx[X_T] - road_rate];
-        let weighted = match &self.coupling {
-            Some(coupling) => [coupling.weighted(w), coupling.weighted_rate(w, y[0])],
-            None => [0.0; 2],
-        };
-        Squares::of(y, rate, weighted)
+        (y, rate)
     }
 
     /// The contact margin `[g, g']` ([`super::holding::margin`]) at time `t`
@@ -516,10 +531,29 @@ impl Simulator {
         self.accumulated_now().integral
     }
 
+    /// `∫_{t_0}^{t} y² dt` of BA, SDD and TDD at the current time t, the
+    /// first three of [`Self::square_integral_now`] to the bit. At a
+    /// committed node (every point of a master whose steps are whole
+    /// internal steps) the squares there are taken without the W_k
+    /// filter's, which these three do not need.
+    pub(super) fn rms_integral_now(&mut self) -> [f64; 3] {
+        let integral = if self.current_time == self.committed_time && self.rms.samples > 0 {
+            let (k, t, x) = (self.grid_index, self.committed_time, self.committed_state);
+            let piece = self.piece_from(t);
+            let (y, rate) = self.performance_and_rates_at(k, t, &x, (t, x), &piece);
+            let at_node = Squares::of(y, rate, [0.0; 2]);
+            self.integral
+                .through_run(self.grid.step, &self.rms, &self.weighted, &at_node)
+        } else {
+            self.square_integral_now()
+        };
+        [integral[0], integral[1], integral[2]]
+    }
+
     /// The running RMS values at the current time.
     pub(super) fn rms_now(&mut self) -> RmsValues {
-        let integral = self.square_integral_now();
-        rms_from_integral(integral, self.current_time - self.config.start_time)
+        let integral = self.rms_integral_now();
+        rms_from_integral(&integral, self.current_time - self.config.start_time)
     }
 
     /// Closes the open run at node k (time t, state x, filter state w;
