@@ -4,7 +4,7 @@
 use super::Simulator;
 use super::time_average::{Accumulated, WEIGHTED_FOURTH, WEIGHTED_SQUARE, rms_from_integral};
 use crate::metrics::RmsValues;
-use crate::model::{Performance, State, X_S, X_T};
+use crate::model::{Performance, State, V_T, X_S, X_T};
 use crate::road::RoadPiece;
 
 /// Ride comfort by ISO 2631-1:1997 (vertical whole-body vibration, W_k
@@ -305,6 +305,9 @@ impl Simulator {
         let piece = self.piece_from(tc);
         if piece.end() >= t {
             let (xc, x) = (self.committed_state, self.current_state);
+            if self.stretch_keeps_contact(&piece, (tc, &xc), (t, &x)) {
+                return None;
+            }
             let (a, b) = (
                 self.margin_kept(tc, &xc, &piece),
                 self.margin_kept(t, &x, &piece),
@@ -316,6 +319,47 @@ impl Simulator {
         self.outputs()
             .road_holding
             .and_then(|holding| holding.first_contact_loss)
+    }
+
+    /// Whether the margins of [`Self::first_contact_loss`]'s test over the
+    /// stretch from the committed point `c` to the current point `now`
+    /// surely pass it, decided without a sine: on the harmonic road, from
+    /// a committed grid node and the phase the whole-step loop carries
+    /// there. `x_g` at the node is that phase's `A sin ω t_c` up to its
+    /// rounding drift (of the order of [`super::PHASE_ANCHOR`] ulp, and of
+    /// the rounding of `ω t_c`), both inside `slack`; `x_g` at `now` is
+    /// above it less `|A ω| (t − t_c)`; each `|g'|` is at most
+    /// `|A ω| + |v_t|`. `false` (the exact test decides) elsewhere.
+    fn stretch_keeps_contact(
+        &self,
+        piece: &RoadPiece,
+        (tc, xc): (f64, &State),
+        (t, x): (f64, &State),
+    ) -> bool {
+        let RoadPiece::Harmonic {
+            amplitude,
+            angular_frequency,
+        } = *piece
+        else {
+            return false;
+        };
+        let k = self.grid_index;
+        let Some((index, z)) = self.phase else {
+            return false;
+        };
+        if index != k || tc != self.grid_time(k) {
+            return false;
+        }
+        let length = t - tc;
+        let limit = self.grid_step.contact.limit;
+        let amplitude = amplitude.abs();
+        let sweep = (amplitude * angular_frequency).abs();
+        let slack = 1e-9 * (limit.abs() + amplitude + xc[X_T].abs() + x[X_T].abs())
+            + 8.0 * f64::EPSILON * amplitude * (angular_frequency * tc).abs();
+        let road = z[0] - slack;
+        let lower = (limit - (xc[X_T] - road)).min(limit - (x[X_T] - (road - sweep * length)));
+        let rates = 2.0 * sweep + xc[V_T].abs() + x[V_T].abs();
+        super::holding::keeps_contact(length, lower, rates)
     }
 
     fn contact_loss_at(&self, time: f64) -> ContactLoss {
