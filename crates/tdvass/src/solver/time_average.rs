@@ -538,21 +538,39 @@ impl Simulator {
 
     /// `∫_{t_0}^{t} y² dt` of BA, SDD and TDD at the current time t, the
     /// first three of [`Self::square_integral_now`] to the bit. At a
-    /// committed node (every point of a master whose steps are whole
-    /// internal steps) the squares there are taken without the W_k
-    /// filter's, which these three do not need.
+    /// committed node, or within the snap tolerance of one (every point of
+    /// a master whose steps are whole internal steps), the squares there
+    /// are taken without the W_k filter's, which these three do not need,
+    /// and neither the road-holding accumulators nor the filter state are
+    /// carried to t.
     pub(super) fn rms_integral_now(&mut self) -> [f64; 3] {
-        let integral = if self.current_time == self.committed_time && self.rms.samples > 0 {
-            let (k, t, x) = (self.grid_index, self.committed_time, self.committed_state);
-            let piece = self.piece_from(t);
-            let (y, rate) = self.performance_and_rates_at(k, t, &x, (t, x), &piece);
-            let at_node = Squares::of(y, rate, [0.0; 2]);
-            self.integral
-                .through_run(self.grid.step, &self.rms, &self.weighted, &at_node)
+        let (t, tc) = (self.current_time, self.committed_time);
+        if t != tc && !self.snaps(t, tc) {
+            let integral = self.square_integral_now();
+            return [integral[0], integral[1], integral[2]];
+        }
+        let (base, at) = if self.rms.samples == 0 {
+            (self.integral.closed, self.integral.anchor)
         } else {
-            self.square_integral_now()
+            let (k, x) = (self.grid_index, self.committed_state);
+            let piece = self.piece_from(tc);
+            let (y, rate) = self.performance_and_rates_at(k, tc, &x, (tc, x), &piece);
+            let at_node = Squares::of(y, rate, [0.0; 2]);
+            let base =
+                self.integral
+                    .through_run(self.grid.step, &self.rms, &self.weighted, &at_node);
+            (base, at_node)
         };
-        [integral[0], integral[1], integral[2]]
+        // As in `accumulated_now`: the committed point's integral, or its
+        // Taylor series over a drift away from it.
+        let delta = t - tc;
+        std::array::from_fn(|i| {
+            if t == tc {
+                base[i]
+            } else {
+                base[i] + delta * (at.value[i] + 0.5 * delta * at.rate[i])
+            }
+        })
     }
 
     /// The running RMS values at the current time.
