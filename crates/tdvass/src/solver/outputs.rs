@@ -289,8 +289,10 @@ impl Simulator {
     ///
     /// Cheap where nothing is lost: the committed accumulators answer up to
     /// the committed point, and the stretch from there to now is decided
-    /// from its end margins (the bound of `solver::holding`); only a
-    /// stretch that may lose contact computes the outputs.
+    /// from its end margins (the bound of `solver::holding`; on the
+    /// harmonic road first from bounds that need no sine, see
+    /// `stretch_keeps_contact`); only a stretch that may lose contact
+    /// computes the outputs.
     pub fn first_contact_loss(&mut self) -> Option<ContactLoss> {
         if !self.config.metrics.road_holding() {
             return None;
