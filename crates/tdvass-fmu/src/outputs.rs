@@ -3,7 +3,7 @@
 //! input and the states (Real outputs), and the counts (Integer outputs).
 
 use tdvass::model::{V_H, V_T, X_H, X_S, X_T};
-use tdvass::solver::{OutputDerivatives, Outputs};
+use tdvass::solver::{OutputDerivatives, Outputs, TimeAverages};
 
 /// An output of the simulator.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -105,6 +105,33 @@ impl OutputId {
             OutputId::MaxSuspensionDeflection => o
                 .road_holding
                 .map_or(f64::NAN, |r| r.max_suspension_deflection),
+        }
+    }
+
+    /// Whether the output is a time average from the start (its value
+    /// then comes from [`TimeAverages`] as well, see [`Self::time_average`]).
+    pub fn is_time_average(self) -> bool {
+        matches!(
+            self,
+            OutputId::RmsBodyAcceleration
+                | OutputId::RmsSuspensionDeflection
+                | OutputId::RmsTireDeflection
+                | OutputId::Objective
+                | OutputId::RmsDynamicTireLoadRatio
+        )
+    }
+
+    /// The value in `averages` for a time average (the same as
+    /// [`Self::value`] of the outputs at the same point), `None` for the
+    /// other outputs.
+    pub fn time_average(self, averages: &TimeAverages) -> Option<f64> {
+        match self {
+            OutputId::RmsBodyAcceleration => Some(averages.rms.body_acceleration),
+            OutputId::RmsSuspensionDeflection => Some(averages.rms.suspension_deflection),
+            OutputId::RmsTireDeflection => Some(averages.rms.tire_deflection),
+            OutputId::Objective => Some(averages.objective),
+            OutputId::RmsDynamicTireLoadRatio => Some(averages.rms_dynamic_tire_load_ratio),
+            _ => None,
         }
     }
 

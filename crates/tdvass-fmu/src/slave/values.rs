@@ -3,6 +3,7 @@
 
 use super::{Slave, SpectrumCache};
 use crate::guards;
+use crate::outputs::OutputId;
 use crate::phase::Phase;
 use crate::variables::{
     Access, Calculated, Causality, Dimension, FmiVersion, VarType, Variability, Variable, by_name,
@@ -11,7 +12,7 @@ use crate::variables::{
 use crate::{FmiError, Status};
 use tdvass::analysis::spectrum::CharacteristicRootSolver;
 use tdvass::model::Variant;
-use tdvass::solver::Outputs;
+use tdvass::solver::{Outputs, TimeAverages};
 
 impl Slave {
     pub(super) fn variable(&self, vr: u32, ty: VarType) -> Result<&'static Variable, FmiError> {
@@ -48,6 +49,40 @@ impl Slave {
                 outputs.time
             ))),
         }
+    }
+
+    /// The time averages among the outputs now ([`Self::outputs`] has
+    /// them too, at more cost).
+    fn time_averages(&mut self) -> Result<TimeAverages, FmiError> {
+        Ok(match self.state.sim.as_mut() {
+            Some(sim) => sim.time_averages(),
+            None => self.build_simulator()?.time_averages(),
+        })
+    }
+
+    /// The value of output `id` now. The outputs of one getter call are
+    /// computed once (`outputs`); a call that asks only for time averages
+    /// computes those alone (`averages`).
+    fn output_value(
+        &mut self,
+        id: OutputId,
+        outputs: &mut Option<Outputs>,
+        averages: &mut Option<TimeAverages>,
+    ) -> Result<f64, FmiError> {
+        if outputs.is_none() && id.is_time_average() {
+            let averages = match averages {
+                Some(a) => *a,
+                None => *averages.insert(self.time_averages()?),
+            };
+            if let Some(value) = id.time_average(&averages) {
+                return Ok(value);
+            }
+        }
+        let outputs = match outputs {
+            Some(o) => o,
+            None => outputs.insert(self.outputs()?),
+        };
+        Ok(id.value(outputs))
     }
 
     /// The spectral abscissa at the current settings (cached).
@@ -121,7 +156,7 @@ impl Slave {
     /// elements in row-major order; `values` must hold exactly as many as
     /// the value references need.
     pub fn get_real(&mut self, vrs: &[u32], values: &mut [f64]) -> Result<Status, FmiError> {
-        let mut outputs = None;
+        let (mut outputs, mut averages) = (None, None);
         let mut at = 0;
         for &vr in vrs {
             let var = self.variable(vr, VarType::Real)?;
@@ -137,10 +172,7 @@ impl Slave {
                 Access::Real { get, .. } => slots[0] = get(&self.state.settings),
                 Access::Time => slots[0] = self.time(),
                 Access::Output(id) => {
-                    if outputs.is_none() {
-                        outputs = Some(self.outputs()?);
-                    }
-                    slots[0] = id.value(outputs.as_ref().expect("computed above"));
+                    slots[0] = self.output_value(id, &mut outputs, &mut averages)?
                 }
                 Access::Calculated(Calculated::SpectralAbscissa) => {
                     slots[0] = self.spectral_abscissa()?

@@ -118,6 +118,15 @@ pub(crate) fn may_lose_contact(length: f64, a: [f64; 2], b: [f64; 2]) -> bool {
     a[0].min(b[0]) < HERMITE_BOUND * length * (a[1].abs() + b[1].abs())
 }
 
+/// A sufficient condition for `!may_lose_contact(length, a, b)` from a
+/// lower bound `lower` of `min(a[0], b[0])` and an upper bound `rates` of
+/// `|a[1]| + |b[1]|` (the factor `1 + 1e-9` covers the rounding of the
+/// test itself).
+#[inline]
+pub(crate) fn keeps_contact(length: f64, lower: f64, rates: f64) -> bool {
+    lower > HERMITE_BOUND * length * rates * (1.0 + 1e-9)
+}
+
 /// `[SDD, SDD']` = `[x_s − x_t, v_s − v_t]` (m, m/s) at state x.
 #[inline(always)]
 pub(crate) fn deflection(x: &[f64; 6]) -> [f64; 2] {

@@ -86,7 +86,7 @@ use operators::{
     DELAY_INPUT, GridStep, StepOperator, hermite, hermite_matrix, infinity_norm, tire_pick,
 };
 pub use outputs::{
-    ComfortValues, ContactLoss, OutputDerivatives, Outputs, RoadHolding, RunSummary,
+    ComfortValues, ContactLoss, OutputDerivatives, Outputs, RoadHolding, RunSummary, TimeAverages,
 };
 pub use persist::STATE_FORMAT_VERSION;
 use time_average::{INTEGRALS, SquareIntegral};
@@ -680,20 +680,20 @@ impl Simulator {
 
     /// The dense output of the mode in force, built at its first use.
     fn dense_output(&mut self) -> &mut dense::DenseOutput {
-        let (a, b, e) = (self.solver_matrix, self.solver_input_column(), self.plant.e);
-        let (omega, h) = (self.road_angular_frequency(), self.grid.step);
-        let grid = self.grid;
-        self.dense.get_or_insert_with(|| {
+        if self.dense.is_none() {
+            let (a, b, e) = (self.solver_matrix, self.solver_input_column(), self.plant.e);
+            let (omega, h) = (self.road_angular_frequency(), self.grid.step);
             let dense = dense::DenseOutput::new(&a, &b, &e, omega, h);
             // With the delay inside the step, the pieces [t_k, t_k + tau)
             // and [t_k + tau, t_{k+1}) of every step have fixed lengths.
-            Box::new(if grid.delay_inside_step() {
-                let tau = grid.inner_delay();
+            self.dense = Some(Box::new(if self.grid.delay_inside_step() {
+                let tau = self.grid.inner_delay();
                 dense.with_fixed(&[dense::offset_key(tau, h), dense::offset_key(h - tau, h)])
             } else {
                 dense
-            })
-        })
+            }));
+        }
+        self.dense.as_deref_mut().expect("built above")
     }
 
     /// The augmented vector of a partial step from `at` ([`dense::augmented`]).

@@ -4,7 +4,7 @@
 use super::Simulator;
 use super::time_average::{Accumulated, WEIGHTED_FOURTH, WEIGHTED_SQUARE, rms_from_integral};
 use crate::metrics::RmsValues;
-use crate::model::{Performance, State, X_S, X_T};
+use crate::model::{Performance, State, V_T, X_S, X_T};
 use crate::road::RoadPiece;
 
 /// Ride comfort by ISO 2631-1:1997 (vertical whole-body vibration, W_k
@@ -127,6 +127,18 @@ impl Outputs {
     }
 }
 
+/// The outputs that are time averages from the start (see [`Outputs`]),
+/// for a reader that needs only them ([`Simulator::time_averages`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct TimeAverages {
+    /// Running RMS values of BA, SDD and TDD.
+    pub rms: RmsValues,
+    /// J of Eq. (6) from the running RMS values.
+    pub objective: f64,
+    /// `RMS(dynamic tire load) / W`.
+    pub rms_dynamic_tire_load_ratio: f64,
+}
+
 /// First time derivatives of the outputs.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct OutputDerivatives {
@@ -200,11 +212,12 @@ impl Simulator {
         }
         let t = self.current_time;
         let x = self.current_state;
-        let road = self.road_piece_now().value(t);
+        let piece = self.road_piece_now();
+        let [road, _] = self.road_at(&piece, t);
         let (delayed, _) = self.delayed_tire_now();
         let now = self.accumulated_now();
         let duration = t - self.config.start_time;
-        let rms = rms_from_integral(now.integral, duration);
+        let averages = self.time_averages_of(&now.integral, duration);
         let performance = Performance::at(&self.plant, &x, road);
         let k_t = self.config.params.k_t;
         let outputs = Outputs {
@@ -213,11 +226,11 @@ impl Simulator {
             performance,
             road_displacement: road,
             control_force: self.config.params.effective_gain(self.config.variant) * delayed,
-            rms,
-            objective: rms.objective(&self.config.weights),
+            rms: averages.rms,
+            objective: averages.objective,
             comfort: self.comfort_values(&now, duration),
             dynamic_tire_load: self.tire_load(k_t * (road - x[X_T])),
-            rms_dynamic_tire_load_ratio: k_t * rms.tire_deflection / self.static_load(),
+            rms_dynamic_tire_load_ratio: averages.rms_dynamic_tire_load_ratio,
             road_holding: self.config.metrics.road_holding().then(|| RoadHolding {
                 contact_loss_time: now.holding.lost_steps as f64 * self.grid.step
                     + now.holding.lost_time
@@ -237,6 +250,34 @@ impl Simulator {
         outputs
     }
 
+    /// The time averages among the outputs at the current time, the same
+    /// values as [`Self::outputs`] gives, at less cost when the other
+    /// outputs are not needed: the integrals from the start are closed at
+    /// the current time, the instantaneous outputs are not computed.
+    pub fn time_averages(&mut self) -> TimeAverages {
+        if let Some(outputs) = &self.outputs_cache {
+            return TimeAverages {
+                rms: outputs.rms,
+                objective: outputs.objective,
+                rms_dynamic_tire_load_ratio: outputs.rms_dynamic_tire_load_ratio,
+            };
+        }
+        let integral = self.rms_integral_now();
+        let duration = self.current_time - self.config.start_time;
+        self.time_averages_of(&integral, duration)
+    }
+
+    /// The time averages from the integrals `∫ y² dt` over `duration`.
+    fn time_averages_of(&self, integral: &[f64], duration: f64) -> TimeAverages {
+        let rms = rms_from_integral(integral, duration);
+        TimeAverages {
+            rms,
+            objective: rms.objective(&self.config.weights),
+            rms_dynamic_tire_load_ratio: self.config.params.k_t * rms.tire_deflection
+                / self.static_load(),
+        }
+    }
+
     /// The static tire load W (N) of the configured variant
     /// ([`crate::model::Params::static_load`]).
     pub fn static_load(&self) -> f64 {
@@ -248,8 +289,10 @@ impl Simulator {
     ///
     /// Cheap where nothing is lost: the committed accumulators answer up to
     /// the committed point, and the stretch from there to now is decided
-    /// from its end margins (the bound of `solver::holding`); only a
-    /// stretch that may lose contact computes the outputs.
+    /// from its end margins (the bound of `solver::holding`; on the
+    /// harmonic road first from bounds that need no sine, see
+    /// `stretch_keeps_contact`); only a stretch that may lose contact
+    /// computes the outputs.
     pub fn first_contact_loss(&mut self) -> Option<ContactLoss> {
         if !self.config.metrics.road_holding() {
             return None;
@@ -264,6 +307,9 @@ impl Simulator {
         let piece = self.piece_from(tc);
         if piece.end() >= t {
             let (xc, x) = (self.committed_state, self.current_state);
+            if self.stretch_keeps_contact(&piece, (tc, &xc), (t, &x)) {
+                return None;
+            }
             let (a, b) = (
                 self.margin_kept(tc, &xc, &piece),
                 self.margin_kept(t, &x, &piece),
@@ -275,6 +321,47 @@ impl Simulator {
         self.outputs()
             .road_holding
             .and_then(|holding| holding.first_contact_loss)
+    }
+
+    /// Whether the margins of [`Self::first_contact_loss`]'s test over the
+    /// stretch from the committed point `c` to the current point `now`
+    /// surely pass it, decided without a sine: on the harmonic road, from
+    /// a committed grid node and the phase the whole-step loop carries
+    /// there. `x_g` at the node is that phase's `A sin ω t_c` up to its
+    /// rounding drift (of the order of [`super::PHASE_ANCHOR`] ulp, and of
+    /// the rounding of `ω t_c`), both inside `slack`; `x_g` at `now` is
+    /// above it less `|A ω| (t − t_c)`; each `|g'|` is at most
+    /// `|A ω| + |v_t|`. `false` (the exact test decides) elsewhere.
+    fn stretch_keeps_contact(
+        &self,
+        piece: &RoadPiece,
+        (tc, xc): (f64, &State),
+        (t, x): (f64, &State),
+    ) -> bool {
+        let RoadPiece::Harmonic {
+            amplitude,
+            angular_frequency,
+        } = *piece
+        else {
+            return false;
+        };
+        let k = self.grid_index;
+        let Some((index, z)) = self.phase else {
+            return false;
+        };
+        if index != k || tc != self.grid_time(k) {
+            return false;
+        }
+        let length = t - tc;
+        let limit = self.grid_step.contact.limit;
+        let amplitude = amplitude.abs();
+        let sweep = (amplitude * angular_frequency).abs();
+        let slack = 1e-9 * (limit.abs() + amplitude + xc[X_T].abs() + x[X_T].abs())
+            + 8.0 * f64::EPSILON * amplitude * (angular_frequency * tc).abs();
+        let road = z[0] - slack;
+        let lower = (limit - (xc[X_T] - road)).min(limit - (x[X_T] - (road - sweep * length)));
+        let rates = 2.0 * sweep + xc[V_T].abs() + x[V_T].abs();
+        super::holding::keeps_contact(length, lower, rates)
     }
 
     fn contact_loss_at(&self, time: f64) -> ContactLoss {

@@ -174,3 +174,62 @@ fn whole_steps_match_the_general_step_closely() {
         }
     }
 }
+
+#[test]
+fn cheap_readers_agree_with_the_outputs_to_the_bit() {
+    // A harmonic road that takes the tire off the road, read at points on
+    // and between the nodes: the time averages alone and the contact-loss
+    // test (decided without a sine where it can) give what the outputs
+    // give.
+    // The amplitudes put the first loss at different points, or nowhere.
+    let steps = [1e-3, 7e-4, 9.9e-5, 1.3e-3, 1e-7, 1.9e-3, 2.3e-4];
+    let mut losses = 0;
+    for (tau, metrics, amplitude) in [
+        (2e-4, Metrics::Comfort, 0.05),
+        (2e-4, Metrics::RoadHolding, 0.03),
+        (2e-4, Metrics::RoadHolding, 0.022),
+        (2e-4, Metrics::RoadHolding, 0.01),
+        (0.0, Metrics::RoadHolding, 0.04),
+        (0.03, Metrics::Comfort, 0.025),
+    ] {
+        let cfg = SimulationConfig {
+            params: Params::with_controller(5386.0, tau),
+            road: RoadSpec::Harmonic {
+                amplitude,
+                angular_frequency: 40.0,
+            },
+            metrics,
+            ..SimulationConfig::default()
+        };
+        let mut sim = Simulator::new(cfg).unwrap();
+        let mut t = 0.0;
+        for i in 0..2000 {
+            t += steps[i % steps.len()];
+            sim.advance_to(t).unwrap();
+            let averages = sim.time_averages();
+            let loss = sim.first_contact_loss();
+            let o = sim.outputs();
+            let expected = [
+                o.rms.body_acceleration,
+                o.rms.suspension_deflection,
+                o.rms.tire_deflection,
+                o.objective,
+                o.rms_dynamic_tire_load_ratio,
+            ];
+            let got = [
+                averages.rms.body_acceleration,
+                averages.rms.suspension_deflection,
+                averages.rms.tire_deflection,
+                averages.objective,
+                averages.rms_dynamic_tire_load_ratio,
+            ];
+            assert_eq!(got.map(f64::to_bits), expected.map(f64::to_bits), "t = {t}");
+            let holding = o.road_holding.unwrap();
+            assert_eq!(loss, holding.first_contact_loss, "t = {t}");
+            if i == 1999 {
+                losses += usize::from(loss.is_some());
+            }
+        }
+    }
+    assert!((1..6).contains(&losses), "{losses} of 6 runs lose contact");
+}

@@ -156,7 +156,8 @@ pub(crate) struct Accumulated {
 
 /// RMS values from `∫ y²` over a duration (0 for a zero duration; a
 /// rounding-negative integral counts as 0).
-pub(crate) fn rms_from_integral(integral: [f64; INTEGRALS], duration: f64) -> RmsValues {
+/// `integral` holds at least those of BA², SDD², TDD², in that order.
+pub(crate) fn rms_from_integral(integral: &[f64], duration: f64) -> RmsValues {
     if duration <= 0.0 {
         return RmsValues::default();
     }
@@ -173,6 +174,11 @@ impl Simulator {
     /// that `t` coincides with), the same choice as the step integration.
     pub(super) fn piece_from(&mut self, t: f64) -> RoadPiece {
         let piece = self.road.piece(t);
+        if let RoadPiece::Harmonic { .. } = piece {
+            // One piece for all times (the test below would ask for it
+            // again at its end, +∞).
+            return piece;
+        }
         if piece.end() <= t || self.coincide(piece.end(), t) {
             self.road.piece(piece.end().max(t))
         } else {
@@ -229,25 +235,38 @@ impl Simulator {
         from: (f64, State),
         piece: &RoadPiece,
     ) -> Squares {
+        let (y, rate) = self.performance_and_rates_at(k, t, x, from, piece);
+        let weighted = match &self.coupling {
+            Some(coupling) => [coupling.weighted(w), coupling.weighted_rate(w, y[0])],
+            None => [0.0; 2],
+        };
+        Squares::of(y, rate, weighted)
+    }
+
+    /// BA, SDD, TDD and their rates at time `t` of step k with state `x`,
+    /// the road given by `piece` (see [`Self::squares_at`]).
+    fn performance_and_rates_at(
+        &mut self,
+        k: u64,
+        t: f64,
+        x: &State,
+        from: (f64, State),
+        piece: &RoadPiece,
+    ) -> ([f64; 3], [f64; 3]) {
         let p = self.delayed_vector_at(k, t, from, x);
-        let (road, road_rate) = (piece.value(t), piece.slope(t));
-        let drive = self.forcing(piece);
+        let [road, road_rate] = self.road_at(piece, t);
+        let [drive, drive_rate] = self.road_at(&self.forcing(piece), t);
         let b = self.solver_input_column();
-        let dx = self.solver_matrix * x + b * p[0] + self.plant.e * drive.value(t);
-        let acceleration_rate = (self.solver_matrix.row(V_S) * dx)[0]
-            + b[V_S] * p[1]
-            + self.plant.e[V_S] * drive.slope(t);
+        let dx = self.solver_matrix * x + b * p[0] + self.plant.e * drive;
+        let acceleration_rate =
+            (self.solver_matrix.row(V_S) * dx)[0] + b[V_S] * p[1] + self.plant.e[V_S] * drive_rate;
         let y = [
             self.plant.body_acceleration(x),
             x[X_S] - x[X_T],
             x[X_T] - road,
         ];
         let rate = [acceleration_rate, dx[X_S] - dx[X_T], dx[X_T] - road_rate];
-        let weighted = match &self.coupling {
-            Some(coupling) => [coupling.weighted(w), coupling.weighted_rate(w, y[0])],
-            None => [0.0; 2],
-        };
-        Squares::of(y, rate, weighted)
+        (y, rate)
     }
 
     /// The contact margin `[g, g']` ([`super::holding::margin`]) at time `t`
@@ -265,21 +284,27 @@ impl Simulator {
     /// [`Self::margin_at`], the harmonic road's `sin` and `cos` from the
     /// kept `sin_cos` (the same bits).
     pub(super) fn margin_kept(&mut self, t: f64, x: &State, piece: &RoadPiece) -> [f64; 2] {
-        let RoadPiece::Harmonic {
-            amplitude,
-            angular_frequency,
-        } = *piece
-        else {
-            return self.margin_at(t, x, piece);
-        };
-        let (sin, cos) = self.phases.sin_cos(angular_frequency * t);
+        let [road, road_rate] = self.road_at(piece, t);
         let x: [f64; 6] = (*x).into();
-        margin(
-            self.grid_step.contact.limit,
-            &x,
-            amplitude * sin,
-            amplitude * angular_frequency * cos,
-        )
+        margin(self.grid_step.contact.limit, &x, road, road_rate)
+    }
+
+    /// `[x_g, dx_g/dt]` of `piece` at `t`: [`RoadPiece::value`] and
+    /// [`RoadPiece::slope`] to the bit, the harmonic road's `sin` and `cos`
+    /// from the kept `sin_cos` (one evaluation serves both, and the other
+    /// users of the same instant).
+    #[inline]
+    pub(super) fn road_at(&mut self, piece: &RoadPiece, t: f64) -> [f64; 2] {
+        match *piece {
+            RoadPiece::Harmonic {
+                amplitude,
+                angular_frequency,
+            } => {
+                let (sin, cos) = self.phases.sin_cos(angular_frequency * t);
+                [amplitude * sin, amplitude * angular_frequency * cos]
+            }
+            RoadPiece::Linear { .. } => [piece.value(t), piece.slope(t)],
+        }
     }
 
     /// `∫ f` over `[from.0, to]` inside grid step k (state `to_state` at
@@ -511,10 +536,47 @@ impl Simulator {
         self.accumulated_now().integral
     }
 
+    /// `∫_{t_0}^{t} y² dt` of BA, SDD and TDD at the current time t, the
+    /// first three of [`Self::square_integral_now`] to the bit. At a
+    /// committed node, or within the snap tolerance of one (every point of
+    /// a master whose steps are whole internal steps), the squares there
+    /// are taken without the W_k filter's, which these three do not need,
+    /// and neither the road-holding accumulators nor the filter state are
+    /// carried to t.
+    pub(super) fn rms_integral_now(&mut self) -> [f64; 3] {
+        let (t, tc) = (self.current_time, self.committed_time);
+        if t != tc && !self.snaps(t, tc) {
+            let integral = self.square_integral_now();
+            return [integral[0], integral[1], integral[2]];
+        }
+        let (base, at) = if self.rms.samples == 0 {
+            (self.integral.closed, self.integral.anchor)
+        } else {
+            let (k, x) = (self.grid_index, self.committed_state);
+            let piece = self.piece_from(tc);
+            let (y, rate) = self.performance_and_rates_at(k, tc, &x, (tc, x), &piece);
+            let at_node = Squares::of(y, rate, [0.0; 2]);
+            let base =
+                self.integral
+                    .through_run(self.grid.step, &self.rms, &self.weighted, &at_node);
+            (base, at_node)
+        };
+        // As in `accumulated_now`: the committed point's integral, or its
+        // Taylor series over a drift away from it.
+        let delta = t - tc;
+        std::array::from_fn(|i| {
+            if t == tc {
+                base[i]
+            } else {
+                base[i] + delta * (at.value[i] + 0.5 * delta * at.rate[i])
+            }
+        })
+    }
+
     /// The running RMS values at the current time.
     pub(super) fn rms_now(&mut self) -> RmsValues {
-        let integral = self.square_integral_now();
-        rms_from_integral(integral, self.current_time - self.config.start_time)
+        let integral = self.rms_integral_now();
+        rms_from_integral(&integral, self.current_time - self.config.start_time)
     }
 
     /// Closes the open run at node k (time t, state x, filter state w;
