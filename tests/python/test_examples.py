@@ -185,7 +185,7 @@ def _stability_verification(out: Path, text: str) -> None:
 def _stability_map(out: Path, text: str) -> None:
     assert "all six verdicts agree with the paper: yes" in text, text
     assert "171870.87" in text and "24427.66" in text, text
-    # one notation for the stable delay intervals, as in the READMEs and the CLI
+    # one notation for the stable delay intervals, as in the docs and the CLI
     assert "tdvass: [0, 0.0502) ∪ (0.0945, 0.1338) ∪ (0.1953, 0.2175) ∪ (0.2961, 0.3011)" in text, text
 
 
