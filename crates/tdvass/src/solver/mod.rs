@@ -917,16 +917,7 @@ impl Simulator {
         let mut state = x;
         let mut sensitivity = SMatrix::<f64, 6, 2>::zeros();
         loop {
-            let piece = self.piece_from(start);
-            let mut end = if piece.end() < to && !self.coincide(piece.end(), to) {
-                piece.end()
-            } else {
-                to
-            };
-            let earlier = start < switch && !self.coincide(start, switch);
-            if earlier && end > switch && !self.coincide(end, switch) {
-                end = switch;
-            }
+            let (piece, end, earlier) = self.inner_delay_piece(start, to, switch);
             let piece = self.forcing(&piece);
             // The state and the two columns of its sensitivity, in one
             // application of the partial step.
@@ -951,6 +942,24 @@ impl Simulator {
         }
     }
 
+    /// Delay inside the step: the road piece at `start`, where the stretch
+    /// from `start` ends (the piece's end, `to`, or the switch `t_k + tau`
+    /// of the delayed argument, whichever comes first), and whether
+    /// `start` lies before the switch.
+    fn inner_delay_piece(&mut self, start: f64, to: f64, switch: f64) -> (RoadPiece, f64, bool) {
+        let piece = self.piece_from(start);
+        let mut end = if piece.end() < to && !self.coincide(piece.end(), to) {
+            piece.end()
+        } else {
+            to
+        };
+        let earlier = start < switch && !self.coincide(start, switch);
+        if earlier && end > switch && !self.coincide(end, switch) {
+            end = switch;
+        }
+        (piece, end, earlier)
+    }
+
     /// Delay inside the step, node k + 1's `(x_t, v_t)` = `end` known
     /// ([`Self::inner_delay_next_node`]): the state at `to` in grid step k
     /// from (from, x), split as [`Self::integrate_inner_delay`] (the same
@@ -971,16 +980,7 @@ impl Simulator {
         let mut start = from;
         let mut state = x;
         loop {
-            let piece = self.piece_from(start);
-            let mut end_time = if piece.end() < to && !self.coincide(piece.end(), to) {
-                piece.end()
-            } else {
-                to
-            };
-            let earlier = start < switch && !self.coincide(start, switch);
-            if earlier && end_time > switch && !self.coincide(end_time, switch) {
-                end_time = switch;
-            }
+            let (piece, end_time, earlier) = self.inner_delay_piece(start, to, switch);
             let piece = self.forcing(&piece);
             let delayed = if earlier {
                 self.delayed_input(k, h - tau + (start - step_start))
