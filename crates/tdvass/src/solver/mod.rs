@@ -655,8 +655,16 @@ impl Simulator {
     /// Delayed-input vector `[u, u', u'', u''']` at offset σ into grid step k.
     #[inline]
     fn delayed_input(&self, k: u64, offset: f64) -> Vector4<f64> {
+        hermite(self.delayed_nodes(k), self.grid.step, offset)
+    }
+
+    /// The Hermite nodes `[x_t, v_t, x_t, v_t]` of the delayed input over
+    /// grid step k: the history nodes k − m and k − m + 1, or the constant
+    /// initial `x_t` before the start.
+    #[inline]
+    fn delayed_nodes(&self, k: u64) -> [f64; 4] {
         let m = self.grid.delay_steps();
-        let nodes = if k < m {
+        if k < m {
             let x = self.config.initial_state[X_T];
             [x, 0.0, x, 0.0]
         } else {
@@ -664,8 +672,7 @@ impl Simulator {
             let [x0, v0] = self.history[((k - m) % len) as usize];
             let [x1, v1] = self.history[((k - m + 1) % len) as usize];
             [x0, v0, x1, v1]
-        };
-        hermite(nodes, self.grid.step, offset)
+        }
     }
 
     /// The angular frequency ω of the harmonic road (0 for the others).
@@ -868,16 +875,7 @@ impl Simulator {
         if piece.end() < next && !self.coincide(piece.end(), next) {
             return None;
         }
-        let m = self.grid.delay_steps();
-        let nodes = if k < m {
-            let x = self.config.initial_state[X_T];
-            [x, 0.0, x, 0.0]
-        } else {
-            let len = self.history.len() as u64;
-            let [x0, v0] = self.history[((k - m) % len) as usize];
-            let [x1, v1] = self.history[((k - m + 1) % len) as usize];
-            [x0, v0, x1, v1]
-        };
+        let nodes = self.delayed_nodes(k);
         let road = match piece {
             RoadPiece::Harmonic { .. } => {
                 let phase = self.node_phase(k);
