@@ -74,7 +74,9 @@ impl Slave {
                 Some(a) => *a,
                 None => *averages.insert(self.time_averages()?),
             };
-            if let Some(value) = id.time_average(&averages) {
+            // A value that is not finite takes the full path, whose check
+            // reports it (`guards::non_finite_output`).
+            if let Some(value) = id.time_average(&averages).filter(|v| v.is_finite()) {
                 return Ok(value);
             }
         }
