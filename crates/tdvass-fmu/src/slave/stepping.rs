@@ -131,9 +131,13 @@ impl Slave {
             unreachable!("stepComplete has a simulator")
         };
         match advanced {
-            // `advance_to` bounds every state (its divergence check); the
-            // outputs, computed only when a getter asks, follow from them.
-            Ok(()) => match guards::non_finite_state(&sim.state()) {
+            // `advance_to` bounds every state (its divergence check, or
+            // for a state it defers, a bound that passes it); the outputs,
+            // computed only when a getter asks, follow from them.
+            Ok(()) => match sim
+                .computed_state()
+                .and_then(|x| guards::non_finite_state(&x))
+            {
                 None => {
                     self.state.last_successful_time = sim.time();
                     // The bilateral tire warns once where the linear model

@@ -364,8 +364,7 @@ impl Simulator {
         };
         self.check_divergence(time, &x)?;
         self.outputs_cache = None;
-        self.current_time = time;
-        self.current_state = x;
+        self.set_current(time, x);
         self.close_run_here();
         let piece = self.piece_from(time);
         if self.in_flight() {

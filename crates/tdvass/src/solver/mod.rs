@@ -113,6 +113,16 @@ pub const MIN_RESOLVED_DELAY: f64 = 1e-7;
 pub const DIVERGENCE_DISPLACEMENT: f64 = 1e3;
 /// Velocity bound (m/s): beyond it the run is declared divergent.
 pub const DIVERGENCE_VELOCITY: f64 = 1e6;
+
+/// The divergence bound of state i: [`DIVERGENCE_DISPLACEMENT`] for the
+/// displacements (even i), [`DIVERGENCE_VELOCITY`] for the velocities.
+fn divergence_bound(i: usize) -> f64 {
+    if i.is_multiple_of(2) {
+        DIVERGENCE_DISPLACEMENT
+    } else {
+        DIVERGENCE_VELOCITY
+    }
+}
 /// The harmonic road's phase `A [sin ω t_k, cos ω t_k]` at grid node k is
 /// evaluated exactly at every node `k ≡ 0 (mod PHASE_ANCHOR)` and carried
 /// to the following nodes by the rotation over one step (a power of two, so
@@ -282,7 +292,15 @@ pub struct Simulator {
     committed_time: f64,
     committed_state: State,
     current_time: f64,
+    /// The state at `current_time`, unless `deferred`.
     current_state: State,
+    /// `Some` while `current_state` is still to be found: the current
+    /// time snaps to the committed grid node and the state there
+    /// ([`Self::state_near_committed`]) is computed when first asked for
+    /// ([`Self::settle`]). It holds [`Self::drift_bounds`], which showed
+    /// that the state passes the divergence check. Every change of the
+    /// committed point, the operators or the road settles it first.
+    deferred: Option<[f64; 6]>,
     /// (x_t, v_t) at grid nodes `grid_index − m ..= grid_index`, by `index % (m + 1)`.
     history: Vec<[f64; 2]>,
     /// `Σ y²` of BA, SDD, TDD over the grid nodes of the open run (after
@@ -460,6 +478,7 @@ impl Simulator {
             committed_state: initial,
             current_time: config.start_time,
             current_state: initial,
+            deferred: None,
             history,
             rms: RunningRms::default(),
             integral: SquareIntegral::new(start_time, Default::default()),
@@ -607,7 +626,37 @@ impl Simulator {
 
     /// Current state `X` (solver coordinates).
     pub fn state(&self) -> State {
-        self.current_state
+        match self.computed_state() {
+            Some(x) => x,
+            None => {
+                let mut settled = self.clone();
+                settled.settle();
+                settled.current_state
+            }
+        }
+    }
+
+    /// The current state if it has been computed; `None` while it is
+    /// deferred (a time within the snap tolerance of the committed node,
+    /// whose state is shown to pass the divergence check and is found when
+    /// first asked for: [`Self::state`], the outputs).
+    pub fn computed_state(&self) -> Option<State> {
+        self.deferred.is_none().then_some(self.current_state)
+    }
+
+    /// Computes a deferred current state (the same value as when it is
+    /// computed at once).
+    pub(super) fn settle(&mut self) {
+        if self.deferred.take().is_some() {
+            self.current_state = self.state_near_committed(self.current_time - self.committed_time);
+        }
+    }
+
+    /// Sets the current point (time, state computed).
+    fn set_current(&mut self, time: f64, x: State) {
+        self.current_time = time;
+        self.current_state = x;
+        self.deferred = None;
     }
 
     fn grid_time(&self, k: u64) -> f64 {
@@ -668,9 +717,11 @@ impl Simulator {
             let x = self.config.initial_state[X_T];
             [x, 0.0, x, 0.0]
         } else {
-            let len = self.history.len() as u64;
-            let [x0, v0] = self.history[((k - m) % len) as usize];
-            let [x1, v1] = self.history[((k - m + 1) % len) as usize];
+            let len = self.history.len();
+            let first = ((k - m) % len as u64) as usize;
+            let second = if first + 1 == len { 0 } else { first + 1 };
+            let [x0, v0] = self.history[first];
+            let [x1, v1] = self.history[second];
             [x0, v0, x1, v1]
         }
     }
@@ -777,12 +828,10 @@ impl Simulator {
     /// breakpoints.
     fn integrate_within_step(&mut self, k: u64, from: f64, x: State, to: f64) -> State {
         if self.grid.delay_inside_step() {
-            let next = self.grid_time(k + 1);
-            let (node, end) = self.inner_delay_next_node(k, from, x);
-            if to == next {
-                return node;
+            if to == self.grid_time(k + 1) {
+                return self.inner_delay_next_node(k, from, x).0;
             }
-            return self.integrate_inner_delay_to(k, from, x, to, end);
+            return self.integrate_inner_delay_to(k, from, x, to);
         }
         let step_start = self.grid_time(k);
         let mut start = from;
@@ -958,19 +1007,13 @@ impl Simulator {
         (piece, end, earlier)
     }
 
-    /// Delay inside the step, node k + 1's `(x_t, v_t)` = `end` known
-    /// ([`Self::inner_delay_next_node`]): the state at `to` in grid step k
-    /// from (from, x), split as [`Self::integrate_inner_delay`] (the same
-    /// value, with the end node in the delayed input from the start instead
-    /// of through the sensitivity: one vector per piece instead of three).
-    fn integrate_inner_delay_to(
-        &mut self,
-        k: u64,
-        from: f64,
-        x: State,
-        to: f64,
-        end: [f64; 2],
-    ) -> State {
+    /// Delay inside the step: the state at `to` in grid step k from
+    /// (from, x), split as [`Self::integrate_inner_delay`] (the same value,
+    /// with node k + 1's `(x_t, v_t)` from [`Self::inner_delay_next_node`]
+    /// in the delayed input instead of through the sensitivity: one vector
+    /// per piece instead of three). That node is found only for a piece
+    /// after `t_k + tau`: a point before it does not need it.
+    fn integrate_inner_delay_to(&mut self, k: u64, from: f64, x: State, to: f64) -> State {
         let (h, tau) = (self.grid.step, self.grid.inner_delay());
         let step_start = self.grid_time(k);
         let switch = step_start + tau;
@@ -983,11 +1026,8 @@ impl Simulator {
             let delayed = if earlier {
                 self.delayed_input(k, h - tau + (start - step_start))
             } else {
-                hermite(
-                    [node_x, node_v, end[0], end[1]],
-                    h,
-                    (start - switch).max(0.0),
-                )
+                let (_, [end_x, end_v]) = self.inner_delay_next_node(k, from, x);
+                hermite([node_x, node_v, end_x, end_v], h, (start - switch).max(0.0))
             };
             let z = self.augmented(&state, Some(&delayed), &piece, start);
             state = self.partial_step(end_time - start, &z);
@@ -1000,11 +1040,7 @@ impl Simulator {
 
     fn check_divergence(&self, time: f64, x: &State) -> Result<()> {
         for (i, value) in x.iter().enumerate() {
-            let bound = if i % 2 == 0 {
-                DIVERGENCE_DISPLACEMENT
-            } else {
-                DIVERGENCE_VELOCITY
-            };
+            let bound = divergence_bound(i);
             if value.is_nan() || value.abs() > bound {
                 return Err(Error::Diverged {
                     time,
@@ -1076,8 +1112,7 @@ impl Simulator {
                 let x =
                     self.integrate_within_step(k, self.committed_time, self.committed_state, t_end);
                 self.check_divergence(t_end, &x)?;
-                self.current_state = x;
-                self.current_time = t_end;
+                self.set_current(t_end, x);
                 return Ok(());
             }
         }
@@ -1136,12 +1171,30 @@ impl Simulator {
     }
 
     /// Ends an advance at `t_end`, which snaps to the committed point: the
-    /// state there by [`Self::state_near_committed`].
+    /// state there by [`Self::state_near_committed`], deferred
+    /// ([`Self::settle`]) where [`Self::drift_bounds`] shows that it
+    /// passes the divergence check, so that a master whose communication
+    /// times drift off the grid nodes pays for it only when it asks for
+    /// the state or an output that needs it.
     fn finish_near_committed(&mut self, t_end: f64) -> Result<()> {
-        let x = self.state_near_committed(t_end - self.committed_time);
+        let delta = t_end - self.committed_time;
+        if delta != 0.0 {
+            let x = self.committed_state;
+            if let Some(drift) = self.drift_bounds(delta)
+                && x.iter()
+                    .zip(drift)
+                    .enumerate()
+                    .all(|(i, (v, d))| v.abs() + d <= 0.5 * divergence_bound(i))
+            {
+                self.current_time = t_end;
+                self.current_state = x;
+                self.deferred = Some(drift);
+                return Ok(());
+            }
+        }
+        let x = self.state_near_committed(delta);
         self.check_divergence(t_end, &x)?;
-        self.current_state = x;
-        self.current_time = t_end;
+        self.set_current(t_end, x);
         Ok(())
     }
 
@@ -1178,8 +1231,7 @@ impl Simulator {
         self.committed_time = time;
         self.committed_state = x;
         self.committed_filter = w;
-        self.current_time = time;
-        self.current_state = x;
+        self.set_current(time, x);
         if self.config.metrics.road_holding() {
             self.holding.add_node(&x.into());
         }
@@ -1192,6 +1244,7 @@ impl Simulator {
     /// time that snaps to the committed point (a time drift) sets it from
     /// that point instead.
     pub fn set_road_input(&mut self, value: f64, slope: f64) -> Result<()> {
+        self.settle();
         self.outputs_cache = None;
         if !self.road.is_input() {
             return Err(Error::InvalidSetting {
@@ -1213,6 +1266,7 @@ impl Simulator {
     /// Changes the feedback gain g (tunable; within the rate limit of
     /// [`crate::limits::check_rates`]); the history is kept.
     pub fn set_gain(&mut self, g: f64) -> Result<()> {
+        self.settle();
         self.outputs_cache = None;
         let params = Params {
             g,

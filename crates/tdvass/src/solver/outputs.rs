@@ -199,6 +199,7 @@ impl Simulator {
 
     /// `[u, u']`: the delayed tire displacement and its rate now.
     pub(super) fn delayed_tire_now(&mut self) -> (f64, f64) {
+        self.settle();
         let (k, t, x) = (self.grid_index, self.current_time, self.current_state);
         let from = (self.committed_time, self.committed_state);
         let p = self.delayed_vector_at(k, t, from, &x);
@@ -210,6 +211,7 @@ impl Simulator {
         if let Some(outputs) = self.outputs_cache {
             return outputs;
         }
+        self.settle();
         let t = self.current_time;
         let x = self.current_state;
         let piece = self.road_piece_now();
@@ -306,8 +308,24 @@ impl Simulator {
         }
         let piece = self.piece_from(tc);
         if piece.end() >= t {
-            let (xc, x) = (self.committed_state, self.current_state);
-            if self.stretch_keeps_contact(&piece, (tc, &xc), (t, &x)) {
+            let xc = self.committed_state;
+            if let Some(drift) = self.deferred {
+                // A deferred state near the node: the test below with
+                // bounds of its `x_t` and `|v_t|` (each evaluation is
+                // monotone in them, so passing it means the state passes
+                // it too); where it does not pass, the state is computed.
+                let end = StretchEnd {
+                    tire_high: xc[X_T] + drift[X_T],
+                    tire_magnitude: xc[X_T].abs() + drift[X_T],
+                    tire_speed: xc[V_T].abs() + drift[V_T],
+                };
+                if self.stretch_keeps_contact(&piece, (tc, &xc), (t, end)) {
+                    return None;
+                }
+                self.settle();
+            }
+            let x = self.current_state;
+            if self.stretch_keeps_contact(&piece, (tc, &xc), (t, StretchEnd::at(&x))) {
                 return None;
             }
             let (a, b) = (
@@ -336,7 +354,7 @@ impl Simulator {
         &self,
         piece: &RoadPiece,
         (tc, xc): (f64, &State),
-        (t, x): (f64, &State),
+        (t, end): (f64, StretchEnd),
     ) -> bool {
         let RoadPiece::Harmonic {
             amplitude,
@@ -356,11 +374,12 @@ impl Simulator {
         let limit = self.grid_step.contact.limit;
         let amplitude = amplitude.abs();
         let sweep = (amplitude * angular_frequency).abs();
-        let slack = 1e-9 * (limit.abs() + amplitude + xc[X_T].abs() + x[X_T].abs())
+        let slack = 1e-9 * (limit.abs() + amplitude + xc[X_T].abs() + end.tire_magnitude)
             + 8.0 * f64::EPSILON * amplitude * (angular_frequency * tc).abs();
         let road = z[0] - slack;
-        let lower = (limit - (xc[X_T] - road)).min(limit - (x[X_T] - (road - sweep * length)));
-        let rates = 2.0 * sweep + xc[V_T].abs() + x[V_T].abs();
+        let lower =
+            (limit - (xc[X_T] - road)).min(limit - (end.tire_high - (road - sweep * length)));
+        let rates = 2.0 * sweep + xc[V_T].abs() + end.tire_speed;
         super::holding::keeps_contact(length, lower, rates)
     }
 
@@ -395,6 +414,7 @@ impl Simulator {
 
     /// Exact first time derivatives of the instantaneous outputs.
     pub fn output_derivatives(&mut self) -> OutputDerivatives {
+        self.settle();
         let t = self.current_time;
         let x = self.current_state;
         let piece = self.road_piece_now();
@@ -486,5 +506,25 @@ impl Simulator {
     /// RMS values so far (time averages from the start to now).
     pub fn rms(&mut self) -> RmsValues {
         self.rms_now()
+    }
+}
+
+/// The end point of a stretch in [`Simulator::stretch_keeps_contact`]:
+/// `x_t` there (or a bound above it), and bounds of `|x_t|` and `|v_t|`.
+#[derive(Debug, Clone, Copy)]
+struct StretchEnd {
+    tire_high: f64,
+    tire_magnitude: f64,
+    tire_speed: f64,
+}
+
+impl StretchEnd {
+    /// The end point at state x (the values themselves).
+    fn at(x: &State) -> StretchEnd {
+        StretchEnd {
+            tire_high: x[X_T],
+            tire_magnitude: x[X_T].abs(),
+            tire_speed: x[V_T].abs(),
+        }
     }
 }

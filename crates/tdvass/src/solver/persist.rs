@@ -212,6 +212,12 @@ fn read_road_state(r: &mut ByteReader) -> Result<RoadState> {
 impl Simulator {
     /// Encodes the whole simulator.
     pub fn to_bytes(&self) -> Vec<u8> {
+        if self.computed_state().is_none() {
+            // The same bytes as when the state was computed at once.
+            let mut settled = self.clone();
+            settled.settle();
+            return settled.to_bytes();
+        }
         let mut w = ByteWriter::default();
         w.u64(STATE_FORMAT_VERSION);
         write_config(&mut w, &self.config);

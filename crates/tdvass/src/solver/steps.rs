@@ -132,8 +132,7 @@ impl Simulator {
             self.committed_time = time;
             self.committed_state = State::from(x);
             self.committed_filter = Filter::from(w);
-            self.current_time = time;
-            self.current_state = self.committed_state;
+            self.set_current(time, self.committed_state);
             self.road.release_before(time);
         }
     }
