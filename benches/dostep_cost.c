@@ -2,24 +2,36 @@
  * Cost of one fmi2DoStep through the real tdvass shared library (dlopen).
  *
  *   dostep_cost LIB GUID [REPEATS]
+ *   dostep_cost --interleaved GUID CALLS ROUNDS LIB [LIB ...]
  *
+ * The first form:
  * 1. The fixed call cost, with the internal step pinned at 1e-4 s
  *    (max_internal_step): 15 s of the default experiment at 1 ms and 10 ms
  *    (10 and 100 internal steps, exact times t = k h and accumulated
  *    t += h), the fastest of REPEATS runs (default 7). A line through the
  *    exact-time costs gives the fixed call cost and the cost per internal
  *    step.
- * 2. The default tolerance (1e-6: internal step 10/3 ms on the default
- *    experiment): a doStep of one internal step (aligned), of 1 ms, and of
- *    steps that are not multiples of it (0.7 ms, 9.9e-5 s, 1e-7 s, and a
- *    master that varies its step among 0.13 ... 1.9 ms), each against the
- *    aligned one. Each runs at most 200 000 calls (or 15 s).
+ * 2. The default tolerance (the FMU's internal step divides the
+ *    DefaultExperiment stepSize: 1 ms): a doStep of one internal step
+ *    (aligned, exact times), of 1 ms, and of steps that are not multiples
+ *    of it (0.7 ms, 9.9e-5 s, 1e-7 s, and a master that varies its step
+ *    among 0.13 ... 1.9 ms), each against the aligned one. Each runs at
+ *    most 200 000 calls (or 15 s); times accumulated (t += step) unless
+ *    EXACT is set in the environment.
+ *
+ * The second form compares builds of the library in one process (each
+ * loaded with RTLD_LOCAL): ROUNDS rounds, each running CALLS calls of every
+ * case above at the default tolerance with every library in turn, and the
+ * fastest run of each (library, case). Interleaving puts the libraries
+ * under the same load, which separate runs on a shared machine do not.
+ *
  * Figures in BENCHMARKS.md.
  */
 #define _POSIX_C_SOURCE 199309L
 #include <dlfcn.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <time.h>
 
 typedef void *fmi2Component;
@@ -39,14 +51,17 @@ static void logger(void *env, const char *name, fmi2Status status, const char *c
 
 static const fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
 
-static fmi2Component (*instantiate)(const char *, int, const char *, const char *,
-                                    const fmi2CallbackFunctions *, int, int);
-static void (*free_instance)(fmi2Component);
-static fmi2Status (*setup)(fmi2Component, int, double, double, int, double);
-static fmi2Status (*enter_init)(fmi2Component);
-static fmi2Status (*exit_init)(fmi2Component);
-static fmi2Status (*do_step)(fmi2Component, double, double, int);
-static fmi2Status (*set_real)(fmi2Component, const unsigned *, size_t, const double *);
+/* The functions of one loaded library. */
+typedef struct {
+    fmi2Component (*instantiate)(const char *, int, const char *, const char *,
+                                 const fmi2CallbackFunctions *, int, int);
+    void (*free_instance)(fmi2Component);
+    fmi2Status (*setup)(fmi2Component, int, double, double, int, double);
+    fmi2Status (*enter_init)(fmi2Component);
+    fmi2Status (*exit_init)(fmi2Component);
+    fmi2Status (*do_step)(fmi2Component, double, double, int);
+    fmi2Status (*set_real)(fmi2Component, const unsigned *, size_t, const double *);
+} Library;
 
 /* Value reference of max_internal_step. */
 static const unsigned MAX_INTERNAL_STEP = 20;
@@ -64,71 +79,133 @@ static void *symbol(void *lib, const char *name) {
     return f;
 }
 
+static Library load(const char *path) {
+    void *lib = dlopen(path, RTLD_NOW | RTLD_LOCAL);
+    if (!lib) {
+        fprintf(stderr, "%s\n", dlerror());
+        exit(1);
+    }
+    Library l;
+    *(void **)&l.instantiate = symbol(lib, "fmi2Instantiate");
+    *(void **)&l.free_instance = symbol(lib, "fmi2FreeInstance");
+    *(void **)&l.setup = symbol(lib, "fmi2SetupExperiment");
+    *(void **)&l.enter_init = symbol(lib, "fmi2EnterInitializationMode");
+    *(void **)&l.exit_init = symbol(lib, "fmi2ExitInitializationMode");
+    *(void **)&l.do_step = symbol(lib, "fmi2DoStep");
+    *(void **)&l.set_real = symbol(lib, "fmi2SetReal");
+    return l;
+}
+
 static double now(void) {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 
-/* Seconds per fmi2DoStep with step h (h < 0: the varying master) for 15 s
- * or at most 200 000 calls; `accumulate`: t += h; `bound`: the
- * max_internal_step set before initialization (0: none). */
-static double run(const char *guid, double h, int accumulate, double bound) {
-    fmi2Component c = instantiate("bench", 1, guid, NULL, &callbacks, 0, 0);
-    if (!c || set_real(c, &MAX_INTERNAL_STEP, 1, &bound) || setup(c, 0, 0.0, 0.0, 0, 0.0) ||
-        enter_init(c) || exit_init(c)) {
+/* Seconds per fmi2DoStep with step h (h < 0: the varying master) over
+ * `calls` calls (0: 15 s, at most 200 000 calls); `accumulate`: t += h;
+ * `bound`: the max_internal_step set before initialization (0: none). */
+static double run(const Library *l, const char *guid, double h, int accumulate, double bound,
+                  long calls) {
+    fmi2Component c = l->instantiate("bench", 1, guid, NULL, &callbacks, 0, 0);
+    if (!c || l->set_real(c, &MAX_INTERNAL_STEP, 1, &bound) || l->setup(c, 0, 0.0, 0.0, 0, 0.0) ||
+        l->enter_init(c) || l->exit_init(c)) {
         fprintf(stderr, "cannot start an instance\n");
         exit(1);
     }
     double mean = h > 0 ? h : 0.8e-3;
-    long n = (long)(15.0 / mean + 0.5);
-    if (n > 200000) n = 200000;
+    long n = calls > 0 ? calls : (long)(15.0 / mean + 0.5);
+    if (calls <= 0 && n > 200000) n = 200000;
     double t = 0.0;
     double start = now();
     for (long k = 0; k < n; k++) {
         double step = h > 0 ? h : VARYING[k % 7];
-        if (do_step(c, t, step, 1) != 0) {
+        if (l->do_step(c, t, step, 1) != 0) {
             fprintf(stderr, "fmi2DoStep failed at t = %g\n", t);
             exit(1);
         }
         t = accumulate || h < 0 ? t + step : (double)(k + 1) * h;
     }
     double seconds = (now() - start) / n;
-    free_instance(c);
+    l->free_instance(c);
     return seconds;
 }
 
-static double fastest(const char *guid, double h, int accumulate, double bound, int repeats) {
+static double fastest(const Library *l, const char *guid, double h, int accumulate, double bound,
+                      int repeats) {
     double best = 1e30;
     for (int i = 0; i < repeats; i++) {
-        double s = run(guid, h, accumulate, bound);
+        double s = run(l, guid, h, accumulate, bound, 0);
         best = s < best ? s : best;
     }
     return best;
 }
 
+/* The cases at the default tolerance: step (< 0: varying) and whether the
+ * master accumulates its time. */
+#define CASES 6
+static const double CASE_STEP[CASES] = {1e-3, 1e-3, 0.7e-3, 9.9e-5, 1e-7, -1.0};
+static const int CASE_ACCUMULATED[CASES] = {0, 1, 1, 1, 1, 1};
+static const char *CASE_NAME[CASES] = {"aligned, t = k h", "1 ms, t += h", "0.7 ms",
+                                       "9.9e-5 s",         "1e-7 s",       "varying"};
+
+#define MAX_LIBRARIES 8
+
+static int interleaved(int argc, char **argv) {
+    if (argc < 6) {
+        fprintf(stderr, "usage: %s --interleaved GUID CALLS ROUNDS LIB [LIB ...]\n", argv[0]);
+        return 2;
+    }
+    const char *guid = argv[2];
+    long calls = atol(argv[3]);
+    int rounds = atoi(argv[4]);
+    int count = argc - 5;
+    if (count > MAX_LIBRARIES || calls <= 0 || rounds <= 0) {
+        fprintf(stderr, "CALLS and ROUNDS must be positive, at most %d libraries\n",
+                MAX_LIBRARIES);
+        return 2;
+    }
+    Library libraries[MAX_LIBRARIES];
+    double best[MAX_LIBRARIES][CASES];
+    for (int i = 0; i < count; i++) {
+        libraries[i] = load(argv[5 + i]);
+        for (int j = 0; j < CASES; j++) best[i][j] = 1e30;
+    }
+    for (int r = 0; r < rounds; r++) {
+        for (int j = 0; j < CASES; j++) {
+            for (int i = 0; i < count; i++) {
+                double s = run(&libraries[i], guid, CASE_STEP[j], CASE_ACCUMULATED[j], 0.0, calls);
+                best[i][j] = s < best[i][j] ? s : best[i][j];
+            }
+        }
+    }
+    printf("fmi2DoStep at the default tolerance, fastest of %d interleaved runs of %ld calls\n",
+           rounds, calls);
+    printf("(us per call; in brackets: against the aligned call, against 1 ms with t += h)\n");
+    for (int i = 0; i < count; i++) {
+        printf("%s\n", argv[5 + i]);
+        for (int j = 0; j < CASES; j++) {
+            printf("  %-18s %7.3f", CASE_NAME[j], best[i][j] * 1e6);
+            if (j > 0) printf("  (%.2f, %.2f)", best[i][j] / best[i][0], best[i][j] / best[i][1]);
+            printf("\n");
+        }
+    }
+    return 0;
+}
+
 int main(int argc, char **argv) {
+    if (argc > 1 && strcmp(argv[1], "--interleaved") == 0) return interleaved(argc, argv);
     if (argc < 3) {
         fprintf(stderr, "usage: %s LIB GUID [REPEATS]\n", argv[0]);
         return 2;
     }
-    void *lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
-    if (!lib) {
-        fprintf(stderr, "%s\n", dlerror());
-        return 1;
-    }
+    Library l = load(argv[1]);
+    const char *guid = argv[2];
     int repeats = argc > 3 ? atoi(argv[3]) : 7;
-    *(void **)&instantiate = symbol(lib, "fmi2Instantiate");
-    *(void **)&free_instance = symbol(lib, "fmi2FreeInstance");
-    *(void **)&setup = symbol(lib, "fmi2SetupExperiment");
-    *(void **)&enter_init = symbol(lib, "fmi2EnterInitializationMode");
-    *(void **)&exit_init = symbol(lib, "fmi2ExitInitializationMode");
-    *(void **)&do_step = symbol(lib, "fmi2DoStep");
-    *(void **)&set_real = symbol(lib, "fmi2SetReal");
-    double exact_10 = fastest(argv[2], 1e-3, 0, 1e-4, repeats);
-    double exact_100 = fastest(argv[2], 1e-2, 0, 1e-4, repeats);
-    double drift_10 = fastest(argv[2], 1e-3, 1, 1e-4, repeats);
-    double drift_100 = fastest(argv[2], 1e-2, 1, 1e-4, repeats);
+    double exact_10 = fastest(&l, guid, 1e-3, 0, 1e-4, repeats);
+    double exact_100 = fastest(&l, guid, 1e-2, 0, 1e-4, repeats);
+    double drift_10 = fastest(&l, guid, 1e-3, 1, 1e-4, repeats);
+    double drift_100 = fastest(&l, guid, 1e-2, 1, 1e-4, repeats);
     double per_step = (exact_100 - exact_10) / 90.0;
     double fixed = exact_10 - 10.0 * per_step;
     printf("fmi2DoStep, default experiment, fastest of %d runs:\n", repeats);
@@ -139,13 +216,13 @@ int main(int argc, char **argv) {
            exact_100 * 1e6, drift_100 * 1e6);
     printf("  fit on exact times: %.2f ns per internal step, fixed call cost %.3f us\n",
            per_step * 1e9, fixed * 1e6);
-    double aligned = fastest(argv[2], DEFAULT_INTERNAL_STEP, 0, 0.0, repeats);
+    double aligned = fastest(&l, guid, DEFAULT_INTERNAL_STEP, 0, 0.0, repeats);
     printf("default tolerance (internal step %.6g s):\n", DEFAULT_INTERNAL_STEP);
     printf("  %-28s %8.3f us\n", "aligned (one internal step)", aligned * 1e6);
     const double steps[] = {1e-3, 0.7e-3, 9.9e-5, 1e-7, -1.0};
     const char *names[] = {"1 ms", "0.7 ms", "9.9e-5 s", "1e-7 s", "varying 0.13 to 1.9 ms"};
     for (int i = 0; i < 5; i++) {
-        double cost = fastest(argv[2], steps[i], getenv("EXACT") ? 0 : 1, 0.0, repeats);
+        double cost = fastest(&l, guid, steps[i], getenv("EXACT") ? 0 : 1, 0.0, repeats);
         printf("  %-28s %8.3f us  (%.2f x aligned)\n", names[i], cost * 1e6, cost / aligned);
     }
     return 0;
