@@ -256,6 +256,13 @@ fn taylor_order(theta: f64) -> usize {
 /// balancing makes it tight. Powers of two scale exactly, and only +, ×
 /// and comparisons are used.
 pub(super) fn balanced_norm<const D: usize>(m: &SMatrix<f64, D, D>) -> f64 {
+    balancing(m).1
+}
+
+/// The diagonal D of [`balanced_norm`] (powers of two) and the norm
+/// `‖D⁻¹ M D‖_∞`.
+pub(super) fn balancing<const D: usize>(m: &SMatrix<f64, D, D>) -> ([f64; D], f64) {
+    let mut diagonal = [1.0; D];
     let mut b = m.abs();
     for _ in 0..64 {
         let mut changed = false;
@@ -284,6 +291,7 @@ pub(super) fn balanced_norm<const D: usize>(m: &SMatrix<f64, D, D>) -> f64 {
             }
             if c + r < 0.95 * sum {
                 changed = true;
+                diagonal[i] *= f;
                 for j in 0..D {
                     b[(j, i)] *= f;
                     b[(i, j)] /= f;
@@ -294,9 +302,11 @@ pub(super) fn balanced_norm<const D: usize>(m: &SMatrix<f64, D, D>) -> f64 {
             break;
         }
     }
-    b.row_iter()
+    let norm = b
+        .row_iter()
         .map(|row| row.iter().sum::<f64>())
-        .fold(0.0, f64::max)
+        .fold(0.0, f64::max);
+    (diagonal, norm)
 }
 
 /// The dense output of one mode of the plant (see the module docs).
@@ -315,6 +325,9 @@ pub(super) struct DenseOutput {
     /// With the W_k filter: its rows of the 22-dimensional matrix and
     /// their table (built at the first use).
     filter: Option<FilterTable>,
+    /// The balance of the solver's matrix that bounds a deferred state
+    /// inside a step ([`super::deferred`]).
+    pub(super) scaling: super::deferred::Scaling,
 }
 
 #[derive(Debug, Clone)]
@@ -344,6 +357,7 @@ impl DenseOutput {
             plant: Table::new(&m, h, 0),
             fixed: Vec::new(),
             filter: None,
+            scaling: super::deferred::Scaling::new(a, b, e),
         }
     }
 

@@ -55,6 +55,7 @@
 //! AVX2 build: all of the solver's `unsafe`; the crate denies it elsewhere),
 //! `steps` (whole steps and steps that a road breakpoint splits), `contact`
 //! (the unilateral tire: flight, and the switches located inside steps),
+//! `deferred` (a current state found when first asked for),
 //! `outputs`
 //! (what the simulator reports), `time_average` (the RMS values),
 //! `persist` (the byte form), `expm` (the 2^N exponential); this file holds
@@ -62,6 +63,7 @@
 
 pub mod accuracy;
 mod contact;
+mod deferred;
 mod dense;
 pub mod expm;
 mod filter;
@@ -89,6 +91,7 @@ pub use outputs::{
     ComfortValues, ContactLoss, OutputDerivatives, Outputs, RoadHolding, RunSummary, TimeAverages,
 };
 pub use persist::STATE_FORMAT_VERSION;
+use time_average::series_order;
 use time_average::{INTEGRALS, SquareIntegral};
 
 pub use accuracy::{DEFAULT_TOLERANCE, StepChoice};
@@ -116,7 +119,7 @@ pub const DIVERGENCE_VELOCITY: f64 = 1e6;
 
 /// The divergence bound of state i: [`DIVERGENCE_DISPLACEMENT`] for the
 /// displacements (even i), [`DIVERGENCE_VELOCITY`] for the velocities.
-fn divergence_bound(i: usize) -> f64 {
+pub(crate) fn divergence_bound(i: usize) -> f64 {
     if i.is_multiple_of(2) {
         DIVERGENCE_DISPLACEMENT
     } else {
@@ -294,13 +297,10 @@ pub struct Simulator {
     current_time: f64,
     /// The state at `current_time`, unless `deferred`.
     current_state: State,
-    /// `Some` while `current_state` is still to be found: the current
-    /// time snaps to the committed grid node and the state there
-    /// ([`Self::state_near_committed`]) is computed when first asked for
-    /// ([`Self::settle`]). It holds [`Self::drift_bounds`], which showed
-    /// that the state passes the divergence check. Every change of the
-    /// committed point, the operators or the road settles it first.
-    deferred: Option<[f64; 6]>,
+    /// `Some` while `current_state` is still to be found ([`deferred`]):
+    /// what finds it and the bounds that showed it passes the divergence
+    /// check.
+    deferred: Option<deferred::Deferred>,
     /// (x_t, v_t) at grid nodes `grid_index − m ..= grid_index`, by `index % (m + 1)`.
     history: Vec<[f64; 2]>,
     /// `Σ y²` of BA, SDD, TDD over the grid nodes of the open run (after
@@ -633,22 +633,6 @@ impl Simulator {
                 settled.settle();
                 settled.current_state
             }
-        }
-    }
-
-    /// The current state if it has been computed; `None` while it is
-    /// deferred (a time within the snap tolerance of the committed node,
-    /// whose state is shown to pass the divergence check and is found when
-    /// first asked for: [`Self::state`], the outputs).
-    pub fn computed_state(&self) -> Option<State> {
-        self.deferred.is_none().then_some(self.current_state)
-    }
-
-    /// Computes a deferred current state (the same value as when it is
-    /// computed at once).
-    pub(super) fn settle(&mut self) {
-        if self.deferred.take().is_some() {
-            self.current_state = self.state_near_committed(self.current_time - self.committed_time);
         }
     }
 
@@ -1064,6 +1048,11 @@ impl Simulator {
     /// communication times (`t += step`) commits the same nodes, does the
     /// same work and gets the same RMS integrals as one that computes them
     /// exactly; its outputs differ only by the drift times their rates.
+    ///
+    /// The state at a `t_end` that is not a grid node (near one, or inside
+    /// a step) may be left to be found when first asked for
+    /// ([`Self::computed_state`]): bounds show that it passes the
+    /// divergence check, and it is the same value to the bit.
     pub fn advance_to(&mut self, t_end: f64) -> Result<()> {
         self.outputs_cache = None;
         if !t_end.is_finite()
@@ -1108,6 +1097,9 @@ impl Simulator {
                 }
                 if unilateral && self.switch_by(k, t_end, &mut switches)? {
                     continue;
+                }
+                if self.defer(t_end, deferred::Kind::InsideStep) {
+                    return Ok(());
                 }
                 let x =
                     self.integrate_within_step(k, self.committed_time, self.committed_state, t_end);
@@ -1171,26 +1163,12 @@ impl Simulator {
     }
 
     /// Ends an advance at `t_end`, which snaps to the committed point: the
-    /// state there by [`Self::state_near_committed`], deferred
-    /// ([`Self::settle`]) where [`Self::drift_bounds`] shows that it
-    /// passes the divergence check, so that a master whose communication
-    /// times drift off the grid nodes pays for it only when it asks for
-    /// the state or an output that needs it.
+    /// state there by [`Self::state_near_committed`], deferred where that
+    /// is shown to be safe ([`deferred`]).
     fn finish_near_committed(&mut self, t_end: f64) -> Result<()> {
         let delta = t_end - self.committed_time;
-        if delta != 0.0 {
-            let x = self.committed_state;
-            if let Some(drift) = self.drift_bounds(delta)
-                && x.iter()
-                    .zip(drift)
-                    .enumerate()
-                    .all(|(i, (v, d))| v.abs() + d <= 0.5 * divergence_bound(i))
-            {
-                self.current_time = t_end;
-                self.current_state = x;
-                self.deferred = Some(drift);
-                return Ok(());
-            }
+        if delta != 0.0 && self.defer(t_end, deferred::Kind::NearNode) {
+            return Ok(());
         }
         let x = self.state_near_committed(delta);
         self.check_divergence(t_end, &x)?;

@@ -309,7 +309,7 @@ impl Simulator {
         let piece = self.piece_from(tc);
         if piece.end() >= t {
             let xc = self.committed_state;
-            if let Some(drift) = self.deferred {
+            if let Some(drift) = self.deferred_drift() {
                 // A deferred state near the node: the test below with
                 // bounds of its `x_t` and `|v_t|` (each evaluation is
                 // monotone in them, so passing it means the state passes

@@ -743,86 +743,11 @@ impl Simulator {
         }
         result
     }
-
-    /// Bounds of `|x_i − x_c,i|` for the state x that
-    /// [`Self::state_near_committed`] gives at `delta` from the committed
-    /// point `x_c` when that point is grid node k (`None` elsewhere).
-    ///
-    /// Its series of order p is `x = x_c + Σ_{j=1..p} delta^j/j! d_j`,
-    /// `d_j = A d_{j−1} + b u^{(j−1)} + e x_g^{(j−1)}`, `d_0 = x_c`, so
-    /// `|d_j,i| ≤ ν D_{j−1} + |b_i| U_{j−1} + |e_i| R_{j−1}` with `ν =
-    /// ‖A‖_∞`, `D_j` the bound of `‖d_j‖_∞` that follows, `R_j` bounds of
-    /// the road's derivatives (`|A| ω^j` on the harmonic road; the value
-    /// and the slope on a linear piece) and `U_j` bounds of the delayed
-    /// input's over the whole Hermite cubic of the nodes `(x_0, v_0)`,
-    /// `(x_1, v_1)` (s = offset/h in [0, 1], from the ranges of the basis
-    /// functions and their derivatives):
-    ///
-    /// ```text
-    /// U_0 = max(|x_0|, |x_1|) + 4/27 h (|v_0| + |v_1|)
-    /// U_1 = 3/2 |x_1 − x_0|/h + |v_0| + |v_1|
-    /// U_2 = (6 |x_1 − x_0|/h + 4 (|v_0| + |v_1|)) / h
-    /// U_3 = (12 |x_1 − x_0|/h + 6 (|v_0| + |v_1|)) / h²
-    /// ```
-    ///
-    /// The sum is bounded with `|delta|^j` for `|delta|^j/j!`; the
-    /// factor 1.001 and `4 ε |x_c,i|` cover the rounding of the series.
-    pub(super) fn drift_bounds(&mut self, delta: f64) -> Option<[f64; 6]> {
-        let (k, t, x) = (self.grid_index, self.committed_time, self.committed_state);
-        if t != self.grid_time(k) {
-            return None;
-        }
-        let norm = self.solver_matrix_norm;
-        let order = series_order(norm * delta.abs());
-        let h = self.grid.step;
-        let [x0, v0, x1, v1] = self.delayed_nodes(k);
-        let slopes = v0.abs() + v1.abs();
-        let mut input = [
-            x0.abs().max(x1.abs()) + 4.0 / 27.0 * h * slopes,
-            0.0,
-            0.0,
-            0.0,
-        ];
-        if order > 1 {
-            let rise = (x1 - x0).abs() / h;
-            input[1] = 1.5 * rise + slopes;
-            input[2] = (6.0 * rise + 4.0 * slopes) / h;
-            input[3] = (12.0 * rise + 6.0 * slopes) / (h * h);
-        }
-        let road_piece = self.piece_from(t + delta);
-        let road = match self.forcing(&road_piece) {
-            RoadPiece::Harmonic {
-                amplitude,
-                angular_frequency,
-            } => {
-                let (a, w) = (amplitude.abs(), angular_frequency.abs());
-                [a, a * w, a * w * w, a * w * w * w]
-            }
-            piece @ RoadPiece::Linear { .. } => {
-                [piece.value(t).abs(), piece.slope(t).abs(), 0.0, 0.0]
-            }
-        };
-        let (b, e) = (self.solver_input_column(), self.plant.e);
-        let (b_max, e_max) = (b.amax(), e.amax());
-        let mut previous = x.amax();
-        let mut bounds = [0.0; 6];
-        let mut factor = 1.0;
-        for j in 0..order {
-            factor *= delta.abs();
-            for (i, bound) in bounds.iter_mut().enumerate() {
-                *bound += factor * (norm * previous + b[i].abs() * input[j] + e[i].abs() * road[j]);
-            }
-            previous = norm * previous + b_max * input[j] + e_max * road[j];
-        }
-        Some(std::array::from_fn(|i| {
-            1.001 * bounds[i] + 4.0 * f64::EPSILON * x[i].abs()
-        }))
-    }
 }
 
 /// The order of [`Simulator::state_near_committed`]'s series for `reach =
 /// ‖A‖_∞ |delta|`: the smallest whose truncation stays below 1e-17.
-fn series_order(reach: f64) -> usize {
+pub(super) fn series_order(reach: f64) -> usize {
     match reach {
         r if r <= 4.4e-9 => 1,
         r if r <= 3.9e-6 => 2,
@@ -832,7 +757,7 @@ fn series_order(reach: f64) -> usize {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::model::{Params, Performance, Variant};
     use crate::road::{RandomRoad, RoadSpec};
@@ -890,7 +815,9 @@ mod tests {
         total
     }
 
-    fn configs() -> Vec<(&'static str, SimulationConfig)> {
+    /// Configurations that reach the delay regimes, roads and states of
+    /// the tests of this file (and of `deferred`).
+    pub(in crate::solver) fn configs() -> Vec<(&'static str, SimulationConfig)> {
         let base = SimulationConfig::default();
         let iso = RoadSpec::Iso8608(RandomRoad {
             seed: 7,
@@ -1075,94 +1002,6 @@ mod tests {
                 }
                 assert!(worst_drift > 0.0 || step == 7.3e-3);
             }
-        }
-    }
-
-    #[test]
-    fn drift_bounds_hold_for_the_series_near_a_node() {
-        // The unilateral tire in flight as well: the flight plant and
-        // its constant forcing.
-        let mut cases = configs();
-        cases.push((
-            "TDVASS unilateral tire, wheel starting 5 cm up",
-            SimulationConfig {
-                tire_contact: crate::solver::TireContact::Unilateral,
-                initial_state: State::new(0.0, 0.0, 0.0, 0.0, 0.05, 0.0),
-                ..SimulationConfig::default()
-            },
-        ));
-        let mut random = crate::solver::dense::tests::Lcg(3);
-        for (name, cfg) in cases {
-            let mut sim = Simulator::new(cfg).unwrap();
-            for end in [0.0, 0.013, 0.7] {
-                sim.advance_to(end).unwrap();
-                let (k, x) = (sim.grid_index, sim.committed_state);
-                if sim.committed_time != sim.grid_time(k) {
-                    continue;
-                }
-                let limit = sim.snap_tolerance(sim.committed_time);
-                for _ in 0..200 {
-                    // Offsets of every order of the series, both signs.
-                    let delta = (2.0 * random.next() - 1.0) * limit * 1e-9f64.powf(random.next());
-                    let series = sim.state_near_committed(delta);
-                    let bounds = sim.drift_bounds(delta).unwrap();
-                    for i in 0..6 {
-                        assert!(
-                            (series[i] - x[i]).abs() <= bounds[i],
-                            "{name}, t = {end}, delta {delta:e}, state {i}: {:e} > {:e}",
-                            (series[i] - x[i]).abs(),
-                            bounds[i]
-                        );
-                    }
-                }
-            }
-        }
-    }
-
-    #[test]
-    fn a_deferred_state_is_the_state_computed_at_once() {
-        for (name, cfg) in configs() {
-            let mut sim = Simulator::new(cfg).unwrap();
-            let mut t = 0.0;
-            let (mut deferred, mut drifted) = (0, 0);
-            let step = sim.grid.step;
-            for _ in 0..400 {
-                t += step;
-                sim.advance_to(t).unwrap();
-                let tc = sim.committed_time;
-                if t != tc && sim.snaps(t, tc) && tc == sim.grid_time(sim.grid_index) {
-                    drifted += 1;
-                }
-                if sim.computed_state().is_some() {
-                    continue;
-                }
-                deferred += 1;
-                let delta = t - sim.committed_time;
-                let at_once = sim.clone().state_near_committed(delta);
-                let bits = |x: State| x.map(f64::to_bits);
-                assert_eq!(bits(sim.state()), bits(at_once), "{name}, t = {t}");
-                // Saved state, first loss of contact and the outputs as
-                // from the computed state.
-                let mut settled = sim.clone();
-                settled.settle();
-                assert_eq!(sim.to_bytes(), settled.to_bytes(), "{name}, t = {t}");
-                assert_eq!(
-                    sim.clone().first_contact_loss(),
-                    settled.first_contact_loss(),
-                    "{name}, t = {t}"
-                );
-                let (a, b) = (sim.clone().outputs(), settled.outputs());
-                assert_eq!(
-                    a.core_values().map(f64::to_bits),
-                    b.core_values().map(f64::to_bits),
-                    "{name}, t = {t}"
-                );
-            }
-            // Every time that drifted off a node is deferred.
-            assert!(
-                deferred == drifted && deferred > 10,
-                "{name}: {deferred} deferred of {drifted}"
-            );
         }
     }
 }

@@ -1,0 +1,425 @@
+//! A current state found when first asked for.
+//!
+//! [`Simulator::advance_to`] ends at a time `t` that is either a grid node
+//! (its state comes with the step), within the snap tolerance of the
+//! committed node (the state by [`Simulator::state_near_committed`]), or
+//! inside a step (the state by the exact partial steps of
+//! [`super::dense`]). The last two cost more than the whole step itself,
+//! and a master often does not ask for the state at every communication
+//! point (a getter of the time averages does not need it). So the
+//! simulator may defer it: `current_state` then holds the committed state
+//! and [`Simulator::settle`] computes the state at `t` when it is first
+//! needed (the state, the outputs, the saved bytes, a change of the
+//! operators or of the road), by the same function of the same values
+//! (the committed point, the step, the history and the road do not change
+//! before it), so the result is the same to the bit.
+//!
+//! **The divergence check.** `advance_to` checks the state at `t`. A
+//! deferred state is shown to pass it by bounds of `|x_i(t) − x_c,i|`
+//! (`x_c` the committed state): `|x_c,i|` plus the bound at most half of
+//! the divergence bound. Where a bound is not available or too large, the
+//! state is computed at once and checked, as before.
+//!
+//! - Near the node ([`Simulator::drift_bounds`]): the terms of the Taylor
+//!   series.
+//! - Inside a step ([`Simulator::inside_bounds`]): with `y = x − x_c`,
+//!   `y' = A y + f`, `f = A x_c + b u + e x_g`, `y(0) = 0`, and a diagonal
+//!   `D` of powers of two balancing A (`ν = ‖D⁻¹ A D‖_∞`),
+//!
+//!   ```text
+//!   ‖D⁻¹ y(s)‖_∞ ≤ ∫_0^s e^{ν (s − r)} dr · max ‖D⁻¹ f‖_∞
+//!               ≤ s (1 + ν s + (ν s)²) (‖D⁻¹ A x_c‖_∞ + U ‖D⁻¹ b‖_∞ + G ‖D⁻¹ e‖_∞)
+//!   ```
+//!
+//!   for `ν s ≤ 1` (`e^θ ≤ 1 + θ + θ²` there), U and G bounds of `|u|` and
+//!   `|x_g|` over the stretch: [`hermite_bound`] of the cubics of the
+//!   delayed input it uses, `|A|` on the harmonic road, the larger end
+//!   value on a linear piece (a stretch across a road breakpoint is not
+//!   deferred). The factor 1.01 and an absolute `1e-9` of the values
+//!   involved cover the rounding of the exact partial steps (1.5e-14 of
+//!   the largest value in the tests of `dense`).
+//!
+//! **The contact-loss test** of the stretch from the committed point
+//! ([`Simulator::first_contact_loss`]) runs on the same bounds: its
+//! evaluation is monotone in the end point's `x_t` and `|v_t|`, so a
+//! stretch that passes with the bounds passes with the state; otherwise
+//! the state is computed and the exact test runs.
+
+use super::{Simulator, divergence_bound, series_order};
+use crate::model::State;
+use crate::road::RoadPiece;
+
+/// What finds a deferred state.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Kind {
+    /// [`Simulator::state_near_committed`].
+    NearNode,
+    /// [`Simulator::integrate_within_step`] from the committed point.
+    InsideStep,
+}
+
+/// A deferred current state: what finds it and bounds of `|x_i − x_c,i|`.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Deferred {
+    kind: Kind,
+    pub(super) drift: [f64; 6],
+}
+
+/// The balance of the solver's matrix for [`Simulator::inside_bounds`]:
+/// `D` (powers of two), `ν = ‖D⁻¹ A D‖_∞`, `‖D⁻¹ b‖_∞`, `‖D⁻¹ e‖_∞`.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Scaling {
+    diagonal: [f64; 6],
+    norm: f64,
+    input: f64,
+    road: f64,
+}
+
+impl Scaling {
+    /// For the solver's matrix `a`, input column `b` and road column `e`.
+    pub(super) fn new(a: &nalgebra::Matrix6<f64>, b: &State, e: &State) -> Scaling {
+        let (diagonal, norm) = super::dense::balancing(a);
+        let scaled = |c: &State| (0..6).fold(0.0f64, |m, i| m.max(c[i].abs() / diagonal[i]));
+        Scaling {
+            diagonal,
+            norm,
+            input: scaled(b),
+            road: scaled(e),
+        }
+    }
+}
+
+/// A bound of `|p|` over `[0, h]` for the cubic Hermite interpolant `p`
+/// of `[x_0, v_0, x_1, v_1]`: its basis functions of the values are
+/// nonnegative and sum to 1, those of the slopes stay within `4/27 h`.
+pub(super) fn hermite_bound([x0, v0, x1, v1]: [f64; 4], h: f64) -> f64 {
+    x0.abs().max(x1.abs()) + 4.0 / 27.0 * h * (v0.abs() + v1.abs())
+}
+
+impl Simulator {
+    /// The current state if it has been computed; `None` while it is
+    /// deferred: [`Self::advance_to`] may leave the state at a point near
+    /// a node or inside a step to be found when first asked for
+    /// ([`Self::state`], the outputs), after showing that it passes the
+    /// divergence check.
+    pub fn computed_state(&self) -> Option<State> {
+        self.deferred.is_none().then_some(self.current_state)
+    }
+
+    /// Computes a deferred current state (the same value as when it is
+    /// computed at once).
+    pub(super) fn settle(&mut self) {
+        if let Some(deferred) = self.deferred.take() {
+            let (k, tc, xc, t) = (
+                self.grid_index,
+                self.committed_time,
+                self.committed_state,
+                self.current_time,
+            );
+            self.current_state = match deferred.kind {
+                Kind::NearNode => self.state_near_committed(t - tc),
+                Kind::InsideStep => self.integrate_within_step(k, tc, xc, t),
+            };
+        }
+    }
+
+    /// Bounds of how far the deferred state lies from the committed one
+    /// (`None` when it is computed).
+    pub(super) fn deferred_drift(&self) -> Option<[f64; 6]> {
+        self.deferred.map(|d| d.drift)
+    }
+
+    /// Makes `t` the current time with its state deferred, where the
+    /// bounds of `kind` show that the state passes the divergence check;
+    /// `false` (nothing changed) otherwise.
+    pub(super) fn defer(&mut self, t: f64, kind: Kind) -> bool {
+        let drift = match kind {
+            Kind::NearNode => self.drift_bounds(t - self.committed_time),
+            Kind::InsideStep => self.inside_bounds(t),
+        };
+        let x = self.committed_state;
+        let Some(drift) = drift
+            .filter(|drift| (0..6).all(|i| x[i].abs() + drift[i] <= 0.5 * divergence_bound(i)))
+        else {
+            return false;
+        };
+        self.current_time = t;
+        self.current_state = x;
+        self.deferred = Some(Deferred { kind, drift });
+        true
+    }
+
+    /// Bounds of `|x_i − x_c,i|` for the state x that
+    /// [`Self::state_near_committed`] gives at `delta` from the committed
+    /// point `x_c` when that point is grid node k (`None` elsewhere).
+    ///
+    /// Its series of order p is `x = x_c + Σ_{j=1..p} delta^j/j! d_j`,
+    /// `d_j = A d_{j−1} + b u^{(j−1)} + e x_g^{(j−1)}`, `d_0 = x_c`, so
+    /// `|d_j,i| ≤ ν D_{j−1} + |b_i| U_{j−1} + |e_i| R_{j−1}` with `ν =
+    /// ‖A‖_∞`, `D_j` the bound of `‖d_j‖_∞` that follows, `R_j` bounds of
+    /// the road's derivatives (`|A| ω^j` on the harmonic road; the value
+    /// and the slope on a linear piece) and `U_j` bounds of the delayed
+    /// input's over the whole Hermite cubic of the nodes `(x_0, v_0)`,
+    /// `(x_1, v_1)` (s = offset/h in [0, 1], from the ranges of the basis
+    /// functions and their derivatives):
+    ///
+    /// ```text
+    /// U_0 = max(|x_0|, |x_1|) + 4/27 h (|v_0| + |v_1|)
+    /// U_1 = 3/2 |x_1 − x_0|/h + |v_0| + |v_1|
+    /// U_2 = (6 |x_1 − x_0|/h + 4 (|v_0| + |v_1|)) / h
+    /// U_3 = (12 |x_1 − x_0|/h + 6 (|v_0| + |v_1|)) / h²
+    /// ```
+    ///
+    /// The sum is bounded with `|delta|^j` for `|delta|^j/j!`; the
+    /// factor 1.001 and `4 ε |x_c,i|` cover the rounding of the series.
+    pub(super) fn drift_bounds(&mut self, delta: f64) -> Option<[f64; 6]> {
+        let (k, t, x) = (self.grid_index, self.committed_time, self.committed_state);
+        if t != self.grid_time(k) {
+            return None;
+        }
+        let norm = self.solver_matrix_norm;
+        let order = series_order(norm * delta.abs());
+        let h = self.grid.step;
+        let nodes = self.delayed_nodes(k);
+        let [x0, v0, x1, v1] = nodes;
+        let mut input = [hermite_bound(nodes, h), 0.0, 0.0, 0.0];
+        if order > 1 {
+            let (rise, slopes) = ((x1 - x0).abs() / h, v0.abs() + v1.abs());
+            input[1] = 1.5 * rise + slopes;
+            input[2] = (6.0 * rise + 4.0 * slopes) / h;
+            input[3] = (12.0 * rise + 6.0 * slopes) / (h * h);
+        }
+        let road_piece = self.piece_from(t + delta);
+        let road = match self.forcing(&road_piece) {
+            RoadPiece::Harmonic {
+                amplitude,
+                angular_frequency,
+            } => {
+                let (a, w) = (amplitude.abs(), angular_frequency.abs());
+                [a, a * w, a * w * w, a * w * w * w]
+            }
+            piece @ RoadPiece::Linear { .. } => {
+                [piece.value(t).abs(), piece.slope(t).abs(), 0.0, 0.0]
+            }
+        };
+        let (b, e) = (self.solver_input_column(), self.plant.e);
+        let (b_max, e_max) = (b.amax(), e.amax());
+        let mut previous = x.amax();
+        let mut bounds = [0.0; 6];
+        let mut factor = 1.0;
+        for j in 0..order {
+            factor *= delta.abs();
+            for (i, bound) in bounds.iter_mut().enumerate() {
+                *bound += factor * (norm * previous + b[i].abs() * input[j] + e[i].abs() * road[j]);
+            }
+            previous = norm * previous + b_max * input[j] + e_max * road[j];
+        }
+        Some(std::array::from_fn(|i| {
+            1.001 * bounds[i] + 4.0 * f64::EPSILON * x[i].abs()
+        }))
+    }
+
+    /// Bounds of `|x_i − x_c,i|` over the stretch from the committed point
+    /// to `t` inside its step (see the module docs); `None` where the
+    /// stretch crosses a road breakpoint or `ν (t − t_c) > 1`.
+    pub(super) fn inside_bounds(&mut self, t: f64) -> Option<[f64; 6]> {
+        let (k, tc, xc) = (self.grid_index, self.committed_time, self.committed_state);
+        let length = t - tc;
+        let road_piece = self.piece_from(tc);
+        if length.is_nan() || length <= 0.0 || road_piece.end() < t {
+            return None;
+        }
+        let road = match self.forcing(&road_piece) {
+            RoadPiece::Harmonic { amplitude, .. } => amplitude.abs(),
+            piece @ RoadPiece::Linear { .. } => piece.value(tc).abs().max(piece.value(t).abs()),
+        };
+        let scaling = self.dense_output().scaling;
+        let theta = scaling.norm * length;
+        if theta.is_nan() || theta > 1.0 {
+            return None;
+        }
+        let h = self.grid.step;
+        let input = if scaling.input == 0.0 {
+            0.0
+        } else {
+            let mut bound = hermite_bound(self.delayed_nodes(k), h);
+            if self.grid.delay_inside_step() && t > self.grid_time(k) + self.grid.inner_delay() {
+                // The piece after t_k + tau interpolates node k and the
+                // step's end node.
+                let (_, [end_x, end_v]) = self.inner_delay_next_node(k, tc, xc);
+                let [node_x, node_v] = self.history[(k % self.history.len() as u64) as usize];
+                bound = bound.max(hermite_bound([node_x, node_v, end_x, end_v], h));
+            }
+            bound
+        };
+        let pull = self.solver_matrix * xc;
+        let scaled_pull = (0..6).fold(0.0f64, |m, i| m.max(pull[i].abs() / scaling.diagonal[i]));
+        let forcing = scaled_pull + input * scaling.input + road * scaling.road;
+        let growth = length * (1.0 + theta + theta * theta) * forcing;
+        let bounds: [f64; 6] = std::array::from_fn(|i| 1.01 * scaling.diagonal[i] * growth);
+        let cushion =
+            1e-9 * (xc.amax() + bounds.iter().fold(0.0f64, |m, b| m.max(*b)) + input + road);
+        Some(bounds.map(|b| b + cushion))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::solver::SimulationConfig;
+    use crate::solver::dense::tests::Lcg;
+    use crate::solver::time_average::tests::configs;
+
+    /// The configurations of the time-average tests and the unilateral
+    /// tire in flight (the flight plant and its constant forcing).
+    fn cases() -> Vec<(&'static str, SimulationConfig)> {
+        let mut cases = configs();
+        cases.push((
+            "TDVASS unilateral tire, wheel starting 5 cm up",
+            SimulationConfig {
+                tire_contact: crate::solver::TireContact::Unilateral,
+                initial_state: State::new(0.0, 0.0, 0.0, 0.0, 0.05, 0.0),
+                ..SimulationConfig::default()
+            },
+        ));
+        cases
+    }
+
+    #[test]
+    fn drift_bounds_hold_for_the_series_near_a_node() {
+        let mut random = Lcg(3);
+        for (name, cfg) in cases() {
+            let mut sim = Simulator::new(cfg).unwrap();
+            for end in [0.0, 0.013, 0.7] {
+                sim.advance_to(end).unwrap();
+                let (k, x) = (sim.grid_index, sim.committed_state);
+                if sim.committed_time != sim.grid_time(k) {
+                    continue;
+                }
+                let limit = sim.snap_tolerance(sim.committed_time);
+                for _ in 0..200 {
+                    // Offsets of every order of the series, both signs.
+                    let delta = (2.0 * random.next() - 1.0) * limit * 1e-9f64.powf(random.next());
+                    let series = sim.state_near_committed(delta);
+                    let bounds = sim.drift_bounds(delta).unwrap();
+                    for i in 0..6 {
+                        assert!(
+                            (series[i] - x[i]).abs() <= bounds[i],
+                            "{name}, t = {end}, delta {delta:e}, state {i}: {:e} > {:e}",
+                            (series[i] - x[i]).abs(),
+                            bounds[i]
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn inside_bounds_hold_for_the_exact_partial_steps() {
+        let mut random = Lcg(5);
+        let mut used = 0;
+        for (name, cfg) in cases() {
+            let mut sim = Simulator::new(cfg).unwrap();
+            for end in [0.0, 0.013, 0.7] {
+                sim.advance_to(end).unwrap();
+                let (k, tc, xc) = (sim.grid_index, sim.committed_time, sim.committed_state);
+                let next = sim.grid_time(k + 1);
+                for _ in 0..100 {
+                    let t = tc + (next - tc) * random.next();
+                    let Some(bounds) = sim.inside_bounds(t) else {
+                        continue;
+                    };
+                    used += 1;
+                    let x = sim.integrate_within_step(k, tc, xc, t);
+                    for i in 0..6 {
+                        assert!(
+                            (x[i] - xc[i]).abs() <= bounds[i],
+                            "{name}, t = {t}, state {i}: {:e} > {:e}",
+                            (x[i] - xc[i]).abs(),
+                            bounds[i]
+                        );
+                    }
+                }
+            }
+        }
+        assert!(used > 1000, "{used} bounds");
+    }
+
+    #[test]
+    fn a_deferred_state_inside_a_step_is_the_state_computed_at_once() {
+        for (name, cfg) in cases() {
+            let mut sim = Simulator::new(cfg).unwrap();
+            let step = 0.37 * sim.grid.step;
+            let mut deferred = 0;
+            for i in 1..=400 {
+                let t = i as f64 * step;
+                sim.advance_to(t).unwrap();
+                if sim.computed_state().is_none() {
+                    deferred += 1;
+                    same_as_at_once(name, &sim);
+                }
+            }
+            assert!(deferred > 100, "{name}: {deferred} deferred");
+        }
+    }
+
+    /// The state, the saved bytes, the first loss of contact and the
+    /// outputs of `sim` (its state deferred) are those of its state
+    /// computed.
+    fn same_as_at_once(name: &str, sim: &Simulator) {
+        let t = sim.time();
+        let mut settled = sim.clone();
+        settled.settle();
+        let bits = |x: State| x.map(f64::to_bits);
+        assert_eq!(
+            bits(sim.state()),
+            bits(settled.current_state),
+            "{name}, t = {t}"
+        );
+        assert_eq!(sim.to_bytes(), settled.to_bytes(), "{name}, t = {t}");
+        assert_eq!(
+            sim.clone().first_contact_loss(),
+            settled.clone().first_contact_loss(),
+            "{name}, t = {t}"
+        );
+        let (a, b) = (sim.clone().outputs(), settled.outputs());
+        assert_eq!(
+            a.core_values().map(f64::to_bits),
+            b.core_values().map(f64::to_bits),
+            "{name}, t = {t}"
+        );
+    }
+
+    #[test]
+    fn a_deferred_state_is_the_state_computed_at_once() {
+        for (name, cfg) in configs() {
+            let mut sim = Simulator::new(cfg).unwrap();
+            let mut t = 0.0;
+            let (mut deferred, mut drifted) = (0, 0);
+            let step = sim.grid.step;
+            for _ in 0..400 {
+                t += step;
+                sim.advance_to(t).unwrap();
+                let tc = sim.committed_time;
+                if t != tc && sim.snaps(t, tc) && tc == sim.grid_time(sim.grid_index) {
+                    drifted += 1;
+                }
+                if sim.computed_state().is_some() {
+                    continue;
+                }
+                deferred += 1;
+                let delta = t - sim.committed_time;
+                let at_once = sim.clone().state_near_committed(delta);
+                let bits = |x: State| x.map(f64::to_bits);
+                assert_eq!(bits(sim.state()), bits(at_once), "{name}, t = {t}");
+                same_as_at_once(name, &sim);
+            }
+            // Every time that drifted off a node is deferred.
+            assert!(
+                deferred == drifted && deferred > 10,
+                "{name}: {deferred} deferred of {drifted}"
+            );
+        }
+    }
+}
