@@ -62,7 +62,7 @@ pub(super) enum Kind {
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Deferred {
     kind: Kind,
-    pub(super) drift: [f64; 6],
+    drift: [f64; 6],
 }
 
 /// The balance of the solver's matrix for [`Simulator::inside_bounds`]:
@@ -131,7 +131,7 @@ impl Simulator {
 
     /// Makes `t` the current time with its state deferred, where the
     /// bounds of `kind` show that the state passes the divergence check;
-    /// `false` (nothing changed) otherwise.
+    /// `false` (the current point unchanged) otherwise.
     pub(super) fn defer(&mut self, t: f64, kind: Kind) -> bool {
         let drift = match kind {
             Kind::NearNode => self.drift_bounds(t - self.committed_time),

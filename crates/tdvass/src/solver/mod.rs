@@ -119,13 +119,14 @@ pub const DIVERGENCE_VELOCITY: f64 = 1e6;
 
 /// The divergence bound of state i: [`DIVERGENCE_DISPLACEMENT`] for the
 /// displacements (even i), [`DIVERGENCE_VELOCITY`] for the velocities.
-pub(crate) fn divergence_bound(i: usize) -> f64 {
+fn divergence_bound(i: usize) -> f64 {
     if i.is_multiple_of(2) {
         DIVERGENCE_DISPLACEMENT
     } else {
         DIVERGENCE_VELOCITY
     }
 }
+
 /// The harmonic road's phase `A [sin ω t_k, cos ω t_k]` at grid node k is
 /// evaluated exactly at every node `k ≡ 0 (mod PHASE_ANCHOR)` and carried
 /// to the following nodes by the rotation over one step (a power of two, so
@@ -624,7 +625,8 @@ impl Simulator {
         self.committed_time
     }
 
-    /// Current state `X` (solver coordinates).
+    /// Current state `X` (solver coordinates); a deferred one
+    /// ([`Self::computed_state`]) is computed on a copy.
     pub fn state(&self) -> State {
         match self.computed_state() {
             Some(x) => x,

@@ -310,8 +310,8 @@ impl Simulator {
         if piece.end() >= t {
             let xc = self.committed_state;
             if let Some(drift) = self.deferred_drift() {
-                // A deferred state near the node: the test below with
-                // bounds of its `x_t` and `|v_t|` (each evaluation is
+                // A deferred state: the test below with bounds of its
+                // `x_t` and `|v_t|` (each evaluation is
                 // monotone in them, so passing it means the state passes
                 // it too); where it does not pass, the state is computed.
                 let end = StretchEnd {
