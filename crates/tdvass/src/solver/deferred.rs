@@ -79,14 +79,18 @@ impl Scaling {
     /// For the solver's matrix `a`, input column `b` and road column `e`.
     pub(super) fn new(a: &nalgebra::Matrix6<f64>, b: &State, e: &State) -> Scaling {
         let (diagonal, norm) = super::dense::balancing(a);
-        let scaled = |c: &State| (0..6).fold(0.0f64, |m, i| m.max(c[i].abs() / diagonal[i]));
         Scaling {
             diagonal,
             norm,
-            input: scaled(b),
-            road: scaled(e),
+            input: scaled_norm(&diagonal, b),
+            road: scaled_norm(&diagonal, e),
         }
     }
+}
+
+/// `‖D⁻¹ c‖_∞` for the diagonal D.
+fn scaled_norm(diagonal: &[f64; 6], c: &State) -> f64 {
+    (0..6).fold(0.0f64, |m, i| m.max(c[i].abs() / diagonal[i]))
 }
 
 /// A bound of `|p|` over `[0, h]` for the cubic Hermite interpolant `p`
@@ -247,14 +251,14 @@ impl Simulator {
                 // The piece after t_k + tau interpolates node k and the
                 // step's end node.
                 let (_, [end_x, end_v]) = self.inner_delay_next_node(k, tc, xc);
-                let [node_x, node_v] = self.history[(k % self.history.len() as u64) as usize];
+                let [node_x, node_v] = self.node_tire(k);
                 bound = bound.max(hermite_bound([node_x, node_v, end_x, end_v], h));
             }
             bound
         };
         let pull = self.solver_matrix * xc;
-        let scaled_pull = (0..6).fold(0.0f64, |m, i| m.max(pull[i].abs() / scaling.diagonal[i]));
-        let forcing = scaled_pull + input * scaling.input + road * scaling.road;
+        let forcing =
+            scaled_norm(&scaling.diagonal, &pull) + input * scaling.input + road * scaling.road;
         let growth = length * (1.0 + theta + theta * theta) * forcing;
         let bounds: [f64; 6] = std::array::from_fn(|i| 1.01 * scaling.diagonal[i] * growth);
         let cushion =

@@ -693,6 +693,13 @@ impl Simulator {
         hermite(self.delayed_nodes(k), self.grid.step, offset)
     }
 
+    /// `(x_t, v_t)` at grid node k, from the history ring (k at most
+    /// `m` nodes back from the grid index).
+    #[inline]
+    fn node_tire(&self, k: u64) -> [f64; 2] {
+        self.history[(k % self.history.len() as u64) as usize]
+    }
+
     /// The Hermite nodes `[x_t, v_t, x_t, v_t]` of the delayed input over
     /// grid step k: the history nodes k − m and k − m + 1, or the constant
     /// initial `x_t` before the start.
@@ -945,7 +952,7 @@ impl Simulator {
         let (h, tau) = (self.grid.step, self.grid.inner_delay());
         let step_start = self.grid_time(k);
         let switch = step_start + tau;
-        let [node_x, node_v] = self.history[(k % self.history.len() as u64) as usize];
+        let [node_x, node_v] = self.node_tire(k);
         let mut start = from;
         let mut state = x;
         let mut sensitivity = SMatrix::<f64, 6, 2>::zeros();
@@ -1003,7 +1010,7 @@ impl Simulator {
         let (h, tau) = (self.grid.step, self.grid.inner_delay());
         let step_start = self.grid_time(k);
         let switch = step_start + tau;
-        let [node_x, node_v] = self.history[(k % self.history.len() as u64) as usize];
+        let [node_x, node_v] = self.node_tire(k);
         let mut start = from;
         let mut state = x;
         loop {

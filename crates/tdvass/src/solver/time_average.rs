@@ -205,7 +205,7 @@ impl Simulator {
                 self.delayed_input(k, h - tau + offset)
             } else {
                 let (_, [end_x, end_v]) = self.inner_delay_next_node(k, from.0, from.1);
-                let [node_x, node_v] = self.history[(k % self.history.len() as u64) as usize];
+                let [node_x, node_v] = self.node_tire(k);
                 hermite([node_x, node_v, end_x, end_v], h, offset - tau)
             }
         } else if self.grid.resolves_delay() {
