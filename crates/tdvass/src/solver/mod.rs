@@ -1191,12 +1191,17 @@ impl Simulator {
     /// from the estimate `(t_end − t_0) / h` by
     /// [`crate::monotone::last_index_where`] in a bounded number of
     /// evaluations, even where many indices share one floating-point time.
+    /// The usual call of a master that steps one internal step at a time,
+    /// to the next node (or a time that snaps to it), is tested first.
     fn last_node_until(&self, t_end: f64) -> u64 {
         let reached = |j: u64| {
             let t = self.grid_time(j);
             t < t_end || self.snaps(t_end, t)
         };
         let k = self.grid_index;
+        if k < u64::MAX - 2 && reached(k + 1) && !reached(k + 2) {
+            return k + 1;
+        }
         // `as` saturates (and maps NaN to 0); the search clamps the guess.
         let estimate = ((t_end - self.config.start_time) / self.grid.step).floor() as u64;
         crate::monotone::last_index_where(k, u64::MAX - 1, estimate, reached)

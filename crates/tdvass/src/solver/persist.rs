@@ -930,6 +930,45 @@ mod tests {
     }
 
     #[test]
+    fn last_node_until_finds_the_last_node_reached() {
+        // Ends on a node, a few ulps either side of it, at the edge of the
+        // snap tolerance and inside steps, one to three steps ahead: the
+        // node found is the last one a scan finds.
+        let mut sim = Simulator::new(SimulationConfig::default()).unwrap();
+        sim.advance_to(0.25).unwrap();
+        let k = sim.grid_index;
+        for ahead in 1..=3 {
+            let node = sim.grid_time(k + ahead);
+            let tolerance = sim.snap_tolerance(node);
+            let h = sim.grid.step;
+            for t_end in [
+                node,
+                node.next_up(),
+                node.next_down(),
+                node.next_down().next_down(),
+                node - 0.9 * tolerance,
+                node - 1.1 * tolerance,
+                node + 1.1 * tolerance,
+                node - 0.5 * h,
+                node + 0.5 * h,
+            ] {
+                let scan = (k..k + 8)
+                    .take_while(|&j| {
+                        let t = sim.grid_time(j);
+                        t < t_end || sim.snaps(t_end, t)
+                    })
+                    .last()
+                    .unwrap();
+                assert_eq!(
+                    sim.last_node_until(t_end),
+                    scan,
+                    "{ahead} ahead, t_end {t_end}"
+                );
+            }
+        }
+    }
+
+    #[test]
     fn last_node_until_is_bounded_where_node_times_do_not_resolve_steps() {
         // States no simulator reaches (`Simulator::new` refuses such start
         // times), built field by field: the search for the last node reached
