@@ -3,7 +3,7 @@
 //! input and the states (Real outputs), and the counts (Integer outputs).
 
 use tdvass::model::{V_H, V_T, X_H, X_S, X_T};
-use tdvass::solver::{OutputDerivatives, Outputs, TimeAverages};
+use tdvass::solver::{Instantaneous, OutputDerivatives, Outputs, TimeAverages};
 
 /// An output of the simulator.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -105,6 +105,37 @@ impl OutputId {
             OutputId::MaxSuspensionDeflection => o
                 .road_holding
                 .map_or(f64::NAN, |r| r.max_suspension_deflection),
+        }
+    }
+
+    /// Whether the output is a value at the current instant that
+    /// [`Instantaneous`] holds (see [`Self::instantaneous`]).
+    pub fn is_instantaneous(self) -> bool {
+        matches!(
+            self,
+            OutputId::State(_)
+                | OutputId::BodyAcceleration
+                | OutputId::SuspensionDeflection
+                | OutputId::TireDeflection
+                | OutputId::RoadDisplacement
+                | OutputId::ControlForce
+                | OutputId::DynamicTireLoad
+        )
+    }
+
+    /// The value in `instant` for an instantaneous output (the same as
+    /// [`Self::value`] of the outputs at the same point), `None` for the
+    /// other outputs.
+    pub fn instantaneous(self, instant: &Instantaneous) -> Option<f64> {
+        match self {
+            OutputId::State(i) => Some(instant.state[i]),
+            OutputId::BodyAcceleration => Some(instant.performance.body_acceleration),
+            OutputId::SuspensionDeflection => Some(instant.performance.suspension_deflection),
+            OutputId::TireDeflection => Some(instant.performance.tire_deflection),
+            OutputId::RoadDisplacement => Some(instant.road_displacement),
+            OutputId::ControlForce => Some(instant.control_force),
+            OutputId::DynamicTireLoad => Some(instant.dynamic_tire_load),
+            _ => None,
         }
     }
 

@@ -143,6 +143,8 @@ pub struct Slave {
     /// FMU states handed out, by their address (the handle the master gets).
     fmu_states: HashMap<usize, Box<SlaveState>>,
     spectrum: Option<SpectrumCache>,
+    /// The value references of the last `GetReal`, looked up.
+    read_plan: values::ReadPlan,
 }
 
 impl Slave {
@@ -156,6 +158,7 @@ impl Slave {
             state: SlaveState::new(),
             fmu_states: HashMap::new(),
             spectrum: None,
+            read_plan: values::ReadPlan::default(),
         }
     }
 

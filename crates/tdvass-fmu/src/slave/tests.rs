@@ -4,7 +4,9 @@
 //! tire's contact.
 
 use super::*;
-use crate::variables::{COMMON_VARIABLES, Causality, FmiVersion, VarType, by_name};
+use crate::variables::{
+    Access, COMMON_VARIABLES, Causality, FmiVersion, VarType, Variable, by_name,
+};
 use std::cell::RefCell;
 use std::rc::Rc;
 use tdvass::model::V_S;
@@ -517,5 +519,105 @@ fn the_bilateral_tire_counts_its_would_be_lift_offs() {
                 .iter()
                 .any(|(_, _, m)| m.contains("lift-off at t = "))
         );
+    }
+}
+
+#[test]
+fn getters_of_one_kind_of_output_give_what_all_outputs_give() {
+    // One slave reads the instantaneous outputs alone, then the time
+    // averages alone (each computes only its part); its twin reads every
+    // Real output in one call (every output computed): the same bits, on
+    // and between the internal nodes, with either tire and the wheel off
+    // the road.
+    let outputs: Vec<&Variable> = COMMON_VARIABLES
+        .iter()
+        .filter(|v| v.causality == Causality::Output && v.var_type() == VarType::Real)
+        .collect();
+    let instantaneous: Vec<u32> = outputs
+        .iter()
+        .filter(|v| matches!(v.access, Access::Output(id) if id.is_instantaneous()))
+        .map(|v| v.vr)
+        .collect();
+    let averages: Vec<u32> = outputs
+        .iter()
+        .filter(|v| matches!(v.access, Access::Output(id) if id.is_time_average()))
+        .map(|v| v.vr)
+        .collect();
+    assert_eq!(instantaneous.len(), 12);
+    assert_eq!(averages.len(), 5);
+    let all: Vec<u32> = outputs.iter().map(|v| v.vr).collect();
+    for tire_contact in [0, 1] {
+        let (mut alone, _) = new_slave(false);
+        let (mut together, _) = new_slave(false);
+        for s in [&mut alone, &mut together] {
+            s.set_integer(&[vr("tire_contact")], &[tire_contact])
+                .unwrap();
+            s.set_real(&[vr("road_amplitude")], &[0.05]).unwrap();
+            s.setup_experiment(None, 0.0, None).unwrap();
+            start(s);
+        }
+        let steps = [1e-3, 7e-4, 9.9e-5, 1.3e-3, 1e-7];
+        let mut t = 0.0;
+        for i in 0..1500 {
+            let h = steps[i % steps.len()];
+            alone.do_step(t, h).unwrap();
+            together.do_step(t, h).unwrap();
+            t += h;
+            let mut now = vec![0.0; instantaneous.len()];
+            alone.get_real(&instantaneous, &mut now).unwrap();
+            let mut mean = vec![0.0; averages.len()];
+            alone.get_real(&averages, &mut mean).unwrap();
+            let mut every = vec![0.0; all.len()];
+            together.get_real(&all, &mut every).unwrap();
+            let by_vr = |vr: u32| every[all.iter().position(|&v| v == vr).unwrap()].to_bits();
+            for (vrs, values) in [(&instantaneous, &now), (&averages, &mean)] {
+                for (vr, value) in vrs.iter().zip(values.iter()) {
+                    assert_eq!(value.to_bits(), by_vr(*vr), "vr {vr} at t = {t}");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn getter_lists_give_the_same_values_and_errors_whatever_was_read_before() {
+    // The looked-up list of the last call is kept: a repeated list, a
+    // shorter or longer one, a list longer than is kept and a list with a
+    // reference that is no Real variable each read (or refuse) as alone.
+    let (mut s, _) = initialized();
+    s.do_step(0.0, 7e-4).unwrap();
+    let ba = vr("body_acceleration");
+    let rms = vr("rms_body_acceleration");
+    let max = vr("max_suspension_deflection");
+    let expected = [
+        get(&mut s, "body_acceleration"),
+        get(&mut s, "rms_body_acceleration"),
+    ];
+    let expected_max = get(&mut s, "max_suspension_deflection");
+    for _ in 0..2 {
+        for (vrs, values) in [
+            (vec![ba, rms], expected.to_vec()),
+            (vec![rms, ba], vec![expected[1], expected[0]]),
+            (vec![ba], vec![expected[0]]),
+            (
+                vec![rms, ba, max],
+                vec![expected[1], expected[0], expected_max],
+            ),
+            (vec![ba; 20], vec![expected[0]; 20]),
+            (vec![rms; 16], vec![expected[1]; 16]),
+        ] {
+            let mut got = vec![0.0; vrs.len()];
+            s.get_real(&vrs, &mut got).unwrap();
+            assert_eq!(got, values, "{vrs:?}");
+        }
+        let message = refusal(s.get_real(&[ba, 9999], &mut [0.0; 2]));
+        assert!(
+            message.contains("unknown value reference 9999"),
+            "{message}"
+        );
+        let message = refusal(s.get_real(&[ba, vr("variant")], &mut [0.0; 2]));
+        assert!(message.contains("`variant`"), "{message}");
+        let message = refusal(s.get_real(&[ba, rms], &mut [0.0; 1]));
+        assert!(message.contains("1 values given"), "{message}");
     }
 }

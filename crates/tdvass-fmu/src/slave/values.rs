@@ -12,9 +12,70 @@ use crate::variables::{
 use crate::{FmiError, Status};
 use tdvass::analysis::spectrum::CharacteristicRootSolver;
 use tdvass::model::Variant;
-use tdvass::solver::{Outputs, TimeAverages};
+use tdvass::solver::{Instantaneous, Outputs, TimeAverages};
+
+/// What one getter call has computed of the outputs so far: each part at
+/// most once per call.
+#[derive(Default)]
+struct OutputRead {
+    /// The call asks for an output that only all outputs give: they are
+    /// computed for every output it asks for (at less cost than a part
+    /// first and all of them after).
+    all_needed: bool,
+    /// Every output.
+    outputs: Option<Outputs>,
+    /// The time averages alone.
+    averages: Option<TimeAverages>,
+    /// The instantaneous outputs alone.
+    instant: Option<Instantaneous>,
+}
+
+/// The value references of the last `GetReal` call whose every reference
+/// is a Real variable (at most [`ReadPlan::CAPACITY`] of them), their
+/// variables, and whether they ask for an output that only all outputs
+/// give: a master asks for the same list at every communication point, so
+/// the list is looked up once.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct ReadPlan {
+    vrs: [u32; ReadPlan::CAPACITY],
+    variables: [Option<&'static Variable>; ReadPlan::CAPACITY],
+    len: usize,
+    all_needed: bool,
+}
+
+impl ReadPlan {
+    /// The longest list kept.
+    const CAPACITY: usize = 16;
+}
 
 impl Slave {
+    /// The plan of a `GetReal` of `vrs`: the kept one when the list is the
+    /// same, else a new one (kept), or `None` when a reference is not a
+    /// Real variable or the list is longer than a plan holds (the caller
+    /// then looks each reference up, with its error).
+    fn read_plan(&mut self, vrs: &[u32]) -> Option<ReadPlan> {
+        let kept = &self.read_plan;
+        if kept.vrs.get(..kept.len) == Some(vrs) {
+            return Some(*kept);
+        }
+        if vrs.len() > ReadPlan::CAPACITY {
+            return None;
+        }
+        let mut plan = ReadPlan {
+            len: vrs.len(),
+            ..ReadPlan::default()
+        };
+        for (i, &vr) in vrs.iter().enumerate() {
+            let var = self.variable(vr, VarType::Real).ok()?;
+            plan.vrs[i] = vr;
+            plan.variables[i] = Some(var);
+            plan.all_needed |= matches!(var.access, Access::Output(id)
+                if !id.is_time_average() && !id.is_instantaneous());
+        }
+        self.read_plan = plan;
+        Some(plan)
+    }
+
     pub(super) fn variable(&self, vr: u32, ty: VarType) -> Result<&'static Variable, FmiError> {
         let var = by_vr(self.dialect.version, vr).ok_or_else(|| {
             FmiError::error(format!(
@@ -60,29 +121,45 @@ impl Slave {
         })
     }
 
+    /// The instantaneous outputs now ([`Self::outputs`] has them too, at
+    /// more cost).
+    fn instantaneous(&mut self) -> Result<Instantaneous, FmiError> {
+        Ok(match self.state.sim.as_mut() {
+            Some(sim) => sim.instantaneous(),
+            None => self.build_simulator()?.instantaneous(),
+        })
+    }
+
     /// The value of output `id` now. The outputs of one getter call are
-    /// computed once (`outputs`); a call that asks only for time averages
-    /// computes those alone (`averages`).
-    fn output_value(
-        &mut self,
-        id: OutputId,
-        outputs: &mut Option<Outputs>,
-        averages: &mut Option<TimeAverages>,
-    ) -> Result<f64, FmiError> {
-        if outputs.is_none() && id.is_time_average() {
-            let averages = match averages {
-                Some(a) => *a,
-                None => *averages.insert(self.time_averages()?),
+    /// computed once (`read.outputs`); a call that asks only for time
+    /// averages, or only for instantaneous outputs, computes those alone
+    /// (`read.averages`, `read.instant`).
+    fn output_value(&mut self, id: OutputId, read: &mut OutputRead) -> Result<f64, FmiError> {
+        if read.outputs.is_none() && !read.all_needed {
+            let quick = if id.is_time_average() {
+                let averages = match read.averages {
+                    Some(a) => a,
+                    None => *read.averages.insert(self.time_averages()?),
+                };
+                id.time_average(&averages)
+            } else if id.is_instantaneous() {
+                let instant = match read.instant {
+                    Some(i) => i,
+                    None => *read.instant.insert(self.instantaneous()?),
+                };
+                id.instantaneous(&instant)
+            } else {
+                None
             };
             // A value that is not finite takes the full path, whose check
             // reports it (`guards::non_finite_output`).
-            if let Some(value) = id.time_average(&averages).filter(|v| v.is_finite()) {
+            if let Some(value) = quick.filter(|v| v.is_finite()) {
                 return Ok(value);
             }
         }
-        let outputs = match outputs {
+        let outputs = match &mut read.outputs {
             Some(o) => o,
-            None => outputs.insert(self.outputs()?),
+            None => read.outputs.insert(self.outputs()?),
         };
         Ok(id.value(outputs))
     }
@@ -158,10 +235,20 @@ impl Slave {
     /// elements in row-major order; `values` must hold exactly as many as
     /// the value references need.
     pub fn get_real(&mut self, vrs: &[u32], values: &mut [f64]) -> Result<Status, FmiError> {
-        let (mut outputs, mut averages) = (None, None);
+        let plan = self.read_plan(vrs);
+        let mut read = OutputRead {
+            // Without a plan (a list longer than a plan holds, or one with
+            // a reference that is not a Real variable, refused below) the
+            // outputs are read from all outputs.
+            all_needed: plan.as_ref().is_none_or(|p| p.all_needed),
+            ..OutputRead::default()
+        };
         let mut at = 0;
-        for &vr in vrs {
-            let var = self.variable(vr, VarType::Real)?;
+        for (i, &vr) in vrs.iter().enumerate() {
+            let var = match plan.as_ref().and_then(|p| p.variables[i]) {
+                Some(var) => var,
+                None => self.variable(vr, VarType::Real)?,
+            };
             let size = self.size_of(var);
             let available = values.len();
             let Some(slots) = values.get_mut(at..at + size) else {
@@ -173,9 +260,7 @@ impl Slave {
             match var.access {
                 Access::Real { get, .. } => slots[0] = get(&self.state.settings),
                 Access::Time => slots[0] = self.time(),
-                Access::Output(id) => {
-                    slots[0] = self.output_value(id, &mut outputs, &mut averages)?
-                }
+                Access::Output(id) => slots[0] = self.output_value(id, &mut read)?,
                 Access::Calculated(Calculated::SpectralAbscissa) => {
                     slots[0] = self.spectral_abscissa()?
                 }

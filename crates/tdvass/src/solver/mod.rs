@@ -88,7 +88,8 @@ use operators::{
     DELAY_INPUT, GridStep, StepOperator, hermite, hermite_matrix, infinity_norm, tire_pick,
 };
 pub use outputs::{
-    ComfortValues, ContactLoss, OutputDerivatives, Outputs, RoadHolding, RunSummary, TimeAverages,
+    ComfortValues, ContactLoss, Instantaneous, OutputDerivatives, Outputs, RoadHolding, RunSummary,
+    TimeAverages,
 };
 pub use persist::STATE_FORMAT_VERSION;
 use time_average::series_order;

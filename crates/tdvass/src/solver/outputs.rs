@@ -139,6 +139,26 @@ pub struct TimeAverages {
     pub rms_dynamic_tire_load_ratio: f64,
 }
 
+/// The outputs that are values at the current instant (see [`Outputs`]),
+/// for a reader that needs only them ([`Simulator::instantaneous`]): no
+/// integral from the start is closed for them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Instantaneous {
+    /// Time (s).
+    pub time: f64,
+    /// Reported state `[x_s, v_s, x_h, v_h, x_t, v_t]` (CS: x_h, v_h mirror the wheel).
+    pub state: State,
+    /// BA, SDD, TDD.
+    pub performance: Performance,
+    /// The road displacement x_g actually applied (m).
+    pub road_displacement: f64,
+    /// Control force `u = g x_t(t − tau)` (N).
+    pub control_force: f64,
+    /// The dynamic tire load `k_t (x_g − x_t)` (N; at least −W with the
+    /// unilateral tire).
+    pub dynamic_tire_load: f64,
+}
+
 /// First time derivatives of the outputs.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct OutputDerivatives {
@@ -206,32 +226,63 @@ impl Simulator {
         (p[0], p[1])
     }
 
-    /// All outputs at the current time.
-    pub fn outputs(&mut self) -> Outputs {
-        if let Some(outputs) = self.outputs_cache {
-            return outputs;
+    /// The instantaneous outputs at the current time, the same values as
+    /// [`Self::outputs`] gives, at less cost when the others are not
+    /// needed: the integrals from the start are not closed.
+    pub fn instantaneous(&mut self) -> Instantaneous {
+        match &self.outputs_cache {
+            Some(outputs) => Instantaneous {
+                time: outputs.time,
+                state: outputs.state,
+                performance: outputs.performance,
+                road_displacement: outputs.road_displacement,
+                control_force: outputs.control_force,
+                dynamic_tire_load: outputs.dynamic_tire_load,
+            },
+            None => self.instantaneous_now(),
         }
+    }
+
+    /// [`Self::instantaneous`] computed (the state settled first).
+    fn instantaneous_now(&mut self) -> Instantaneous {
         self.settle();
         let t = self.current_time;
         let x = self.current_state;
         let piece = self.road_piece_now();
         let [road, _] = self.road_at(&piece, t);
         let (delayed, _) = self.delayed_tire_now();
+        let k_t = self.config.params.k_t;
+        Instantaneous {
+            time: t,
+            state: self.plant.reported_state(&x),
+            performance: Performance::at(&self.plant, &x, road),
+            road_displacement: road,
+            control_force: self.config.params.effective_gain(self.config.variant) * delayed,
+            dynamic_tire_load: self.tire_load(k_t * (road - x[X_T])),
+        }
+    }
+
+    /// All outputs at the current time.
+    pub fn outputs(&mut self) -> Outputs {
+        if let Some(outputs) = self.outputs_cache {
+            return outputs;
+        }
+        let instant = self.instantaneous_now();
+        let t = instant.time;
         let now = self.accumulated_now();
         let duration = t - self.config.start_time;
         let averages = self.time_averages_of(&now.integral, duration);
-        let performance = Performance::at(&self.plant, &x, road);
-        let k_t = self.config.params.k_t;
+        let performance = instant.performance;
         let outputs = Outputs {
             time: t,
-            state: self.plant.reported_state(&x),
+            state: instant.state,
             performance,
-            road_displacement: road,
-            control_force: self.config.params.effective_gain(self.config.variant) * delayed,
+            road_displacement: instant.road_displacement,
+            control_force: instant.control_force,
             rms: averages.rms,
             objective: averages.objective,
             comfort: self.comfort_values(&now, duration),
-            dynamic_tire_load: self.tire_load(k_t * (road - x[X_T])),
+            dynamic_tire_load: instant.dynamic_tire_load,
             rms_dynamic_tire_load_ratio: averages.rms_dynamic_tire_load_ratio,
             road_holding: self.config.metrics.road_holding().then(|| RoadHolding {
                 contact_loss_time: now.holding.lost_steps as f64 * self.grid.step
