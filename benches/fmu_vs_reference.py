@@ -1,15 +1,23 @@
 #!/usr/bin/env python3
 """tdvass.fmu against the FMI project's Reference FMU Dahlquist in the same
-master loop and the same run: fmpy's FMU2Slave, `doStep` of 1 ms then
-`getReal` of three variables, 15 s (15 000 points), median of the repeats.
+master loop and the same run: fmpy's FMU2Slave, `doStep` then `getReal` of
+three variables, 15 s of 1 ms steps (15 000 points), median of the repeats.
 
 Dahlquist (one state, explicit Euler) is the cheapest model an FMU can be,
 so the ratio is what tdvass adds to what the master itself costs.
 
-Usage: benches/fmu_vs_reference.py [--fmu PATH] [--reference PATH]
+Usage: benches/fmu_vs_reference.py [--fmu PATH ...] [--reference PATH]
+                                   [--outputs rms|instantaneous] [--step S]
                                    [--repeats N] [--duration S]
 Defaults: target/fmu/tdvass.fmu (cargo run --release -p fmu-build) and
-../shared/ref-fmus/Dahlquist.fmu beside the repository.
+../shared/ref-fmus/Dahlquist.fmu beside the repository; the three RMS
+values (time averages), 1 ms steps.
+
+`--outputs instantaneous` reads BA, SDD and TDD instead. `--fmu` may be
+given more than once (another build of the FMU, say): each repeat runs
+every FMU and Dahlquist in turn, so all are timed under the same load, and
+each FMU's ratio is printed, also as the median of its ratios to the
+Dahlquist run of the same repeat.
 """
 
 import argparse
@@ -22,7 +30,10 @@ from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
 
 ROOT = Path(__file__).resolve().parent.parent
-TDVASS_OUTPUTS = ["rms_body_acceleration", "rms_suspension_deflection", "rms_tire_deflection"]
+TDVASS_OUTPUTS = {
+    "rms": ["rms_body_acceleration", "rms_suspension_deflection", "rms_tire_deflection"],
+    "instantaneous": ["body_acceleration", "suspension_deflection", "tire_deflection"],
+}
 DAHLQUIST_VARIABLES = ["x", "der(x)", "k"]
 
 
@@ -60,23 +71,38 @@ def loop(path, names, duration, step, workdir):
 
 def main():
     parser = argparse.ArgumentParser()
-    parser.add_argument("--fmu", default=str(ROOT / "target" / "fmu" / "tdvass.fmu"))
+    parser.add_argument("--fmu", action="append")
     parser.add_argument(
         "--reference", default=str(ROOT.parent / "shared" / "ref-fmus" / "Dahlquist.fmu")
     )
+    parser.add_argument("--outputs", choices=sorted(TDVASS_OUTPUTS), default="rms")
+    parser.add_argument("--step", type=float, default=1e-3)
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--duration", type=float, default=15.0)
     args = parser.parse_args()
-    ours, theirs = [], []
+    fmus = args.fmu or [str(ROOT / "target" / "fmu" / "tdvass.fmu")]
+    names = TDVASS_OUTPUTS[args.outputs]
+    ours = {fmu: [] for fmu in fmus}
+    theirs = []
     with tempfile.TemporaryDirectory() as workdir:
         for _ in range(args.repeats):
-            ours.append(loop(args.fmu, TDVASS_OUTPUTS, args.duration, 1e-3, workdir))
-            theirs.append(loop(args.reference, DAHLQUIST_VARIABLES, args.duration, 1e-3, workdir))
-    a, b = statistics.median(ours), statistics.median(theirs)
-    print(f"doStep(1 ms) + getReal(3), median of {args.repeats} runs of {args.duration} s:")
-    print(f"  tdvass.fmu      {a * 1e6:8.3f} us per point")
+            for fmu in fmus:
+                ours[fmu].append(loop(fmu, names, args.duration, args.step, workdir))
+            theirs.append(
+                loop(args.reference, DAHLQUIST_VARIABLES, args.duration, args.step, workdir)
+            )
+    b = statistics.median(theirs)
+    print(
+        f"doStep({args.step * 1e3:g} ms) + getReal(3 {args.outputs}), "
+        f"median of {args.repeats} runs of {args.duration} s:"
+    )
+    for fmu, times in ours.items():
+        a = statistics.median(times)
+        paired = statistics.median(t / r for t, r in zip(times, theirs))
+        print(f"  {fmu}")
+        print(f"    tdvass        {a * 1e6:8.3f} us per point")
+        print(f"    ratio         {a / b:8.3f}  (median of the paired ratios {paired:.3f})")
     print(f"  Dahlquist.fmu   {b * 1e6:8.3f} us per point")
-    print(f"  ratio           {a / b:8.3f}")
 
 
 if __name__ == "__main__":
