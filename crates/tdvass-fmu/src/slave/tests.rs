@@ -603,8 +603,8 @@ fn getter_lists_give_the_same_values_and_errors_whatever_was_read_before() {
                 vec![rms, ba, max],
                 vec![expected[1], expected[0], expected_max],
             ),
-            (vec![ba; 20], vec![expected[0]; 20]),
-            (vec![rms; 16], vec![expected[1]; 16]),
+            (vec![ba; 40], vec![expected[0]; 40]),
+            (vec![rms; 32], vec![expected[1]; 32]),
         ] {
             let mut got = vec![0.0; vrs.len()];
             s.get_real(&vrs, &mut got).unwrap();

@@ -45,7 +45,7 @@ pub(super) struct ReadPlan {
 
 impl ReadPlan {
     /// The longest list kept.
-    const CAPACITY: usize = 16;
+    const CAPACITY: usize = 32;
 }
 
 impl Slave {
