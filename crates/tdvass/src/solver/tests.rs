@@ -247,9 +247,6 @@ fn cheap_readers_agree_with_the_outputs_to_the_bit() {
                 ),
                 "t = {t}"
             );
-            if tire_contact.is_unilateral() {
-                continue;
-            }
             let expected = [
                 o.rms.body_acceleration,
                 o.rms.suspension_deflection,
@@ -265,6 +262,11 @@ fn cheap_readers_agree_with_the_outputs_to_the_bit() {
                 averages.rms_dynamic_tire_load_ratio,
             ];
             assert_eq!(got.map(f64::to_bits), expected.map(f64::to_bits), "t = {t}");
+            if tire_contact.is_unilateral() {
+                // The contact-loss test is the bilateral tire's (the FMU
+                // asks it only then).
+                continue;
+            }
             let holding = o.road_holding.unwrap();
             assert_eq!(loss, holding.first_contact_loss, "t = {t}");
             if i == 1999 {
