@@ -326,10 +326,30 @@ impl Simulator {
         holding: &mut Holding,
     ) -> ([f64; INTEGRALS], Squares, RoadPiece) {
         let (x_to, w_to) = to_state;
+        let filter = Some((w_from, w_to));
+        self.stretch_integral(k, from, filter, at_from, (to, x_to), Some(holding))
+    }
+
+    /// [`Self::integral_within_step`] with the filter states optional:
+    /// without them (`filter` `None`) the squares leave the W_k filter's
+    /// out, so only `∫` BA², SDD², TDD² are meaningful (the same bits as
+    /// with them), and without `holding` the road-holding accumulators are
+    /// not carried.
+    fn stretch_integral(
+        &mut self,
+        k: u64,
+        from: (f64, State),
+        filter: Option<(&Filter, &Filter)>,
+        at_from: Squares,
+        to: (f64, &State),
+        mut holding: Option<&mut Holding>,
+    ) -> ([f64; INTEGRALS], Squares, RoadPiece) {
+        let (to, x_to) = to;
+        let w_to = filter.map(|(_, w)| *w);
         let (mut start, mut at_start, mut x_start) = (from.0, at_from, from.1);
         if to <= start {
             let piece = self.road.piece(to);
-            let at_to = self.squares_at(k, to, x_to, w_to, from, &piece);
+            let at_to = self.squares_with(k, to, x_to, w_to.as_ref(), from, &piece);
             return (
                 corrected_trapezoid(to - start, &at_start, &at_to),
                 at_to,
@@ -345,16 +365,18 @@ impl Simulator {
                 to
             };
             let (x_end, w_end) = if end == to {
-                (*x_to, *w_to)
+                (*x_to, w_to)
             } else {
                 (
                     self.integrate_within_step(k, from.0, from.1, end),
-                    self.filter_within_step(k, from, w_from, end),
+                    filter.map(|(w_from, _)| self.filter_within_step(k, from, w_from, end)),
                 )
             };
-            let at_end = self.squares_at(k, end, &x_end, &w_end, from, &piece);
+            let at_end = self.squares_with(k, end, &x_end, w_end.as_ref(), from, &piece);
             total = add(total, corrected_trapezoid(end - start, &at_start, &at_end));
-            if self.config.metrics.road_holding() {
+            if let Some(holding) = holding.as_deref_mut()
+                && self.config.metrics.road_holding()
+            {
                 let (a, b) = (
                     self.margin_at(start, &x_start, &piece),
                     self.margin_at(end, &x_end, &piece),
@@ -372,8 +394,28 @@ impl Simulator {
                 return (total, at_end, piece);
             }
             let next = self.piece_from(end);
-            at_start = self.squares_at(k, end, &x_end, &w_end, from, &next);
+            at_start = self.squares_with(k, end, &x_end, w_end.as_ref(), from, &next);
             (start, x_start) = (end, x_end);
+        }
+    }
+
+    /// [`Self::squares_at`] with filter state `w`, or without one the
+    /// squares of BA, SDD and TDD alone (the W_k filter's left at 0).
+    fn squares_with(
+        &mut self,
+        k: u64,
+        t: f64,
+        x: &State,
+        w: Option<&Filter>,
+        from: (f64, State),
+        piece: &RoadPiece,
+    ) -> Squares {
+        match w {
+            Some(w) => self.squares_at(k, t, x, w, from, piece),
+            None => {
+                let (y, rate) = self.performance_and_rates_at(k, t, x, from, piece);
+                Squares::of(y, rate, [0.0; 2])
+            }
         }
     }
 
@@ -532,36 +574,34 @@ impl Simulator {
         }
     }
 
-    /// `∫_{t_0}^{t} f dt` at the current time t.
-    pub(super) fn square_integral_now(&mut self) -> [f64; INTEGRALS] {
-        self.accumulated_now().integral
-    }
-
     /// `∫_{t_0}^{t} y² dt` of BA, SDD and TDD at the current time t, the
-    /// first three of [`Self::square_integral_now`] to the bit. At a
-    /// committed node, or within the snap tolerance of one (every point of
-    /// a master whose steps are whole internal steps), the squares there
-    /// are taken without the W_k filter's, which these three do not need,
-    /// and neither the road-holding accumulators nor the filter state are
-    /// carried to t.
+    /// first three of [`Self::accumulated_now`]'s integral to the bit. The
+    /// squares, at the committed point and at t, are taken without the W_k
+    /// filter's, which these three do not need, and neither the
+    /// road-holding accumulators nor the filter state are carried to t.
     pub(super) fn rms_integral_now(&mut self) -> [f64; 3] {
         let (t, tc) = (self.current_time, self.committed_time);
-        if t != tc && !self.snaps(t, tc) {
-            let integral = self.square_integral_now();
-            return [integral[0], integral[1], integral[2]];
+        let inside = t != tc && !self.snaps(t, tc);
+        if inside {
+            self.settle();
         }
         let (base, at) = if self.rms.samples == 0 {
             (self.integral.closed, self.integral.anchor)
         } else {
             let (k, x) = (self.grid_index, self.committed_state);
             let piece = self.piece_from(tc);
-            let (y, rate) = self.performance_and_rates_at(k, tc, &x, (tc, x), &piece);
-            let at_node = Squares::of(y, rate, [0.0; 2]);
+            let at_node = self.squares_with(k, tc, &x, None, (tc, x), &piece);
             let base =
                 self.integral
                     .through_run(self.grid.step, &self.rms, &self.weighted, &at_node);
             (base, at_node)
         };
+        if inside {
+            // As in `accumulated_now`: the stretch from the committed point.
+            let (k, xc, x) = (self.grid_index, self.committed_state, self.current_state);
+            let (stretch, _, _) = self.stretch_integral(k, (tc, xc), None, at, (t, &x), None);
+            return std::array::from_fn(|i| base[i] + stretch[i]);
+        }
         // As in `accumulated_now`: the committed point's integral, or its
         // Taylor series over a drift away from it.
         let delta = t - tc;
@@ -876,7 +916,7 @@ pub(super) mod tests {
             let t_end = 1.234_567;
             let mut sim = Simulator::new(cfg.clone()).unwrap();
             sim.advance_to(t_end).unwrap();
-            let ours = sim.square_integral_now();
+            let ours = sim.accumulated_now().integral;
             let reference = reference_integral(&cfg, t_end);
             for i in 0..3 {
                 let error = (ours[i] - reference[i]).abs() / reference[i];
