@@ -78,7 +78,7 @@ build_fmus() { # every platform's FMUs and the CLI, once per run
 phase_rust() {
     cargo fmt --all -- --check
     cargo clippy --workspace --all-targets -- -D warnings
-    RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --quiet
+    RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --document-private-items --quiet
     cargo test --workspace --release
 }
 

@@ -1,4 +1,4 @@
-//! The unilateral tire ([`TireContact::Unilateral`]): contact and flight,
+//! The unilateral tire ([`crate::model::TireContact::Unilateral`]): contact and flight,
 //! each exact, with the switches between them located inside the steps.
 //!
 //! **The two modes.** In contact the plant is Eq. (2). In flight the tire

@@ -1,5 +1,5 @@
 //! The ISO 2631-1 W_k weighting of the body acceleration inside the precise
-//! integration (only when [`super::SimulationConfig::comfort`] is on).
+//! integration (only when [`super::Metrics::comfort`] is on).
 //!
 //! The realization of [`crate::comfort::wk_state_space`],
 //! `ẇ = A_w w + b_w BA`, `a_w = c_w w` (8 states, m/s²), is driven by

@@ -18,7 +18,7 @@
 //! `min(g_0, g_1) − 4/27 L (|g'_0| + |g'_1|) <= p <= max(g_0, g_1) + 4/27 L (|g'_0| + |g'_1|)`,
 //! so the whole-step loop decides most steps from the node values alone
 //! ([`check_step`]): in contact, or without contact for the whole step;
-//! only a step near a crossing goes to [`time_below_zero`].
+//! only a step near a crossing goes to [`below_zero`].
 //!
 //! **Working space.** The largest |SDD| = |x_s − x_t|, located inside the
 //! steps as the crossings are: over each step (or piece) SDD is represented
@@ -234,7 +234,7 @@ impl Holding {
 
 /// A step near a crossing, or without contact throughout: one lost step
 /// when the cubic cannot be positive, else the measure of
-/// [`time_below_zero`].
+/// [`below_zero`].
 #[cold]
 #[inline(never)]
 fn step_without_contact(
@@ -263,17 +263,15 @@ fn step_without_contact(
     }
 }
 
-/// The time (s) during which the cubic Hermite interpolant through
-/// `a = [g_0, g'_0]` at 0 and `b = [g_1, g'_1]` at `length` is negative,
-/// and the first offset (s) at which it is; `(0, None)` for a length that
-/// is not positive.
+/// The time and the first offset of [`below_zero`]; `(0, None)` for a
+/// length that is not positive.
 #[cfg(test)]
 pub(crate) fn time_below_zero(length: f64, a: [f64; 2], b: [f64; 2]) -> (f64, Option<f64>) {
     let below = below_zero(length, a, b);
     (below.time, below.first)
 }
 
-/// Where the cubic of [`time_below_zero`] is negative.
+/// Where the cubic of [`below_zero`] is negative.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct BelowZero {
     /// The measure of the set where it is negative (s).
@@ -335,8 +333,10 @@ fn sign_pieces(length: f64, a: [f64; 2], b: [f64; 2]) -> (impl Fn(f64) -> f64, V
     (p, points)
 }
 
-/// [`BelowZero`] of the cubic of [`time_below_zero`]; nothing for a length
-/// that is not positive.
+/// [`BelowZero`] of the cubic Hermite interpolant through
+/// `a = [g_0, g'_0]` at 0 and `b = [g_1, g'_1]` at `length`: the time (s)
+/// during which it is negative and the first offset (s) at which it is;
+/// nothing for a length that is not positive.
 pub(crate) fn below_zero(length: f64, a: [f64; 2], b: [f64; 2]) -> BelowZero {
     let mut below = BelowZero {
         time: 0.0,
@@ -368,7 +368,7 @@ pub(crate) fn below_zero(length: f64, a: [f64; 2], b: [f64; 2]) -> BelowZero {
     below
 }
 
-/// The first place where the cubic of [`time_below_zero`] falls through
+/// The first place where the cubic of [`below_zero`] falls through
 /// 0: offsets (s) `[lo, root, hi]`, the root and a bracket of it,
 /// `p(lo) >= 0 > p(hi)`, `lo` the start of the sign piece before it and
 /// `hi` the deepest sub-interval middle of the negative stretch after it

@@ -43,7 +43,7 @@ pub(super) trait NodeRoad: Copy {
 }
 
 /// The harmonic road's phase `A [sin ω t_k, cos ω t_k]` at node k, rotated
-/// exactly from node to node (see [`PHASE_ANCHOR`]).
+/// exactly from node to node (see [`super::PHASE_ANCHOR`]).
 #[derive(Clone, Copy)]
 pub(super) struct HarmonicPhase(pub(super) [f64; 2]);
 
@@ -71,7 +71,7 @@ impl NodeRoad for HarmonicPhase {
 }
 
 /// One linear road piece `x_g = value + slope (t − start)` at grid node
-/// `t_k = t_0 + k h`, evaluated as [`RoadPiece::value`] does.
+/// `t_k = t_0 + k h`, evaluated as [`crate::road::RoadPiece::value`] does.
 #[derive(Clone, Copy)]
 pub(super) struct LinearPiece {
     pub(super) start_time: f64,

@@ -63,7 +63,7 @@ impl Simulator {
 
     /// [`Self::whole_steps`] on the harmonic road: segments that end at the
     /// phase anchors (and at node m, where the history starts), each run by
-    /// [`segment`].
+    /// [`super::kernel::segment`].
     fn harmonic_whole_steps<const DELAY: bool>(&mut self, last: u64) -> Result<bool> {
         let m = self.grid.delay_steps();
         let first = self.grid_index;
