@@ -650,7 +650,13 @@ impl Simulator {
         self.config.start_time + k as f64 * self.grid.step
     }
 
+    /// Whether times `a` and `b` are the same within `1e-9 h + 8 ε |t|`; an
+    /// infinite time (the end of a road piece that never ends) coincides
+    /// only with itself.
     fn coincide(&self, a: f64, b: f64) -> bool {
+        if a.is_infinite() || b.is_infinite() {
+            return a == b;
+        }
         (a - b).abs() <= 1e-9 * self.grid.step + 8.0 * f64::EPSILON * a.abs().max(b.abs())
     }
 

@@ -315,3 +315,25 @@ fn time_averages_alone_agree_with_the_outputs_on_piecewise_linear_roads() {
     }
     assert!(inside > 1000, "{inside} points inside steps");
 }
+
+#[test]
+fn a_road_input_is_no_breakpoint_at_every_node() {
+    // The input's piece never ends: the whole steps it covers form one RMS
+    // run (a breakpoint closes the run at its node).
+    let mut sim = Simulator::new(SimulationConfig {
+        road: RoadSpec::Input,
+        ..SimulationConfig::default()
+    })
+    .unwrap();
+    sim.set_road_input(0.01, 0.2).unwrap();
+    let h = sim.grid.step;
+    assert!(!sim.coincide(f64::INFINITY, 10.0 * h));
+    assert!(sim.coincide(f64::INFINITY, f64::INFINITY));
+    sim.advance_to(10.0 * h).unwrap();
+    assert_eq!(sim.grid_index, 10);
+    assert!(
+        sim.rms.samples >= 10,
+        "{} nodes in the open run",
+        sim.rms.samples
+    );
+}
