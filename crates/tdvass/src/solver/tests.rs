@@ -289,10 +289,17 @@ fn average_bits(a: &TimeAverages) -> [u64; 5] {
 fn time_averages_alone_agree_with_the_outputs_on_piecewise_linear_roads() {
     // Inside steps the time averages alone integrate from the committed
     // point without the W_k filter, here with the squares of linear road
-    // pieces (the grid puts the roads' breakpoints on nodes).
+    // pieces, and in the last case across their breakpoints.
     let steps = [7e-4, 9.9e-5, 1.3e-3, 1e-7, 2.3e-4, 1e-3];
     let mut inside = 0;
-    for cfg in configs() {
+    // A delay longer than the step makes the grid tau/m: the ISO road's
+    // breakpoints then fall inside steps.
+    let long_delay = SimulationConfig {
+        params: Params::with_controller(2528.0, 0.0026),
+        road: RoadSpec::Iso8608(RandomRoad::default()),
+        ..SimulationConfig::default()
+    };
+    for cfg in configs().into_iter().chain([long_delay]) {
         if matches!(cfg.road, RoadSpec::Harmonic { .. }) {
             continue;
         }
