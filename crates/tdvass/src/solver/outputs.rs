@@ -102,6 +102,15 @@ pub struct Outputs {
 }
 
 impl Outputs {
+    /// The time averages among them.
+    pub fn time_averages(&self) -> TimeAverages {
+        TimeAverages {
+            rms: self.rms,
+            objective: self.objective,
+            rms_dynamic_tire_load_ratio: self.rms_dynamic_tire_load_ratio,
+        }
+    }
+
     /// The outputs every metrics level has, as numbers in a fixed order:
     /// the reported state `[x_s, v_s, x_h, v_h, x_t, v_t]`, BA, SDD, TDD,
     /// x_g, the control force, RMS of BA, SDD, TDD, and J.
@@ -309,11 +318,7 @@ impl Simulator {
     /// the current time, the instantaneous outputs are not computed.
     pub fn time_averages(&mut self) -> TimeAverages {
         if let Some(outputs) = &self.outputs_cache {
-            return TimeAverages {
-                rms: outputs.rms,
-                objective: outputs.objective,
-                rms_dynamic_tire_load_ratio: outputs.rms_dynamic_tire_load_ratio,
-            };
+            return outputs.time_averages();
         }
         let integral = self.rms_integral_now();
         let duration = self.current_time - self.config.start_time;

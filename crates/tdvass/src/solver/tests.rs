@@ -247,7 +247,11 @@ fn cheap_readers_agree_with_the_outputs_to_the_bit() {
                 ),
                 "t = {t}"
             );
-            assert_eq!(average_bits(&averages), averages_of(&o), "t = {t}");
+            assert_eq!(
+                average_bits(&averages),
+                average_bits(&o.time_averages()),
+                "t = {t}"
+            );
             if tire_contact.is_unilateral() {
                 // The contact-loss test is the bilateral tire's (the FMU
                 // asks it only then).
@@ -261,15 +265,6 @@ fn cheap_readers_agree_with_the_outputs_to_the_bit() {
         }
     }
     assert!((1..6).contains(&losses), "{losses} of 6 runs lose contact");
-}
-
-/// The time averages among the outputs.
-fn averages_of(o: &Outputs) -> [u64; 5] {
-    average_bits(&TimeAverages {
-        rms: o.rms,
-        objective: o.objective,
-        rms_dynamic_tire_load_ratio: o.rms_dynamic_tire_load_ratio,
-    })
 }
 
 /// The bits of the time averages: the three RMS values, J and the RMS
@@ -316,7 +311,11 @@ fn time_averages_alone_agree_with_the_outputs_on_piecewise_linear_roads() {
                 inside += usize::from(!sim.snaps(t, sim.committed_time));
                 let averages = sim.time_averages();
                 let o = sim.outputs();
-                assert_eq!(average_bits(&averages), averages_of(&o), "t = {t}");
+                assert_eq!(
+                    average_bits(&averages),
+                    average_bits(&o.time_averages()),
+                    "t = {t}"
+                );
             }
         }
     }
