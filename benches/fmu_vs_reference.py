@@ -21,6 +21,7 @@ Dahlquist run of the same repeat.
 """
 
 import argparse
+import math
 import statistics
 import tempfile
 import time
@@ -37,7 +38,7 @@ TDVASS_OUTPUTS = {
 DAHLQUIST_VARIABLES = ["x", "der(x)", "k"]
 
 
-def start(path, workdir):
+def start(path, workdir, road_input=False):
     md = read_model_description(str(path))
     unzipdir = extract(str(path), unzipdir=tempfile.mkdtemp(dir=workdir))
     slave = FMU2Slave(
@@ -49,18 +50,31 @@ def start(path, workdir):
     slave.instantiate()
     slave.setupExperiment(startTime=0.0)
     slave.enterInitializationMode()
+    if road_input:
+        by_name = {v.name: v.valueReference for v in md.modelVariables}
+        slave.setInteger([by_name["road"], by_name["input_extrapolation"]], [0, 2])
     slave.exitInitializationMode()
     return md, slave
 
 
-def loop(path, names, duration, step, workdir):
-    """Seconds per communication point of `doStep` + `getReal(names)`."""
-    md, slave = start(path, workdir)
+def road_input_value(t):
+    """The x_g (m) the road-input loop sets at time t (s)."""
+    return 0.02 * math.sin(9 * t) + 0.004 * math.sin(60 * t)
+
+
+def loop(path, names, duration, step, workdir, road_input=False):
+    """Seconds per communication point of `doStep` + `getReal(names)`; with
+    `road_input` (tdvass only: `road` = 0, `input_extrapolation` = 2) the
+    master sets `x_g` before each step."""
+    md, slave = start(path, workdir, road_input)
     by_name = {v.name: v.valueReference for v in md.modelVariables}
     vrs = [by_name[n] for n in names]
+    x_g = [by_name["x_g"]] if road_input else None
     n = int(round(duration / step))
     begin = time.perf_counter()
     for k in range(n):
+        if x_g:
+            slave.setReal(x_g, [road_input_value(k * step)])
         slave.doStep(currentCommunicationPoint=k * step, communicationStepSize=step)
         slave.getReal(vrs)
     seconds = (time.perf_counter() - begin) / n
