@@ -29,7 +29,9 @@ packages=(
     gcc-aarch64-linux-gnu libc6-dev-arm64-cross # the Linux aarch64 harness
     qemu-user             # ... run under qemu-aarch64
 )
-rust_components=(rustfmt clippy)
+# llvm-tools: llvm-profdata, which merges the training counts of the
+# profile-guided x86-64 Linux libraries (fmu-build/src/pgo.rs).
+rust_components=(rustfmt clippy llvm-tools)
 rust_targets=(x86_64-pc-windows-gnu aarch64-unknown-linux-gnu)
 
 check_only=false
@@ -54,7 +56,10 @@ else
 fi
 missing_components=()
 for component in "${rust_components[@]}"; do
-    cargo "${component/rustfmt/fmt}" --version >/dev/null 2>&1 || missing_components+=("$component")
+    case "$component" in
+        llvm-tools) rustup component list --installed 2>/dev/null | grep -q '^llvm-tools' ;;
+        *) cargo "${component/rustfmt/fmt}" --version >/dev/null 2>&1 ;;
+    esac || missing_components+=("$component")
 done
 missing_targets=()
 installed_targets="$(rustup target list --installed 2>/dev/null || true)"

@@ -49,6 +49,7 @@ use tdvass_fmu::variables::FmiVersion;
 use zip::write::SimpleFileOptions;
 use zip::{CompressionMethod, DateTime, ZipArchive, ZipWriter};
 
+mod pgo;
 mod reference;
 mod zig;
 
@@ -269,6 +270,12 @@ impl Platform {
         format!("{}{library}.{}", self.prefix, self.extension)
     }
 
+    /// Whether its libraries are built with a profile ([`pgo`]): x86-64
+    /// Linux, the machine the training runs on.
+    fn profile_guided(&self) -> bool {
+        self.format == BinaryFormat::ElfX86_64
+    }
+
     /// Where cargo writes the library target `library`.
     fn built_path(&self, target: &Path, library: &str) -> PathBuf {
         match self.cross_target {
@@ -469,6 +476,19 @@ fn missing_requirements(root: &Path, platforms: &[Platform]) -> Vec<String> {
             }
         }
     }
+    // The build of every platform ships the profile-guided x86-64 Linux
+    // libraries (a cross build there); the host build goes without a
+    // profile when the tool is missing, and says so.
+    if platforms
+        .iter()
+        .any(|p| p.profile_guided() && p.cross_target.is_some())
+        && pgo::llvm_profdata().is_none()
+    {
+        missing.push(format!(
+            "llvm-profdata, for the profile-guided x86-64 Linux libraries ({})",
+            pgo::INSTALL_HINT
+        ));
+    }
     if !targets.is_empty() {
         missing.insert(
             0,
@@ -482,6 +502,33 @@ fn missing_requirements(root: &Path, platforms: &[Platform]) -> Vec<String> {
     missing
 }
 
+/// The cargo command that builds `args` for `platform`: cargo-zigbuild
+/// for a glibc floor (target `<triple>.<glibc>`), else cargo itself (with
+/// `--target` for a cross build).
+fn platform_build(platform: &Platform, zig: Option<&ZigTools>, args: &[&str]) -> Result<Command> {
+    match (platform.glibc, zig) {
+        (Some(glibc), Some(zig)) => {
+            let triple = platform
+                .cross_target
+                .ok_or("a glibc floor needs a target triple")?;
+            let target = format!("{triple}.{glibc}");
+            let mut all = args.to_vec();
+            all.extend(["--target", &target]);
+            Ok(zig.command(&all))
+        }
+        (Some(_), None) => Err(format!("{} needs zig", platform.label)),
+        (None, _) => {
+            let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+            let mut command = Command::new(cargo);
+            command.arg("build").args(args);
+            if let Some(triple) = platform.cross_target {
+                command.args(["--target", triple]);
+            }
+            Ok(command)
+        }
+    }
+}
+
 /// Builds the library of `fmu` for `platform` (release, library only) and
 /// returns its bytes, checked to be machine code of that platform. Each
 /// crate is built by a cargo run of its own, so that the FMI 2.0 library is
@@ -491,31 +538,19 @@ fn build_library(
     platform: &Platform,
     fmu: &Fmu,
     zig: Option<&ZigTools>,
+    profile: Option<&pgo::Profile>,
 ) -> Result<Vec<u8>> {
-    let mut command = match (platform.glibc, zig) {
-        (Some(glibc), Some(zig)) => {
-            let triple = platform
-                .cross_target
-                .ok_or("a glibc floor needs a target triple")?;
-            zig.command(&[
-                "--release",
-                "-p",
-                fmu.package,
-                "--lib",
-                "--target",
-                &format!("{triple}.{glibc}"),
-            ])
-        }
-        (Some(_), None) => return Err(format!("{} needs zig", platform.label)),
-        (None, _) => {
-            let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
-            let mut command = Command::new(cargo);
-            command.args(["build", "--release", "-p", fmu.package, "--lib"]);
-            if let Some(triple) = platform.cross_target {
-                command.args(["--target", triple]);
-            }
+    let mut command = platform_build(platform, zig, &["--release", "-p", fmu.package, "--lib"])?;
+    let target = match profile {
+        Some(profile) => {
+            let flags = profile.rustflags(std::env::var("RUSTFLAGS").ok().as_deref());
             command
+                .env("CARGO_TARGET_DIR", &profile.target_dir)
+                .env("RUSTFLAGS", &flags);
+            eprintln!("fmu-build: RUSTFLAGS={flags}");
+            profile.target_dir.clone()
         }
+        None => target_dir(root),
     };
     let shown: Vec<String> = std::iter::once(command.get_program())
         .chain(command.get_args())
@@ -538,7 +573,7 @@ fn build_library(
             platform.label
         ));
     }
-    let library = platform.built_path(&target_dir(root), fmu.library);
+    let library = platform.built_path(&target, fmu.library);
     let bytes = fs::read(&library).map_err(|e| {
         format!(
             "the shared library {} was not built: {e}",
@@ -751,8 +786,20 @@ fn build(root: &Path, fmus: &[Fmu], platforms: &[Platform]) -> Result<()> {
     // leaves no FMU with some of its platforms.
     let mut binaries: Vec<Vec<(String, Vec<u8>)>> = vec![Vec::new(); fmus.len()];
     for platform in platforms {
+        let profile = if platform.profile_guided() {
+            let training = platform_build(platform, zig.as_ref(), &pgo::TRAINING_ARGS)?;
+            pgo::train(
+                root,
+                &target_dir(root),
+                platform.cross_target,
+                training,
+                platform.glibc.is_some(),
+            )?
+        } else {
+            None
+        };
         for (fmu, packed) in fmus.iter().zip(binaries.iter_mut()) {
-            let bytes = build_library(root, platform, fmu, zig.as_ref())?;
+            let bytes = build_library(root, platform, fmu, zig.as_ref(), profile.as_ref())?;
             match platform.fmu_entry(fmu.version) {
                 Some(entry) => packed.push((entry, bytes)),
                 None => eprintln!(

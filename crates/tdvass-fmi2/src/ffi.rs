@@ -96,6 +96,14 @@ const FMI2_FALSE: fmi2Boolean = 0;
 /// The tag of an FMI 2.0 instance handle (see [`pointers::Handle`]).
 const HANDLE_MAGIC: u64 = 0x5444_5641_5353_4649; // "TDVASSFI"
 
+/// The handle of an instance made in Rust ([`Instance::instantiate`], with
+/// a Rust logger), as `fmi2Instantiate` returns it: for a master in Rust
+/// that calls the C functions in-process (the training run of the
+/// profile-guided build). `fmi2FreeInstance` frees it.
+pub fn into_component(instance: Instance) -> fmi2Component {
+    pointers::into_raw(HANDLE_MAGIC, instance)
+}
+
 fn status(s: Status) -> fmi2Status {
     s as fmi2Status
 }
@@ -216,7 +224,7 @@ pub unsafe extern "C" fn fmi2Instantiate(
             logging_on: loggingOn != FMI2_FALSE,
         };
         match Instance::instantiate(request, sink) {
-            Some(instance) => pointers::into_raw(HANDLE_MAGIC, instance),
+            Some(instance) => into_component(instance),
             None => std::ptr::null_mut(),
         }
     });

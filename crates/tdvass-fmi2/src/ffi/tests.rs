@@ -14,7 +14,7 @@ fn panics_are_caught_and_make_the_instance_fatal() {
         Box::new(|_, _, _| {}),
     )
     .unwrap();
-    let c = pointers::into_raw(HANDLE_MAGIC, instance);
+    let c = into_component(instance);
     let s = call(c, Function::Reset, |_| panic!("deliberate"));
     assert_eq!(s, status(Status::Fatal));
     // SAFETY: `c` is the live handle created above.
