@@ -197,13 +197,13 @@ fn missing_targets_and_toolchains_are_named_with_their_install_command() {
         }],
         glibc: None,
     };
-    let missing = missing_requirements(&workspace_root(), &[platform]);
+    let missing = missing_requirements(&workspace_root(), &[platform], Profiling::Trained);
     assert_eq!(missing.len(), 2, "{missing:?}");
     assert!(missing[0].contains("`rustup target add x86_64-unknown-none-such`"));
     assert!(missing[1].contains("`apt-get install gcc-no-such`"));
     // The host needs nothing beyond its own toolchain.
     let host = host_platform(std::env::consts::OS, std::env::consts::ARCH).unwrap();
-    assert!(missing_requirements(&workspace_root(), &[host]).is_empty());
+    assert!(missing_requirements(&workspace_root(), &[host], Profiling::Trained).is_empty());
 }
 
 #[test]
