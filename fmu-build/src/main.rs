@@ -483,15 +483,7 @@ fn missing_requirements(root: &Path, platforms: &[Platform], profile: Profiling)
             }
         }
     }
-    // The build of every platform ships the profile-guided x86-64 Linux
-    // libraries (a cross build there); the host build goes without a
-    // profile when the tool is missing, and says so.
-    if profile == Profiling::Trained
-        && platforms
-            .iter()
-            .any(|p| p.profile_guided() && p.cross_target.is_some())
-        && pgo::llvm_profdata().is_none()
-    {
+    if profile_tool_required(platforms, profile) && pgo::llvm_profdata().is_none() {
         missing.push(format!(
             "llvm-profdata, for the profile-guided x86-64 Linux libraries ({})",
             pgo::INSTALL_HINT
@@ -535,6 +527,17 @@ fn platform_build(platform: &Platform, zig: Option<&ZigTools>, args: &[&str]) ->
             Ok(command)
         }
     }
+}
+
+/// Whether building `platforms` with `profile` needs `llvm-profdata`: the
+/// build of every platform ships the profile-guided x86-64 Linux libraries
+/// (a cross build there) unless told not to; the host build goes without a
+/// profile when the tool is missing, and says so.
+fn profile_tool_required(platforms: &[Platform], profile: Profiling) -> bool {
+    profile == Profiling::Trained
+        && platforms
+            .iter()
+            .any(|p| p.profile_guided() && p.cross_target.is_some())
 }
 
 /// Builds the library of `fmu` for `platform` (release, library only) and
@@ -889,8 +892,10 @@ enum Mode {
     Check,
 }
 
-fn main() -> ExitCode {
-    let args: Vec<String> = std::env::args().skip(1).collect();
+/// The mode and the profiling the arguments ask for: at most one of
+/// `--check` and `--all-platforms`, and [`NO_PROFILE`] anywhere; `None` for
+/// anything else.
+fn parse_args(args: &[String]) -> Option<(Mode, Profiling)> {
     let profile = if args.iter().any(|a| a == NO_PROFILE) {
         Profiling::Skipped
     } else {
@@ -905,10 +910,16 @@ fn main() -> ExitCode {
         [] => Mode::Host,
         ["--check"] => Mode::Check,
         ["--all-platforms"] => Mode::AllPlatforms,
-        _ => {
-            eprintln!("usage: fmu-build [--check | --all-platforms] [{NO_PROFILE}]");
-            return ExitCode::from(2);
-        }
+        _ => return None,
+    };
+    Some((mode, profile))
+}
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let Some((mode, profile)) = parse_args(&args) else {
+        eprintln!("usage: fmu-build [--check | --all-platforms] [{NO_PROFILE}]");
+        return ExitCode::from(2);
     };
     let root = workspace_root();
     let fmus = Fmu::all();

@@ -419,3 +419,36 @@ fn reference_results_are_the_default_experiment_of_each_fmu() {
         reference::results_csv(fmi2.dialect, fmi2.token.clone()).unwrap()
     );
 }
+
+#[test]
+fn arguments_name_a_mode_and_whether_to_train() {
+    let parse = |args: &[&str]| parse_args(&args.iter().map(|a| a.to_string()).collect::<Vec<_>>());
+    assert_eq!(parse(&[]), Some((Mode::Host, Profiling::Trained)));
+    assert_eq!(
+        parse(&["--no-profile"]),
+        Some((Mode::Host, Profiling::Skipped))
+    );
+    assert_eq!(
+        parse(&["--all-platforms"]),
+        Some((Mode::AllPlatforms, Profiling::Trained))
+    );
+    assert_eq!(
+        parse(&["--no-profile", "--all-platforms"]),
+        Some((Mode::AllPlatforms, Profiling::Skipped))
+    );
+    assert_eq!(parse(&["--check"]), Some((Mode::Check, Profiling::Trained)));
+    assert_eq!(parse(&["--check", "--all-platforms"]), None);
+    assert_eq!(parse(&["--no-pgo"]), None);
+}
+
+#[test]
+fn the_profile_tool_is_required_by_the_build_of_every_platform_unless_skipped() {
+    let host = host_platform(std::env::consts::OS, std::env::consts::ARCH).unwrap();
+    let platforms = all_platforms().unwrap();
+    assert!(profile_tool_required(&platforms, Profiling::Trained));
+    assert!(!profile_tool_required(&platforms, Profiling::Skipped));
+    // The host build trains when it can and goes on without otherwise.
+    assert!(!profile_tool_required(&[host], Profiling::Trained));
+    // Windows and aarch64 alone have no profile.
+    assert!(!profile_tool_required(&platforms[1..], Profiling::Trained));
+}
