@@ -458,7 +458,8 @@ fn rust_target_installed(root: &Path, triple: &str) -> bool {
         .unwrap_or(false)
 }
 
-/// Every missing Rust target, cross toolchain and zig, as instructions to
+/// Every missing Rust target, cross toolchain, zig and (for the build of
+/// every platform with `profile`) `llvm-profdata`, as instructions to
 /// install them; empty when everything is there.
 fn missing_requirements(root: &Path, platforms: &[Platform], profile: Profiling) -> Vec<String> {
     let mut missing = Vec::new();

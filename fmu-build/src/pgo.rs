@@ -29,12 +29,12 @@
 //!
 //! The instrumented code is compiled by the same command as the optimized
 //! one (cargo-zigbuild for the glibc floor), so that the symbols match:
-//! their hash includes the target and its linker. The
-//! training takes the AVX2 loop where the CPU has it (every x86-64 build
-//! machine of the last decade); a build machine without AVX2 would train
-//! the other loop and give a different, equally correct library. Without
-//! `llvm-profdata` the libraries are built without a profile, and the build
-//! says so.
+//! their hash includes the target and its linker. The training takes the
+//! AVX2 loop where the CPU has it (every x86-64 build machine of the last
+//! decade); a build machine without AVX2 would train the other loop and
+//! give a different, equally correct library. Without `llvm-profdata` the
+//! host build goes without a profile and says so; the build of every
+//! platform requires it, unless `--no-profile` skips the training.
 
 use std::fs;
 use std::path::{Path, PathBuf};
