@@ -55,9 +55,10 @@ else
     echo "note: no dpkg-query; make sure the equivalents of these Debian packages are installed: ${packages[*]}" >&2
 fi
 missing_components=()
+installed_components="$(rustup component list --installed 2>/dev/null || true)"
 for component in "${rust_components[@]}"; do
     case "$component" in
-        llvm-tools) rustup component list --installed 2>/dev/null | grep -q '^llvm-tools' ;;
+        llvm-tools) grep -q '^llvm-tools' <<<"$installed_components" ;;
         *) cargo "${component/rustfmt/fmt}" --version >/dev/null 2>&1 ;;
     esac || missing_components+=("$component")
 done
