@@ -16,13 +16,13 @@
 //! Every call must succeed: a failing call stops the run with an error, so
 //! that a broken interface never trains the build (fmu-build then fails).
 
-use tdvass_fmi2::Instance;
 use tdvass_fmi2::ffi::{
     fmi2DoStep, fmi2EnterInitializationMode, fmi2ExitInitializationMode, fmi2FreeInstance,
     fmi2GetReal, fmi2SetInteger, fmi2SetReal, fmi2SetupExperiment, fmi2Terminate, into_component,
 };
 use tdvass_fmi2::instance::{FMI2_COSIMULATION, InstantiateRequest};
 use tdvass_fmi2::variables::{Causality, FmiVersion, VarType, by_name, variables_of};
+use tdvass_fmi2::{Instance, Status};
 
 /// `fmi2OK`.
 const OK: i32 = 0;
@@ -69,7 +69,13 @@ fn run(
             guid: Some(guid),
             ..Default::default()
         },
-        Box::new(|_, _, _| {}),
+        // A failing call names the reason here, before its status stops
+        // the run.
+        Box::new(|status, category, message| {
+            if matches!(status, Status::Discard | Status::Error | Status::Fatal) {
+                eprintln!("pgo_training: {status:?} [{category}] {message}");
+            }
+        }),
     )
     .ok_or("the instance was not made")?;
     let read: Vec<u32> = match outputs {
