@@ -12,7 +12,7 @@ echo "== building the command line tool (target/release/tdvass)"
 cargo build --release -p tdvass-cli --bin tdvass
 echo "== building the FMUs (target/fmu/tdvass.fmu, target/fmu/tdvass-fmi3.fmu)"
 # Without the profile-guided optimization of the release build
-# (fmu-build/src/pgo.rs): the same results, about 80 s less on two cores.
+# (fmu-build/src/pgo.rs): the same results, about a minute and a half less on two cores.
 cargo run --release -p fmu-build -- --no-profile
 echo "== the FMU's default experiment through fmpy"
 "$python" examples/default_experiment.py target/fmu/tdvass.fmu
