@@ -24,7 +24,13 @@ use crate::error::{Error, Result};
 use crate::metrics::Weights;
 use crate::model::{Params, STATE_NAMES, State, Variant};
 use crate::road::RoadSpec;
-use crate::solver::{DIVERGENCE_DISPLACEMENT, DIVERGENCE_VELOCITY};
+
+/// Displacement bound (m): beyond it a run is declared divergent, and no
+/// initial displacement or road amplitude may exceed it.
+pub const DIVERGENCE_DISPLACEMENT: f64 = 1e3;
+/// Velocity bound (m/s): beyond it a run is declared divergent, and no
+/// initial velocity or road slope may exceed it.
+pub const DIVERGENCE_VELOCITY: f64 = 1e6;
 
 /// Largest stiffness, damping or gain over a mass (1/s²) or damping over a
 /// mass (1/s).

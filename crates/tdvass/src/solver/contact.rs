@@ -150,7 +150,7 @@ impl Simulator {
         };
         let b = self.solver_input_column();
         ModeOperators {
-            solver_matrix_norm: super::operators::infinity_norm(&a),
+            solver_matrix_norm: super::linalg::infinity_norm(&a),
             full_step: StepOperator::new(&a, &b, &e, omega, self.grid.step, self.coupling.as_ref()),
             solver_matrix: a,
             dense: None,

@@ -45,6 +45,7 @@
 //! stretch that passes with the bounds passes with the state; otherwise
 //! the state is computed and the exact test runs.
 
+use super::linalg::{hermite_bound, scaled_norm};
 use super::{Simulator, divergence_bound, series_order};
 use crate::model::State;
 use crate::road::RoadPiece;
@@ -63,41 +64,6 @@ pub(super) enum Kind {
 pub(super) struct Deferred {
     kind: Kind,
     drift: [f64; 6],
-}
-
-/// The balance of the solver's matrix for [`Simulator::inside_bounds`]:
-/// `D` (powers of two), `ν = ‖D⁻¹ A D‖_∞`, `‖D⁻¹ b‖_∞`, `‖D⁻¹ e‖_∞`.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct Scaling {
-    diagonal: [f64; 6],
-    norm: f64,
-    input: f64,
-    road: f64,
-}
-
-impl Scaling {
-    /// For the solver's matrix `a`, input column `b` and road column `e`.
-    pub(super) fn new(a: &nalgebra::Matrix6<f64>, b: &State, e: &State) -> Scaling {
-        let (diagonal, norm) = super::dense::balancing(a);
-        Scaling {
-            diagonal,
-            norm,
-            input: scaled_norm(&diagonal, b),
-            road: scaled_norm(&diagonal, e),
-        }
-    }
-}
-
-/// `‖D⁻¹ c‖_∞` for the diagonal D.
-fn scaled_norm(diagonal: &[f64; 6], c: &State) -> f64 {
-    (0..6).fold(0.0f64, |m, i| m.max(c[i].abs() / diagonal[i]))
-}
-
-/// A bound of `|p|` over `[0, h]` for the cubic Hermite interpolant `p`
-/// of `[x_0, v_0, x_1, v_1]`: its basis functions of the values are
-/// nonnegative and sum to 1, those of the slopes stay within `4/27 h`.
-pub(super) fn hermite_bound([x0, v0, x1, v1]: [f64; 4], h: f64) -> f64 {
-    x0.abs().max(x1.abs()) + 4.0 / 27.0 * h * (v0.abs() + v1.abs())
 }
 
 impl Simulator {

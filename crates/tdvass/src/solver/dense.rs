@@ -86,8 +86,11 @@
 //! external road input) is located from committed values alone, as before.
 
 use super::expm;
-use super::filter::{Filter, FilterCoupling, WITH_FILTER, with_filter_matrix};
-use super::operators::{AUGMENTED, DELAY_INPUT, HARMONIC_ROAD, LINEAR_ROAD, augmented_matrix};
+use super::linalg::{Scaling, balanced_norm};
+use super::system::{
+    AUGMENTED, DELAY_INPUT, Filter, FilterCoupling, HARMONIC_ROAD, LINEAR_ROAD, WITH_FILTER,
+    augmented_matrix, with_filter_matrix,
+};
 use crate::comfort::WK_STATES;
 use crate::model::State;
 use crate::road::RoadPiece;
@@ -249,66 +252,6 @@ fn taylor_order(theta: f64) -> usize {
     MAX_ORDER
 }
 
-/// `‖D⁻¹ M D‖_∞` for a diagonal D of powers of two that balances M
-/// (Osborne's iteration in radix 2, as LAPACK's `gebal`: a state's row and
-/// column sums off the diagonal are brought within a factor 2 of each
-/// other while that lowers their sum by 5 %). Any D gives a valid bound;
-/// balancing makes it tight. Powers of two scale exactly, and only +, ×
-/// and comparisons are used.
-pub(super) fn balanced_norm<const D: usize>(m: &SMatrix<f64, D, D>) -> f64 {
-    balancing(m).1
-}
-
-/// The diagonal D of [`balanced_norm`] (powers of two) and the norm
-/// `‖D⁻¹ M D‖_∞`.
-pub(super) fn balancing<const D: usize>(m: &SMatrix<f64, D, D>) -> ([f64; D], f64) {
-    let mut diagonal = [1.0; D];
-    let mut b = m.abs();
-    for _ in 0..64 {
-        let mut changed = false;
-        for i in 0..D {
-            let (mut column, mut row) = (0.0, 0.0);
-            for j in 0..D {
-                if j != i {
-                    column += b[(j, i)];
-                    row += b[(i, j)];
-                }
-            }
-            if column == 0.0 || row == 0.0 {
-                continue;
-            }
-            let sum = column + row;
-            let (mut c, mut r, mut f) = (column, row, 1.0);
-            while c < 0.5 * r && f < 1e30 {
-                c *= 2.0;
-                r *= 0.5;
-                f *= 2.0;
-            }
-            while 0.5 * c >= r && f > 1e-30 {
-                c *= 0.5;
-                r *= 2.0;
-                f *= 0.5;
-            }
-            if c + r < 0.95 * sum {
-                changed = true;
-                diagonal[i] *= f;
-                for j in 0..D {
-                    b[(j, i)] *= f;
-                    b[(i, j)] /= f;
-                }
-            }
-        }
-        if !changed {
-            break;
-        }
-    }
-    let norm = b
-        .row_iter()
-        .map(|row| row.iter().sum::<f64>())
-        .fold(0.0, f64::max);
-    (diagonal, norm)
-}
-
 /// The dense output of one mode of the plant (see the module docs).
 #[derive(Debug, Clone)]
 pub(super) struct DenseOutput {
@@ -327,7 +270,7 @@ pub(super) struct DenseOutput {
     filter: Option<FilterTable>,
     /// The balance of the solver's matrix that bounds a deferred state
     /// inside a step ([`super::deferred`]).
-    pub(super) scaling: super::deferred::Scaling,
+    pub(super) scaling: Scaling,
 }
 
 #[derive(Debug, Clone)]
@@ -357,7 +300,7 @@ impl DenseOutput {
             plant: Table::new(&m, h, 0),
             fixed: Vec::new(),
             filter: None,
-            scaling: super::deferred::Scaling::new(a, b, e),
+            scaling: Scaling::new(a, b, e),
         }
     }
 
@@ -420,7 +363,7 @@ impl DenseOutput {
                 let s = sigma / k as f64;
                 let (u, road) = (v[DELAY_INPUT], v[LINEAR_ROAD] + v[HARMONIC_ROAD]);
                 let x: [f64; 6] = std::array::from_fn(|i| v[i]);
-                let ax = super::operators::combine6(&a, &x);
+                let ax = super::linalg::combine6(&a, &x);
                 let mut next = z;
                 for i in 0..6 {
                     next[i] += s * (ax[i] + (b[i] * u + e[i] * road));
@@ -581,7 +524,7 @@ impl Phases {
 pub(super) mod tests {
     use super::*;
     use crate::model::{Params, Plant, Variant, X_T};
-    use crate::solver::filter::FilterCoupling;
+    use crate::solver::system::FilterCoupling;
     use std::cell::Cell;
 
     thread_local! {

@@ -5,9 +5,9 @@
 //! only after a run-time check that the CPU has it.
 #![allow(unsafe_code)]
 
-use super::filter::{FilterGridStep, filter_combine};
+use super::grid_step::{FilterGridStep, GridStep, filter_combine};
 use super::holding::{Holding, check_step, deflection, margin};
-use super::operators::{GridStep, add6, combine2, combine4, combine6};
+use super::linalg::{add6, combine2, combine4, combine6};
 use super::{DIVERGENCE_BOUNDS, Simulator};
 use crate::comfort::WK_STATES;
 use crate::error::Result;

@@ -68,30 +68,33 @@ mod dense;
 pub mod expm;
 mod filter;
 mod grid;
+mod grid_step;
 mod holding;
 mod kernel;
+mod linalg;
 mod operators;
 mod outputs;
 mod persist;
 mod steps;
+mod system;
 mod time_average;
 
 use crate::error::{Error, Result};
 use crate::metrics::{RunningRms, Weights};
 use crate::model::{Params, Plant, State, TireContact, V_T, Variant, X_T};
 use crate::road::{Road, RoadPiece, RoadSpec};
-use filter::{Filter, FilterCoupling, FilterGridStep};
 pub use grid::{DelayGrid, DelayRegime};
+use grid_step::{FilterGridStep, GridStep};
 use holding::Holding;
+use linalg::{hermite, hermite_matrix, infinity_norm};
 use nalgebra::{Matrix2, Matrix6, SMatrix, Vector2, Vector4};
-use operators::{
-    DELAY_INPUT, GridStep, StepOperator, hermite, hermite_matrix, infinity_norm, tire_pick,
-};
+use operators::StepOperator;
 pub use outputs::{
     ComfortValues, ContactLoss, Instantaneous, OutputDerivatives, Outputs, RoadHolding, RunSummary,
     TimeAverages,
 };
 pub use persist::STATE_FORMAT_VERSION;
+use system::{DELAY_INPUT, Filter, FilterCoupling, tire_pick};
 use time_average::series_order;
 use time_average::{INTEGRALS, SquareIntegral};
 
@@ -113,10 +116,7 @@ const SNAP_STEP_FRACTION: f64 = 1.0 / 1024.0;
 /// `x_t(t − tau) ≈ x_t(t) − tau v_t(t)` (error ≤ tau²/2 |d²x_t/dt²|, below
 /// 5e-15 |d²x_t/dt²|) instead of forcing a grid step of tau.
 pub const MIN_RESOLVED_DELAY: f64 = 1e-7;
-/// Displacement bound (m): beyond it the run is declared divergent.
-pub const DIVERGENCE_DISPLACEMENT: f64 = 1e3;
-/// Velocity bound (m/s): beyond it the run is declared divergent.
-pub const DIVERGENCE_VELOCITY: f64 = 1e6;
+pub use crate::limits::{DIVERGENCE_DISPLACEMENT, DIVERGENCE_VELOCITY};
 
 /// The divergence bound of state i: [`DIVERGENCE_DISPLACEMENT`] for the
 /// displacements (even i), [`DIVERGENCE_VELOCITY`] for the velocities.
@@ -928,18 +928,18 @@ impl Simulator {
         let road = match piece {
             RoadPiece::Harmonic { .. } => {
                 let phase = self.node_phase(k);
-                operators::combine2(&self.grid_step.harmonic, &phase)
+                linalg::combine2(&self.grid_step.harmonic, &phase)
             }
-            RoadPiece::Linear { .. } => operators::combine2(
+            RoadPiece::Linear { .. } => linalg::combine2(
                 &self.grid_step.linear,
                 &[piece.value(from), piece.slope(from)],
             ),
         };
         let step = &self.grid_step;
-        let inputs = operators::add6(operators::combine4(&step.nodes, &nodes), road);
+        let inputs = linalg::add6(linalg::combine4(&step.nodes, &nodes), road);
         let x: [f64; 6] = (*x).into();
-        Some(State::from(operators::add6(
-            operators::combine6(&step.transition, &x),
+        Some(State::from(linalg::add6(
+            linalg::combine6(&step.transition, &x),
             inputs,
         )))
     }

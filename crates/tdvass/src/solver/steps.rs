@@ -3,11 +3,11 @@
 //! road breakpoints, and the steps that a road breakpoint splits, with
 //! their share of the RMS time integral.
 
-use super::filter::Filter;
 use super::holding::Holding;
 use super::kernel::{
     HarmonicPhase, HotState, LinearPiece, Segment, SegmentEnd, run_segment, within_bounds,
 };
+use super::system::Filter;
 use super::{PHASE_ANCHOR, Simulator};
 use crate::error::Result;
 use crate::metrics::RunningRms;

@@ -32,8 +32,8 @@
 //! too and the rule is third order there: the extra error is below
 //! `h⁴ |Δf'''| / 384` per step.
 
-use super::filter::Filter;
 use super::holding::{Holding, deflection, margin};
+use super::system::Filter;
 use super::{Simulator, hermite};
 use crate::metrics::{RmsValues, RunningRms};
 use crate::model::{State, V_S, V_T, X_S, X_T};
