@@ -2,8 +2,15 @@
 //! resolved on it (section 4.1: the step divides tau, or the delay lies
 //! inside one step, or it is folded into the plant).
 
-use super::{MAX_HISTORY_NODES, MIN_RESOLVED_DELAY};
 use crate::error::{Error, Result};
+
+/// Most grid nodes of delay history kept (8 M nodes, 64 MiB); a delay
+/// needing more is refused.
+pub const MAX_HISTORY_NODES: u64 = 1 << 23;
+/// Delays below this (s) are folded into the plant as
+/// `x_t(t − tau) ≈ x_t(t) − tau v_t(t)` (error ≤ tau²/2 |d²x_t/dt²|, below
+/// 5e-15 |d²x_t/dt²|) instead of forcing a grid step of tau.
+pub const MIN_RESOLVED_DELAY: f64 = 1e-7;
 
 /// How the delay is resolved on the grid (section 4.1).
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -38,7 +38,7 @@ pub(super) struct GridStep {
     /// simulator; +∞ until then).
     pub(super) contact: ContactCheck,
     /// Whether the whole-step loop runs the road-holding test and the
-    /// largest |SDD| ([`super::Metrics::RoadHolding`]).
+    /// largest |SDD| (the road-holding metrics level and above).
     pub(super) holding: bool,
 }
 
@@ -70,7 +70,7 @@ impl GridStep {
     }
 
     /// The whole step when the delay `tau` is shorter than the step h
-    /// ([`DelayRegime::InsideStep`](super::DelayRegime::InsideStep)). Over `[t_k, t_k + tau)` the delayed
+    /// ([`DelayRegime::InsideStep`](super::grid::DelayRegime::InsideStep)). Over `[t_k, t_k + tau)` the delayed
     /// argument lies in step k − 1 (Hermite offsets from `h − tau`), over
     /// `[t_k + tau, t_{k+1})` in step k itself (offsets from 0), so
     /// `X_{k+1} = Φ X_k + D_1 n_{k−1,k} + D_2 n_{k,k+1} + road` with

@@ -83,7 +83,7 @@ use crate::error::{Error, Result};
 use crate::metrics::{RunningRms, Weights};
 use crate::model::{Params, Plant, State, TireContact, V_T, Variant, X_T};
 use crate::road::{Road, RoadPiece, RoadSpec};
-pub use grid::{DelayGrid, DelayRegime};
+pub use grid::{DelayGrid, DelayRegime, MAX_HISTORY_NODES, MIN_RESOLVED_DELAY};
 use grid_step::{FilterGridStep, GridStep};
 use holding::Holding;
 use linalg::{hermite, hermite_matrix, infinity_norm};
@@ -100,9 +100,6 @@ use time_average::{INTEGRALS, SquareIntegral};
 
 pub use accuracy::{DEFAULT_TOLERANCE, StepChoice};
 pub use contact::{LOCATION_TOLERANCE, LiftOff, MAX_SWITCHES_PER_STEP};
-/// Most grid nodes of delay history kept (8 M nodes, 64 MiB); a delay
-/// needing more is refused.
-pub const MAX_HISTORY_NODES: u64 = 1 << 23;
 /// Rounding drift covered by the snap tolerance, in additions: a time
 /// accumulated as `t += step` over N steps is off by at most `N ε |t| / 2`,
 /// so `2^22 ε |t|` covers 2^22 steps with a factor 2 to spare (1.4e-8 s at
@@ -112,10 +109,6 @@ const SNAPPED_ADDITIONS: f64 = 4_194_304.0;
 /// (2^-10: 1e-7 s at the default step, far below any time scale of the
 /// model or its roads).
 const SNAP_STEP_FRACTION: f64 = 1.0 / 1024.0;
-/// Delays below this (s) are folded into the plant as
-/// `x_t(t − tau) ≈ x_t(t) − tau v_t(t)` (error ≤ tau²/2 |d²x_t/dt²|, below
-/// 5e-15 |d²x_t/dt²|) instead of forcing a grid step of tau.
-pub const MIN_RESOLVED_DELAY: f64 = 1e-7;
 pub use crate::limits::{DIVERGENCE_DISPLACEMENT, DIVERGENCE_VELOCITY};
 
 /// The divergence bound of state i: [`DIVERGENCE_DISPLACEMENT`] for the
