@@ -397,6 +397,40 @@ impl RoadPiece {
         }
     }
 
+    /// `[x_g, x_g', x_g'', x_g''']` at t (m, m/s, m/s², m/s³): of the
+    /// harmonic piece `A sin ω t` (`sin ω t` and `cos ω t` from one
+    /// [`crate::math::sin_cos`]), of a linear piece its value and slope.
+    #[inline]
+    pub fn derivatives(&self, t: f64) -> [f64; 4] {
+        match *self {
+            RoadPiece::Harmonic {
+                amplitude: a,
+                angular_frequency: w,
+            } => {
+                let (sin, cos) = crate::math::sin_cos(w * t);
+                [a * sin, a * w * cos, -a * w * w * sin, -a * w * w * w * cos]
+            }
+            RoadPiece::Linear { .. } => [self.value(t), self.slope(t), 0.0, 0.0],
+        }
+    }
+
+    /// Bounds of `|x_g|, |x_g'|, |x_g''|, |x_g'''|` over the piece from t
+    /// on (the harmonic piece's `|A| |ω|^j`; a linear piece's value at t
+    /// and its slope).
+    #[inline]
+    pub fn derivative_bounds(&self, t: f64) -> [f64; 4] {
+        match *self {
+            RoadPiece::Harmonic {
+                amplitude,
+                angular_frequency,
+            } => {
+                let (a, w) = (amplitude.abs(), angular_frequency.abs());
+                [a, a * w, a * w * w, a * w * w * w]
+            }
+            RoadPiece::Linear { .. } => [self.value(t).abs(), self.slope(t).abs(), 0.0, 0.0],
+        }
+    }
+
     /// End of the piece's validity (`+inf` for the harmonic road).
     #[inline]
     pub fn end(&self) -> f64 {

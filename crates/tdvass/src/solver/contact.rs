@@ -209,12 +209,7 @@ impl Simulator {
         let node = self.grid_time(k + 1);
         let (mut start, mut x_start) = (tc, xc);
         while start < node {
-            let piece = self.piece_from(start);
-            let end = if piece.end() < node && !self.coincide(piece.end(), node) {
-                piece.end()
-            } else {
-                node
-            };
+            let super::pieces::Stretch { piece, end, .. } = self.stretch(start, node, None);
             let x_end = self.integrate_within_step(k, tc, xc, end);
             let a = self.switch_function(start, &x_start, &piece);
             let b = self.switch_function(end, &x_end, &piece);

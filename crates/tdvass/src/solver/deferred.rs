@@ -160,18 +160,7 @@ impl Simulator {
             input[3] = (12.0 * rise + 6.0 * slopes) / (h * h);
         }
         let road_piece = self.piece_from(t + delta);
-        let road = match self.forcing(&road_piece) {
-            RoadPiece::Harmonic {
-                amplitude,
-                angular_frequency,
-            } => {
-                let (a, w) = (amplitude.abs(), angular_frequency.abs());
-                [a, a * w, a * w * w, a * w * w * w]
-            }
-            piece @ RoadPiece::Linear { .. } => {
-                [piece.value(t).abs(), piece.slope(t).abs(), 0.0, 0.0]
-            }
-        };
+        let road = self.forcing(&road_piece).derivative_bounds(t);
         let (b, e) = (self.solver_input_column(), self.plant.e);
         let (b_max, e_max) = (b.amax(), e.amax());
         let mut previous = x.amax();

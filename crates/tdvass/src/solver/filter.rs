@@ -26,7 +26,6 @@
 use super::Simulator;
 use super::system::Filter;
 use crate::model::State;
-use crate::road::RoadPiece;
 
 impl Simulator {
     /// The W_k filter state at `to` inside grid step k, from the point
@@ -50,20 +49,7 @@ impl Simulator {
             .then(|| self.grid_time(k) + self.grid.inner_delay());
         let (mut start, mut x, mut w) = (from.0, from.1, *w);
         loop {
-            let piece = self.piece_from(start);
-            let mut end = if piece.end() < to && !self.coincide(piece.end(), to) {
-                piece.end()
-            } else {
-                to
-            };
-            if let Some(switch) = switch
-                && start < switch
-                && !self.coincide(start, switch)
-                && end > switch
-                && !self.coincide(end, switch)
-            {
-                end = switch;
-            }
+            let super::pieces::Stretch { piece, end, .. } = self.stretch(start, to, switch);
             let delayed = self
                 .grid
                 .resolves_delay()
@@ -142,17 +128,7 @@ impl Simulator {
         let p = self.delayed_vector_at(k, t, (t, x), &x);
         let road_piece = self.piece_from(t + delta);
         let piece = self.forcing(&road_piece);
-        let road = match piece {
-            RoadPiece::Harmonic {
-                amplitude,
-                angular_frequency: w,
-            } => {
-                let (sin, cos) = crate::math::sin_cos(w * t);
-                let a = amplitude;
-                [a * sin, a * w * cos, -a * w * w * sin, -a * w * w * w * cos]
-            }
-            RoadPiece::Linear { .. } => [piece.value(t), piece.slope(t), 0.0, 0.0],
-        };
+        let road = piece.derivatives(t);
         let b = self.solver_input_column();
         let (m, e) = (self.solver_matrix, self.plant.e);
         let mut out = [x; 4];

@@ -75,6 +75,7 @@ mod linalg;
 mod operators;
 mod outputs;
 mod persist;
+mod pieces;
 mod steps;
 mod system;
 mod time_average;
@@ -643,14 +644,22 @@ impl Simulator {
         self.config.start_time + k as f64 * self.grid.step
     }
 
-    /// Whether times `a` and `b` are the same within `1e-9 h + 8 ε |t|`; an
-    /// infinite time (the end of a road piece that never ends) coincides
-    /// only with itself.
+    /// Whether times `a` and `b` are the same on this grid
+    /// ([`pieces::coincide`]).
     fn coincide(&self, a: f64, b: f64) -> bool {
-        if a.is_infinite() || b.is_infinite() {
-            return a == b;
-        }
-        (a - b).abs() <= 1e-9 * self.grid.step + 8.0 * f64::EPSILON * a.abs().max(b.abs())
+        pieces::coincide(a, b, self.grid.step)
+    }
+
+    /// The road piece in force from `t` on ([`pieces::piece_from`]), the
+    /// same choice in every loop inside a step.
+    pub(super) fn piece_from(&mut self, t: f64) -> RoadPiece {
+        pieces::piece_from(&mut self.road, t, self.grid.step)
+    }
+
+    /// The stretch of integration from `start` towards `to`
+    /// ([`pieces::stretch`]), ending at `switch` too when given.
+    fn stretch(&mut self, start: f64, to: f64, switch: Option<f64>) -> pieces::Stretch {
+        pieces::stretch(&mut self.road, start, to, switch, self.grid.step)
     }
 
     /// The snap tolerance at time `t` (s): `2^22 ε |t|` (the rounding drift
@@ -830,12 +839,7 @@ impl Simulator {
         let mut start = from;
         let mut state = x;
         loop {
-            let piece = self.piece_from(start);
-            let end = if piece.end() < to && !self.coincide(piece.end(), to) {
-                piece.end()
-            } else {
-                to
-            };
+            let pieces::Stretch { piece, end, .. } = self.stretch(start, to, None);
             let delayed = self
                 .grid
                 .resolves_delay()
@@ -914,7 +918,7 @@ impl Simulator {
         }
         let next = self.grid_time(k + 1);
         let piece = self.piece_from(from);
-        if piece.end() < next && !self.coincide(piece.end(), next) {
+        if pieces::ends_before(&piece, next, self.grid.step) {
             return None;
         }
         let nodes = self.delayed_nodes(k);
@@ -987,17 +991,8 @@ impl Simulator {
     /// of the delayed argument, whichever comes first), and whether
     /// `start` lies before the switch.
     fn inner_delay_piece(&mut self, start: f64, to: f64, switch: f64) -> (RoadPiece, f64, bool) {
-        let piece = self.piece_from(start);
-        let mut end = if piece.end() < to && !self.coincide(piece.end(), to) {
-            piece.end()
-        } else {
-            to
-        };
-        let earlier = start < switch && !self.coincide(start, switch);
-        if earlier && end > switch && !self.coincide(end, switch) {
-            end = switch;
-        }
-        (piece, end, earlier)
+        let stretch = self.stretch(start, to, Some(switch));
+        (stretch.piece, stretch.end, stretch.before_switch)
     }
 
     /// Delay inside the step: the state at `to` in grid step k from

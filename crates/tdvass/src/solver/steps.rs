@@ -370,17 +370,11 @@ impl Simulator {
     /// `at_t`: `self.road.piece(t)` if already known.
     #[inline(always)]
     fn piece_over(&mut self, t: f64, to: f64, at_t: Option<RoadPiece>) -> Option<RoadPiece> {
-        let mut piece = match at_t {
-            Some(piece) => piece,
-            None => self.road.piece(t),
+        let step = self.grid.step;
+        let piece = match at_t {
+            Some(piece) => super::pieces::piece_after(&mut self.road, piece, t, step),
+            None => super::pieces::piece_from(&mut self.road, t, step),
         };
-        if piece.end() <= t || self.coincide(piece.end(), t) {
-            piece = self.road.piece(piece.end().max(t));
-        }
-        if piece.end() < to && !self.coincide(piece.end(), to) {
-            None
-        } else {
-            Some(piece)
-        }
+        (!super::pieces::ends_before(&piece, to, step)).then_some(piece)
     }
 }

@@ -170,22 +170,6 @@ pub(crate) fn rms_from_integral(integral: &[f64], duration: f64) -> RmsValues {
 }
 
 impl Simulator {
-    /// The road piece in force from `t` on (the piece after a breakpoint
-    /// that `t` coincides with), the same choice as the step integration.
-    pub(super) fn piece_from(&mut self, t: f64) -> RoadPiece {
-        let piece = self.road.piece(t);
-        if let RoadPiece::Harmonic { .. } = piece {
-            // One piece for all times (the test below would ask for it
-            // again at its end, +∞).
-            return piece;
-        }
-        if piece.end() <= t || self.coincide(piece.end(), t) {
-            self.road.piece(piece.end().max(t))
-        } else {
-            piece
-        }
-    }
-
     /// `[u, u', u'', u''']` of the delayed tire displacement at time `t` in
     /// grid step k, state `x` there; `from` is a point of step k with its
     /// state, from which the step's end node is found when the delay lies
@@ -358,12 +342,7 @@ impl Simulator {
         }
         let mut total = [0.0; INTEGRALS];
         loop {
-            let piece = self.piece_from(start);
-            let end = if piece.end() < to && !self.coincide(piece.end(), to) {
-                piece.end()
-            } else {
-                to
-            };
+            let super::pieces::Stretch { piece, end, .. } = self.stretch(start, to, None);
             let (x_end, w_end) = if end == to {
                 (*x_to, w_to)
             } else {
@@ -450,12 +429,7 @@ impl Simulator {
         let mut total = [0.0; INTEGRALS];
         let (mut start, mut x_start, mut w_start, mut at) = (t, x, w, at_start);
         loop {
-            let piece = self.piece_from(start);
-            let end = if piece.end() < to && !self.coincide(piece.end(), to) {
-                piece.end()
-            } else {
-                to
-            };
+            let super::pieces::Stretch { piece, end, .. } = self.stretch(start, to, None);
             let x_end = self.integrate_within_step(k, start, x_start, end);
             let w_end = self.filter_within_step(k, (start, x_start), &w_start, end);
             let at_end = self.squares_at(k, end, &x_end, &w_end, (start, x_start), &piece);
@@ -759,17 +733,10 @@ impl Simulator {
         let p = self.delayed_vector_at(k, t, (t, x), &x);
         let road_piece = self.piece_from(t + delta);
         let piece = self.forcing(&road_piece);
-        let road = match piece {
-            _ if order == 1 => [piece.value(t), 0.0, 0.0, 0.0],
-            RoadPiece::Harmonic {
-                amplitude,
-                angular_frequency: w,
-            } => {
-                let (sin, cos) = crate::math::sin_cos(w * t);
-                let a = amplitude;
-                [a * sin, a * w * cos, -a * w * w * sin, -a * w * w * w * cos]
-            }
-            RoadPiece::Linear { .. } => [piece.value(t), piece.slope(t), 0.0, 0.0],
+        let road = if order == 1 {
+            [piece.value(t), 0.0, 0.0, 0.0]
+        } else {
+            piece.derivatives(t)
         };
         let b = self.solver_input_column();
         let (m, e) = (self.solver_matrix, self.plant.e);
