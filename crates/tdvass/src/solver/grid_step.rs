@@ -155,7 +155,7 @@ impl GridStep {
         [c[0] * z[0] + s[0] * z[1], c[1] * z[1] + s[1] * z[0]]
     }
 
-    /// `[BA, SDD]` at state x, summed pairwise like [`combine6`] (in the
+    /// `[BA, SDD]` at state x, summed pairwise like [`super::linalg::combine6`] (in the
     /// hot loop the products share their broadcasts of x with `Φ x`).
     #[inline(always)]
     pub(super) fn ba_sdd(&self, x: &[f64; 6]) -> [f64; 2] {
@@ -217,7 +217,7 @@ pub(super) struct FilterGridStep {
 impl FilterGridStep {
     /// The whole step h of `whole` (which must carry filter rows), the
     /// delayed input acting on the nodes through `Γ_wu H` as in
-    /// [`super::operators::GridStep::new`].
+    /// [`GridStep::new`].
     pub(super) fn new(
         whole: &StepOperator,
         coupling: &FilterCoupling,
@@ -235,7 +235,7 @@ impl FilterGridStep {
     }
 
     /// The whole step when the delay `tau` lies inside it
-    /// ([`super::operators::GridStep::inner_delay`]): with
+    /// ([`GridStep::inner_delay`]): with
     /// `Z = [X; w]`, the filter rows of
     /// `Z_{k+1} = Φ_Z(h) Z_k + Φ_Z(h − tau) Γ_Z(tau) H(h − tau) n_{k−1,k}
     /// + Γ_Z(h − tau) H(0) n_{k,k+1} + road`, where node k's part of
