@@ -28,7 +28,7 @@ const FOLDERS: &[&str] = &["model", "road", "analysis"];
 const SOLVER_LAYERS: &[(&str, &[&str])] = &[
     ("linear algebra", &["expm", "linalg"]),
     ("system", &["system", "grid", "holding"]),
-    ("step maps and inputs", &["operators", "pieces"]),
+    ("step maps and inputs", &["operators", "pieces", "inputs"]),
     ("grid and dense steps", &["grid_step", "dense"]),
     (
         "driver",

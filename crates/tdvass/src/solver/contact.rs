@@ -97,13 +97,13 @@ pub(super) struct LiftOffLog {
 impl Simulator {
     /// Whether the wheel is in flight now (unilateral tire only).
     pub fn in_flight(&self) -> bool {
-        self.holding.flight_start.is_some()
+        self.trajectory.flight_start.is_some()
     }
 
     /// The lift-offs since the last call (at most 64; the second value
     /// counts those left out), for an event log.
     pub fn take_lift_offs(&mut self) -> (Vec<LiftOff>, u64) {
-        let log = std::mem::take(&mut self.lift_off_log);
+        let log = std::mem::take(&mut self.observers.lift_off_log);
         (log.events, log.dropped)
     }
 
@@ -126,7 +126,7 @@ impl Simulator {
             RoadPiece::Linear {
                 start: 0.0,
                 end: piece.end(),
-                value: -self.grid_step.contact.limit,
+                value: -self.modes.grid_step.contact.limit,
                 slope: 0.0,
             }
         } else {
@@ -151,7 +151,14 @@ impl Simulator {
         let b = self.solver_input_column();
         ModeOperators {
             solver_matrix_norm: super::linalg::infinity_norm(&a),
-            full_step: StepOperator::new(&a, &b, &e, omega, self.grid.step, self.coupling.as_ref()),
+            full_step: StepOperator::new(
+                &a,
+                &b,
+                &e,
+                omega,
+                self.grid.step,
+                self.modes.coupling.as_ref(),
+            ),
             solver_matrix: a,
             dense: None,
         }
@@ -161,23 +168,26 @@ impl Simulator {
     /// of flight are made at the first lift-off: until then (`other_mode`
     /// empty) the contact operators are in force.
     fn swap_mode_operators(&mut self) {
-        if self.other_mode.is_none() {
-            let flight = self.flight_operators(&self.solver_matrix);
-            self.other_mode = Some(Box::new(flight));
+        if self.modes.other_mode.is_none() {
+            let flight = self.flight_operators(&self.modes.solver_matrix);
+            self.modes.other_mode = Some(Box::new(flight));
         }
-        let Some(other) = self.other_mode.as_mut() else {
+        let Some(other) = self.modes.other_mode.as_mut() else {
             return;
         };
-        std::mem::swap(&mut self.solver_matrix, &mut other.solver_matrix);
-        std::mem::swap(&mut self.solver_matrix_norm, &mut other.solver_matrix_norm);
-        std::mem::swap(&mut self.full_step, &mut other.full_step);
-        std::mem::swap(&mut self.dense, &mut other.dense);
+        std::mem::swap(&mut self.modes.solver_matrix, &mut other.solver_matrix);
+        std::mem::swap(
+            &mut self.modes.solver_matrix_norm,
+            &mut other.solver_matrix_norm,
+        );
+        std::mem::swap(&mut self.modes.full_step, &mut other.full_step);
+        std::mem::swap(&mut self.modes.dense, &mut other.dense);
     }
 
     /// Puts the operators of the mode the holding state says, the contact
     /// operators being in force (after a restore or a rebuild of them).
     pub(super) fn enter_recorded_mode(&mut self) {
-        self.other_mode = None;
+        self.modes.other_mode = None;
         if self.in_flight() {
             self.swap_mode_operators();
         }
@@ -197,7 +207,7 @@ impl Simulator {
     /// The rounding level of φ at state x (m): below it a φ of the other
     /// sign is taken for 0.
     fn switch_rounding(&self, t: f64, x: &State, piece: &RoadPiece) -> f64 {
-        let scale = self.grid_step.contact.limit.abs() + x[X_T].abs() + piece.value(t).abs();
+        let scale = self.modes.grid_step.contact.limit.abs() + x[X_T].abs() + piece.value(t).abs();
         64.0 * f64::EPSILON * scale
     }
 
@@ -205,11 +215,14 @@ impl Simulator {
     /// up to the step's end node in the current mode (`None` if there is
     /// none).
     fn next_switch(&mut self, k: u64) -> Option<f64> {
-        let (tc, xc) = (self.committed_time, self.committed_state);
+        let (tc, xc) = (
+            self.trajectory.committed_time,
+            self.trajectory.committed_state,
+        );
         let node = self.grid_time(k + 1);
         let (mut start, mut x_start) = (tc, xc);
         while start < node {
-            let super::pieces::Stretch { piece, end, .. } = self.stretch(start, node, None);
+            let super::pieces::Stretch { piece, end, .. } = self.inputs.stretch(start, node, None);
             let x_end = self.integrate_within_step(k, tc, xc, end);
             let a = self.switch_function(start, &x_start, &piece);
             let b = self.switch_function(end, &x_end, &piece);
@@ -235,7 +248,10 @@ impl Simulator {
     /// φ at time t in step k on the exact dense output from the committed
     /// point: `[φ, φ']`.
     fn exact_switch_function(&mut self, k: u64, t: f64, piece: &RoadPiece) -> [f64; 2] {
-        let (tc, xc) = (self.committed_time, self.committed_state);
+        let (tc, xc) = (
+            self.trajectory.committed_time,
+            self.trajectory.committed_state,
+        );
         let x = if t == tc {
             xc
         } else {
@@ -340,7 +356,7 @@ impl Simulator {
                 reason: format!(
                     "more than {MAX_SWITCHES_PER_STEP} switches between contact and flight in the internal step from {} s: the margin to W/k_t = {} m changes sign faster than a step of {} s resolves; use a tighter tolerance or a smaller max_internal_step, or the bilateral tire",
                     self.grid_time(k),
-                    self.grid_step.contact.limit,
+                    self.modes.grid_step.contact.limit,
                     self.grid.step
                 ),
             });
@@ -351,34 +367,37 @@ impl Simulator {
     /// Commits the state at the switch time `time` in step k and flips the
     /// mode.
     fn commit_switch(&mut self, k: u64, time: f64) -> Result<bool> {
-        let (tc, xc) = (self.committed_time, self.committed_state);
+        let (tc, xc) = (
+            self.trajectory.committed_time,
+            self.trajectory.committed_state,
+        );
         let x = if time == tc {
             xc
         } else {
             self.integrate_within_step(k, tc, xc, time)
         };
         self.check_divergence(time, &x)?;
-        self.outputs_cache = None;
+        self.observers.outputs_cache = None;
         self.set_current(time, x);
         self.close_run_here();
-        let piece = self.piece_from(time);
+        let piece = self.inputs.piece_from(time);
         if self.in_flight() {
-            let start = self.holding.flight_start.take().unwrap_or(time);
-            self.holding.lost_time += time - start;
+            let start = self.trajectory.flight_start.take().unwrap_or(time);
+            self.observers.holding.lost_time += time - start;
         } else {
-            let limit = self.grid_step.contact.limit;
-            self.holding.flight_start = Some(time);
-            self.holding.lift_offs += 1;
-            self.holding.first_loss.get_or_insert(time);
+            let limit = self.modes.grid_step.contact.limit;
+            self.trajectory.flight_start = Some(time);
+            self.observers.holding.lift_offs += 1;
+            self.observers.holding.first_loss.get_or_insert(time);
             let event = LiftOff {
                 time,
                 tire_deflection: x[X_T] - piece.value(time),
                 limit,
             };
-            if self.lift_off_log.events.len() < LIFT_OFF_LOG {
-                self.lift_off_log.events.push(event);
+            if self.observers.lift_off_log.events.len() < LIFT_OFF_LOG {
+                self.observers.lift_off_log.events.push(event);
             } else {
-                self.lift_off_log.dropped += 1;
+                self.observers.lift_off_log.dropped += 1;
             }
         }
         self.swap_mode_operators();

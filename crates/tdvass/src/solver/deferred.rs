@@ -73,20 +73,23 @@ impl Simulator {
     /// ([`Self::state`], the outputs), after showing that it passes the
     /// divergence check.
     pub fn computed_state(&self) -> Option<State> {
-        self.deferred.is_none().then_some(self.current_state)
+        self.trajectory
+            .deferred
+            .is_none()
+            .then_some(self.trajectory.current_state)
     }
 
     /// Computes a deferred current state (the same value as when it is
     /// computed at once).
     pub(super) fn settle(&mut self) {
-        if let Some(deferred) = self.deferred.take() {
+        if let Some(deferred) = self.trajectory.deferred.take() {
             let (k, tc, xc, t) = (
-                self.grid_index,
-                self.committed_time,
-                self.committed_state,
-                self.current_time,
+                self.trajectory.grid_index,
+                self.trajectory.committed_time,
+                self.trajectory.committed_state,
+                self.trajectory.current_time,
             );
-            self.current_state = match deferred.kind {
+            self.trajectory.current_state = match deferred.kind {
                 Kind::NearNode => self.state_near_committed(t - tc),
                 Kind::InsideStep => self.integrate_within_step(k, tc, xc, t),
             };
@@ -96,7 +99,7 @@ impl Simulator {
     /// Bounds of how far the deferred state lies from the committed one
     /// (`None` when it is computed).
     pub(super) fn deferred_drift(&self) -> Option<[f64; 6]> {
-        self.deferred.map(|d| d.drift)
+        self.trajectory.deferred.map(|d| d.drift)
     }
 
     /// Makes `t` the current time with its state deferred, where the
@@ -104,18 +107,18 @@ impl Simulator {
     /// `false` (the current point unchanged) otherwise.
     pub(super) fn defer(&mut self, t: f64, kind: Kind) -> bool {
         let drift = match kind {
-            Kind::NearNode => self.drift_bounds(t - self.committed_time),
+            Kind::NearNode => self.drift_bounds(t - self.trajectory.committed_time),
             Kind::InsideStep => self.inside_bounds(t),
         };
-        let x = self.committed_state;
+        let x = self.trajectory.committed_state;
         let Some(drift) = drift
             .filter(|drift| (0..6).all(|i| x[i].abs() + drift[i] <= 0.5 * divergence_bound(i)))
         else {
             return false;
         };
-        self.current_time = t;
-        self.current_state = x;
-        self.deferred = Some(Deferred { kind, drift });
+        self.trajectory.current_time = t;
+        self.trajectory.current_state = x;
+        self.trajectory.deferred = Some(Deferred { kind, drift });
         true
     }
 
@@ -143,14 +146,18 @@ impl Simulator {
     /// The sum is bounded with `|delta|^j` for `|delta|^j/j!`; the
     /// factor 1.001 and `4 ε |x_c,i|` cover the rounding of the series.
     pub(super) fn drift_bounds(&mut self, delta: f64) -> Option<[f64; 6]> {
-        let (k, t, x) = (self.grid_index, self.committed_time, self.committed_state);
+        let (k, t, x) = (
+            self.trajectory.grid_index,
+            self.trajectory.committed_time,
+            self.trajectory.committed_state,
+        );
         if t != self.grid_time(k) {
             return None;
         }
-        let norm = self.solver_matrix_norm;
+        let norm = self.modes.solver_matrix_norm;
         let order = series_order(norm * delta.abs());
         let h = self.grid.step;
-        let nodes = self.delayed_nodes(k);
+        let nodes = self.inputs.delayed_nodes(k);
         let [x0, v0, x1, v1] = nodes;
         let mut input = [hermite_bound(nodes, h), 0.0, 0.0, 0.0];
         if order > 1 {
@@ -159,7 +166,7 @@ impl Simulator {
             input[2] = (6.0 * rise + 4.0 * slopes) / h;
             input[3] = (12.0 * rise + 6.0 * slopes) / (h * h);
         }
-        let road_piece = self.piece_from(t + delta);
+        let road_piece = self.inputs.piece_from(t + delta);
         let road = self.forcing(&road_piece).derivative_bounds(t);
         let (b, e) = (self.solver_input_column(), self.plant.e);
         let (b_max, e_max) = (b.amax(), e.amax());
@@ -182,9 +189,13 @@ impl Simulator {
     /// to `t` inside its step (see the module docs); `None` where the
     /// stretch crosses a road breakpoint or `ν (t − t_c) > 1`.
     pub(super) fn inside_bounds(&mut self, t: f64) -> Option<[f64; 6]> {
-        let (k, tc, xc) = (self.grid_index, self.committed_time, self.committed_state);
+        let (k, tc, xc) = (
+            self.trajectory.grid_index,
+            self.trajectory.committed_time,
+            self.trajectory.committed_state,
+        );
         let length = t - tc;
-        let road_piece = self.piece_from(tc);
+        let road_piece = self.inputs.piece_from(tc);
         if length.is_nan() || length <= 0.0 || road_piece.end() < t {
             return None;
         }
@@ -201,17 +212,17 @@ impl Simulator {
         let input = if scaling.input == 0.0 {
             0.0
         } else {
-            let mut bound = hermite_bound(self.delayed_nodes(k), h);
+            let mut bound = hermite_bound(self.inputs.delayed_nodes(k), h);
             if self.grid.delay_inside_step() && t > self.grid_time(k) + self.grid.inner_delay() {
                 // The piece after t_k + tau interpolates node k and the
                 // step's end node.
                 let (_, [end_x, end_v]) = self.inner_delay_next_node(k, tc, xc);
-                let [node_x, node_v] = self.node_tire(k);
+                let [node_x, node_v] = self.inputs.node_tire(k);
                 bound = bound.max(hermite_bound([node_x, node_v, end_x, end_v], h));
             }
             bound
         };
-        let pull = self.solver_matrix * xc;
+        let pull = self.modes.solver_matrix * xc;
         let forcing =
             scaled_norm(&scaling.diagonal, &pull) + input * scaling.input + road * scaling.road;
         let growth = length * (1.0 + theta + theta * theta) * forcing;
@@ -251,11 +262,11 @@ mod tests {
             let mut sim = Simulator::new(cfg).unwrap();
             for end in [0.0, 0.013, 0.7] {
                 sim.advance_to(end).unwrap();
-                let (k, x) = (sim.grid_index, sim.committed_state);
-                if sim.committed_time != sim.grid_time(k) {
+                let (k, x) = (sim.trajectory.grid_index, sim.trajectory.committed_state);
+                if sim.trajectory.committed_time != sim.grid_time(k) {
                     continue;
                 }
-                let limit = sim.snap_tolerance(sim.committed_time);
+                let limit = sim.snap_tolerance(sim.trajectory.committed_time);
                 for _ in 0..200 {
                     // Offsets of every order of the series, both signs.
                     let delta = (2.0 * random.next() - 1.0) * limit * 1e-9f64.powf(random.next());
@@ -282,7 +293,11 @@ mod tests {
             let mut sim = Simulator::new(cfg).unwrap();
             for end in [0.0, 0.013, 0.7] {
                 sim.advance_to(end).unwrap();
-                let (k, tc, xc) = (sim.grid_index, sim.committed_time, sim.committed_state);
+                let (k, tc, xc) = (
+                    sim.trajectory.grid_index,
+                    sim.trajectory.committed_time,
+                    sim.trajectory.committed_state,
+                );
                 let next = sim.grid_time(k + 1);
                 for _ in 0..100 {
                     let t = tc + (next - tc) * random.next();
@@ -333,7 +348,7 @@ mod tests {
         let bits = |x: State| x.map(f64::to_bits);
         assert_eq!(
             bits(sim.state()),
-            bits(settled.current_state),
+            bits(settled.trajectory.current_state),
             "{name}, t = {t}"
         );
         assert_eq!(sim.to_bytes(), settled.to_bytes(), "{name}, t = {t}");
@@ -360,15 +375,15 @@ mod tests {
             for _ in 0..400 {
                 t += step;
                 sim.advance_to(t).unwrap();
-                let tc = sim.committed_time;
-                if t != tc && sim.snaps(t, tc) && tc == sim.grid_time(sim.grid_index) {
+                let tc = sim.trajectory.committed_time;
+                if t != tc && sim.snaps(t, tc) && tc == sim.grid_time(sim.trajectory.grid_index) {
                     drifted += 1;
                 }
                 if sim.computed_state().is_some() {
                     continue;
                 }
                 deferred += 1;
-                let delta = t - sim.committed_time;
+                let delta = t - sim.trajectory.committed_time;
                 let at_once = sim.clone().state_near_committed(delta);
                 let bits = |x: State| x.map(f64::to_bits);
                 assert_eq!(bits(sim.state()), bits(at_once), "{name}, t = {t}");

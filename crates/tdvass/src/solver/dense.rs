@@ -494,31 +494,5 @@ pub(super) fn augmented(
     z
 }
 
-/// The last four `(sin, cos)` of [`crate::math::sin_cos`] by their
-/// angle's bits: the points inside a step ask for the same few angles
-/// again (`ω tau`, the committed time's).
-#[derive(Debug, Clone, Copy)]
-pub(super) struct Phases([(u64, (f64, f64)); 4]);
-
-impl Default for Phases {
-    fn default() -> Self {
-        Phases([(f64::NAN.to_bits(), (f64::NAN, f64::NAN)); 4])
-    }
-}
-
-impl Phases {
-    /// `sin_cos(angle)`, the same to the bit.
-    #[inline]
-    pub(super) fn sin_cos(&mut self, angle: f64) -> (f64, f64) {
-        let bits = angle.to_bits();
-        if let Some((_, value)) = self.0.iter().find(|(b, _)| *b == bits) {
-            return *value;
-        }
-        let value = crate::math::sin_cos(angle);
-        self.0 = [self.0[1], self.0[2], self.0[3], (bits, value)];
-        value
-    }
-}
-
 #[cfg(test)]
 pub(super) mod tests;

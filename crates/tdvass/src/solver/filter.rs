@@ -40,7 +40,7 @@ impl Simulator {
         w: &Filter,
         to: f64,
     ) -> Filter {
-        if self.coupling.is_none() {
+        if self.modes.coupling.is_none() {
             return Filter::zeros();
         }
         let switch = self
@@ -49,7 +49,7 @@ impl Simulator {
             .then(|| self.grid_time(k) + self.grid.inner_delay());
         let (mut start, mut x, mut w) = (from.0, from.1, *w);
         loop {
-            let super::pieces::Stretch { piece, end, .. } = self.stretch(start, to, switch);
+            let super::pieces::Stretch { piece, end, .. } = self.inputs.stretch(start, to, switch);
             let delayed = self
                 .grid
                 .resolves_delay()
@@ -57,7 +57,7 @@ impl Simulator {
             let length = end - start;
             let drive = self.forcing(&piece);
             if self.coincide(length, self.grid.step) {
-                let op = &self.full_step;
+                let op = &self.modes.full_step;
                 let rows = op.filter.as_ref().expect("the filter is on");
                 w = rows.apply(&w, &x, delayed.as_ref(), &drive, start);
                 x = op.apply(&x, delayed.as_ref(), &drive, start);
@@ -86,7 +86,7 @@ impl Simulator {
     ) -> Filter {
         let key = super::dense::offset_key(length, self.grid.step);
         self.dense_output();
-        match (self.dense.as_mut(), self.coupling.as_ref()) {
+        match (self.modes.dense.as_mut(), self.modes.coupling.as_ref()) {
             (Some(dense), Some(coupling)) => dense.filter(key, z, w, coupling),
             _ => Filter::zeros(),
         }
@@ -98,8 +98,8 @@ impl Simulator {
     /// [`Self::committed_derivatives`] (truncation below
     /// `(ν |delta|)^5 / 120` relative, ν the larger norm of A and A_w).
     pub(super) fn filter_near_committed(&mut self, delta: f64) -> Filter {
-        let w = self.committed_filter;
-        let Some(coupling) = self.coupling.clone() else {
+        let w = self.trajectory.committed_filter;
+        let Some(coupling) = self.modes.coupling.clone() else {
             return Filter::zeros();
         };
         if delta == 0.0 {
@@ -124,13 +124,17 @@ impl Simulator {
     /// filter's Taylor series; the road derivatives are those of the piece
     /// in force at `committed_time + delta`.
     fn committed_derivatives(&mut self, delta: f64) -> [State; 4] {
-        let (k, t, x) = (self.grid_index, self.committed_time, self.committed_state);
+        let (k, t, x) = (
+            self.trajectory.grid_index,
+            self.trajectory.committed_time,
+            self.trajectory.committed_state,
+        );
         let p = self.delayed_vector_at(k, t, (t, x), &x);
-        let road_piece = self.piece_from(t + delta);
+        let road_piece = self.inputs.piece_from(t + delta);
         let piece = self.forcing(&road_piece);
         let road = piece.derivatives(t);
         let b = self.solver_input_column();
-        let (m, e) = (self.solver_matrix, self.plant.e);
+        let (m, e) = (self.modes.solver_matrix, self.plant.e);
         let mut out = [x; 4];
         for j in 1..4 {
             out[j] = m * out[j - 1] + b * p[j - 1] + e * road[j - 1];

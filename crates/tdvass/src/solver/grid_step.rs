@@ -6,7 +6,7 @@
 use super::holding::ContactCheck;
 use super::linalg::{Columns, columns, hermite_matrix};
 use super::operators::{FilterRows, StepOperator};
-use super::system::{FilterCoupling, tire_pick};
+use super::system::{FilterCoupling, phase_rotation, rotate, tire_pick};
 use crate::comfort::WK_STATES;
 use crate::metrics::RunningRms;
 use crate::model::{X_S, X_T};
@@ -26,8 +26,8 @@ pub(super) struct GridStep {
     pub(super) harmonic: Columns<2>,
     /// Columns of `Γ_l`, acting on `[x_g, x_g'](t_k)`.
     pub(super) linear: Columns<2>,
-    /// The road phase rotation over one step, `z' = r_1 z + r_2 swap(z)` with
-    /// `r_1 = [cos ω h, cos ω h]`, `r_2 = [sin ω h, −sin ω h]`.
+    /// The road phase rotation over one step
+    /// ([`super::system::phase_rotation`]).
     pub(super) rotation: [[f64; 2]; 2],
     /// Columns of the 2×6 map from X to `[BA, SDD]` (row V_S of A, and
     /// `x_s − x_t`).
@@ -121,13 +121,12 @@ impl GridStep {
         angular_frequency: f64,
         h: f64,
     ) -> GridStep {
-        let (sin, cos) = crate::math::sin_cos(angular_frequency * h);
         GridStep {
             transition: columns(transition),
             nodes: columns(nodes),
             harmonic: columns(&road.harmonic_road),
             linear: columns(&road.linear_road),
-            rotation: [[cos, cos], [sin, -sin]],
+            rotation: phase_rotation(angular_frequency, h),
             outputs: std::array::from_fn(|j| {
                 let sdd = match j {
                     X_S => 1.0,
@@ -151,8 +150,7 @@ impl GridStep {
     /// Road phase at the node after one with phase `z`.
     #[inline(always)]
     pub(super) fn rotate(&self, z: [f64; 2]) -> [f64; 2] {
-        let [c, s] = self.rotation;
-        [c[0] * z[0] + s[0] * z[1], c[1] * z[1] + s[1] * z[0]]
+        rotate(&self.rotation, z)
     }
 
     /// `[BA, SDD]` at state x, summed pairwise like [`super::linalg::combine6`] (in the

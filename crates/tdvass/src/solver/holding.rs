@@ -59,9 +59,6 @@ pub(crate) struct Holding {
     /// margin through 0 (located on its cubic), with the unilateral tire
     /// the switches to flight (see `solver::contact`).
     pub lift_offs: u64,
-    /// Unilateral tire: the start of the flight in progress (s), `None`
-    /// in contact. The flights that ended are in `lost_time`.
-    pub flight_start: Option<f64>,
 }
 
 impl Holding {
@@ -74,7 +71,6 @@ impl Holding {
             lost_time: 0.0,
             first_loss: (margin < 0.0).then_some(start),
             lift_offs: u64::from(margin < 0.0),
-            flight_start: None,
         }
     }
 

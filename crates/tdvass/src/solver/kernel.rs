@@ -43,7 +43,7 @@ pub(super) trait NodeRoad: Copy {
 }
 
 /// The harmonic road's phase `A [sin ω t_k, cos ω t_k]` at node k, rotated
-/// exactly from node to node (see [`super::PHASE_ANCHOR`]).
+/// exactly from node to node (see [`super::inputs::PHASE_ANCHOR`]).
 #[derive(Clone, Copy)]
 pub(super) struct HarmonicPhase(pub(super) [f64; 2]);
 
@@ -414,23 +414,23 @@ mod tests {
         /// loop; returns the bits of state, RMS sums and history of each.
         fn both<R: NodeRoad>(sim: &Simulator, road: R) -> Vec<Vec<u64>> {
             let start = HotState {
-                x: sim.committed_state.into(),
+                x: sim.trajectory.committed_state.into(),
                 road,
-                k: sim.grid_index,
-                slot: ((sim.grid_index + 1) % sim.history.len() as u64) as usize,
-                rms: sim.rms,
-                w: sim.committed_filter.into(),
-                weighted: sim.weighted,
-                holding: sim.holding,
+                k: sim.trajectory.grid_index,
+                slot: ((sim.trajectory.grid_index + 1) % sim.inputs.history.len() as u64) as usize,
+                rms: sim.observers.rms,
+                w: sim.trajectory.committed_filter.into(),
+                weighted: sim.observers.weighted,
+                holding: sim.observers.holding,
             };
             let mut results = Vec::new();
             for wide in [false, true] {
-                let mut history = sim.history.clone();
+                let mut history = sim.inputs.history.clone();
                 let mut hot = HotState { ..start };
                 let seg = Segment {
-                    op: &sim.grid_step,
+                    op: &sim.modes.grid_step,
                     history: &mut history,
-                    end: sim.grid_index + 1000,
+                    end: sim.trajectory.grid_index + 1000,
                     before_start: [0.0; 4],
                 };
                 if wide {
@@ -457,7 +457,7 @@ mod tests {
         })
         .unwrap();
         sim.advance_to(0.01).unwrap();
-        let phase = HarmonicPhase(sim.harmonic_phase(sim.grid_index));
+        let phase = HarmonicPhase(sim.inputs.harmonic_phase(sim.trajectory.grid_index));
         let [baseline, wide] = &both(&sim, phase)[..] else {
             unreachable!()
         };
@@ -466,7 +466,7 @@ mod tests {
         let ramp = LinearPiece {
             start_time: 0.0,
             step: sim.grid.step,
-            k: sim.grid_index,
+            k: sim.trajectory.grid_index,
             start: 0.005,
             value: 0.01,
             slope: -0.3,

@@ -70,6 +70,7 @@ mod filter;
 mod grid;
 mod grid_step;
 mod holding;
+mod inputs;
 mod kernel;
 mod linalg;
 mod operators;
@@ -87,6 +88,7 @@ use crate::road::{Road, RoadPiece, RoadSpec};
 pub use grid::{DelayGrid, DelayRegime, MAX_HISTORY_NODES, MIN_RESOLVED_DELAY};
 use grid_step::{FilterGridStep, GridStep};
 use holding::Holding;
+use inputs::Inputs;
 use linalg::{hermite, hermite_matrix, infinity_norm};
 use nalgebra::{Matrix2, Matrix6, SMatrix, Vector2, Vector4};
 use operators::StepOperator;
@@ -122,12 +124,6 @@ fn divergence_bound(i: usize) -> f64 {
     }
 }
 
-/// The harmonic road's phase `A [sin ω t_k, cos ω t_k]` at grid node k is
-/// evaluated exactly at every node `k ≡ 0 (mod PHASE_ANCHOR)` and carried
-/// to the following nodes by the rotation over one step (a power of two, so
-/// the test is a mask). The rounding drift between anchors stays of the
-/// order of PHASE_ANCHOR ulp; the phase is a function of k alone.
-const PHASE_ANCHOR: u64 = 1024;
 /// Divergence bounds in state order.
 const DIVERGENCE_BOUNDS: [f64; 6] = [
     DIVERGENCE_DISPLACEMENT,
@@ -264,32 +260,63 @@ struct NextNode {
 /// integration method. `Clone` is a complete snapshot of it.
 #[derive(Debug, Clone)]
 pub struct Simulator {
+    /// The configuration, as given (the gain and the weights are tunable).
     config: SimulationConfig,
+    /// The plant of the configuration (A, b, e of Eq. (2)).
     plant: Plant,
+    /// The internal grid: the step and how the delay lies on it.
+    grid: DelayGrid,
+    /// How the internal step came from the tolerance.
+    step_choice: StepChoice,
+    /// The operators of the tire's modes and their caches.
+    modes: Modes,
+    /// The road and the delay history.
+    inputs: Inputs,
+    /// The committed point and the current point.
+    trajectory: Trajectory,
+    /// What the run accumulates for its outputs.
+    observers: Observers,
+}
+
+/// The operators of the plant: those of the mode in force (contact, or
+/// flight with the unilateral tire), the other mode's, and caches of
+/// functions of them.
+#[derive(Debug, Clone)]
+struct Modes {
     /// Plant matrix used by the solver (the plant's A, plus the folded
     /// feedback when the delay is not resolved on the grid).
     solver_matrix: Matrix6<f64>,
     /// `‖solver_matrix‖_∞` (largest absolute row sum, 1/s): chooses the
     /// order of the Taylor series near a node.
     solver_matrix_norm: f64,
-    grid: DelayGrid,
     full_step: StepOperator,
     /// `full_step` in the form of the whole-step loop.
     grid_step: GridStep,
     /// The partial steps' maps ([`dense`]), built at the first point
     /// inside a step: a cache of functions of the operators, not state.
     dense: Option<Box<dense::DenseOutput>>,
-    /// The last [`Self::inner_delay_next_node`] (a cache of a function of
-    /// its arguments, the mode and the operators, cleared when an operator
-    /// or the road input changes).
+    /// The last [`Simulator::inner_delay_next_node`] (a cache of a
+    /// function of its arguments, the mode and the operators, cleared when
+    /// an operator or the road input changes).
     next_node: Option<NextNode>,
-    /// The harmonic road's last phases (a cache of `sin_cos`).
-    phases: dense::Phases,
-    road: Road,
+    /// How BA drives the W_k filter (only with [`Metrics::Comfort`]).
+    coupling: Option<FilterCoupling>,
+    /// Unilateral tire: the operators of the mode not in force (see
+    /// `contact`); `None` with the bilateral tire.
+    other_mode: Option<Box<contact::ModeOperators>>,
+}
+
+/// Where the run is: the committed point (a grid node, or a point where
+/// an external road input changed or the tire contact switched) and the
+/// current point.
+#[derive(Debug, Clone)]
+struct Trajectory {
     /// Index k of the grid node at or before the committed time.
     grid_index: u64,
     committed_time: f64,
     committed_state: State,
+    /// The W_k filter state at the committed point (zero without it).
+    committed_filter: Filter,
     current_time: f64,
     /// The state at `current_time`, unless `deferred`.
     current_state: State,
@@ -297,37 +324,31 @@ pub struct Simulator {
     /// what finds it and the bounds that showed it passes the divergence
     /// check.
     deferred: Option<deferred::Deferred>,
-    /// (x_t, v_t) at grid nodes `grid_index − m ..= grid_index`, by `index % (m + 1)`.
-    history: Vec<[f64; 2]>,
+    /// The tire's mode: with the unilateral tire, the start of the
+    /// flight in progress (s); `None` in contact. The flights that ended
+    /// are in the road-holding accumulators' lost time.
+    flight_start: Option<f64>,
+}
+
+/// What the run accumulates up to the committed point, for its outputs.
+#[derive(Debug, Clone)]
+struct Observers {
     /// `Σ y²` of BA, SDD, TDD over the grid nodes of the open run (after
     /// the anchor of `integral`, up to `grid_index`).
     rms: RunningRms,
     /// The time integral of `y²` (see [`time_average`]).
     integral: SquareIntegral,
-    /// The outputs at the current time, once computed (cleared by every
-    /// change of the state, the time or a parameter).
-    outputs_cache: Option<Outputs>,
-    /// Harmonic road phase `(k, A [sin ω t_k, cos ω t_k])` at the last grid
-    /// node reached by the whole-step loop: a cache of a function of k alone
-    /// (see [`PHASE_ANCHOR`]), so it is not part of the saved state.
-    phase: Option<(u64, [f64; 2])>,
-    /// How BA drives the W_k filter (only with [`Metrics::Comfort`]).
-    coupling: Option<FilterCoupling>,
-    /// The W_k filter state at the committed point (zero without it).
-    committed_filter: Filter,
     /// `Σ a_w²`, `Σ a_w⁴` over the grid nodes of the open run (as `rms`).
     weighted: [f64; 2],
     /// Road holding and working space up to the committed point.
     holding: Holding,
     /// The dynamic tire load at the start (N).
     start_load: f64,
-    /// How the internal step came from the tolerance.
-    step_choice: StepChoice,
-    /// Unilateral tire: the operators of the mode not in force (see
-    /// `contact`); `None` with the bilateral tire.
-    other_mode: Option<Box<contact::ModeOperators>>,
     /// Lift-offs not yet taken by a front-end's event log.
     lift_off_log: contact::LiftOffLog,
+    /// The outputs at the current time, once computed (cleared by every
+    /// change of the state, the time or a parameter).
+    outputs_cache: Option<Outputs>,
 }
 
 impl Simulator {
@@ -456,48 +477,57 @@ impl Simulator {
         }
         let (solver_matrix, full_step, grid_step, coupling) =
             Self::operators(&plant, &config, &grid)?;
-        let history = vec![[initial[X_T], initial[V_T]]; grid.delay_steps() as usize + 1];
         let start_time = config.start_time;
         let mut sim = Simulator {
             plant,
-            solver_matrix_norm: infinity_norm(&solver_matrix),
-            solver_matrix,
             grid,
-            full_step,
-            grid_step,
-            dense: None,
-            next_node: None,
-            phases: dense::Phases::default(),
-            road,
-            grid_index: 0,
-            committed_time: config.start_time,
-            committed_state: initial,
-            current_time: config.start_time,
-            current_state: initial,
-            deferred: None,
-            history,
-            rms: RunningRms::default(),
-            integral: SquareIntegral::new(start_time, Default::default()),
-            outputs_cache: None,
-            phase: None,
-            coupling,
-            committed_filter: Filter::zeros(),
-            weighted: [0.0; 2],
-            holding: Holding::new(0.0, 1.0, start_time),
-            start_load: 0.0,
             step_choice: StepChoice {
                 step_bound: grid.step,
                 model_step: f64::NAN,
                 probe_error: f64::NAN,
                 probe_rounds: 0,
             },
-            other_mode: None,
-            lift_off_log: contact::LiftOffLog::default(),
+            modes: Modes {
+                solver_matrix_norm: infinity_norm(&solver_matrix),
+                solver_matrix,
+                full_step,
+                grid_step,
+                dense: None,
+                next_node: None,
+                coupling,
+                other_mode: None,
+            },
+            inputs: Inputs::new(
+                road,
+                &config.road,
+                grid,
+                config.start_time,
+                [initial[X_T], initial[V_T]],
+            ),
+            trajectory: Trajectory {
+                grid_index: 0,
+                committed_time: config.start_time,
+                committed_state: initial,
+                committed_filter: Filter::zeros(),
+                current_time: config.start_time,
+                current_state: initial,
+                deferred: None,
+                flight_start: None,
+            },
+            observers: Observers {
+                rms: RunningRms::default(),
+                integral: SquareIntegral::new(start_time, Default::default()),
+                weighted: [0.0; 2],
+                holding: Holding::new(0.0, 1.0, start_time),
+                start_load: 0.0,
+                lift_off_log: contact::LiftOffLog::default(),
+                outputs_cache: None,
+            },
             config,
         };
-        let piece = sim.piece_from(start_time);
+        let piece = sim.inputs.piece_from(start_time);
         let rest = Filter::zeros();
-        sim.integral.anchor = sim.squares_at(
+        sim.observers.integral.anchor = sim.squares_at(
             0,
             start_time,
             &initial,
@@ -506,17 +536,17 @@ impl Simulator {
             &piece,
         );
         let margin = sim.margin_at(start_time, &initial, &piece);
-        sim.holding = Holding::new(
+        sim.observers.holding = Holding::new(
             initial[crate::model::X_S] - initial[X_T],
             margin[0],
             start_time,
         );
-        sim.start_load = sim.config.params.k_t * (piece.value(start_time) - initial[X_T]);
+        sim.observers.start_load = sim.config.params.k_t * (piece.value(start_time) - initial[X_T]);
         if sim.config.tire_contact.is_unilateral() {
             // A start without contact is a lift-off at the start, made by
             // the first step's switch search.
-            sim.holding.first_loss = None;
-            sim.holding.lift_offs = 0;
+            sim.observers.holding.first_loss = None;
+            sim.observers.holding.lift_offs = 0;
         }
         sim.enter_recorded_mode();
         Ok(sim)
@@ -611,13 +641,13 @@ impl Simulator {
 
     /// Current time (s).
     pub fn time(&self) -> f64 {
-        self.current_time
+        self.trajectory.current_time
     }
 
     /// Time of the last committed state (s): the last grid node reached, or
     /// the last change of an external road input.
     pub fn committed_time(&self) -> f64 {
-        self.committed_time
+        self.trajectory.committed_time
     }
 
     /// Current state `X` (solver coordinates); a deferred one
@@ -628,38 +658,26 @@ impl Simulator {
             None => {
                 let mut settled = self.clone();
                 settled.settle();
-                settled.current_state
+                settled.trajectory.current_state
             }
         }
     }
 
     /// Sets the current point (time, state computed).
     fn set_current(&mut self, time: f64, x: State) {
-        self.current_time = time;
-        self.current_state = x;
-        self.deferred = None;
+        self.trajectory.current_time = time;
+        self.trajectory.current_state = x;
+        self.trajectory.deferred = None;
     }
 
     fn grid_time(&self, k: u64) -> f64 {
-        self.config.start_time + k as f64 * self.grid.step
+        self.inputs.node_time(k)
     }
 
     /// Whether times `a` and `b` are the same on this grid
     /// ([`pieces::coincide`]).
     fn coincide(&self, a: f64, b: f64) -> bool {
         pieces::coincide(a, b, self.grid.step)
-    }
-
-    /// The road piece in force from `t` on ([`pieces::piece_from`]), the
-    /// same choice in every loop inside a step.
-    pub(super) fn piece_from(&mut self, t: f64) -> RoadPiece {
-        pieces::piece_from(&mut self.road, t, self.grid.step)
-    }
-
-    /// The stretch of integration from `start` towards `to`
-    /// ([`pieces::stretch`]), ending at `switch` too when given.
-    fn stretch(&mut self, start: f64, to: f64, switch: Option<f64>) -> pieces::Stretch {
-        pieces::stretch(&mut self.road, start, to, switch, self.grid.step)
     }
 
     /// The snap tolerance at time `t` (s): `2^22 ε |t|` (the rounding drift
@@ -677,7 +695,7 @@ impl Simulator {
     /// inside a step (FMI 3.0 intermediate updates) without moving the
     /// grid.
     pub fn node_at_or_after(&self, t: f64) -> f64 {
-        let first = self.grid_index.saturating_add(1);
+        let first = self.trajectory.grid_index.saturating_add(1);
         // `as` saturates (and maps NaN to 0); the loops correct the guess.
         let mut k = (((t - self.config.start_time) / self.grid.step).ceil() as u64).max(first);
         while k > first && self.grid_time(k - 1) >= t {
@@ -696,64 +714,26 @@ impl Simulator {
         (a - b).abs() <= self.snap_tolerance(a.abs().max(b.abs()))
     }
 
-    /// Delayed-input vector `[u, u', u'', u''']` at offset σ into grid step k.
-    #[inline]
-    fn delayed_input(&self, k: u64, offset: f64) -> Vector4<f64> {
-        hermite(self.delayed_nodes(k), self.grid.step, offset)
-    }
-
-    /// `(x_t, v_t)` at grid node k, from the history ring (k at most
-    /// `m` nodes back from the grid index).
-    #[inline]
-    fn node_tire(&self, k: u64) -> [f64; 2] {
-        self.history[(k % self.history.len() as u64) as usize]
-    }
-
-    /// The Hermite nodes `[x_t, v_t, x_t, v_t]` of the delayed input over
-    /// grid step k: the history nodes k − m and k − m + 1, or the constant
-    /// initial `x_t` before the start.
-    #[inline]
-    fn delayed_nodes(&self, k: u64) -> [f64; 4] {
-        let m = self.grid.delay_steps();
-        if k < m {
-            let x = self.config.initial_state[X_T];
-            [x, 0.0, x, 0.0]
-        } else {
-            let len = self.history.len();
-            let first = ((k - m) % len as u64) as usize;
-            let second = if first + 1 == len { 0 } else { first + 1 };
-            let [x0, v0] = self.history[first];
-            let [x1, v1] = self.history[second];
-            [x0, v0, x1, v1]
-        }
-    }
-
-    /// The angular frequency ω of the harmonic road (0 for the others).
-    fn road_angular_frequency(&self) -> f64 {
-        match self.config.road {
-            RoadSpec::Harmonic {
-                angular_frequency, ..
-            } => angular_frequency,
-            _ => 0.0,
-        }
-    }
-
     /// The dense output of the mode in force, built at its first use.
     fn dense_output(&mut self) -> &mut dense::DenseOutput {
-        if self.dense.is_none() {
-            let (a, b, e) = (self.solver_matrix, self.solver_input_column(), self.plant.e);
-            let (omega, h) = (self.road_angular_frequency(), self.grid.step);
+        if self.modes.dense.is_none() {
+            let (a, b, e) = (
+                self.modes.solver_matrix,
+                self.solver_input_column(),
+                self.plant.e,
+            );
+            let (omega, h) = (self.inputs.angular_frequency(), self.grid.step);
             let dense = dense::DenseOutput::new(&a, &b, &e, omega, h);
             // With the delay inside the step, the pieces [t_k, t_k + tau)
             // and [t_k + tau, t_{k+1}) of every step have fixed lengths.
-            self.dense = Some(Box::new(if self.grid.delay_inside_step() {
+            self.modes.dense = Some(Box::new(if self.grid.delay_inside_step() {
                 let tau = self.grid.inner_delay();
                 dense.with_fixed(&[dense::offset_key(tau, h), dense::offset_key(h - tau, h)])
             } else {
                 dense
             }));
         }
-        self.dense.as_deref_mut().expect("built above")
+        self.modes.dense.as_deref_mut().expect("built above")
     }
 
     /// The augmented vector of a partial step from `at` ([`dense::augmented`]).
@@ -764,46 +744,10 @@ impl Simulator {
         road: &RoadPiece,
         at: f64,
     ) -> dense::Augmented<1> {
-        dense::augmented(x, delayed, road, at, || self.harmonic_at(road, at))
-    }
-
-    /// The harmonic road's `A [sin ω t, cos ω t]` at the start `t` of a
-    /// partial step. At the node of the grid index it is the phase the
-    /// whole-step loop carries ([`Self::harmonic_phase`]), and at `tau`
-    /// after it (the delay inside the step) that phase rotated by `ω tau`:
-    /// the pieces of a step start there, and each point inside it asks
-    /// again. Elsewhere `sin_cos` (its last two values kept). Each is a
-    /// function of `t` and the grid index alone.
-    fn harmonic_at(&mut self, road: &RoadPiece, t: f64) -> [f64; 2] {
-        let RoadPiece::Harmonic {
-            amplitude,
-            angular_frequency,
-        } = *road
-        else {
-            return [0.0; 2];
-        };
-        let k = self.grid_index;
-        let node = self.grid_time(k);
-        if t == node {
-            return self.node_phase(k);
-        }
-        if self.grid.delay_inside_step() && t == node + self.grid.inner_delay() {
-            let [z0, z1] = self.node_phase(k);
-            let (s, c) = self
-                .phases
-                .sin_cos(angular_frequency * self.grid.inner_delay());
-            return [c * z0 + s * z1, c * z1 - s * z0];
-        }
-        let (sin, cos) = self.phases.sin_cos(angular_frequency * t);
-        [amplitude * sin, amplitude * cos]
-    }
-
-    /// [`Self::harmonic_phase`] at node k, kept for the whole-step loop
-    /// (the same value).
-    fn node_phase(&mut self, k: u64) -> [f64; 2] {
-        let z = self.harmonic_phase(k);
-        self.phase = Some((k, z));
-        z
+        let k = self.trajectory.grid_index;
+        dense::augmented(x, delayed, road, at, || {
+            self.inputs.harmonic_at(road, at, k)
+        })
     }
 
     /// The exact map of a partial step of length `length` (quantized to
@@ -839,15 +783,16 @@ impl Simulator {
         let mut start = from;
         let mut state = x;
         loop {
-            let pieces::Stretch { piece, end, .. } = self.stretch(start, to, None);
+            let pieces::Stretch { piece, end, .. } = self.inputs.stretch(start, to, None);
             let delayed = self
                 .grid
                 .resolves_delay()
-                .then(|| self.delayed_input(k, start - step_start));
+                .then(|| self.inputs.delayed_input(k, start - step_start));
             let length = end - start;
             let drive = self.forcing(&piece);
             state = if self.coincide(length, self.grid.step) {
-                self.full_step
+                self.modes
+                    .full_step
                     .apply(&state, delayed.as_ref(), &drive, start)
             } else {
                 let z = self.augmented(&state, delayed.as_ref(), &drive, start);
@@ -867,7 +812,7 @@ impl Simulator {
     /// divergence check reports).
     fn inner_delay_next_node(&mut self, k: u64, from: f64, x: State) -> (State, [f64; 2]) {
         let flight = self.in_flight();
-        if let Some(c) = &self.next_node
+        if let Some(c) = &self.modes.next_node
             && (c.k, c.from.to_bits(), c.flight) == (k, from.to_bits(), flight)
             && c.state
                 .iter()
@@ -877,7 +822,7 @@ impl Simulator {
             return (c.node, c.end);
         }
         let (node, end) = self.solve_next_node(k, from, x);
-        self.next_node = Some(NextNode {
+        self.modes.next_node = Some(NextNode {
             k,
             from,
             state: x,
@@ -917,22 +862,22 @@ impl Simulator {
             return None;
         }
         let next = self.grid_time(k + 1);
-        let piece = self.piece_from(from);
+        let piece = self.inputs.piece_from(from);
         if pieces::ends_before(&piece, next, self.grid.step) {
             return None;
         }
-        let nodes = self.delayed_nodes(k);
+        let nodes = self.inputs.delayed_nodes(k);
         let road = match piece {
             RoadPiece::Harmonic { .. } => {
-                let phase = self.node_phase(k);
-                linalg::combine2(&self.grid_step.harmonic, &phase)
+                let phase = self.inputs.node_phase(k);
+                linalg::combine2(&self.modes.grid_step.harmonic, &phase)
             }
             RoadPiece::Linear { .. } => linalg::combine2(
-                &self.grid_step.linear,
+                &self.modes.grid_step.linear,
                 &[piece.value(from), piece.slope(from)],
             ),
         };
-        let step = &self.grid_step;
+        let step = &self.modes.grid_step;
         let inputs = linalg::add6(linalg::combine4(&step.nodes, &nodes), road);
         let x: [f64; 6] = (*x).into();
         Some(State::from(linalg::add6(
@@ -956,7 +901,7 @@ impl Simulator {
         let (h, tau) = (self.grid.step, self.grid.inner_delay());
         let step_start = self.grid_time(k);
         let switch = step_start + tau;
-        let [node_x, node_v] = self.node_tire(k);
+        let [node_x, node_v] = self.inputs.node_tire(k);
         let mut start = from;
         let mut state = x;
         let mut sensitivity = SMatrix::<f64, 6, 2>::zeros();
@@ -968,7 +913,7 @@ impl Simulator {
             let mut z = dense::Augmented::<3>::zeros();
             z.fixed_view_mut::<6, 2>(0, 1).copy_from(&sensitivity);
             let delayed = if earlier {
-                self.delayed_input(k, h - tau + (start - step_start))
+                self.inputs.delayed_input(k, h - tau + (start - step_start))
             } else {
                 let interpolant = hermite_matrix(h, (start - switch).max(0.0));
                 z.fixed_view_mut::<4, 2>(DELAY_INPUT, 1)
@@ -991,7 +936,7 @@ impl Simulator {
     /// of the delayed argument, whichever comes first), and whether
     /// `start` lies before the switch.
     fn inner_delay_piece(&mut self, start: f64, to: f64, switch: f64) -> (RoadPiece, f64, bool) {
-        let stretch = self.stretch(start, to, Some(switch));
+        let stretch = self.inputs.stretch(start, to, Some(switch));
         (stretch.piece, stretch.end, stretch.before_switch)
     }
 
@@ -1005,14 +950,14 @@ impl Simulator {
         let (h, tau) = (self.grid.step, self.grid.inner_delay());
         let step_start = self.grid_time(k);
         let switch = step_start + tau;
-        let [node_x, node_v] = self.node_tire(k);
+        let [node_x, node_v] = self.inputs.node_tire(k);
         let mut start = from;
         let mut state = x;
         loop {
             let (piece, end_time, earlier) = self.inner_delay_piece(start, to, switch);
             let piece = self.forcing(&piece);
             let delayed = if earlier {
-                self.delayed_input(k, h - tau + (start - step_start))
+                self.inputs.delayed_input(k, h - tau + (start - step_start))
             } else {
                 let (_, [end_x, end_v]) = self.inner_delay_next_node(k, from, x);
                 hermite([node_x, node_v, end_x, end_v], h, (start - switch).max(0.0))
@@ -1058,9 +1003,10 @@ impl Simulator {
     /// ([`Self::computed_state`]): bounds show that it passes the
     /// divergence check, and it is the same value to the bit.
     pub fn advance_to(&mut self, t_end: f64) -> Result<()> {
-        self.outputs_cache = None;
+        self.observers.outputs_cache = None;
         if !t_end.is_finite()
-            || (t_end < self.current_time && !self.snaps(t_end, self.current_time))
+            || (t_end < self.trajectory.current_time
+                && !self.snaps(t_end, self.trajectory.current_time))
         {
             return Err(Error::InvalidTime {
                 name: "t_end",
@@ -1072,10 +1018,10 @@ impl Simulator {
         // Switches of the tire contact made in the current step.
         let mut switches = 0;
         loop {
-            let k = self.grid_index;
+            let k = self.trajectory.grid_index;
             let next_node = self.grid_time(k + 1);
             if next_node < t_end || self.snaps(t_end, next_node) {
-                let on_node = self.committed_time == self.grid_time(k);
+                let on_node = self.trajectory.committed_time == self.grid_time(k);
                 if on_node && !self.in_flight() && switches == 0 {
                     // On a grid node: whole steps up to the last node the
                     // interval reaches, in one tight loop; with a
@@ -1089,14 +1035,14 @@ impl Simulator {
                 } else {
                     self.step_to_node()?;
                 }
-                if self.grid_index > k {
+                if self.trajectory.grid_index > k {
                     switches = 0;
                 }
-                if self.snaps(t_end, self.committed_time) {
+                if self.snaps(t_end, self.trajectory.committed_time) {
                     return self.finish_near_committed(t_end);
                 }
             } else {
-                if self.snaps(t_end, self.committed_time) {
+                if self.snaps(t_end, self.trajectory.committed_time) {
                     return self.finish_near_committed(t_end);
                 }
                 if unilateral && self.switch_by(k, t_end, &mut switches)? {
@@ -1105,8 +1051,12 @@ impl Simulator {
                 if self.defer(t_end, deferred::Kind::InsideStep) {
                     return Ok(());
                 }
-                let x =
-                    self.integrate_within_step(k, self.committed_time, self.committed_state, t_end);
+                let x = self.integrate_within_step(
+                    k,
+                    self.trajectory.committed_time,
+                    self.trajectory.committed_state,
+                    t_end,
+                );
                 self.check_divergence(t_end, &x)?;
                 self.set_current(t_end, x);
                 return Ok(());
@@ -1117,10 +1067,10 @@ impl Simulator {
     /// With a unilateral tire: to the end node of the current step,
     /// through the switches of the tire contact inside it.
     fn step_to_node_switching(&mut self, switches: &mut u32) -> Result<()> {
-        let k = self.grid_index;
+        let k = self.trajectory.grid_index;
         let next_node = self.grid_time(k + 1);
         while self.switch_by(k, next_node, switches)? {
-            if self.snaps(next_node, self.committed_time) {
+            if self.snaps(next_node, self.trajectory.committed_time) {
                 break;
             }
         }
@@ -1131,32 +1081,35 @@ impl Simulator {
     /// external road input changed or the tire contact switched), or from
     /// its start node, to its end node, which is committed.
     fn step_to_node(&mut self) -> Result<()> {
-        let k = self.grid_index;
+        let k = self.trajectory.grid_index;
         let next_node = self.grid_time(k + 1);
-        if self.rms.samples > 0 {
+        if self.observers.rms.samples > 0 {
             // From a node that ends a run of the whole-step loop (a
             // unilateral tire's step that may lift off, or a step that a
             // road breakpoint splits): the run closes there first.
             let (t, x, w) = (
-                self.committed_time,
-                self.committed_state,
-                self.committed_filter,
+                self.trajectory.committed_time,
+                self.trajectory.committed_state,
+                self.trajectory.committed_filter,
             );
-            let piece = self.piece_from(t);
-            let (mut rms, mut weighted) = (self.rms, self.weighted);
+            let piece = self.inputs.piece_from(t);
+            let (mut rms, mut weighted) = (self.observers.rms, self.observers.weighted);
             self.close_run_at_node(k, t, &x, &w, &mut rms, &mut weighted, &piece, &piece);
-            (self.rms, self.weighted) = (rms, weighted);
+            (self.observers.rms, self.observers.weighted) = (rms, weighted);
         }
-        let from = (self.committed_time, self.committed_state);
+        let from = (
+            self.trajectory.committed_time,
+            self.trajectory.committed_state,
+        );
         let x = self.integrate_within_step(k, from.0, from.1, next_node);
         self.check_divergence(next_node, &x)?;
-        let w_from = self.committed_filter;
+        let w_from = self.trajectory.committed_filter;
         let w = self.filter_within_step(k, from, &w_from, next_node);
-        let anchor = self.integral.anchor;
-        let mut holding = self.holding;
+        let anchor = self.observers.integral.anchor;
+        let mut holding = self.observers.holding;
         let (step_integral, at_end, last_piece) =
             self.integral_within_step(k, from, &w_from, anchor, next_node, (&x, &w), &mut holding);
-        self.holding = holding;
+        self.observers.holding = holding;
         self.commit_node(
             k + 1,
             (next_node, x, w),
@@ -1170,7 +1123,7 @@ impl Simulator {
     /// state there by [`Self::state_near_committed`], deferred where that
     /// is shown to be safe ([`deferred`]).
     fn finish_near_committed(&mut self, t_end: f64) -> Result<()> {
-        let delta = t_end - self.committed_time;
+        let delta = t_end - self.trajectory.committed_time;
         if delta != 0.0 && self.defer(t_end, deferred::Kind::NearNode) {
             return Ok(());
         }
@@ -1193,7 +1146,7 @@ impl Simulator {
             let t = self.grid_time(j);
             t < t_end || self.snaps(t_end, t)
         };
-        let k = self.grid_index;
+        let k = self.trajectory.grid_index;
         if k < u64::MAX - 2 && reached(k + 1) && !reached(k + 2) {
             return k + 1;
         }
@@ -1212,18 +1165,17 @@ impl Simulator {
         step_integral: [f64; INTEGRALS],
         arrival: (time_average::Squares, RoadPiece),
     ) {
-        let len = self.history.len() as u64;
-        self.history[(k % len) as usize] = [x[X_T], x[V_T]];
-        self.grid_index = k;
-        self.committed_time = time;
-        self.committed_state = x;
-        self.committed_filter = w;
+        self.inputs.record_node(k, [x[X_T], x[V_T]]);
+        self.trajectory.grid_index = k;
+        self.trajectory.committed_time = time;
+        self.trajectory.committed_state = x;
+        self.trajectory.committed_filter = w;
         self.set_current(time, x);
         if self.config.metrics.road_holding() {
-            self.holding.add_node(&x.into());
+            self.observers.holding.add_node(&x.into());
         }
         self.restart_run_after_step(k, (time, &x, &w), step_integral, arrival);
-        self.road.release_before(time);
+        self.inputs.road.release_before(time);
     }
 
     /// Sets the external road input from the current time on (only with
@@ -1232,8 +1184,8 @@ impl Simulator {
     /// that point instead.
     pub fn set_road_input(&mut self, value: f64, slope: f64) -> Result<()> {
         self.settle();
-        self.outputs_cache = None;
-        if !self.road.is_input() {
+        self.observers.outputs_cache = None;
+        if !self.inputs.road.is_input() {
             return Err(Error::InvalidSetting {
                 name: "road",
                 value: 0,
@@ -1243,9 +1195,9 @@ impl Simulator {
         // Checked before the RMS run is closed, so that a refused value
         // changes nothing.
         Road::check_input(value, slope)?;
-        self.next_node = None;
+        self.modes.next_node = None;
         let start = self.close_run_for_input();
-        self.road.set_input(start, value, slope)?;
+        self.inputs.road.set_input(start, value, slope)?;
         self.reanchor_after_input();
         Ok(())
     }
@@ -1254,7 +1206,7 @@ impl Simulator {
     /// [`crate::limits::check_rates`]); the history is kept.
     pub fn set_gain(&mut self, g: f64) -> Result<()> {
         self.settle();
-        self.outputs_cache = None;
+        self.observers.outputs_cache = None;
         let params = Params {
             g,
             ..self.config.params
@@ -1264,14 +1216,14 @@ impl Simulator {
         self.config.params = params;
         let (matrix, step, grid_step, coupling) =
             Self::operators(&plant, &self.config, &self.grid)?;
-        self.coupling = coupling;
+        self.modes.coupling = coupling;
         self.plant = plant;
-        self.solver_matrix = matrix;
-        self.solver_matrix_norm = infinity_norm(&matrix);
-        self.full_step = step;
-        self.grid_step = grid_step;
-        self.dense = None;
-        self.next_node = None;
+        self.modes.solver_matrix = matrix;
+        self.modes.solver_matrix_norm = infinity_norm(&matrix);
+        self.modes.full_step = step;
+        self.modes.grid_step = grid_step;
+        self.modes.dense = None;
+        self.modes.next_node = None;
         // The contact operators were rebuilt: the flight ones follow, and
         // a flight in progress goes on with them.
         self.enter_recorded_mode();
@@ -1280,13 +1232,13 @@ impl Simulator {
 
     /// Changes the weights of J (tunable).
     pub fn set_weights(&mut self, weights: Weights) {
-        self.outputs_cache = None;
+        self.observers.outputs_cache = None;
         self.config.weights = weights;
     }
 
     /// Runs from the current time for `duration` seconds and summarises.
     pub fn run_for(&mut self, duration: f64) -> Result<RunSummary> {
-        self.advance_to(self.current_time + duration)?;
+        self.advance_to(self.trajectory.current_time + duration)?;
         let outputs = self.outputs();
         Ok(RunSummary {
             rms: outputs.rms,

@@ -217,10 +217,10 @@ pub struct RunSummary {
 
 impl Simulator {
     pub(super) fn road_piece_now(&mut self) -> RoadPiece {
-        let t = self.current_time;
-        let piece = self.road.piece(t);
+        let t = self.trajectory.current_time;
+        let piece = self.inputs.road.piece(t);
         if self.coincide(piece.end(), t) {
-            self.road.piece(piece.end())
+            self.inputs.road.piece(piece.end())
         } else {
             piece
         }
@@ -229,8 +229,15 @@ impl Simulator {
     /// `[u, u']`: the delayed tire displacement and its rate now.
     pub(super) fn delayed_tire_now(&mut self) -> (f64, f64) {
         self.settle();
-        let (k, t, x) = (self.grid_index, self.current_time, self.current_state);
-        let from = (self.committed_time, self.committed_state);
+        let (k, t, x) = (
+            self.trajectory.grid_index,
+            self.trajectory.current_time,
+            self.trajectory.current_state,
+        );
+        let from = (
+            self.trajectory.committed_time,
+            self.trajectory.committed_state,
+        );
         let p = self.delayed_vector_at(k, t, from, &x);
         (p[0], p[1])
     }
@@ -239,7 +246,7 @@ impl Simulator {
     /// [`Self::outputs`] gives, at less cost when the others are not
     /// needed: the integrals from the start are not closed.
     pub fn instantaneous(&mut self) -> Instantaneous {
-        match &self.outputs_cache {
+        match &self.observers.outputs_cache {
             Some(outputs) => Instantaneous {
                 time: outputs.time,
                 state: outputs.state,
@@ -255,10 +262,10 @@ impl Simulator {
     /// [`Self::instantaneous`] computed (the state settled first).
     fn instantaneous_now(&mut self) -> Instantaneous {
         self.settle();
-        let t = self.current_time;
-        let x = self.current_state;
+        let t = self.trajectory.current_time;
+        let x = self.trajectory.current_state;
         let piece = self.road_piece_now();
-        let [road, _] = self.road_at(&piece, t);
+        let [road, _] = self.inputs.road_at(&piece, t);
         let (delayed, _) = self.delayed_tire_now();
         let k_t = self.config.params.k_t;
         Instantaneous {
@@ -273,7 +280,7 @@ impl Simulator {
 
     /// All outputs at the current time.
     pub fn outputs(&mut self) -> Outputs {
-        if let Some(outputs) = self.outputs_cache {
+        if let Some(outputs) = self.observers.outputs_cache {
             return outputs;
         }
         let instant = self.instantaneous_now();
@@ -296,7 +303,7 @@ impl Simulator {
             road_holding: self.config.metrics.road_holding().then(|| RoadHolding {
                 contact_loss_time: now.holding.lost_steps as f64 * self.grid.step
                     + now.holding.lost_time
-                    + now.holding.flight_start.map_or(0.0, |start| t - start),
+                    + self.trajectory.flight_start.map_or(0.0, |start| t - start),
                 max_suspension_deflection: now
                     .holding
                     .max_deflection
@@ -308,7 +315,7 @@ impl Simulator {
                 lift_off_count: now.holding.lift_offs,
             }),
         };
-        self.outputs_cache = Some(outputs);
+        self.observers.outputs_cache = Some(outputs);
         outputs
     }
 
@@ -317,11 +324,11 @@ impl Simulator {
     /// outputs are not needed: the integrals from the start are closed at
     /// the current time, the instantaneous outputs are not computed.
     pub fn time_averages(&mut self) -> TimeAverages {
-        if let Some(outputs) = &self.outputs_cache {
+        if let Some(outputs) = &self.observers.outputs_cache {
             return outputs.time_averages();
         }
         let integral = self.rms_integral_now();
-        let duration = self.current_time - self.config.start_time;
+        let duration = self.trajectory.current_time - self.config.start_time;
         self.time_averages_of(&integral, duration)
     }
 
@@ -355,16 +362,16 @@ impl Simulator {
         if !self.config.metrics.road_holding() {
             return None;
         }
-        if let Some(time) = self.holding.first_loss {
+        if let Some(time) = self.observers.holding.first_loss {
             return Some(self.contact_loss_at(time));
         }
-        let (tc, t) = (self.committed_time, self.current_time);
+        let (tc, t) = (self.trajectory.committed_time, self.trajectory.current_time);
         if t <= tc {
             return None;
         }
-        let piece = self.piece_from(tc);
+        let piece = self.inputs.piece_from(tc);
         if piece.end() >= t {
-            let xc = self.committed_state;
+            let xc = self.trajectory.committed_state;
             if let Some(drift) = self.deferred_drift() {
                 // A deferred state: the test below with bounds of its
                 // `x_t` and `|v_t|` (each evaluation is
@@ -380,7 +387,7 @@ impl Simulator {
                 }
                 self.settle();
             }
-            let x = self.current_state;
+            let x = self.trajectory.current_state;
             if self.stretch_keeps_contact(&piece, (tc, &xc), (t, StretchEnd::at(&x))) {
                 return None;
             }
@@ -402,7 +409,7 @@ impl Simulator {
     /// surely pass it, decided without a sine: on the harmonic road, from
     /// a committed grid node and the phase the whole-step loop carries
     /// there. `x_g` at the node is that phase's `A sin ω t_c` up to its
-    /// rounding drift (of the order of [`super::PHASE_ANCHOR`] ulp, and of
+    /// rounding drift (of the order of [`super::inputs::PHASE_ANCHOR`] ulp, and of
     /// the rounding of `ω t_c`), both inside `slack`; `x_g` at `now` is
     /// above it less `|A ω| (t − t_c)`; each `|g'|` is at most
     /// `|A ω| + |v_t|`. `false` (the exact test decides) elsewhere.
@@ -419,15 +426,15 @@ impl Simulator {
         else {
             return false;
         };
-        let k = self.grid_index;
-        let Some((index, z)) = self.phase else {
+        let k = self.trajectory.grid_index;
+        let Some(z) = self.inputs.kept_node_phase(k) else {
             return false;
         };
-        if index != k || tc != self.grid_time(k) {
+        if tc != self.grid_time(k) {
             return false;
         }
         let length = t - tc;
-        let limit = self.grid_step.contact.limit;
+        let limit = self.modes.grid_step.contact.limit;
         let amplitude = amplitude.abs();
         let sweep = (amplitude * angular_frequency).abs();
         let slack = 1e-9 * (limit.abs() + amplitude + xc[X_T].abs() + end.tire_magnitude)
@@ -441,12 +448,12 @@ impl Simulator {
 
     fn contact_loss_at(&self, time: f64) -> ContactLoss {
         let static_load = self.static_load();
-        let dynamic_tire_load = if time == self.config.start_time && self.start_load < -static_load
-        {
-            self.start_load
-        } else {
-            -static_load
-        };
+        let dynamic_tire_load =
+            if time == self.config.start_time && self.observers.start_load < -static_load {
+                self.observers.start_load
+            } else {
+                -static_load
+            };
         ContactLoss {
             time,
             dynamic_tire_load,
@@ -455,7 +462,7 @@ impl Simulator {
     }
 
     fn comfort_values(&self, now: &Accumulated, duration: f64) -> Option<ComfortValues> {
-        let coupling = self.coupling.as_ref()?;
+        let coupling = self.modes.coupling.as_ref()?;
         let rms = if duration > 0.0 {
             (now.integral[WEIGHTED_SQUARE].max(0.0) / duration).sqrt()
         } else {
@@ -471,15 +478,15 @@ impl Simulator {
     /// Exact first time derivatives of the instantaneous outputs.
     pub fn output_derivatives(&mut self) -> OutputDerivatives {
         self.settle();
-        let t = self.current_time;
-        let x = self.current_state;
+        let t = self.trajectory.current_time;
+        let x = self.trajectory.current_state;
         let piece = self.road_piece_now();
         let (road, road_rate) = (piece.value(t), piece.slope(t));
         let (delayed, delayed_rate) = self.delayed_tire_now();
         let b = self.solver_input_column();
         let drive = self.forcing(&piece);
-        let dx = self.solver_matrix * x + b * delayed + self.plant.e * drive.value(t);
-        let d2x = self.solver_matrix * dx + b * delayed_rate + self.plant.e * drive.slope(t);
+        let dx = self.modes.solver_matrix * x + b * delayed + self.plant.e * drive.value(t);
+        let d2x = self.modes.solver_matrix * dx + b * delayed_rate + self.plant.e * drive.slope(t);
         let gain = self.config.params.effective_gain(self.config.variant);
         let now = Performance::at(&self.plant, &x, road);
         let rms = self.outputs().rms;
@@ -498,7 +505,7 @@ impl Simulator {
         };
         let outputs = self.outputs();
         let accumulated = self.accumulated_now();
-        let comfort = match (&self.coupling, outputs.comfort) {
+        let comfort = match (&self.modes.coupling, outputs.comfort) {
             (Some(coupling), Some(values)) => {
                 let filter = accumulated.filter;
                 let a = values.weighted_body_acceleration;

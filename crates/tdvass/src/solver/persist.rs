@@ -175,8 +175,9 @@ fn read_step_bound(r: &mut ByteReader, config: &SimulationConfig) -> Result<f64>
     Ok(step_bound)
 }
 
-/// The road-holding accumulators and the flight in progress.
-fn read_holding(r: &mut ByteReader) -> Result<Holding> {
+/// The road-holding accumulators and the start of the flight in
+/// progress.
+fn read_holding(r: &mut ByteReader) -> Result<(Holding, Option<f64>)> {
     let optional_time = |r: &mut ByteReader, what: &str| -> Result<Option<f64>> {
         match r.u64()? {
             0 => Ok(None),
@@ -184,14 +185,14 @@ fn read_holding(r: &mut ByteReader) -> Result<Holding> {
             other => Err(Error::InvalidState(format!("{what} tag {other}"))),
         }
     };
-    Ok(Holding {
+    let holding = Holding {
         max_deflection: r.f64()?,
         lost_steps: r.u64()?,
         lost_time: r.f64()?,
         first_loss: optional_time(r, "first contact loss")?,
         lift_offs: r.u64()?,
-        flight_start: optional_time(r, "flight")?,
-    })
+    };
+    Ok((holding, optional_time(r, "flight")?))
 }
 
 /// The road's dynamic state (random road position and nodes, external
@@ -222,24 +223,34 @@ impl Simulator {
         w.u64(STATE_FORMAT_VERSION);
         write_config(&mut w, &self.config);
         w.f64(self.step_choice.step_bound);
-        w.u64(self.grid_index);
-        w.f64(self.committed_time);
-        self.committed_state.iter().for_each(|&v| w.f64(v));
-        w.f64(self.current_time);
-        self.current_state.iter().for_each(|&v| w.f64(v));
-        let flat: Vec<f64> = self.history.iter().flatten().copied().collect();
+        w.u64(self.trajectory.grid_index);
+        w.f64(self.trajectory.committed_time);
+        self.trajectory
+            .committed_state
+            .iter()
+            .for_each(|&v| w.f64(v));
+        w.f64(self.trajectory.current_time);
+        self.trajectory.current_state.iter().for_each(|&v| w.f64(v));
+        let flat: Vec<f64> = self.inputs.history.iter().flatten().copied().collect();
         w.f64s(&flat);
-        self.rms.sums_of_squares.iter().for_each(|&v| w.f64(v));
-        w.u64(self.rms.samples);
-        let integral = &self.integral;
+        self.observers
+            .rms
+            .sums_of_squares
+            .iter()
+            .for_each(|&v| w.f64(v));
+        w.u64(self.observers.rms.samples);
+        let integral = &self.observers.integral;
         integral.closed.iter().for_each(|&v| w.f64(v));
         w.u64(integral.anchor_index);
         w.f64(integral.anchor_time);
         integral.anchor.value.iter().for_each(|&v| w.f64(v));
         integral.anchor.rate.iter().for_each(|&v| w.f64(v));
-        self.weighted.iter().for_each(|&v| w.f64(v));
-        self.committed_filter.iter().for_each(|&v| w.f64(v));
-        let holding = &self.holding;
+        self.observers.weighted.iter().for_each(|&v| w.f64(v));
+        self.trajectory
+            .committed_filter
+            .iter()
+            .for_each(|&v| w.f64(v));
+        let holding = &self.observers.holding;
         w.f64(holding.max_deflection);
         w.u64(holding.lost_steps);
         w.f64(holding.lost_time);
@@ -251,14 +262,14 @@ impl Simulator {
             None => w.u64(0),
         }
         w.u64(holding.lift_offs);
-        match holding.flight_start {
+        match self.trajectory.flight_start {
             Some(time) => {
                 w.u64(1);
                 w.f64(time);
             }
             None => w.u64(0),
         }
-        let road = self.road.dynamic_state();
+        let road = self.inputs.road.dynamic_state();
         w.u128(road.word_position);
         w.u64(road.first_node);
         w.f64s(&road.nodes);
@@ -312,17 +323,18 @@ impl Simulator {
         let mut sim = Simulator::with_step_bound(config, step_bound)?;
         sim.read_trajectory(&mut r)?;
         sim.read_accumulators(&mut r)?;
-        let initial_holding = sim.holding;
-        sim.holding = read_holding(&mut r)?;
+        let initial_holding = sim.observers.holding;
+        (sim.observers.holding, sim.trajectory.flight_start) = read_holding(&mut r)?;
         sim.enter_recorded_mode();
         let road = read_road_state(&mut r)?;
         if !r.is_empty() {
             return Err(Error::InvalidState("trailing bytes".into()));
         }
         let values_finite = sim
+            .trajectory
             .committed_state
             .iter()
-            .chain(sim.current_state.iter())
+            .chain(sim.trajectory.current_state.iter())
             .all(|v| v.is_finite());
         if !values_finite {
             return Err(Error::InvalidState("non-finite state".into()));
@@ -332,38 +344,39 @@ impl Simulator {
         sim.check_comfort()?;
         if sim.config.metrics.road_holding() || sim.config.tire_contact.is_unilateral() {
             sim.check_holding()?;
-        } else if sim.holding != initial_holding {
+        } else if sim.observers.holding != initial_holding {
             return Err(Error::InvalidState(
                 "road-holding accumulators moved, but road holding is off".into(),
             ));
         }
-        let horizon = sim.grid_time(sim.grid_index.saturating_add(2));
-        sim.road
-            .restore_dynamic_state(&road, sim.committed_time, horizon)?;
+        let horizon = sim.grid_time(sim.trajectory.grid_index.saturating_add(2));
+        sim.inputs
+            .road
+            .restore_dynamic_state(&road, sim.trajectory.committed_time, horizon)?;
         Ok(sim)
     }
 
     /// The grid node, the committed and current points and the delay
     /// history, as [`Self::to_bytes`] wrote them.
     fn read_trajectory(&mut self, r: &mut ByteReader) -> Result<()> {
-        self.grid_index = r.u64()?;
-        self.committed_time = r.f64()?;
-        for v in self.committed_state.iter_mut() {
+        self.trajectory.grid_index = r.u64()?;
+        self.trajectory.committed_time = r.f64()?;
+        for v in self.trajectory.committed_state.iter_mut() {
             *v = r.f64()?;
         }
-        self.current_time = r.f64()?;
-        for v in self.current_state.iter_mut() {
+        self.trajectory.current_time = r.f64()?;
+        for v in self.trajectory.current_state.iter_mut() {
             *v = r.f64()?;
         }
         let flat = r.f64s(2 * super::MAX_HISTORY_NODES + 2)?;
-        if flat.len() != 2 * self.history.len() {
+        if flat.len() != 2 * self.inputs.history.len() {
             return Err(Error::InvalidState(format!(
                 "history of {} values where {} were expected",
                 flat.len(),
-                2 * self.history.len()
+                2 * self.inputs.history.len()
             )));
         }
-        for (slot, pair) in self.history.iter_mut().zip(flat.chunks(2)) {
+        for (slot, pair) in self.inputs.history.iter_mut().zip(flat.chunks(2)) {
             *slot = [pair[0], pair[1]];
         }
         Ok(())
@@ -377,22 +390,22 @@ impl Simulator {
             *v = r.f64()?;
         }
         rms.samples = r.u64()?;
-        self.rms = rms;
-        for v in self.integral.closed.iter_mut() {
+        self.observers.rms = rms;
+        for v in self.observers.integral.closed.iter_mut() {
             *v = r.f64()?;
         }
-        self.integral.anchor_index = r.u64()?;
-        self.integral.anchor_time = r.f64()?;
-        for v in self.integral.anchor.value.iter_mut() {
+        self.observers.integral.anchor_index = r.u64()?;
+        self.observers.integral.anchor_time = r.f64()?;
+        for v in self.observers.integral.anchor.value.iter_mut() {
             *v = r.f64()?;
         }
-        for v in self.integral.anchor.rate.iter_mut() {
+        for v in self.observers.integral.anchor.rate.iter_mut() {
             *v = r.f64()?;
         }
-        for v in self.weighted.iter_mut() {
+        for v in self.observers.weighted.iter_mut() {
             *v = r.f64()?;
         }
-        for v in self.committed_filter.iter_mut() {
+        for v in self.trajectory.committed_filter.iter_mut() {
             *v = r.f64()?;
         }
         Ok(())
@@ -405,25 +418,25 @@ impl Simulator {
     /// that are finite and not negative; a finite closed integral and
     /// anchor squares.
     fn check_rms(&self) -> Result<()> {
-        let (samples, k) = (self.rms.samples, self.grid_index);
-        let anchor = self.integral.anchor_index;
+        let (samples, k) = (self.observers.rms.samples, self.trajectory.grid_index);
+        let anchor = self.observers.integral.anchor_index;
         if anchor.checked_add(samples) != Some(k) {
             return Err(Error::InvalidState(format!(
                 "rms samples {samples}: one per grid node after the anchor node {anchor} was expected, grid_index = {k}"
             )));
         }
-        let anchor_time = self.integral.anchor_time;
+        let anchor_time = self.observers.integral.anchor_time;
         let expected = if samples > 0 {
             self.grid_time(anchor)
         } else {
-            self.committed_time
+            self.trajectory.committed_time
         };
         if anchor_time != expected {
             return Err(Error::InvalidState(format!(
                 "rms anchor time {anchor_time} s: {expected} s was expected"
             )));
         }
-        let integral = &self.integral;
+        let integral = &self.observers.integral;
         let values = integral
             .closed
             .iter()
@@ -434,7 +447,10 @@ impl Simulator {
                 "rms integral value {bad} is not finite"
             )));
         }
-        for (name, sum) in ["BA", "SDD", "TDD"].iter().zip(self.rms.sums_of_squares) {
+        for (name, sum) in ["BA", "SDD", "TDD"]
+            .iter()
+            .zip(self.observers.rms.sums_of_squares)
+        {
             if !(sum.is_finite() && sum >= 0.0) {
                 return Err(Error::InvalidState(format!(
                     "rms sum of squares of {name} {sum} is not finite and >= 0"
@@ -447,7 +463,7 @@ impl Simulator {
     /// The W_k accumulators of [`Simulator::from_bytes`]: finite, the node
     /// sums not negative, and all zero without the filter.
     fn check_comfort(&self) -> Result<()> {
-        let integral = &self.integral;
+        let integral = &self.observers.integral;
         let weighted = [WEIGHTED_SQUARE, WEIGHTED_FOURTH];
         let values: Vec<f64> = weighted
             .iter()
@@ -458,20 +474,20 @@ impl Simulator {
                     integral.anchor.rate[i],
                 ]
             })
-            .chain(self.weighted)
-            .chain(self.committed_filter.iter().copied())
+            .chain(self.observers.weighted)
+            .chain(self.trajectory.committed_filter.iter().copied())
             .collect();
         if let Some(bad) = values.iter().find(|v| !v.is_finite()) {
             return Err(Error::InvalidState(format!(
                 "comfort (a_w) accumulator {bad} is not finite"
             )));
         }
-        if let Some(bad) = self.weighted.iter().find(|v| **v < 0.0) {
+        if let Some(bad) = self.observers.weighted.iter().find(|v| **v < 0.0) {
             return Err(Error::InvalidState(format!(
                 "comfort (a_w) sum {bad} is negative"
             )));
         }
-        if self.coupling.is_none() && values.iter().any(|v| *v != 0.0) {
+        if self.modes.coupling.is_none() && values.iter().any(|v| *v != 0.0) {
             return Err(Error::InvalidState(
                 "comfort (a_w) accumulators are not zero, but the W_k filter is off".into(),
             ));
@@ -482,8 +498,8 @@ impl Simulator {
 
     /// The road-holding accumulators of [`Simulator::from_bytes`].
     fn check_holding(&self) -> Result<()> {
-        let holding = &self.holding;
-        let x = self.committed_state;
+        let holding = &self.observers.holding;
+        let x = self.trajectory.committed_state;
         let committed = (x[crate::model::X_S] - x[crate::model::X_T]).abs();
         let deflection = holding.max_deflection;
         // Below road holding (a unilateral tire at the paper level) the
@@ -494,10 +510,10 @@ impl Simulator {
                 "max suspension deflection {deflection} m is not finite or below the committed |SDD| {committed} m"
             )));
         }
-        let elapsed = self.committed_time - self.config.start_time;
+        let elapsed = self.trajectory.committed_time - self.config.start_time;
         let lost = holding.lost_steps as f64 * self.grid.step + holding.lost_time;
-        let tolerance = self.snap_tolerance(self.committed_time) + 1e-9 * elapsed.abs();
-        if holding.lost_steps > self.grid_index
+        let tolerance = self.snap_tolerance(self.trajectory.committed_time) + 1e-9 * elapsed.abs();
+        if holding.lost_steps > self.trajectory.grid_index
             || !(holding.lost_time.is_finite()
                 && holding.lost_time >= 0.0
                 && lost <= elapsed + tolerance)
@@ -512,11 +528,12 @@ impl Simulator {
                 "contact loss time {lost} s without a first contact loss"
             ))),
             Some(time)
-                if !(time >= self.config.start_time && time <= self.committed_time + tolerance) =>
+                if !(time >= self.config.start_time
+                    && time <= self.trajectory.committed_time + tolerance) =>
             {
                 Err(Error::InvalidState(format!(
                     "first contact loss at {time} s lies outside the run up to the committed_time {} s",
-                    self.committed_time
+                    self.trajectory.committed_time
                 )))
             }
             _ => Ok(()),
@@ -527,18 +544,18 @@ impl Simulator {
                 holding.lift_offs
             )));
         }
-        match holding.flight_start {
+        match self.trajectory.flight_start {
             Some(_) if !self.config.tire_contact.is_unilateral() => Err(Error::InvalidState(
                 "a flight in progress, but the tire is bilateral".into(),
             )),
             Some(time)
                 if !(time >= self.config.start_time
-                    && time <= self.committed_time + tolerance
+                    && time <= self.trajectory.committed_time + tolerance
                     && holding.lift_offs > 0) =>
             {
                 Err(Error::InvalidState(format!(
                     "a flight from {time} s does not fit in the run up to the committed time {} s after {} lift-offs",
-                    self.committed_time, holding.lift_offs
+                    self.trajectory.committed_time, holding.lift_offs
                 )))
             }
             _ => Ok(()),
@@ -548,7 +565,11 @@ impl Simulator {
     /// The time checks of [`Simulator::from_bytes`] on `grid_index`,
     /// `committed_time` and `current_time`.
     fn check_times(&self) -> Result<()> {
-        let (k, committed, current) = (self.grid_index, self.committed_time, self.current_time);
+        let (k, committed, current) = (
+            self.trajectory.grid_index,
+            self.trajectory.committed_time,
+            self.trajectory.current_time,
+        );
         for (name, t) in [("committed_time", committed), ("current_time", current)] {
             if !t.is_finite() {
                 return Err(Error::InvalidState(format!("{name} {t} s is not finite")));
@@ -625,7 +646,10 @@ mod tests {
     fn running() -> Simulator {
         let mut sim = Simulator::new(SimulationConfig::default().at_fixed_step()).unwrap();
         sim.advance_to(0.0623).unwrap();
-        assert_eq!((sim.grid_index, sim.committed_time), (623, 0.0623));
+        assert_eq!(
+            (sim.trajectory.grid_index, sim.trajectory.committed_time),
+            (623, 0.0623)
+        );
         sim
     }
 
@@ -634,7 +658,7 @@ mod tests {
         let sim = running();
         let bytes = sim.to_bytes();
         Simulator::from_bytes(&bytes).unwrap();
-        let k = sim.grid_index;
+        let k = sim.trajectory.grid_index;
         let at = grid_index_at(&sim);
         for forged in [
             0,
@@ -657,11 +681,11 @@ mod tests {
         let bytes = sim.to_bytes();
         // After the history ring (its length, then 2 values per node) come
         // the three sums of squares and the sample count.
-        let sums_at = current_time_at(&sim) + 8 + 6 * 8 + 8 + 16 * sim.history.len();
+        let sums_at = current_time_at(&sim) + 8 + 6 * 8 + 8 + 16 * sim.inputs.history.len();
         let samples_at = sums_at + 3 * 8;
         assert_eq!(
             bytes[samples_at..samples_at + 8],
-            sim.grid_index.to_le_bytes()
+            sim.trajectory.grid_index.to_le_bytes()
         );
         for forged in [0, 622, 624, u64::MAX] {
             let mut bytes = bytes.clone();
@@ -687,11 +711,11 @@ mod tests {
         put(&mut forged, current_time_at(&sim), 1e6f64.to_bits());
         refused(&forged, &["committed_time", "1000000", "grid_index"]);
 
-        let (h, k) = (sim.grid.step, sim.grid_index);
+        let (h, k) = (sim.grid.step, sim.trajectory.grid_index);
         let next = sim.grid_time(k + 1);
         for (time, words) in [
             (
-                sim.committed_time - 0.5 * h,
+                sim.trajectory.committed_time - 0.5 * h,
                 ["current_time", "committed_time"],
             ),
             (next + 0.5 * h, ["current_time", "grid_index"]),
@@ -744,7 +768,7 @@ mod tests {
             ];
             for t in stops {
                 sim.advance_to(t).unwrap();
-                if sim.road.is_input() {
+                if sim.inputs.road.is_input() {
                     sim.set_road_input(0.01 * t, 0.1).unwrap();
                 }
                 let bytes = sim.to_bytes();
@@ -773,7 +797,7 @@ mod tests {
         };
         let mut sim = Simulator::new(config(Metrics::Comfort)).unwrap();
         sim.advance_to(0.5).unwrap();
-        let holding = sim.holding;
+        let holding = sim.observers.holding;
         assert!(holding.lost_steps > 0 && holding.first_loss.is_some());
         let bytes = sim.to_bytes();
         Simulator::from_bytes(&bytes).unwrap();
@@ -782,7 +806,7 @@ mod tests {
         // progress (tag 0), the lift-offs, the first loss (tag and time),
         // the lost time, the lost steps, the max deflection, the 8 filter
         // states and the 2 a_w sums.
-        let road = sim.road.dynamic_state();
+        let road = sim.inputs.road.dynamic_state();
         let road_len = 16 + 8 + 8 + 8 * road.nodes.len() + 8;
         let flight_at = bytes.len() - road_len - 8;
         let lift_offs_at = flight_at - 8;
@@ -810,7 +834,7 @@ mod tests {
             ),
             (
                 lost_steps_at,
-                sim.grid_index + 1,
+                sim.trajectory.grid_index + 1,
                 ["contact loss time", "whole steps"],
             ),
             (lost_time_at, 1e3f64.to_bits(), ["contact loss time", "run"]),
@@ -842,18 +866,18 @@ mod tests {
         // Filter state or holding accumulators where they are not kept.
         let mut paper = Simulator::new(config(Metrics::Paper)).unwrap();
         paper.advance_to(0.5).unwrap();
-        paper.committed_filter[3] = 1e-3;
+        paper.trajectory.committed_filter[3] = 1e-3;
         refused(&paper.to_bytes(), &["comfort", "off"]);
-        paper.committed_filter[3] = 0.0;
+        paper.trajectory.committed_filter[3] = 0.0;
         Simulator::from_bytes(&paper.to_bytes()).unwrap();
-        paper.holding.lost_steps = 1;
+        paper.observers.holding.lost_steps = 1;
         refused(&paper.to_bytes(), &["road holding is off"]);
     }
 
     /// The bytes of `sim` with its random road state replaced.
     fn with_road(sim: &Simulator, first_node: u64, nodes: &[f64]) -> Vec<u8> {
         let bytes = sim.to_bytes();
-        let saved = sim.road.dynamic_state();
+        let saved = sim.inputs.road.dynamic_state();
         // first_node, the node count, the nodes, the input tag.
         let first_at = bytes.len() - 8 * (3 + saved.nodes.len());
         let mut w = ByteWriter {
@@ -880,7 +904,7 @@ mod tests {
             })
             .unwrap();
             sim.advance_to(0.5).unwrap();
-            let saved = sim.road.dynamic_state();
+            let saved = sim.inputs.road.dynamic_state();
             let (first, nodes) = (saved.first_node, saved.nodes);
             assert!(first > 0);
             assert_eq!(with_road(&sim, first, &nodes), sim.to_bytes());
@@ -936,7 +960,7 @@ mod tests {
         // node found is the last one a scan finds.
         let mut sim = Simulator::new(SimulationConfig::default()).unwrap();
         sim.advance_to(0.25).unwrap();
-        let k = sim.grid_index;
+        let k = sim.trajectory.grid_index;
         for ahead in 1..=3 {
             let node = sim.grid_time(k + ahead);
             let tolerance = sim.snap_tolerance(node);
@@ -976,17 +1000,22 @@ mod tests {
         // time, and without overflowing the node index.
         let mut sim = Simulator::new(SimulationConfig::default()).unwrap();
         let k = u64::MAX - 10;
-        sim.grid_index = k;
-        sim.committed_time = sim.grid_time(k);
-        sim.current_time = sim.committed_time;
-        for t_end in [sim.committed_time, sim.committed_time * 1.5, f64::MAX] {
+        sim.trajectory.grid_index = k;
+        sim.trajectory.committed_time = sim.grid_time(k);
+        sim.trajectory.current_time = sim.trajectory.committed_time;
+        for t_end in [
+            sim.trajectory.committed_time,
+            sim.trajectory.committed_time * 1.5,
+            f64::MAX,
+        ] {
             let j = sim.last_node_until(t_end);
             assert!(j >= k && j < u64::MAX, "{j}");
         }
         let mut sim = Simulator::new(SimulationConfig::default().at_fixed_step()).unwrap();
         sim.config.start_time = 1e22;
-        sim.committed_time = 1e22;
-        sim.current_time = 1e22;
+        sim.inputs.move_start_for_tests(1e22);
+        sim.trajectory.committed_time = 1e22;
+        sim.trajectory.current_time = 1e22;
         let reached = |sim: &Simulator, j: u64| {
             let t = sim.grid_time(j);
             t <= 1e22 || sim.coincide(t, 1e22)

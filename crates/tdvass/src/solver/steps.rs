@@ -3,48 +3,19 @@
 //! road breakpoints, and the steps that a road breakpoint splits, with
 //! their share of the RMS time integral.
 
+use super::Simulator;
 use super::holding::Holding;
+use super::inputs::PHASE_ANCHOR;
 use super::kernel::{
     HarmonicPhase, HotState, LinearPiece, Segment, SegmentEnd, run_segment, within_bounds,
 };
 use super::system::Filter;
-use super::{PHASE_ANCHOR, Simulator};
 use crate::error::Result;
 use crate::metrics::RunningRms;
 use crate::model::{State, V_T, X_T};
 use crate::road::{RoadPiece, RoadSpec};
 
 impl Simulator {
-    /// `A [sin ω t_k, cos ω t_k]` of the harmonic road, evaluated directly.
-    fn exact_phase(&self, k: u64) -> [f64; 2] {
-        match self.config.road {
-            RoadSpec::Harmonic {
-                amplitude,
-                angular_frequency,
-            } => {
-                let (sin, cos) = crate::math::sin_cos(angular_frequency * self.grid_time(k));
-                [amplitude * sin, amplitude * cos]
-            }
-            _ => [0.0; 2],
-        }
-    }
-
-    /// The harmonic road phase at grid node k as the whole-step loop
-    /// carries it: exact at the last anchor node, then rotated.
-    pub(super) fn harmonic_phase(&self, k: u64) -> [f64; 2] {
-        if let Some((index, z)) = self.phase
-            && index == k
-        {
-            return z;
-        }
-        let anchor = k - k % PHASE_ANCHOR;
-        let mut z = self.exact_phase(anchor);
-        for _ in anchor..k {
-            z = self.grid_step.rotate(z);
-        }
-        z
-    }
-
     /// Commits the grid nodes `grid_index + 1 ..= last`, each by one whole
     /// step from the node before (the committed state is on node
     /// `grid_index`). Each node's state is a function of its index alone.
@@ -66,18 +37,18 @@ impl Simulator {
     /// [`super::kernel::segment`].
     fn harmonic_whole_steps<const DELAY: bool>(&mut self, last: u64) -> Result<bool> {
         let m = self.grid.delay_steps();
-        let first = self.grid_index;
-        let len = self.history.len();
-        let x0 = self.config.initial_state[X_T];
+        let first = self.trajectory.grid_index;
+        let len = self.inputs.history.len();
+        let before_start = self.inputs.before_start();
         let mut hot = HotState {
-            x: self.committed_state.into(),
-            road: HarmonicPhase(self.harmonic_phase(first)),
+            x: self.trajectory.committed_state.into(),
+            road: HarmonicPhase(self.inputs.harmonic_phase(first)),
             k: first,
             slot: ((first + 1) % len as u64) as usize,
-            rms: self.rms,
-            w: self.committed_filter.into(),
-            weighted: self.weighted,
-            holding: self.holding,
+            rms: self.observers.rms,
+            w: self.trajectory.committed_filter.into(),
+            weighted: self.observers.weighted,
+            holding: self.observers.holding,
         };
         let mut end_reason = SegmentEnd::Reached;
         while hot.k < last {
@@ -88,31 +59,39 @@ impl Simulator {
                 end = end.min(m);
             }
             let segment = Segment {
-                op: &self.grid_step,
-                history: &mut self.history,
+                op: &self.modes.grid_step,
+                history: &mut self.inputs.history,
                 end,
-                before_start: [x0, 0.0, x0, 0.0],
+                before_start,
             };
             end_reason = run_segment::<_, DELAY>(segment, &mut hot, before_history);
             if hot.k.is_multiple_of(PHASE_ANCHOR) {
-                hot.road = HarmonicPhase(self.exact_phase(hot.k));
+                hot.road = HarmonicPhase(self.inputs.exact_phase(hot.k));
             }
             if end_reason == SegmentEnd::Switch && hot.k > start {
-                self.grid_step.count(&mut hot.rms, &hot.x, hot.road.0[0]);
-                self.grid_step.count_weighted(&hot.w, &mut hot.weighted);
+                self.modes
+                    .grid_step
+                    .count(&mut hot.rms, &hot.x, hot.road.0[0]);
+                self.modes
+                    .grid_step
+                    .count_weighted(&hot.w, &mut hot.weighted);
             }
             if end_reason != SegmentEnd::Reached {
                 break;
             }
             if hot.k > start {
-                self.grid_step.count(&mut hot.rms, &hot.x, hot.road.0[0]);
-                self.grid_step.count_weighted(&hot.w, &mut hot.weighted);
+                self.modes
+                    .grid_step
+                    .count(&mut hot.rms, &hot.x, hot.road.0[0]);
+                self.modes
+                    .grid_step
+                    .count_weighted(&hot.w, &mut hot.weighted);
             }
         }
-        self.rms = hot.rms;
-        self.weighted = hot.weighted;
-        self.holding = hot.holding;
-        self.phase = Some((hot.k, hot.road.0));
+        self.observers.rms = hot.rms;
+        self.observers.weighted = hot.weighted;
+        self.observers.holding = hot.holding;
+        self.inputs.keep_node_phase(hot.k, hot.road.0);
         self.set_committed_node(first, hot.k, hot.x, hot.w);
         match end_reason {
             SegmentEnd::Diverged(x) => self
@@ -128,12 +107,12 @@ impl Simulator {
     fn set_committed_node(&mut self, first: u64, k: u64, x: [f64; 6], w: [f64; 8]) {
         if k > first {
             let time = self.grid_time(k);
-            self.grid_index = k;
-            self.committed_time = time;
-            self.committed_state = State::from(x);
-            self.committed_filter = Filter::from(w);
-            self.set_current(time, self.committed_state);
-            self.road.release_before(time);
+            self.trajectory.grid_index = k;
+            self.trajectory.committed_time = time;
+            self.trajectory.committed_state = State::from(x);
+            self.trajectory.committed_filter = Filter::from(w);
+            self.set_current(time, self.trajectory.committed_state);
+            self.inputs.road.release_before(time);
         }
     }
 
@@ -147,23 +126,20 @@ impl Simulator {
     #[inline(always)]
     pub(super) fn whole_steps_with_body<const DELAY: bool>(&mut self, last: u64) -> Result<bool> {
         let m = self.grid.delay_steps();
-        let len = self.history.len();
-        let first = self.grid_index;
+        let len = self.inputs.history.len();
+        let first = self.trajectory.grid_index;
         let mut k = first;
-        let mut x: [f64; 6] = self.committed_state.into();
-        let before_start = {
-            let x0 = self.config.initial_state[X_T];
-            [x0, 0.0, x0, 0.0]
-        };
+        let mut x: [f64; 6] = self.trajectory.committed_state.into();
+        let before_start = self.inputs.before_start();
         // Ring slot of node k + 1, which holds node k − m until overwritten.
         let mut slot = ((k + 1) % len as u64) as usize;
-        let mut rms = self.rms;
-        let mut w: [f64; 8] = self.committed_filter.into();
-        let mut weighted = self.weighted;
-        let mut holding = self.holding;
+        let mut rms = self.observers.rms;
+        let mut w: [f64; 8] = self.trajectory.committed_filter.into();
+        let mut weighted = self.observers.weighted;
+        let mut holding = self.observers.holding;
         // A local copy: the compiler then knows that the history writes do
         // not change it.
-        let op = self.grid_step.clone();
+        let op = self.modes.grid_step.clone();
         // The piece at the node just reached, looked up for its road
         // displacement and used again for the step that leaves it.
         let mut piece_at_node = None;
@@ -172,7 +148,7 @@ impl Simulator {
                 break Ok(false);
             }
             let (t, to) = (self.grid_time(k), self.grid_time(k + 1));
-            let covering = self.piece_over(t, to, piece_at_node.take());
+            let covering = self.inputs.piece_over(t, to, piece_at_node.take());
             if let Some(
                 piece @ RoadPiece::Linear {
                     start,
@@ -210,7 +186,7 @@ impl Simulator {
                 };
                 let segment = Segment {
                     op: &op,
-                    history: &mut self.history,
+                    history: &mut self.inputs.history,
                     end: stop,
                     before_start,
                 };
@@ -239,14 +215,14 @@ impl Simulator {
                 let piece_now = if k == inside {
                     piece
                 } else {
-                    self.road.piece(now)
+                    self.inputs.road.piece(now)
                 };
                 op.count(&mut rms, &x, piece_now.value(now));
                 op.count_weighted(&w, &mut weighted);
                 if k != inside && self.coincide(end, now) {
                     // The node is a road breakpoint: x_g has a kink there,
                     // so the RMS run of nodes closes at it.
-                    let after = self.piece_from(now);
+                    let after = self.inputs.piece_from(now);
                     self.close_run_at_node(
                         k,
                         now,
@@ -258,7 +234,7 @@ impl Simulator {
                         &after,
                     );
                 }
-                self.road.release_before(self.grid_time(k - 1));
+                self.inputs.road.release_before(self.grid_time(k - 1));
                 piece_at_node = Some(piece_now);
                 continue;
             }
@@ -285,9 +261,9 @@ impl Simulator {
                 Err(e) => break Err(e),
             }
         };
-        self.rms = rms;
-        self.weighted = weighted;
-        self.holding = holding;
+        self.observers.rms = rms;
+        self.observers.weighted = weighted;
+        self.observers.holding = holding;
         self.set_committed_node(first, k, x, w);
         result
     }
@@ -311,7 +287,7 @@ impl Simulator {
     ) -> Result<([f64; 6], [f64; 8], RoadPiece)> {
         let node = State::from(x);
         let node_filter = Filter::from(w);
-        let piece_at_start = self.piece_from(t);
+        let piece_at_start = self.inputs.piece_from(t);
         self.close_run_at_node(
             k,
             t,
@@ -322,19 +298,19 @@ impl Simulator {
             &piece_at_start,
             &piece_at_start,
         );
-        let anchor = self.integral.anchor;
+        let anchor = self.observers.integral.anchor;
         let mut step_holding = *holding;
         let (x_end, w_end, step_integral, at_end, last_piece) =
             self.integrate_split_step(k, t, node, node_filter, anchor, to, &mut step_holding);
         let x_next: [f64; 6] = x_end.into();
         if (k + 1).is_multiple_of(PHASE_ANCHOR) {
-            self.road.release_before(t);
+            self.inputs.road.release_before(t);
         }
-        let piece_next = self.road.piece(to);
+        let piece_next = self.inputs.road.piece(to);
         if !within_bounds(&x_next) {
             self.check_divergence(to, &State::from(x_next))?;
         }
-        self.history[slot] = [x_next[X_T], x_next[V_T]];
+        self.inputs.history[slot] = [x_next[X_T], x_next[V_T]];
         if self.config.metrics.road_holding() {
             *holding = step_holding;
             holding.add_node(&x_next);
@@ -363,18 +339,5 @@ impl Simulator {
             k
         };
         crate::monotone::last_index_where(k, last, guess, inside)
-    }
-
-    /// The road piece used over the whole step `[t, to]` if no breakpoint
-    /// splits it (the same choice as [`Self::integrate_within_step`]).
-    /// `at_t`: `self.road.piece(t)` if already known.
-    #[inline(always)]
-    fn piece_over(&mut self, t: f64, to: f64, at_t: Option<RoadPiece>) -> Option<RoadPiece> {
-        let step = self.grid.step;
-        let piece = match at_t {
-            Some(piece) => super::pieces::piece_after(&mut self.road, piece, t, step),
-            None => super::pieces::piece_from(&mut self.road, t, step),
-        };
-        (!super::pieces::ends_before(&piece, to, step)).then_some(piece)
     }
 }

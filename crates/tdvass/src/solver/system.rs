@@ -118,3 +118,19 @@ pub(super) fn with_filter_matrix(
         .copy_from(&coupling.wk.state_matrix);
     big
 }
+
+/// The rotation of the harmonic road generator's phase
+/// `A [sin ω t, cos ω t]` over one step h at angular frequency ω:
+/// `z' = r_1 z + r_2 swap(z)` with `r_1 = [cos ω h, cos ω h]`,
+/// `r_2 = [sin ω h, −sin ω h]` ([`rotate`]).
+pub(super) fn phase_rotation(angular_frequency: f64, h: f64) -> [[f64; 2]; 2] {
+    let (sin, cos) = crate::math::sin_cos(angular_frequency * h);
+    [[cos, cos], [sin, -sin]]
+}
+
+/// The phase one step after `z` ([`phase_rotation`]).
+#[inline(always)]
+pub(super) fn rotate(rotation: &[[f64; 2]; 2], z: [f64; 2]) -> [f64; 2] {
+    let [c, s] = rotation;
+    [c[0] * z[0] + s[0] * z[1], c[1] * z[1] + s[1] * z[0]]
+}

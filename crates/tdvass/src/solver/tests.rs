@@ -6,9 +6,9 @@ fn bits(sim: &mut Simulator) -> Vec<u64> {
     let o = sim.outputs();
     let mut v = o.core_values().to_vec();
     v.push(o.time);
-    v.extend(sim.committed_state.iter().copied());
-    v.extend(sim.rms.sums_of_squares);
-    v.push(sim.rms.samples as f64);
+    v.extend(sim.trajectory.committed_state.iter().copied());
+    v.extend(sim.observers.rms.sums_of_squares);
+    v.push(sim.observers.rms.samples as f64);
     v.into_iter().map(f64::to_bits).collect()
 }
 
@@ -133,20 +133,24 @@ fn whole_steps_match_the_general_step_closely() {
         let mut general = Simulator::new(cfg).unwrap();
         for k in 0..3000u64 {
             let to = general.grid_time(k + 1);
-            let from = (general.committed_time, general.committed_state);
+            let from = (
+                general.trajectory.committed_time,
+                general.trajectory.committed_state,
+            );
             let x = general.integrate_within_step(k, from.0, from.1, to);
-            let w_from = general.committed_filter;
+            let w_from = general.trajectory.committed_filter;
             let w = general.filter_within_step(k, from, &w_from, to);
-            let anchor = general.integral.anchor;
-            let mut holding = general.holding;
+            let anchor = general.observers.integral.anchor;
+            let mut holding = general.observers.holding;
             let (step_integral, at_end, piece) =
                 general.integral_within_step(k, from, &w_from, anchor, to, (&x, &w), &mut holding);
-            general.holding = holding;
+            general.observers.holding = holding;
             general.commit_node(k + 1, (to, x, w), step_integral, (at_end, piece));
         }
-        fast.advance_to(general.committed_time).unwrap();
-        let scale = general.committed_state.amax();
-        let difference = (fast.committed_state - general.committed_state).amax();
+        fast.advance_to(general.trajectory.committed_time).unwrap();
+        let scale = general.trajectory.committed_state.amax();
+        let difference =
+            (fast.trajectory.committed_state - general.trajectory.committed_state).amax();
         assert!(difference < 1e-12 * scale, "{difference:e} of {scale:e}");
         let (a, b) = (fast.rms(), general.rms());
         assert!((a.body_acceleration - b.body_acceleration).abs() < 1e-12 * b.body_acceleration);
@@ -158,9 +162,10 @@ fn whole_steps_match_the_general_step_closely() {
         );
         assert!((u - v).abs() < 1e-12 * v, "{u} {v}");
         if comfort {
-            let filter_scale = general.committed_filter.amax();
+            let filter_scale = general.trajectory.committed_filter.amax();
             assert!(filter_scale > 0.0);
-            let difference = (fast.committed_filter - general.committed_filter).amax();
+            let difference =
+                (fast.trajectory.committed_filter - general.trajectory.committed_filter).amax();
             assert!(difference < 1e-12 * filter_scale, "{difference:e}");
             let (a, b) = (a.comfort.unwrap(), b.comfort.unwrap());
             let (u, v) = (
@@ -308,7 +313,7 @@ fn time_averages_alone_agree_with_the_outputs_on_piecewise_linear_roads() {
             for i in 0..600 {
                 t += steps[i % steps.len()];
                 sim.advance_to(t).unwrap();
-                inside += usize::from(!sim.snaps(t, sim.committed_time));
+                inside += usize::from(!sim.snaps(t, sim.trajectory.committed_time));
                 let averages = sim.time_averages();
                 let o = sim.outputs();
                 assert_eq!(
@@ -336,10 +341,10 @@ fn a_road_input_is_no_breakpoint_at_every_node() {
     assert!(!sim.coincide(f64::INFINITY, 10.0 * h));
     assert!(sim.coincide(f64::INFINITY, f64::INFINITY));
     sim.advance_to(10.0 * h).unwrap();
-    assert_eq!(sim.grid_index, 10);
+    assert_eq!(sim.trajectory.grid_index, 10);
     assert!(
-        sim.rms.samples >= 10,
+        sim.observers.rms.samples >= 10,
         "{} nodes in the open run",
-        sim.rms.samples
+        sim.observers.rms.samples
     );
 }

@@ -186,23 +186,23 @@ impl Simulator {
         if self.grid.delay_inside_step() {
             let (h, tau) = (self.grid.step, self.grid.inner_delay());
             if offset < tau {
-                self.delayed_input(k, h - tau + offset)
+                self.inputs.delayed_input(k, h - tau + offset)
             } else {
                 let (_, [end_x, end_v]) = self.inner_delay_next_node(k, from.0, from.1);
-                let [node_x, node_v] = self.node_tire(k);
+                let [node_x, node_v] = self.inputs.node_tire(k);
                 hermite([node_x, node_v, end_x, end_v], h, offset - tau)
             }
         } else if self.grid.resolves_delay() {
-            self.delayed_input(k, offset)
+            self.inputs.delayed_input(k, offset)
         } else {
             let tau = if self.config.variant.has_control() {
                 self.config.params.tau
             } else {
                 0.0
             };
-            let piece = self.piece_from(t);
+            let piece = self.inputs.piece_from(t);
             let xg = self.forcing(&piece).value(t);
-            let dx = self.solver_matrix * x + self.plant.e * xg;
+            let dx = self.modes.solver_matrix * x + self.plant.e * xg;
             Vector4::new(x[X_T] - tau * x[V_T], dx[X_T] - tau * dx[V_T], 0.0, 0.0)
         }
     }
@@ -220,7 +220,7 @@ impl Simulator {
         piece: &RoadPiece,
     ) -> Squares {
         let (y, rate) = self.performance_and_rates_at(k, t, x, from, piece);
-        let weighted = match &self.coupling {
+        let weighted = match &self.modes.coupling {
             Some(coupling) => [coupling.weighted(w), coupling.weighted_rate(w, y[0])],
             None => [0.0; 2],
         };
@@ -238,12 +238,13 @@ impl Simulator {
         piece: &RoadPiece,
     ) -> ([f64; 3], [f64; 3]) {
         let p = self.delayed_vector_at(k, t, from, x);
-        let [road, road_rate] = self.road_at(piece, t);
-        let [drive, drive_rate] = self.road_at(&self.forcing(piece), t);
+        let [road, road_rate] = self.inputs.road_at(piece, t);
+        let [drive, drive_rate] = self.inputs.road_at(&self.forcing(piece), t);
         let b = self.solver_input_column();
-        let dx = self.solver_matrix * x + b * p[0] + self.plant.e * drive;
-        let acceleration_rate =
-            (self.solver_matrix.row(V_S) * dx)[0] + b[V_S] * p[1] + self.plant.e[V_S] * drive_rate;
+        let dx = self.modes.solver_matrix * x + b * p[0] + self.plant.e * drive;
+        let acceleration_rate = (self.modes.solver_matrix.row(V_S) * dx)[0]
+            + b[V_S] * p[1]
+            + self.plant.e[V_S] * drive_rate;
         let y = [
             self.plant.body_acceleration(x),
             x[X_S] - x[X_T],
@@ -258,7 +259,7 @@ impl Simulator {
     pub(super) fn margin_at(&self, t: f64, x: &State, piece: &RoadPiece) -> [f64; 2] {
         let x: [f64; 6] = (*x).into();
         margin(
-            self.grid_step.contact.limit,
+            self.modes.grid_step.contact.limit,
             &x,
             piece.value(t),
             piece.slope(t),
@@ -268,27 +269,9 @@ impl Simulator {
     /// [`Self::margin_at`], the harmonic road's `sin` and `cos` from the
     /// kept `sin_cos` (the same bits).
     pub(super) fn margin_kept(&mut self, t: f64, x: &State, piece: &RoadPiece) -> [f64; 2] {
-        let [road, road_rate] = self.road_at(piece, t);
+        let [road, road_rate] = self.inputs.road_at(piece, t);
         let x: [f64; 6] = (*x).into();
-        margin(self.grid_step.contact.limit, &x, road, road_rate)
-    }
-
-    /// `[x_g, dx_g/dt]` of `piece` at `t`: [`RoadPiece::value`] and
-    /// [`RoadPiece::slope`] to the bit, the harmonic road's `sin` and `cos`
-    /// from the kept `sin_cos` (one evaluation serves both, and the other
-    /// users of the same instant).
-    #[inline]
-    pub(super) fn road_at(&mut self, piece: &RoadPiece, t: f64) -> [f64; 2] {
-        match *piece {
-            RoadPiece::Harmonic {
-                amplitude,
-                angular_frequency,
-            } => {
-                let (sin, cos) = self.phases.sin_cos(angular_frequency * t);
-                [amplitude * sin, amplitude * angular_frequency * cos]
-            }
-            RoadPiece::Linear { .. } => [piece.value(t), piece.slope(t)],
-        }
+        margin(self.modes.grid_step.contact.limit, &x, road, road_rate)
     }
 
     /// `∫ f` over `[from.0, to]` inside grid step k (state `to_state` at
@@ -332,7 +315,7 @@ impl Simulator {
         let w_to = filter.map(|(_, w)| *w);
         let (mut start, mut at_start, mut x_start) = (from.0, at_from, from.1);
         if to <= start {
-            let piece = self.road.piece(to);
+            let piece = self.inputs.road.piece(to);
             let at_to = self.squares_with(k, to, x_to, w_to.as_ref(), from, &piece);
             return (
                 corrected_trapezoid(to - start, &at_start, &at_to),
@@ -342,7 +325,7 @@ impl Simulator {
         }
         let mut total = [0.0; INTEGRALS];
         loop {
-            let super::pieces::Stretch { piece, end, .. } = self.stretch(start, to, None);
+            let super::pieces::Stretch { piece, end, .. } = self.inputs.stretch(start, to, None);
             let (x_end, w_end) = if end == to {
                 (*x_to, w_to)
             } else {
@@ -372,7 +355,7 @@ impl Simulator {
             if end == to {
                 return (total, at_end, piece);
             }
-            let next = self.piece_from(end);
+            let next = self.inputs.piece_from(end);
             at_start = self.squares_with(k, end, &x_end, w_end.as_ref(), from, &next);
             (start, x_start) = (end, x_end);
         }
@@ -429,7 +412,7 @@ impl Simulator {
         let mut total = [0.0; INTEGRALS];
         let (mut start, mut x_start, mut w_start, mut at) = (t, x, w, at_start);
         loop {
-            let super::pieces::Stretch { piece, end, .. } = self.stretch(start, to, None);
+            let super::pieces::Stretch { piece, end, .. } = self.inputs.stretch(start, to, None);
             let x_end = self.integrate_within_step(k, start, x_start, end);
             let w_end = self.filter_within_step(k, (start, x_start), &w_start, end);
             let at_end = self.squares_at(k, end, &x_end, &w_end, (start, x_start), &piece);
@@ -451,7 +434,7 @@ impl Simulator {
             if end == to {
                 return (x_end, w_end, total, at_end, piece);
             }
-            let next = self.piece_from(end);
+            let next = self.inputs.piece_from(end);
             at = self.across_breakpoint(at_end, end, &x_end, &piece, &next);
             (start, x_start, w_start) = (end, x_end, w_end);
         }
@@ -483,16 +466,27 @@ impl Simulator {
 
     /// `∫_{t_0} f` up to the committed point (the end of the open run).
     fn integral_to_committed(&mut self) -> ([f64; INTEGRALS], Squares) {
-        if self.rms.samples == 0 {
-            return (self.integral.closed, self.integral.anchor);
+        if self.observers.rms.samples == 0 {
+            return (
+                self.observers.integral.closed,
+                self.observers.integral.anchor,
+            );
         }
-        let (k, t, x) = (self.grid_index, self.committed_time, self.committed_state);
-        let w = self.committed_filter;
-        let piece = self.piece_from(t);
+        let (k, t, x) = (
+            self.trajectory.grid_index,
+            self.trajectory.committed_time,
+            self.trajectory.committed_state,
+        );
+        let w = self.trajectory.committed_filter;
+        let piece = self.inputs.piece_from(t);
         let at_node = self.squares_at(k, t, &x, &w, (t, x), &piece);
         (
-            self.integral
-                .through_run(self.grid.step, &self.rms, &self.weighted, &at_node),
+            self.observers.integral.through_run(
+                self.grid.step,
+                &self.observers.rms,
+                &self.observers.weighted,
+                &at_node,
+            ),
             at_node,
         )
     }
@@ -504,12 +498,12 @@ impl Simulator {
         self.settle();
         let (base, at_committed) = self.integral_to_committed();
         let (tc, xc, wc) = (
-            self.committed_time,
-            self.committed_state,
-            self.committed_filter,
+            self.trajectory.committed_time,
+            self.trajectory.committed_state,
+            self.trajectory.committed_filter,
         );
-        let (t, x) = (self.current_time, self.current_state);
-        let mut holding = self.holding;
+        let (t, x) = (self.trajectory.current_time, self.trajectory.current_state);
+        let mut holding = self.observers.holding;
         if t == tc {
             return Accumulated {
                 integral: base,
@@ -522,7 +516,7 @@ impl Simulator {
             // `δ f + δ²/2 f'` (the next term, δ³/6 f'', is below 1e-30 of
             // the integral).
             let delta = t - tc;
-            let piece = self.piece_from(tc);
+            let piece = self.inputs.piece_from(tc);
             if self.config.metrics.road_holding()
                 && !self.config.tire_contact.is_unilateral()
                 && self.margin_at(tc, &xc, &piece)[0] < 0.0
@@ -537,7 +531,7 @@ impl Simulator {
                 filter: self.filter_near_committed(delta),
             };
         }
-        let k = self.grid_index;
+        let k = self.trajectory.grid_index;
         let w = self.filter_within_step(k, (tc, xc), &wc, t);
         let (stretch, _, _) =
             self.integral_within_step(k, (tc, xc), &wc, at_committed, t, (&x, &w), &mut holding);
@@ -554,25 +548,35 @@ impl Simulator {
     /// filter's, which these three do not need, and neither the
     /// road-holding accumulators nor the filter state are carried to t.
     pub(super) fn rms_integral_now(&mut self) -> [f64; 3] {
-        let (t, tc) = (self.current_time, self.committed_time);
+        let (t, tc) = (self.trajectory.current_time, self.trajectory.committed_time);
         let inside = t != tc && !self.snaps(t, tc);
         if inside {
             self.settle();
         }
-        let (base, at) = if self.rms.samples == 0 {
-            (self.integral.closed, self.integral.anchor)
+        let (base, at) = if self.observers.rms.samples == 0 {
+            (
+                self.observers.integral.closed,
+                self.observers.integral.anchor,
+            )
         } else {
-            let (k, x) = (self.grid_index, self.committed_state);
-            let piece = self.piece_from(tc);
+            let (k, x) = (self.trajectory.grid_index, self.trajectory.committed_state);
+            let piece = self.inputs.piece_from(tc);
             let at_node = self.squares_with(k, tc, &x, None, (tc, x), &piece);
-            let base =
-                self.integral
-                    .through_run(self.grid.step, &self.rms, &self.weighted, &at_node);
+            let base = self.observers.integral.through_run(
+                self.grid.step,
+                &self.observers.rms,
+                &self.observers.weighted,
+                &at_node,
+            );
             (base, at_node)
         };
         if inside {
             // As in `accumulated_now`: the stretch from the committed point.
-            let (k, xc, x) = (self.grid_index, self.committed_state, self.current_state);
+            let (k, xc, x) = (
+                self.trajectory.grid_index,
+                self.trajectory.committed_state,
+                self.trajectory.current_state,
+            );
             let (stretch, _, _) = self.stretch_integral(k, (tc, xc), None, at, (t, &x), None);
             return std::array::from_fn(|i| base[i] + stretch[i]);
         }
@@ -591,7 +595,10 @@ impl Simulator {
     /// The running RMS values at the current time.
     pub(super) fn rms_now(&mut self) -> RmsValues {
         let integral = self.rms_integral_now();
-        rms_from_integral(&integral, self.current_time - self.config.start_time)
+        rms_from_integral(
+            &integral,
+            self.trajectory.current_time - self.config.start_time,
+        )
     }
 
     /// Closes the open run at node k (time t, state x, filter state w;
@@ -616,17 +623,18 @@ impl Simulator {
             None
         };
         if let (true, Some(at_left)) = (run.samples > 0, at_left) {
-            self.integral.closed =
-                self.integral
+            self.observers.integral.closed =
+                self.observers
+                    .integral
                     .through_run(self.grid.step, run, weighted, &at_left);
         }
         let at_right = match at_left {
             Some(at) if left == right => at,
             _ => self.squares_at(k, t, x, w, (t, *x), right),
         };
-        self.integral.anchor_index = k;
-        self.integral.anchor_time = t;
-        self.integral.anchor = at_right;
+        self.observers.integral.anchor_index = k;
+        self.observers.integral.anchor_time = t;
+        self.observers.integral.anchor = at_right;
         *run = RunningRms::default();
         *weighted = [0.0; 2];
     }
@@ -644,18 +652,18 @@ impl Simulator {
         step_integral: [f64; INTEGRALS],
         arrival: (Squares, RoadPiece),
     ) {
-        self.integral.closed = add(self.integral.closed, step_integral);
-        let piece = self.piece_from(t);
+        self.observers.integral.closed = add(self.observers.integral.closed, step_integral);
+        let piece = self.inputs.piece_from(t);
         let at_node = if piece == arrival.1 {
             arrival.0
         } else {
             self.squares_at(k, t, x, w, (t, *x), &piece)
         };
-        self.integral.anchor_index = k;
-        self.integral.anchor_time = t;
-        self.integral.anchor = at_node;
-        self.rms = RunningRms::default();
-        self.weighted = [0.0; 2];
+        self.observers.integral.anchor_index = k;
+        self.observers.integral.anchor_time = t;
+        self.observers.integral.anchor = at_node;
+        self.observers.rms = RunningRms::default();
+        self.observers.weighted = [0.0; 2];
     }
 
     /// Before the external road input changes at the current time: closes
@@ -665,18 +673,18 @@ impl Simulator {
     /// the committed point (its filter state and road-holding accumulators
     /// with it).
     pub(super) fn close_run_for_input(&mut self) -> f64 {
-        let (tc, t) = (self.committed_time, self.current_time);
+        let (tc, t) = (self.trajectory.committed_time, self.trajectory.current_time);
         if self.snaps(t, tc) {
             let (closed, _) = self.integral_to_committed();
-            self.integral.closed = closed;
-            self.rms = RunningRms::default();
-            self.weighted = [0.0; 2];
-            self.integral.anchor_index = self.grid_index;
-            self.integral.anchor_time = self.committed_time;
+            self.observers.integral.closed = closed;
+            self.observers.rms = RunningRms::default();
+            self.observers.weighted = [0.0; 2];
+            self.observers.integral.anchor_index = self.trajectory.grid_index;
+            self.observers.integral.anchor_time = self.trajectory.committed_time;
         } else {
             self.close_run_here();
         }
-        self.committed_time
+        self.trajectory.committed_time
     }
 
     /// Closes the run at the current time, which becomes the committed
@@ -685,33 +693,39 @@ impl Simulator {
     /// contact, `solver::contact`).
     pub(super) fn close_run_here(&mut self) {
         self.settle();
-        if self.current_time == self.committed_time {
+        if self.trajectory.current_time == self.trajectory.committed_time {
             let (closed, _) = self.integral_to_committed();
-            self.integral.closed = closed;
+            self.observers.integral.closed = closed;
         } else {
             let now = self.accumulated_now();
-            self.integral.closed = now.integral;
-            self.holding = now.holding;
+            self.observers.integral.closed = now.integral;
+            self.observers.holding = now.holding;
             if self.config.metrics.road_holding() {
-                self.holding.add_node(&self.current_state.into());
+                self.observers
+                    .holding
+                    .add_node(&self.trajectory.current_state.into());
             }
-            self.committed_filter = now.filter;
-            self.committed_time = self.current_time;
-            self.committed_state = self.current_state;
+            self.trajectory.committed_filter = now.filter;
+            self.trajectory.committed_time = self.trajectory.current_time;
+            self.trajectory.committed_state = self.trajectory.current_state;
         }
-        self.rms = RunningRms::default();
-        self.weighted = [0.0; 2];
-        self.integral.anchor_index = self.grid_index;
-        self.integral.anchor_time = self.committed_time;
+        self.observers.rms = RunningRms::default();
+        self.observers.weighted = [0.0; 2];
+        self.observers.integral.anchor_index = self.trajectory.grid_index;
+        self.observers.integral.anchor_time = self.trajectory.committed_time;
     }
 
     /// After the external road input changed at the anchor: the anchor's
     /// squares from the right, with the new input.
     pub(super) fn reanchor_after_input(&mut self) {
-        let (k, t, x) = (self.grid_index, self.committed_time, self.committed_state);
-        let w = self.committed_filter;
-        let piece = self.piece_from(t);
-        self.integral.anchor = self.squares_at(k, t, &x, &w, (t, x), &piece);
+        let (k, t, x) = (
+            self.trajectory.grid_index,
+            self.trajectory.committed_time,
+            self.trajectory.committed_state,
+        );
+        let w = self.trajectory.committed_filter;
+        let piece = self.inputs.piece_from(t);
+        self.observers.integral.anchor = self.squares_at(k, t, &x, &w, (t, x), &piece);
     }
 
     /// The state at `committed_time + delta` for a `delta` within the snap
@@ -725,13 +739,17 @@ impl Simulator {
     /// `delta`) the interpolant after the node is used; the delayed input
     /// is C¹ there, so that costs `delta² |Δu''| / 2`.
     pub(super) fn state_near_committed(&mut self, delta: f64) -> State {
-        let (k, t, x) = (self.grid_index, self.committed_time, self.committed_state);
+        let (k, t, x) = (
+            self.trajectory.grid_index,
+            self.trajectory.committed_time,
+            self.trajectory.committed_state,
+        );
         if delta == 0.0 {
             return x;
         }
-        let order = series_order(self.solver_matrix_norm * delta.abs());
+        let order = series_order(self.modes.solver_matrix_norm * delta.abs());
         let p = self.delayed_vector_at(k, t, (t, x), &x);
-        let road_piece = self.piece_from(t + delta);
+        let road_piece = self.inputs.piece_from(t + delta);
         let piece = self.forcing(&road_piece);
         let road = if order == 1 {
             [piece.value(t), 0.0, 0.0, 0.0]
@@ -739,7 +757,7 @@ impl Simulator {
             piece.derivatives(t)
         };
         let b = self.solver_input_column();
-        let (m, e) = (self.solver_matrix, self.plant.e);
+        let (m, e) = (self.modes.solver_matrix, self.plant.e);
         let mut derivative = m * x + b * p[0] + e * road[0];
         let mut result = x + derivative * delta;
         let mut factor = delta;
@@ -794,7 +812,7 @@ pub(super) mod tests {
             let b = probe.grid_time(k + 1).min(t_end);
             let mut start = a;
             while start < b {
-                let piece = breaks.piece_from(start);
+                let piece = breaks.inputs.piece_from(start);
                 let end = if piece.end() < b && !breaks.coincide(piece.end(), b) {
                     piece.end()
                 } else {
@@ -908,7 +926,7 @@ pub(super) mod tests {
         sim.advance_to(0.5).unwrap();
         let h = sim.grid.step;
         // Across a grid node, from inside the step before to inside the next.
-        let node = sim.grid_time(sim.grid_index + 1);
+        let node = sim.grid_time(sim.trajectory.grid_index + 1);
         let mut previous = None;
         for offset in [-0.3, -1e-6, 0.0, 1e-6, 0.3] {
             sim.advance_to(node + offset * h).unwrap();
@@ -956,8 +974,11 @@ pub(super) mod tests {
         for (name, cfg) in configs() {
             let mut sim = Simulator::new(cfg).unwrap();
             sim.advance_to(0.7).unwrap();
-            let k = sim.grid_index;
-            let (t, x) = (sim.committed_time, sim.committed_state);
+            let k = sim.trajectory.grid_index;
+            let (t, x) = (
+                sim.trajectory.committed_time,
+                sim.trajectory.committed_state,
+            );
             assert_eq!(t, sim.grid_time(k));
             let h = sim.grid.step;
             for delta in [1e-13, 3e-11, h / 1024.0] {
@@ -988,7 +1009,7 @@ pub(super) mod tests {
                     exact.advance_to(t_exact).unwrap();
                     drifting.advance_to(t).unwrap();
                     assert_eq!(
-                        exact.grid_index, drifting.grid_index,
+                        exact.trajectory.grid_index, drifting.trajectory.grid_index,
                         "{name}, step {step}, t = {t}"
                     );
                     let (a, b) = (exact.rms(), drifting.rms());

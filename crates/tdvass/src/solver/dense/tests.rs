@@ -273,12 +273,12 @@ fn in_step_points_leave_the_nodes_unchanged() {
         stopping.advance_to(end).unwrap();
         let bits = |sim: &mut Simulator| {
             let mut v: Vec<f64> = sim.outputs().core_values().to_vec();
-            v.extend(sim.committed_state.iter());
-            v.push(sim.committed_time);
-            v.push(sim.grid_index as f64);
+            v.extend(sim.trajectory.committed_state.iter());
+            v.push(sim.trajectory.committed_time);
+            v.push(sim.trajectory.grid_index as f64);
             v.extend(sim.state().iter());
-            v.extend(sim.rms.sums_of_squares);
-            v.extend(sim.committed_filter.iter());
+            v.extend(sim.observers.rms.sums_of_squares);
+            v.extend(sim.trajectory.committed_filter.iter());
             v.into_iter().map(f64::to_bits).collect::<Vec<_>>()
         };
         assert_eq!(bits(&mut straight), bits(&mut stopping), "{label}");
