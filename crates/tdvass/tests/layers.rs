@@ -27,9 +27,10 @@ const FOLDERS: &[&str] = &["model", "road", "analysis"];
 /// The files of `crates/tdvass/src/solver`, from the ground up.
 const SOLVER_LAYERS: &[(&str, &[&str])] = &[
     ("linear algebra", &["expm", "linalg"]),
-    ("system", &["system", "grid", "holding"]),
+    ("system", &["system", "grid", "holding", "config"]),
     ("step maps and inputs", &["operators", "pieces", "inputs"]),
     ("grid and dense steps", &["grid_step", "dense"]),
+    ("modes", &["modes"]),
     (
         "driver",
         &[

@@ -95,8 +95,7 @@ use crate::model::{Plant, V_H, V_S, V_T, X_H, X_S, X_T};
 use crate::road::{ISO_NODE_INTERVAL, RoadSpec};
 use nalgebra::{Matrix6, Schur};
 
-/// Default relative tolerance of every reported metric.
-pub const DEFAULT_TOLERANCE: f64 = 1e-6;
+pub use super::config::DEFAULT_TOLERANCE;
 /// Loosest tolerance accepted: beyond it the numbers would mean little.
 pub const MAX_TOLERANCE: f64 = 0.1;
 /// Tightest tolerance accepted: below it rounding, not the step, sets the

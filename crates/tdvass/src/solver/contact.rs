@@ -46,12 +46,10 @@
 //! in the mode at the step's start. Both are within the tolerance's step
 //! choice, which probes the unilateral run itself.
 
-use super::operators::StepOperator;
 use super::{Simulator, holding};
 use crate::error::{Error, Result};
 use crate::model::{State, X_T};
-use crate::road::{RoadPiece, RoadSpec};
-use nalgebra::Matrix6;
+use crate::road::RoadPiece;
 
 /// The accuracy to which a switch time is located (s).
 pub const LOCATION_TOLERANCE: f64 = 1e-13;
@@ -75,15 +73,6 @@ pub struct LiftOff {
     pub tire_deflection: f64,
     /// W/k_t (m): the TDD at which the tire load reaches 0.
     pub limit: f64,
-}
-
-/// The operators of the mode that is not in force (see the module docs).
-#[derive(Debug, Clone)]
-pub(super) struct ModeOperators {
-    pub(super) solver_matrix: Matrix6<f64>,
-    pub(super) solver_matrix_norm: f64,
-    pub(super) full_step: StepOperator,
-    pub(super) dense: Option<Box<super::dense::DenseOutput>>,
 }
 
 /// Lift-offs since the front-end last took them.
@@ -134,62 +123,12 @@ impl Simulator {
         }
     }
 
-    /// The flight mode's operators for the contact plant matrix `contact`
-    /// (the solver's, with any folded feedback).
-    pub(super) fn flight_operators(&self, contact: &Matrix6<f64>) -> ModeOperators {
-        let e = self.plant.e;
-        let mut a = *contact;
-        for row in 0..6 {
-            a[(row, X_T)] += e[row];
-        }
-        let omega = match self.config.road {
-            RoadSpec::Harmonic {
-                angular_frequency, ..
-            } => angular_frequency,
-            _ => 0.0,
-        };
-        let b = self.solver_input_column();
-        ModeOperators {
-            solver_matrix_norm: super::linalg::infinity_norm(&a),
-            full_step: StepOperator::new(
-                &a,
-                &b,
-                &e,
-                omega,
-                self.grid.step,
-                self.modes.coupling.as_ref(),
-            ),
-            solver_matrix: a,
-            dense: None,
-        }
-    }
-
-    /// Swaps the operators in force with those of the other mode. Those
-    /// of flight are made at the first lift-off: until then (`other_mode`
-    /// empty) the contact operators are in force.
-    fn swap_mode_operators(&mut self) {
-        if self.modes.other_mode.is_none() {
-            let flight = self.flight_operators(&self.modes.solver_matrix);
-            self.modes.other_mode = Some(Box::new(flight));
-        }
-        let Some(other) = self.modes.other_mode.as_mut() else {
-            return;
-        };
-        std::mem::swap(&mut self.modes.solver_matrix, &mut other.solver_matrix);
-        std::mem::swap(
-            &mut self.modes.solver_matrix_norm,
-            &mut other.solver_matrix_norm,
-        );
-        std::mem::swap(&mut self.modes.full_step, &mut other.full_step);
-        std::mem::swap(&mut self.modes.dense, &mut other.dense);
-    }
-
     /// Puts the operators of the mode the holding state says, the contact
     /// operators being in force (after a restore or a rebuild of them).
     pub(super) fn enter_recorded_mode(&mut self) {
         self.modes.other_mode = None;
         if self.in_flight() {
-            self.swap_mode_operators();
+            self.modes.swap(&self.plant, self.grid.step);
         }
     }
 
@@ -400,7 +339,7 @@ impl Simulator {
                 self.observers.lift_off_log.dropped += 1;
             }
         }
-        self.swap_mode_operators();
+        self.modes.swap(&self.plant, self.grid.step);
         self.reanchor_after_input();
         Ok(true)
     }

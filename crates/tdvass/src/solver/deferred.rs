@@ -168,7 +168,7 @@ impl Simulator {
         }
         let road_piece = self.inputs.piece_from(t + delta);
         let road = self.forcing(&road_piece).derivative_bounds(t);
-        let (b, e) = (self.solver_input_column(), self.plant.e);
+        let (b, e) = (self.modes.input_column, self.plant.e);
         let (b_max, e_max) = (b.amax(), e.amax());
         let mut previous = x.amax();
         let mut bounds = [0.0; 6];
@@ -247,7 +247,7 @@ mod tests {
         cases.push((
             "TDVASS unilateral tire, wheel starting 5 cm up",
             SimulationConfig {
-                tire_contact: crate::solver::TireContact::Unilateral,
+                tire_contact: crate::model::TireContact::Unilateral,
                 initial_state: State::new(0.0, 0.0, 0.0, 0.0, 0.05, 0.0),
                 ..SimulationConfig::default()
             },

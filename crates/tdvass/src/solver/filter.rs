@@ -133,7 +133,7 @@ impl Simulator {
         let road_piece = self.inputs.piece_from(t + delta);
         let piece = self.forcing(&road_piece);
         let road = piece.derivatives(t);
-        let b = self.solver_input_column();
+        let b = self.modes.input_column;
         let (m, e) = (self.modes.solver_matrix, self.plant.e);
         let mut out = [x; 4];
         for j in 1..4 {

@@ -62,6 +62,7 @@
 //! the configuration, the `Simulator` and its general step.
 
 pub mod accuracy;
+mod config;
 mod contact;
 mod deferred;
 mod dense;
@@ -73,6 +74,7 @@ mod holding;
 mod inputs;
 mod kernel;
 mod linalg;
+mod modes;
 mod operators;
 mod outputs;
 mod persist;
@@ -83,25 +85,25 @@ mod time_average;
 
 use crate::error::{Error, Result};
 use crate::metrics::{RunningRms, Weights};
-use crate::model::{Params, Plant, State, TireContact, V_T, Variant, X_T};
-use crate::road::{Road, RoadPiece, RoadSpec};
+use crate::model::{Params, Plant, State, V_T, Variant, X_T};
+use crate::road::{Road, RoadPiece};
 pub use grid::{DelayGrid, DelayRegime, MAX_HISTORY_NODES, MIN_RESOLVED_DELAY};
-use grid_step::{FilterGridStep, GridStep};
 use holding::Holding;
 use inputs::Inputs;
-use linalg::{hermite, hermite_matrix, infinity_norm};
-use nalgebra::{Matrix2, Matrix6, SMatrix, Vector2, Vector4};
-use operators::StepOperator;
+use linalg::{hermite, hermite_matrix};
+use modes::{Modes, NextNode};
+use nalgebra::{Matrix2, SMatrix, Vector2, Vector4};
 pub use outputs::{
     ComfortValues, ContactLoss, Instantaneous, OutputDerivatives, Outputs, RoadHolding, RunSummary,
     TimeAverages,
 };
 pub use persist::STATE_FORMAT_VERSION;
-use system::{DELAY_INPUT, Filter, FilterCoupling, tire_pick};
+use system::{DELAY_INPUT, Filter, tire_pick};
 use time_average::series_order;
 use time_average::{INTEGRALS, SquareIntegral};
 
-pub use accuracy::{DEFAULT_TOLERANCE, StepChoice};
+pub use accuracy::StepChoice;
+pub use config::{DEFAULT_TOLERANCE, Metrics, SimulationConfig};
 pub use contact::{LOCATION_TOLERANCE, LiftOff, MAX_SWITCHES_PER_STEP};
 /// Rounding drift covered by the snap tolerance, in additions: a time
 /// accumulated as `t += step` over N steps is off by at most `N ε |t| / 2`,
@@ -134,128 +136,6 @@ const DIVERGENCE_BOUNDS: [f64; 6] = [
     DIVERGENCE_VELOCITY,
 ];
 
-/// Everything that defines a simulation.
-#[derive(Debug, Clone, PartialEq)]
-pub struct SimulationConfig {
-    /// Physical and controller parameters.
-    pub params: Params,
-    /// CS, PVASS or TDVASS.
-    pub variant: Variant,
-    /// The road.
-    pub road: RoadSpec,
-    /// Relative accuracy of every reported metric: it sets the internal
-    /// step (see [`accuracy`]; [`DEFAULT_TOLERANCE`] by default).
-    pub tolerance: f64,
-    /// Optional upper bound of the internal step (s); 0 = none, the
-    /// tolerance alone sets the step.
-    pub max_internal_step: f64,
-    /// A communication step the internal step should divide (s; 0 =
-    /// none): the ladder of steps becomes `communication_step / n`, so that
-    /// a caller advancing by it (or a multiple) meets internal nodes only
-    /// and never pays for a point inside a step. The FMU passes its
-    /// DefaultExperiment stepSize (see [`accuracy`]).
-    pub communication_step: f64,
-    /// The tire's contact law ([`TireContact`]; the paper's bilateral
-    /// tire by default).
-    pub tire_contact: TireContact,
-    /// Start time t_0 (s).
-    pub start_time: f64,
-    /// X(t_0) = [x_s, v_s, x_h, v_h, x_t, v_t]; also the history for t < t_0.
-    pub initial_state: State,
-    /// Weights of the objective J.
-    pub weights: Weights,
-    /// Which outputs beyond the RMS values of Eq. (6) the run accumulates
-    /// ([`Metrics`]; [`Metrics::Paper`] by default, at the cost a step
-    /// always had). The outputs they share are the same to the bit at every
-    /// level.
-    pub metrics: Metrics,
-}
-
-/// What a run accumulates besides the RMS values of BA, SDD, TDD and J.
-/// The levels are ordered: each includes the one before.
-///
-/// The instantaneous dynamic tire load `k_t (x_g − x_t)` and the RMS
-/// dynamic tire load ratio `k_t RMS(TDD) / W` need nothing more and are
-/// given at every level.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
-pub enum Metrics {
-    /// The paper's evaluation only: a step costs what it always did (the
-    /// PSO on J, the floor-ratio loop).
-    #[default]
-    Paper,
-    /// Also road holding and working space ([`RoadHolding`]): the time
-    /// without tire contact with its first occurrence, and the largest
-    /// |SDD|; a test of every internal step.
-    RoadHolding,
-    /// Also ISO 2631-1 ride comfort ([`ComfortValues`]): the W_k weighting
-    /// of BA integrated as 8 more states in the exact step (see
-    /// `solver::filter`), for a_w, RMS a_w and VDV.
-    Comfort,
-}
-
-impl Metrics {
-    /// All levels, in order.
-    pub const ALL: [Metrics; 3] = [Metrics::Paper, Metrics::RoadHolding, Metrics::Comfort];
-
-    /// Whether the road-holding and working-space accumulators run.
-    pub fn road_holding(self) -> bool {
-        self >= Metrics::RoadHolding
-    }
-
-    /// Whether the W_k filter runs.
-    pub fn comfort(self) -> bool {
-        self >= Metrics::Comfort
-    }
-
-    /// Integer code (0 = paper, 1 = road holding, 2 = comfort), as saved.
-    pub fn code(self) -> u64 {
-        self as u64
-    }
-
-    /// Inverse of [`Metrics::code`].
-    pub fn from_code(code: u64) -> Result<Metrics> {
-        Metrics::ALL
-            .get(usize::try_from(code).unwrap_or(usize::MAX))
-            .copied()
-            .ok_or(Error::InvalidSetting {
-                name: "metrics",
-                value: i64::try_from(code).unwrap_or(i64::MAX),
-                reason: "must be 0 (paper), 1 (road holding) or 2 (comfort)",
-            })
-    }
-}
-
-impl Default for SimulationConfig {
-    /// TDVASS, Table 1, (g1, tau1), the harmonic road 0.05 sin 5t, from rest.
-    fn default() -> Self {
-        SimulationConfig {
-            params: Params::default(),
-            variant: Variant::Tdvass,
-            road: RoadSpec::paper_harmonic(),
-            tolerance: DEFAULT_TOLERANCE,
-            max_internal_step: 0.0,
-            communication_step: 0.0,
-            tire_contact: TireContact::Bilateral,
-            start_time: 0.0,
-            initial_state: State::zeros(),
-            weights: Weights::default(),
-            metrics: Metrics::Paper,
-        }
-    }
-}
-
-/// Node k + 1 (its state and `(x_t, v_t)`) reached from `(from, state)`
-/// in step k, with the delay inside the step.
-#[derive(Debug, Clone, Copy)]
-struct NextNode {
-    k: u64,
-    from: f64,
-    state: State,
-    flight: bool,
-    node: State,
-    end: [f64; 2],
-}
-
 /// The simulator: a quarter car on a road, advanced in time by the precise
 /// integration method. `Clone` is a complete snapshot of it.
 #[derive(Debug, Clone)]
@@ -276,34 +156,6 @@ pub struct Simulator {
     trajectory: Trajectory,
     /// What the run accumulates for its outputs.
     observers: Observers,
-}
-
-/// The operators of the plant: those of the mode in force (contact, or
-/// flight with the unilateral tire), the other mode's, and caches of
-/// functions of them.
-#[derive(Debug, Clone)]
-struct Modes {
-    /// Plant matrix used by the solver (the plant's A, plus the folded
-    /// feedback when the delay is not resolved on the grid).
-    solver_matrix: Matrix6<f64>,
-    /// `‖solver_matrix‖_∞` (largest absolute row sum, 1/s): chooses the
-    /// order of the Taylor series near a node.
-    solver_matrix_norm: f64,
-    full_step: StepOperator,
-    /// `full_step` in the form of the whole-step loop.
-    grid_step: GridStep,
-    /// The partial steps' maps ([`dense`]), built at the first point
-    /// inside a step: a cache of functions of the operators, not state.
-    dense: Option<Box<dense::DenseOutput>>,
-    /// The last [`Simulator::inner_delay_next_node`] (a cache of a
-    /// function of its arguments, the mode and the operators, cleared when
-    /// an operator or the road input changes).
-    next_node: Option<NextNode>,
-    /// How BA drives the W_k filter (only with [`Metrics::Comfort`]).
-    coupling: Option<FilterCoupling>,
-    /// Unilateral tire: the operators of the mode not in force (see
-    /// `contact`); `None` with the bilateral tire.
-    other_mode: Option<Box<contact::ModeOperators>>,
 }
 
 /// Where the run is: the committed point (a grid node, or a point where
@@ -475,8 +327,14 @@ impl Simulator {
             initial[crate::model::X_H] = 0.0;
             initial[crate::model::V_H] = 0.0;
         }
-        let (solver_matrix, full_step, grid_step, coupling) =
-            Self::operators(&plant, &config, &grid)?;
+        let inputs = Inputs::new(
+            road,
+            &config.road,
+            grid,
+            config.start_time,
+            [initial[X_T], initial[V_T]],
+        );
+        let modes = Modes::new(&plant, &config, &grid, inputs.angular_frequency())?;
         let start_time = config.start_time;
         let mut sim = Simulator {
             plant,
@@ -487,23 +345,8 @@ impl Simulator {
                 probe_error: f64::NAN,
                 probe_rounds: 0,
             },
-            modes: Modes {
-                solver_matrix_norm: infinity_norm(&solver_matrix),
-                solver_matrix,
-                full_step,
-                grid_step,
-                dense: None,
-                next_node: None,
-                coupling,
-                other_mode: None,
-            },
-            inputs: Inputs::new(
-                road,
-                &config.road,
-                grid,
-                config.start_time,
-                [initial[X_T], initial[V_T]],
-            ),
+            modes,
+            inputs,
             trajectory: Trajectory {
                 grid_index: 0,
                 committed_time: config.start_time,
@@ -550,72 +393,6 @@ impl Simulator {
         }
         sim.enter_recorded_mode();
         Ok(sim)
-    }
-
-    /// The solver's state matrix, the whole step, its grid form (with the
-    /// contact-loss test with [`Metrics::RoadHolding`] and the filter with
-    /// [`Metrics::Comfort`]) and the
-    /// filter coupling.
-    fn operators(
-        plant: &Plant,
-        config: &SimulationConfig,
-        grid: &DelayGrid,
-    ) -> Result<(Matrix6<f64>, StepOperator, GridStep, Option<FilterCoupling>)> {
-        let mut a = plant.a;
-        let mut b = plant.b;
-        if !grid.resolves_delay() {
-            // u = g (x_t − tau v_t): fold the feedback into the plant.
-            let tau = if config.variant.has_control() {
-                config.params.tau
-            } else {
-                0.0
-            };
-            for row in 0..6 {
-                a[(row, X_T)] += b[row];
-                a[(row, V_T)] -= tau * b[row];
-            }
-            b = State::zeros();
-        }
-        let omega = match config.road {
-            RoadSpec::Harmonic {
-                angular_frequency, ..
-            } => angular_frequency,
-            _ => 0.0,
-        };
-        let (h, tau) = (grid.step, grid.inner_delay());
-        let coupling = config
-            .metrics
-            .comfort()
-            .then(|| FilterCoupling::new(&a, &b, plant));
-        let filter = coupling.as_ref();
-        let step = StepOperator::new(&a, &b, &plant.e, omega, h, filter);
-        let mut grid_step = if grid.delay_inside_step() {
-            let first = StepOperator::new(&a, &b, &plant.e, omega, tau, filter);
-            let rest = StepOperator::new(&a, &b, &plant.e, omega, h - tau, filter);
-            let mut grid_step = GridStep::inner_delay(&step, [&first, &rest], &a, omega, h, tau)
-                .ok_or(Error::InvalidParameter {
-                    name: "g",
-                    value: config.params.g,
-                    reason: "the step with the delay inside it is singular at this gain",
-                })?;
-            grid_step.filter =
-                filter.and_then(|c| FilterGridStep::inner_delay(&step, [&first, &rest], c, h, tau));
-            grid_step
-        } else {
-            let mut grid_step = GridStep::new(&step, &a, omega, h);
-            grid_step.filter = filter.and_then(|c| FilterGridStep::new(&step, c, h));
-            grid_step
-        };
-        let params = &config.params;
-        grid_step.contact.limit = if params.k_t > 0.0 {
-            params.static_load(config.variant) / params.k_t
-        } else {
-            f64::INFINITY
-        };
-        grid_step.contact.start_time = config.start_time;
-        grid_step.contact.unilateral = config.tire_contact.is_unilateral();
-        grid_step.holding = config.metrics.road_holding();
-        Ok((a, step, grid_step, coupling))
     }
 
     /// The configuration.
@@ -719,7 +496,7 @@ impl Simulator {
         if self.modes.dense.is_none() {
             let (a, b, e) = (
                 self.modes.solver_matrix,
-                self.solver_input_column(),
+                self.modes.input_column,
                 self.plant.e,
             );
             let (omega, h) = (self.inputs.angular_frequency(), self.grid.step);
@@ -760,14 +537,6 @@ impl Simulator {
     ) -> SMatrix<f64, 6, C> {
         let key = dense::offset_key(length, self.grid.step);
         self.dense_output().plant(key, z)
-    }
-
-    fn solver_input_column(&self) -> State {
-        if self.grid.resolves_delay() {
-            self.plant.b
-        } else {
-            State::zeros()
-        }
     }
 
     /// Integrates from (a, x) to b, all inside grid step k, splitting at road
@@ -1214,16 +983,13 @@ impl Simulator {
         let plant = Plant::new(params, self.config.variant)?;
         crate::limits::check_rates(&params, Some(self.config.variant))?;
         self.config.params = params;
-        let (matrix, step, grid_step, coupling) =
-            Self::operators(&plant, &self.config, &self.grid)?;
-        self.modes.coupling = coupling;
+        self.modes = Modes::new(
+            &plant,
+            &self.config,
+            &self.grid,
+            self.inputs.angular_frequency(),
+        )?;
         self.plant = plant;
-        self.modes.solver_matrix = matrix;
-        self.modes.solver_matrix_norm = infinity_norm(&matrix);
-        self.modes.full_step = step;
-        self.modes.grid_step = grid_step;
-        self.modes.dense = None;
-        self.modes.next_node = None;
         // The contact operators were rebuilt: the flight ones follow, and
         // a flight in progress goes on with them.
         self.enter_recorded_mode();

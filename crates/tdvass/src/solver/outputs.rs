@@ -483,7 +483,7 @@ impl Simulator {
         let piece = self.road_piece_now();
         let (road, road_rate) = (piece.value(t), piece.slope(t));
         let (delayed, delayed_rate) = self.delayed_tire_now();
-        let b = self.solver_input_column();
+        let b = self.modes.input_column;
         let drive = self.forcing(&piece);
         let dx = self.modes.solver_matrix * x + b * delayed + self.plant.e * drive.value(t);
         let d2x = self.modes.solver_matrix * dx + b * delayed_rate + self.plant.e * drive.slope(t);

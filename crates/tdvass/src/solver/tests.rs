@@ -1,6 +1,8 @@
 use super::*;
 use crate::model::Performance;
+use crate::model::TireContact;
 use crate::road::RandomRoad;
+use crate::road::RoadSpec;
 
 fn bits(sim: &mut Simulator) -> Vec<u64> {
     let o = sim.outputs();

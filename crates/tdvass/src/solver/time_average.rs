@@ -240,7 +240,7 @@ impl Simulator {
         let p = self.delayed_vector_at(k, t, from, x);
         let [road, road_rate] = self.inputs.road_at(piece, t);
         let [drive, drive_rate] = self.inputs.road_at(&self.forcing(piece), t);
-        let b = self.solver_input_column();
+        let b = self.modes.input_column;
         let dx = self.modes.solver_matrix * x + b * p[0] + self.plant.e * drive;
         let acceleration_rate = (self.modes.solver_matrix.row(V_S) * dx)[0]
             + b[V_S] * p[1]
@@ -756,7 +756,7 @@ impl Simulator {
         } else {
             piece.derivatives(t)
         };
-        let b = self.solver_input_column();
+        let b = self.modes.input_column;
         let (m, e) = (self.modes.solver_matrix, self.plant.e);
         let mut derivative = m * x + b * p[0] + e * road[0];
         let mut result = x + derivative * delta;

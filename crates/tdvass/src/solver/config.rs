@@ -1,0 +1,123 @@
+//! The configuration of a simulation ([`SimulationConfig`]) and what a run
+//! accumulates ([`Metrics`]): values, checked by `Simulator::new`, that
+//! the solver reads and never changes (but for the tunable gain and
+//! weights). It imports the model, the road and the metrics, nothing of
+//! the solver.
+
+use crate::error::{Error, Result};
+use crate::metrics::Weights;
+use crate::model::{Params, State, TireContact, Variant};
+use crate::road::RoadSpec;
+
+/// Default relative tolerance of every reported metric.
+pub const DEFAULT_TOLERANCE: f64 = 1e-6;
+
+/// Everything that defines a simulation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SimulationConfig {
+    /// Physical and controller parameters.
+    pub params: Params,
+    /// CS, PVASS or TDVASS.
+    pub variant: Variant,
+    /// The road.
+    pub road: RoadSpec,
+    /// Relative accuracy of every reported metric: it sets the internal
+    /// step (see the `accuracy` module; [`DEFAULT_TOLERANCE`] by default).
+    pub tolerance: f64,
+    /// Optional upper bound of the internal step (s); 0 = none, the
+    /// tolerance alone sets the step.
+    pub max_internal_step: f64,
+    /// A communication step the internal step should divide (s; 0 =
+    /// none): the ladder of steps becomes `communication_step / n`, so that
+    /// a caller advancing by it (or a multiple) meets internal nodes only
+    /// and never pays for a point inside a step. The FMU passes its
+    /// DefaultExperiment stepSize (see the `accuracy` module).
+    pub communication_step: f64,
+    /// The tire's contact law ([`TireContact`]; the paper's bilateral
+    /// tire by default).
+    pub tire_contact: TireContact,
+    /// Start time t_0 (s).
+    pub start_time: f64,
+    /// X(t_0) = [x_s, v_s, x_h, v_h, x_t, v_t]; also the history for t < t_0.
+    pub initial_state: State,
+    /// Weights of the objective J.
+    pub weights: Weights,
+    /// Which outputs beyond the RMS values of Eq. (6) the run accumulates
+    /// ([`Metrics`]; [`Metrics::Paper`] by default, at the cost a step
+    /// always had). The outputs they share are the same to the bit at every
+    /// level.
+    pub metrics: Metrics,
+}
+
+/// What a run accumulates besides the RMS values of BA, SDD, TDD and J.
+/// The levels are ordered: each includes the one before.
+///
+/// The instantaneous dynamic tire load `k_t (x_g − x_t)` and the RMS
+/// dynamic tire load ratio `k_t RMS(TDD) / W` need nothing more and are
+/// given at every level.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
+pub enum Metrics {
+    /// The paper's evaluation only: a step costs what it always did (the
+    /// PSO on J, the floor-ratio loop).
+    #[default]
+    Paper,
+    /// Also road holding and working space ([`RoadHolding`]): the time
+    /// without tire contact with its first occurrence, and the largest
+    /// |SDD|; a test of every internal step.
+    RoadHolding,
+    /// Also ISO 2631-1 ride comfort ([`ComfortValues`]): the W_k weighting
+    /// of BA integrated as 8 more states in the exact step (see
+    /// `solver::filter`), for a_w, RMS a_w and VDV.
+    Comfort,
+}
+
+impl Metrics {
+    /// All levels, in order.
+    pub const ALL: [Metrics; 3] = [Metrics::Paper, Metrics::RoadHolding, Metrics::Comfort];
+
+    /// Whether the road-holding and working-space accumulators run.
+    pub fn road_holding(self) -> bool {
+        self >= Metrics::RoadHolding
+    }
+
+    /// Whether the W_k filter runs.
+    pub fn comfort(self) -> bool {
+        self >= Metrics::Comfort
+    }
+
+    /// Integer code (0 = paper, 1 = road holding, 2 = comfort), as saved.
+    pub fn code(self) -> u64 {
+        self as u64
+    }
+
+    /// Inverse of [`Metrics::code`].
+    pub fn from_code(code: u64) -> Result<Metrics> {
+        Metrics::ALL
+            .get(usize::try_from(code).unwrap_or(usize::MAX))
+            .copied()
+            .ok_or(Error::InvalidSetting {
+                name: "metrics",
+                value: i64::try_from(code).unwrap_or(i64::MAX),
+                reason: "must be 0 (paper), 1 (road holding) or 2 (comfort)",
+            })
+    }
+}
+
+impl Default for SimulationConfig {
+    /// TDVASS, Table 1, (g1, tau1), the harmonic road 0.05 sin 5t, from rest.
+    fn default() -> Self {
+        SimulationConfig {
+            params: Params::default(),
+            variant: Variant::Tdvass,
+            road: RoadSpec::paper_harmonic(),
+            tolerance: DEFAULT_TOLERANCE,
+            max_internal_step: 0.0,
+            communication_step: 0.0,
+            tire_contact: TireContact::Bilateral,
+            start_time: 0.0,
+            initial_state: State::zeros(),
+            weights: Weights::default(),
+            metrics: Metrics::Paper,
+        }
+    }
+}
