@@ -31,6 +31,7 @@ const SOLVER_LAYERS: &[(&str, &[&str])] = &[
     ("step maps and inputs", &["operators", "pieces", "inputs"]),
     ("grid and dense steps", &["grid_step", "dense"]),
     ("modes", &["modes"]),
+    ("stepping", &["stepping"]),
     (
         "driver",
         &[

@@ -46,6 +46,7 @@
 //! in the mode at the step's start. Both are within the tolerance's step
 //! choice, which probes the unilateral run itself.
 
+use super::stepping::stepping;
 use super::{Simulator, holding};
 use crate::error::{Error, Result};
 use crate::model::{State, X_T};
@@ -106,23 +107,6 @@ impl Simulator {
         }
     }
 
-    /// What drives the plant through its road column `e` over `piece`: the
-    /// road in contact, the constant `−W/k_t` in flight (see the module
-    /// docs).
-    #[inline]
-    pub(super) fn forcing(&self, piece: &RoadPiece) -> RoadPiece {
-        if self.in_flight() {
-            RoadPiece::Linear {
-                start: 0.0,
-                end: piece.end(),
-                value: -self.modes.grid_step.contact.limit,
-                slope: 0.0,
-            }
-        } else {
-            *piece
-        }
-    }
-
     /// Puts the operators of the mode the holding state says, the contact
     /// operators being in force (after a restore or a rebuild of them).
     pub(super) fn enter_recorded_mode(&mut self) {
@@ -162,7 +146,7 @@ impl Simulator {
         let (mut start, mut x_start) = (tc, xc);
         while start < node {
             let super::pieces::Stretch { piece, end, .. } = self.inputs.stretch(start, node, None);
-            let x_end = self.integrate_within_step(k, tc, xc, end);
+            let x_end = stepping!(self).integrate_within_step(k, tc, xc, end);
             let a = self.switch_function(start, &x_start, &piece);
             let b = self.switch_function(end, &x_end, &piece);
             // A start on the other side by rounding only, and leaving it,
@@ -194,7 +178,7 @@ impl Simulator {
         let x = if t == tc {
             xc
         } else {
-            self.integrate_within_step(k, tc, xc, t)
+            stepping!(self).integrate_within_step(k, tc, xc, t)
         };
         self.switch_function(t, &x, piece)
     }
@@ -313,7 +297,7 @@ impl Simulator {
         let x = if time == tc {
             xc
         } else {
-            self.integrate_within_step(k, tc, xc, time)
+            stepping!(self).integrate_within_step(k, tc, xc, time)
         };
         self.check_divergence(time, &x)?;
         self.observers.outputs_cache = None;

@@ -46,6 +46,7 @@
 //! the state is computed and the exact test runs.
 
 use super::linalg::{hermite_bound, scaled_norm};
+use super::stepping::stepping;
 use super::{Simulator, divergence_bound, series_order};
 use crate::model::State;
 use crate::road::RoadPiece;
@@ -91,7 +92,7 @@ impl Simulator {
             );
             self.trajectory.current_state = match deferred.kind {
                 Kind::NearNode => self.state_near_committed(t - tc),
-                Kind::InsideStep => self.integrate_within_step(k, tc, xc, t),
+                Kind::InsideStep => stepping!(self).integrate_within_step(k, tc, xc, t),
             };
         }
     }
@@ -167,7 +168,7 @@ impl Simulator {
             input[3] = (12.0 * rise + 6.0 * slopes) / (h * h);
         }
         let road_piece = self.inputs.piece_from(t + delta);
-        let road = self.forcing(&road_piece).derivative_bounds(t);
+        let road = stepping!(self).forcing(&road_piece).derivative_bounds(t);
         let (b, e) = (self.modes.input_column, self.plant.e);
         let (b_max, e_max) = (b.amax(), e.amax());
         let mut previous = x.amax();
@@ -199,11 +200,11 @@ impl Simulator {
         if length.is_nan() || length <= 0.0 || road_piece.end() < t {
             return None;
         }
-        let road = match self.forcing(&road_piece) {
+        let road = match stepping!(self).forcing(&road_piece) {
             RoadPiece::Harmonic { amplitude, .. } => amplitude.abs(),
             piece @ RoadPiece::Linear { .. } => piece.value(tc).abs().max(piece.value(t).abs()),
         };
-        let scaling = self.dense_output().scaling;
+        let scaling = stepping!(self).dense_output().scaling;
         let theta = scaling.norm * length;
         if theta.is_nan() || theta > 1.0 {
             return None;
@@ -216,7 +217,7 @@ impl Simulator {
             if self.grid.delay_inside_step() && t > self.grid_time(k) + self.grid.inner_delay() {
                 // The piece after t_k + tau interpolates node k and the
                 // step's end node.
-                let (_, [end_x, end_v]) = self.inner_delay_next_node(k, tc, xc);
+                let (_, [end_x, end_v]) = stepping!(self).inner_delay_next_node(k, tc, xc);
                 let [node_x, node_v] = self.inputs.node_tire(k);
                 bound = bound.max(hermite_bound([node_x, node_v, end_x, end_v], h));
             }
@@ -305,7 +306,7 @@ mod tests {
                         continue;
                     };
                     used += 1;
-                    let x = sim.integrate_within_step(k, tc, xc, t);
+                    let x = stepping!(sim).integrate_within_step(k, tc, xc, t);
                     for i in 0..6 {
                         assert!(
                             (x[i] - xc[i]).abs() <= bounds[i],

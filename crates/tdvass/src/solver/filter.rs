@@ -24,74 +24,11 @@
 //! The filter starts from rest (`w(t_0) = 0`).
 
 use super::Simulator;
+use super::stepping::stepping;
 use super::system::Filter;
 use crate::model::State;
 
 impl Simulator {
-    /// The W_k filter state at `to` inside grid step k, from the point
-    /// `from` (time and plant state) of step k with filter state `w`:
-    /// the exact filter step of each piece (split at road breakpoints and,
-    /// when the delay lies inside the step, at `t_k + tau`), with the plant
-    /// state carried along the same pieces. Zero without the filter.
-    pub(super) fn filter_within_step(
-        &mut self,
-        k: u64,
-        from: (f64, State),
-        w: &Filter,
-        to: f64,
-    ) -> Filter {
-        if self.modes.coupling.is_none() {
-            return Filter::zeros();
-        }
-        let switch = self
-            .grid
-            .delay_inside_step()
-            .then(|| self.grid_time(k) + self.grid.inner_delay());
-        let (mut start, mut x, mut w) = (from.0, from.1, *w);
-        loop {
-            let super::pieces::Stretch { piece, end, .. } = self.inputs.stretch(start, to, switch);
-            let delayed = self
-                .grid
-                .resolves_delay()
-                .then(|| self.delayed_vector_at(k, start, from, &x));
-            let length = end - start;
-            let drive = self.forcing(&piece);
-            if self.coincide(length, self.grid.step) {
-                let op = &self.modes.full_step;
-                let rows = op.filter.as_ref().expect("the filter is on");
-                w = rows.apply(&w, &x, delayed.as_ref(), &drive, start);
-                x = op.apply(&x, delayed.as_ref(), &drive, start);
-            } else {
-                // The plant's state by the same operations as
-                // `integrate_within_step`, the filter's from its own rows.
-                let z = self.augmented(&x, delayed.as_ref(), &drive, start);
-                w = self.partial_filter_step(length, &z, &w);
-                x = self.partial_step(length, &z);
-            }
-            if end == to {
-                return w;
-            }
-            start = end;
-        }
-    }
-
-    /// The W_k filter state after a partial step of length `length` from
-    /// the plant's augmented vector `z` and the filter state `w`
-    /// ([`super::dense`]).
-    fn partial_filter_step(
-        &mut self,
-        length: f64,
-        z: &super::dense::Augmented<1>,
-        w: &Filter,
-    ) -> Filter {
-        let key = super::dense::offset_key(length, self.grid.step);
-        self.dense_output();
-        match (self.modes.dense.as_mut(), self.modes.coupling.as_ref()) {
-            (Some(dense), Some(coupling)) => dense.filter(key, z, w, coupling),
-            _ => Filter::zeros(),
-        }
-    }
-
     /// The filter state at `committed_time + delta` for a `delta` within
     /// the snap tolerance: the fourth-order Taylor series of
     /// `ẇ = A_w w + b_w c X` with the plant's derivatives from
@@ -129,9 +66,9 @@ impl Simulator {
             self.trajectory.committed_time,
             self.trajectory.committed_state,
         );
-        let p = self.delayed_vector_at(k, t, (t, x), &x);
+        let p = stepping!(self).delayed_vector_at(k, t, (t, x), &x);
         let road_piece = self.inputs.piece_from(t + delta);
-        let piece = self.forcing(&road_piece);
+        let piece = stepping!(self).forcing(&road_piece);
         let road = piece.derivatives(t);
         let b = self.modes.input_column;
         let (m, e) = (self.modes.solver_matrix, self.plant.e);

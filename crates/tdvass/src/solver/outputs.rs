@@ -2,6 +2,7 @@
 //! derivatives, and the summary of a run.
 
 use super::Simulator;
+use super::stepping::stepping;
 use super::time_average::{Accumulated, WEIGHTED_FOURTH, WEIGHTED_SQUARE, rms_from_integral};
 use crate::metrics::RmsValues;
 use crate::model::{Performance, State, V_T, X_S, X_T};
@@ -238,7 +239,7 @@ impl Simulator {
             self.trajectory.committed_time,
             self.trajectory.committed_state,
         );
-        let p = self.delayed_vector_at(k, t, from, &x);
+        let p = stepping!(self).delayed_vector_at(k, t, from, &x);
         (p[0], p[1])
     }
 
@@ -484,7 +485,7 @@ impl Simulator {
         let (road, road_rate) = (piece.value(t), piece.slope(t));
         let (delayed, delayed_rate) = self.delayed_tire_now();
         let b = self.modes.input_column;
-        let drive = self.forcing(&piece);
+        let drive = stepping!(self).forcing(&piece);
         let dx = self.modes.solver_matrix * x + b * delayed + self.plant.e * drive.value(t);
         let d2x = self.modes.solver_matrix * dx + b * delayed_rate + self.plant.e * drive.slope(t);
         let gain = self.config.params.effective_gain(self.config.variant);

@@ -3,6 +3,7 @@ use crate::model::Performance;
 use crate::model::TireContact;
 use crate::road::RandomRoad;
 use crate::road::RoadSpec;
+use crate::solver::stepping::stepping;
 
 fn bits(sim: &mut Simulator) -> Vec<u64> {
     let o = sim.outputs();
@@ -139,9 +140,9 @@ fn whole_steps_match_the_general_step_closely() {
                 general.trajectory.committed_time,
                 general.trajectory.committed_state,
             );
-            let x = general.integrate_within_step(k, from.0, from.1, to);
+            let x = stepping!(general).integrate_within_step(k, from.0, from.1, to);
             let w_from = general.trajectory.committed_filter;
-            let w = general.filter_within_step(k, from, &w_from, to);
+            let w = stepping!(general).filter_within_step(k, from, &w_from, to);
             let anchor = general.observers.integral.anchor;
             let mut holding = general.observers.holding;
             let (step_integral, at_end, piece) =

@@ -32,13 +32,13 @@
 //! too and the rule is third order there: the extra error is below
 //! `h⁴ |Δf'''| / 384` per step.
 
+use super::Simulator;
 use super::holding::{Holding, deflection, margin};
+use super::stepping::stepping;
 use super::system::Filter;
-use super::{Simulator, hermite};
 use crate::metrics::{RmsValues, RunningRms};
-use crate::model::{State, V_S, V_T, X_S, X_T};
+use crate::model::{State, V_S, X_S, X_T};
 use crate::road::RoadPiece;
-use nalgebra::Vector4;
 
 /// Number of time integrals kept: `BA²`, `SDD²`, `TDD²`, `a_w²`, `a_w⁴`.
 pub(crate) const INTEGRALS: usize = 5;
@@ -170,43 +170,6 @@ pub(crate) fn rms_from_integral(integral: &[f64], duration: f64) -> RmsValues {
 }
 
 impl Simulator {
-    /// `[u, u', u'', u''']` of the delayed tire displacement at time `t` in
-    /// grid step k, state `x` there; `from` is a point of step k with its
-    /// state, from which the step's end node is found when the delay lies
-    /// inside the step. With the delay folded into the plant only `[u, u']`
-    /// are meaningful (`u = x_t − tau v_t`; the solver has no delayed input).
-    pub(super) fn delayed_vector_at(
-        &mut self,
-        k: u64,
-        t: f64,
-        from: (f64, State),
-        x: &State,
-    ) -> Vector4<f64> {
-        let offset = t - self.grid_time(k);
-        if self.grid.delay_inside_step() {
-            let (h, tau) = (self.grid.step, self.grid.inner_delay());
-            if offset < tau {
-                self.inputs.delayed_input(k, h - tau + offset)
-            } else {
-                let (_, [end_x, end_v]) = self.inner_delay_next_node(k, from.0, from.1);
-                let [node_x, node_v] = self.inputs.node_tire(k);
-                hermite([node_x, node_v, end_x, end_v], h, offset - tau)
-            }
-        } else if self.grid.resolves_delay() {
-            self.inputs.delayed_input(k, offset)
-        } else {
-            let tau = if self.config.variant.has_control() {
-                self.config.params.tau
-            } else {
-                0.0
-            };
-            let piece = self.inputs.piece_from(t);
-            let xg = self.forcing(&piece).value(t);
-            let dx = self.modes.solver_matrix * x + self.plant.e * xg;
-            Vector4::new(x[X_T] - tau * x[V_T], dx[X_T] - tau * dx[V_T], 0.0, 0.0)
-        }
-    }
-
     /// The integrands and their rates at time `t` of step k with state `x`
     /// and filter state `w`, the road given by `piece` (which side of a
     /// breakpoint is the caller's choice).
@@ -237,9 +200,10 @@ impl Simulator {
         from: (f64, State),
         piece: &RoadPiece,
     ) -> ([f64; 3], [f64; 3]) {
-        let p = self.delayed_vector_at(k, t, from, x);
+        let p = stepping!(self).delayed_vector_at(k, t, from, x);
         let [road, road_rate] = self.inputs.road_at(piece, t);
-        let [drive, drive_rate] = self.inputs.road_at(&self.forcing(piece), t);
+        let forcing = stepping!(self).forcing(piece);
+        let [drive, drive_rate] = self.inputs.road_at(&forcing, t);
         let b = self.modes.input_column;
         let dx = self.modes.solver_matrix * x + b * p[0] + self.plant.e * drive;
         let acceleration_rate = (self.modes.solver_matrix.row(V_S) * dx)[0]
@@ -330,8 +294,10 @@ impl Simulator {
                 (*x_to, w_to)
             } else {
                 (
-                    self.integrate_within_step(k, from.0, from.1, end),
-                    filter.map(|(w_from, _)| self.filter_within_step(k, from, w_from, end)),
+                    stepping!(self).integrate_within_step(k, from.0, from.1, end),
+                    filter.map(|(w_from, _)| {
+                        stepping!(self).filter_within_step(k, from, w_from, end)
+                    }),
                 )
             };
             let at_end = self.squares_with(k, end, &x_end, w_end.as_ref(), from, &piece);
@@ -403,8 +369,8 @@ impl Simulator {
     ) -> (State, Filter, [f64; INTEGRALS], Squares, RoadPiece) {
         if self.grid.delay_inside_step() {
             // The end node enters the delayed input of the whole step.
-            let x_to = self.integrate_within_step(k, t, x, to);
-            let w_to = self.filter_within_step(k, (t, x), &w, to);
+            let x_to = stepping!(self).integrate_within_step(k, t, x, to);
+            let w_to = stepping!(self).filter_within_step(k, (t, x), &w, to);
             let (integral, at_end, piece) =
                 self.integral_within_step(k, (t, x), &w, at_start, to, (&x_to, &w_to), holding);
             return (x_to, w_to, integral, at_end, piece);
@@ -413,8 +379,8 @@ impl Simulator {
         let (mut start, mut x_start, mut w_start, mut at) = (t, x, w, at_start);
         loop {
             let super::pieces::Stretch { piece, end, .. } = self.inputs.stretch(start, to, None);
-            let x_end = self.integrate_within_step(k, start, x_start, end);
-            let w_end = self.filter_within_step(k, (start, x_start), &w_start, end);
+            let x_end = stepping!(self).integrate_within_step(k, start, x_start, end);
+            let w_end = stepping!(self).filter_within_step(k, (start, x_start), &w_start, end);
             let at_end = self.squares_at(k, end, &x_end, &w_end, (start, x_start), &piece);
             total = add(total, corrected_trapezoid(end - start, &at, &at_end));
             if self.config.metrics.road_holding() {
@@ -532,7 +498,7 @@ impl Simulator {
             };
         }
         let k = self.trajectory.grid_index;
-        let w = self.filter_within_step(k, (tc, xc), &wc, t);
+        let w = stepping!(self).filter_within_step(k, (tc, xc), &wc, t);
         let (stretch, _, _) =
             self.integral_within_step(k, (tc, xc), &wc, at_committed, t, (&x, &w), &mut holding);
         Accumulated {
@@ -748,9 +714,9 @@ impl Simulator {
             return x;
         }
         let order = series_order(self.modes.solver_matrix_norm * delta.abs());
-        let p = self.delayed_vector_at(k, t, (t, x), &x);
+        let p = stepping!(self).delayed_vector_at(k, t, (t, x), &x);
         let road_piece = self.inputs.piece_from(t + delta);
-        let piece = self.forcing(&road_piece);
+        let piece = stepping!(self).forcing(&road_piece);
         let road = if order == 1 {
             [piece.value(t), 0.0, 0.0, 0.0]
         } else {
@@ -983,7 +949,7 @@ pub(super) mod tests {
             let h = sim.grid.step;
             for delta in [1e-13, 3e-11, h / 1024.0] {
                 let series = sim.state_near_committed(delta);
-                let exact = sim.integrate_within_step(k, t, x, t + delta);
+                let exact = stepping!(sim).integrate_within_step(k, t, x, t + delta);
                 let scale = exact.amax();
                 let error = (series - exact).amax();
                 assert!(

@@ -1,0 +1,435 @@
+//! Stepping: the integration of the plant (and of the W_k filter) from a
+//! point inside a grid step to another point of the same step, by the
+//! exact partial steps of [`super::dense`] over the stretches of
+//! [`super::pieces`], and the node at the end of a step when the delay lies
+//! inside it (a 2×2 solve).
+//!
+//! [`Stepping`] is a view of the simulator's configuration, plant, grid,
+//! modes and inputs, taken for one call by [`stepping!`]: it reads the
+//! committed point's grid index and the tire's mode, and changes only
+//! caches (the dense table, the next node, the road's window and the
+//! phases). It knows nothing of the trajectory's commits or of the
+//! accumulators; the whole-step loop is `kernel`'s.
+
+use super::config::SimulationConfig;
+use super::dense;
+use super::grid::DelayGrid;
+use super::inputs::Inputs;
+use super::linalg::{self, hermite, hermite_matrix};
+use super::modes::{Modes, NextNode};
+use super::pieces;
+use super::system::{DELAY_INPUT, Filter, tire_pick};
+use crate::model::{Plant, State, V_T, X_T};
+use crate::road::RoadPiece;
+use nalgebra::{Matrix2, SMatrix, Vector2, Vector4};
+
+/// A view of a simulator for stepping (see the module docs); `$sim` is the
+/// simulator, borrowed field by field so that its trajectory and
+/// observers stay free.
+macro_rules! stepping {
+    ($sim:expr) => {
+        $crate::solver::stepping::Stepping {
+            config: &$sim.config,
+            plant: &$sim.plant,
+            grid: $sim.grid,
+            modes: &mut $sim.modes,
+            inputs: &mut $sim.inputs,
+            grid_index: $sim.trajectory.grid_index,
+            flight: $sim.trajectory.flight_start.is_some(),
+        }
+    };
+}
+pub(super) use stepping;
+
+/// The parts of a simulator that stepping uses (see the module docs).
+pub(super) struct Stepping<'a> {
+    pub(super) config: &'a SimulationConfig,
+    pub(super) plant: &'a Plant,
+    pub(super) grid: DelayGrid,
+    pub(super) modes: &'a mut Modes,
+    pub(super) inputs: &'a mut Inputs,
+    /// The grid index of the committed point.
+    pub(super) grid_index: u64,
+    /// Whether the wheel is in flight (unilateral tire).
+    pub(super) flight: bool,
+}
+
+impl Stepping<'_> {
+    /// Whether times `a` and `b` are the same on this grid
+    /// ([`pieces::coincide`]).
+    fn coincide(&self, a: f64, b: f64) -> bool {
+        pieces::coincide(a, b, self.grid.step)
+    }
+
+    /// The dense output of the mode in force, built at its first use.
+    pub(super) fn dense_output(&mut self) -> &mut dense::DenseOutput {
+        if self.modes.dense.is_none() {
+            let (a, b, e) = (
+                self.modes.solver_matrix,
+                self.modes.input_column,
+                self.plant.e,
+            );
+            let (omega, h) = (self.inputs.angular_frequency(), self.grid.step);
+            let dense = dense::DenseOutput::new(&a, &b, &e, omega, h);
+            // With the delay inside the step, the pieces [t_k, t_k + tau)
+            // and [t_k + tau, t_{k+1}) of every step have fixed lengths.
+            self.modes.dense = Some(Box::new(if self.grid.delay_inside_step() {
+                let tau = self.grid.inner_delay();
+                dense.with_fixed(&[dense::offset_key(tau, h), dense::offset_key(h - tau, h)])
+            } else {
+                dense
+            }));
+        }
+        self.modes.dense.as_deref_mut().expect("built above")
+    }
+
+    /// The augmented vector of a partial step from `at` ([`dense::augmented`]).
+    pub(super) fn augmented(
+        &mut self,
+        x: &State,
+        delayed: Option<&Vector4<f64>>,
+        road: &RoadPiece,
+        at: f64,
+    ) -> dense::Augmented<1> {
+        let k = self.grid_index;
+        dense::augmented(x, delayed, road, at, || {
+            self.inputs.harmonic_at(road, at, k)
+        })
+    }
+
+    /// The exact map of a partial step of length `length` (quantized to
+    /// 2^-40 h, see [`dense`]) applied to the augmented vectors `z`: the
+    /// first 6 rows of `e^{M length} z`.
+    pub(super) fn partial_step<const C: usize>(
+        &mut self,
+        length: f64,
+        z: &dense::Augmented<C>,
+    ) -> SMatrix<f64, 6, C> {
+        let key = dense::offset_key(length, self.grid.step);
+        self.dense_output().plant(key, z)
+    }
+
+    /// Integrates from (a, x) to b, all inside grid step k, splitting at road
+    /// breakpoints.
+    pub(super) fn integrate_within_step(&mut self, k: u64, from: f64, x: State, to: f64) -> State {
+        if self.grid.delay_inside_step() {
+            if to == self.inputs.node_time(k + 1) {
+                return self.inner_delay_next_node(k, from, x).0;
+            }
+            return self.integrate_inner_delay_to(k, from, x, to);
+        }
+        let step_start = self.inputs.node_time(k);
+        let mut start = from;
+        let mut state = x;
+        loop {
+            let pieces::Stretch { piece, end, .. } = self.inputs.stretch(start, to, None);
+            let delayed = self
+                .grid
+                .resolves_delay()
+                .then(|| self.inputs.delayed_input(k, start - step_start));
+            let length = end - start;
+            let drive = self.forcing(&piece);
+            state = if self.coincide(length, self.grid.step) {
+                self.modes
+                    .full_step
+                    .apply(&state, delayed.as_ref(), &drive, start)
+            } else {
+                let z = self.augmented(&state, delayed.as_ref(), &drive, start);
+                self.partial_step(length, &z)
+            };
+            if end == to {
+                return state;
+            }
+            start = end;
+        }
+    }
+
+    /// Delay inside the step ([`DelayRegime::InsideStep`]): the state at grid
+    /// node k + 1 reached from (from, x) in step k, and that node's
+    /// `(x_t, v_t)`, which the delayed input of `[t_k + tau, t_{k+1})`
+    /// interpolates (a 2×2 solve; NaN if it is singular, which the
+    /// divergence check reports).
+    pub(super) fn inner_delay_next_node(
+        &mut self,
+        k: u64,
+        from: f64,
+        x: State,
+    ) -> (State, [f64; 2]) {
+        let flight = self.flight;
+        if let Some(c) = &self.modes.next_node
+            && (c.k, c.from.to_bits(), c.flight) == (k, from.to_bits(), flight)
+            && c.state
+                .iter()
+                .zip(x.iter())
+                .all(|(a, b)| a.to_bits() == b.to_bits())
+        {
+            return (c.node, c.end);
+        }
+        let (node, end) = self.solve_next_node(k, from, x);
+        self.modes.next_node = Some(NextNode {
+            k,
+            from,
+            state: x,
+            flight,
+            node,
+            end,
+        });
+        (node, end)
+    }
+
+    /// [`Self::inner_delay_next_node`] without its cache.
+    fn solve_next_node(&mut self, k: u64, from: f64, x: State) -> (State, [f64; 2]) {
+        if let Some(node) = self.whole_step_from_node(k, from, &x) {
+            return (node, [node[X_T], node[V_T]]);
+        }
+        let next = self.inputs.node_time(k + 1);
+        let (state, sensitivity) = self.integrate_inner_delay(k, from, x, next);
+        let pick = tire_pick();
+        let end = (Matrix2::identity() - pick * sensitivity)
+            .lu()
+            .solve(&(pick * state))
+            .unwrap_or(Vector2::repeat(f64::NAN));
+        (state + sensitivity * end, [end[0], end[1]])
+    }
+
+    /// Node k + 1 by the whole-step map of the grid (the 2×2 solve folded
+    /// in, as the whole-step loop takes it) from node k itself (time
+    /// `from`, state `x`), when the step lies in one road piece and the
+    /// wheel is on the road; `None` otherwise.
+    fn whole_step_from_node(&mut self, k: u64, from: f64, x: &State) -> Option<State> {
+        if from != self.inputs.node_time(k) || self.flight {
+            return None;
+        }
+        #[cfg(test)]
+        if dense::tests::EXACT.get() {
+            // The reference of the tests solves for the node as before.
+            return None;
+        }
+        let next = self.inputs.node_time(k + 1);
+        let piece = self.inputs.piece_from(from);
+        if pieces::ends_before(&piece, next, self.grid.step) {
+            return None;
+        }
+        let nodes = self.inputs.delayed_nodes(k);
+        let road = match piece {
+            RoadPiece::Harmonic { .. } => {
+                let phase = self.inputs.node_phase(k);
+                linalg::combine2(&self.modes.grid_step.harmonic, &phase)
+            }
+            RoadPiece::Linear { .. } => linalg::combine2(
+                &self.modes.grid_step.linear,
+                &[piece.value(from), piece.slope(from)],
+            ),
+        };
+        let step = &self.modes.grid_step;
+        let inputs = linalg::add6(linalg::combine4(&step.nodes, &nodes), road);
+        let x: [f64; 6] = (*x).into();
+        Some(State::from(linalg::add6(
+            linalg::combine6(&step.transition, &x),
+            inputs,
+        )))
+    }
+
+    /// Delay inside the step: integrates from (from, x) to `to` inside grid
+    /// step k, splitting at road breakpoints and at `t_k + tau`, with node
+    /// k + 1 taken as zero in the delayed input. Returns that state and its
+    /// 6×2 sensitivity to node k + 1's `(x_t, v_t)` (the result is affine
+    /// in them).
+    fn integrate_inner_delay(
+        &mut self,
+        k: u64,
+        from: f64,
+        x: State,
+        to: f64,
+    ) -> (State, SMatrix<f64, 6, 2>) {
+        let (h, tau) = (self.grid.step, self.grid.inner_delay());
+        let step_start = self.inputs.node_time(k);
+        let switch = step_start + tau;
+        let [node_x, node_v] = self.inputs.node_tire(k);
+        let mut start = from;
+        let mut state = x;
+        let mut sensitivity = SMatrix::<f64, 6, 2>::zeros();
+        loop {
+            let (piece, end, earlier) = self.inner_delay_piece(start, to, switch);
+            let piece = self.forcing(&piece);
+            // The state and the two columns of its sensitivity, in one
+            // application of the partial step.
+            let mut z = dense::Augmented::<3>::zeros();
+            z.fixed_view_mut::<6, 2>(0, 1).copy_from(&sensitivity);
+            let delayed = if earlier {
+                self.inputs.delayed_input(k, h - tau + (start - step_start))
+            } else {
+                let interpolant = hermite_matrix(h, (start - switch).max(0.0));
+                z.fixed_view_mut::<4, 2>(DELAY_INPUT, 1)
+                    .copy_from(&interpolant.fixed_view::<4, 2>(0, 2));
+                interpolant * Vector4::new(node_x, node_v, 0.0, 0.0)
+            };
+            z.set_column(0, &self.augmented(&state, Some(&delayed), &piece, start));
+            let next = self.partial_step(end - start, &z);
+            state = next.column(0).into_owned();
+            sensitivity = next.fixed_columns::<2>(1).into_owned();
+            if end == to {
+                return (state, sensitivity);
+            }
+            start = end;
+        }
+    }
+
+    /// Delay inside the step: the road piece at `start`, where the stretch
+    /// from `start` ends (the piece's end, `to`, or the switch `t_k + tau`
+    /// of the delayed argument, whichever comes first), and whether
+    /// `start` lies before the switch.
+    fn inner_delay_piece(&mut self, start: f64, to: f64, switch: f64) -> (RoadPiece, f64, bool) {
+        let stretch = self.inputs.stretch(start, to, Some(switch));
+        (stretch.piece, stretch.end, stretch.before_switch)
+    }
+
+    /// Delay inside the step: the state at `to` in grid step k from
+    /// (from, x), split as [`Self::integrate_inner_delay`] (the same value,
+    /// with node k + 1's `(x_t, v_t)` from [`Self::inner_delay_next_node`]
+    /// in the delayed input instead of through the sensitivity: one vector
+    /// per piece instead of three). That node is found only for a piece
+    /// after `t_k + tau`: a point before it does not need it.
+    fn integrate_inner_delay_to(&mut self, k: u64, from: f64, x: State, to: f64) -> State {
+        let (h, tau) = (self.grid.step, self.grid.inner_delay());
+        let step_start = self.inputs.node_time(k);
+        let switch = step_start + tau;
+        let [node_x, node_v] = self.inputs.node_tire(k);
+        let mut start = from;
+        let mut state = x;
+        loop {
+            let (piece, end_time, earlier) = self.inner_delay_piece(start, to, switch);
+            let piece = self.forcing(&piece);
+            let delayed = if earlier {
+                self.inputs.delayed_input(k, h - tau + (start - step_start))
+            } else {
+                let (_, [end_x, end_v]) = self.inner_delay_next_node(k, from, x);
+                hermite([node_x, node_v, end_x, end_v], h, (start - switch).max(0.0))
+            };
+            let z = self.augmented(&state, Some(&delayed), &piece, start);
+            state = self.partial_step(end_time - start, &z);
+            if end_time == to {
+                return state;
+            }
+            start = end_time;
+        }
+    }
+
+    /// The W_k filter state at `to` inside grid step k, from the point
+    /// `from` (time and plant state) of step k with filter state `w`:
+    /// the exact filter step of each piece (split at road breakpoints and,
+    /// when the delay lies inside the step, at `t_k + tau`), with the plant
+    /// state carried along the same pieces. Zero without the filter.
+    pub(super) fn filter_within_step(
+        &mut self,
+        k: u64,
+        from: (f64, State),
+        w: &Filter,
+        to: f64,
+    ) -> Filter {
+        if self.modes.coupling.is_none() {
+            return Filter::zeros();
+        }
+        let switch = self
+            .grid
+            .delay_inside_step()
+            .then(|| self.inputs.node_time(k) + self.grid.inner_delay());
+        let (mut start, mut x, mut w) = (from.0, from.1, *w);
+        loop {
+            let super::pieces::Stretch { piece, end, .. } = self.inputs.stretch(start, to, switch);
+            let delayed = self
+                .grid
+                .resolves_delay()
+                .then(|| self.delayed_vector_at(k, start, from, &x));
+            let length = end - start;
+            let drive = self.forcing(&piece);
+            if self.coincide(length, self.grid.step) {
+                let op = &self.modes.full_step;
+                let rows = op.filter.as_ref().expect("the filter is on");
+                w = rows.apply(&w, &x, delayed.as_ref(), &drive, start);
+                x = op.apply(&x, delayed.as_ref(), &drive, start);
+            } else {
+                // The plant's state by the same operations as
+                // `integrate_within_step`, the filter's from its own rows.
+                let z = self.augmented(&x, delayed.as_ref(), &drive, start);
+                w = self.partial_filter_step(length, &z, &w);
+                x = self.partial_step(length, &z);
+            }
+            if end == to {
+                return w;
+            }
+            start = end;
+        }
+    }
+
+    /// The W_k filter state after a partial step of length `length` from
+    /// the plant's augmented vector `z` and the filter state `w`
+    /// ([`super::dense`]).
+    fn partial_filter_step(
+        &mut self,
+        length: f64,
+        z: &super::dense::Augmented<1>,
+        w: &Filter,
+    ) -> Filter {
+        let key = super::dense::offset_key(length, self.grid.step);
+        self.dense_output();
+        match (self.modes.dense.as_mut(), self.modes.coupling.as_ref()) {
+            (Some(dense), Some(coupling)) => dense.filter(key, z, w, coupling),
+            _ => Filter::zeros(),
+        }
+    }
+
+    /// `[u, u', u'', u''']` of the delayed tire displacement at time `t` in
+    /// grid step k, state `x` there; `from` is a point of step k with its
+    /// state, from which the step's end node is found when the delay lies
+    /// inside the step. With the delay folded into the plant only `[u, u']`
+    /// are meaningful (`u = x_t − tau v_t`; the solver has no delayed input).
+    pub(super) fn delayed_vector_at(
+        &mut self,
+        k: u64,
+        t: f64,
+        from: (f64, State),
+        x: &State,
+    ) -> Vector4<f64> {
+        let offset = t - self.inputs.node_time(k);
+        if self.grid.delay_inside_step() {
+            let (h, tau) = (self.grid.step, self.grid.inner_delay());
+            if offset < tau {
+                self.inputs.delayed_input(k, h - tau + offset)
+            } else {
+                let (_, [end_x, end_v]) = self.inner_delay_next_node(k, from.0, from.1);
+                let [node_x, node_v] = self.inputs.node_tire(k);
+                hermite([node_x, node_v, end_x, end_v], h, offset - tau)
+            }
+        } else if self.grid.resolves_delay() {
+            self.inputs.delayed_input(k, offset)
+        } else {
+            let tau = if self.config.variant.has_control() {
+                self.config.params.tau
+            } else {
+                0.0
+            };
+            let piece = self.inputs.piece_from(t);
+            let xg = self.forcing(&piece).value(t);
+            let dx = self.modes.solver_matrix * x + self.plant.e * xg;
+            Vector4::new(x[X_T] - tau * x[V_T], dx[X_T] - tau * dx[V_T], 0.0, 0.0)
+        }
+    }
+
+    /// What drives the plant through its road column `e` over `piece`: the
+    /// road in contact, the constant `−W/k_t` in flight (see the module
+    /// docs).
+    #[inline]
+    pub(super) fn forcing(&self, piece: &RoadPiece) -> RoadPiece {
+        if self.flight {
+            RoadPiece::Linear {
+                start: 0.0,
+                end: piece.end(),
+                value: -self.modes.grid_step.contact.limit,
+                slope: 0.0,
+            }
+        } else {
+            *piece
+        }
+    }
+}
