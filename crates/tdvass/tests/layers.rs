@@ -31,7 +31,7 @@ const SOLVER_LAYERS: &[(&str, &[&str])] = &[
     ("step maps and inputs", &["operators", "pieces", "inputs"]),
     ("grid and dense steps", &["grid_step", "dense"]),
     ("modes", &["modes"]),
-    ("stepping", &["stepping"]),
+    ("stepping", &["stepping", "integrals", "events"]),
     (
         "driver",
         &[
@@ -39,7 +39,6 @@ const SOLVER_LAYERS: &[(&str, &[&str])] = &[
             "accuracy",
             "contact",
             "deferred",
-            "filter",
             "kernel",
             "outputs",
             "persist",

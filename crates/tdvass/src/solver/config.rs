@@ -61,13 +61,13 @@ pub enum Metrics {
     /// PSO on J, the floor-ratio loop).
     #[default]
     Paper,
-    /// Also road holding and working space ([`RoadHolding`]): the time
+    /// Also road holding and working space (the outputs' `RoadHolding`): the time
     /// without tire contact with its first occurrence, and the largest
     /// |SDD|; a test of every internal step.
     RoadHolding,
-    /// Also ISO 2631-1 ride comfort ([`ComfortValues`]): the W_k weighting
+    /// Also ISO 2631-1 ride comfort (the outputs' `ComfortValues`): the W_k weighting
     /// of BA integrated as 8 more states in the exact step (see
-    /// `solver::filter`), for a_w, RMS a_w and VDV.
+    /// `solver::system`), for a_w, RMS a_w and VDV.
     Comfort,
 }
 

@@ -6,9 +6,9 @@
 //! `e = [0, …, k_t/m_t]` the road column, the flight plant is
 //! `dX/dt = (A + e c_tᵀ) X + b u + e (−W/k_t)`, `c_t` picking x_t. That is
 //! the same form as contact, with the road replaced by the constant
-//! `−W/k_t` ([`Simulator::forcing`]), so every exact step map of the solver
+//! `−W/k_t` ([`Stepping::forcing`](super::stepping::Stepping::forcing)), so every exact step map of the solver
 //! applies to flight unchanged: the mode's plant matrix and its operators
-//! are swapped at a switch ([`ModeOperators`]).
+//! are swapped at a switch ([`Modes::swap`](super::modes::Modes::swap)).
 //!
 //! **The switches.** With the margin `g = W/k_t − (x_t − x_g)` (m) of
 //! `solver::holding`, the wheel lifts off where g falls through 0 in
@@ -25,7 +25,7 @@
 //! test of `solver::holding`). The bracket is then checked and narrowed on
 //! the exact dense output (the state from the committed point by the exact
 //! partial step of `solver::dense`), by Newton's method on `φ' = ±(x_g' − v_t)`, a state,
-//! kept inside the bracket by bisection, to [`LOCATION_TOLERANCE`]. The
+//! kept inside the bracket by bisection, to [`LOCATION_TOLERANCE`](super::events::LOCATION_TOLERANCE). The
 //! switch time is committed like a change of an external road input (the
 //! RMS run closes there), the mode flips, and the step goes on from there.
 //! A bracket that the exact output does not confirm is a graze (the
@@ -46,21 +46,13 @@
 //! in the mode at the step's start. Both are within the tolerance's step
 //! choice, which probes the unilateral run itself.
 
+use super::Simulator;
 use super::stepping::stepping;
-use super::{Simulator, holding};
 use crate::error::{Error, Result};
-use crate::model::{State, X_T};
-use crate::road::RoadPiece;
-
-/// The accuracy to which a switch time is located (s).
-pub const LOCATION_TOLERANCE: f64 = 1e-13;
+use crate::model::X_T;
 
 /// Most switches between contact and flight inside one internal step.
 pub const MAX_SWITCHES_PER_STEP: u32 = 16;
-
-/// Newton (or bisection) iterations at most per switch: from a bracket of
-/// a whole step, bisection alone reaches 2^-64 of it.
-const LOCATION_ITERATIONS: usize = 64;
 
 /// Lift-offs kept for the front-ends' event log between two takes.
 const LIFT_OFF_LOG: usize = 64;
@@ -116,157 +108,17 @@ impl Simulator {
         }
     }
 
-    /// The switch function `[φ, φ']` at time t with state x: the margin g
-    /// in contact, −g in flight; the mode switches where φ falls through 0.
-    fn switch_function(&self, t: f64, x: &State, piece: &RoadPiece) -> [f64; 2] {
-        let [g, rate] = self.margin_at(t, x, piece);
-        if self.in_flight() {
-            [-g, -rate]
-        } else {
-            [g, rate]
-        }
-    }
-
-    /// The rounding level of φ at state x (m): below it a φ of the other
-    /// sign is taken for 0.
-    fn switch_rounding(&self, t: f64, x: &State, piece: &RoadPiece) -> f64 {
-        let scale = self.modes.grid_step.contact.limit.abs() + x[X_T].abs() + piece.value(t).abs();
-        64.0 * f64::EPSILON * scale
-    }
-
-    /// The first switch in grid step k after the committed point, searched
-    /// up to the step's end node in the current mode (`None` if there is
-    /// none).
-    fn next_switch(&mut self, k: u64) -> Option<f64> {
-        let (tc, xc) = (
-            self.trajectory.committed_time,
-            self.trajectory.committed_state,
-        );
-        let node = self.grid_time(k + 1);
-        let (mut start, mut x_start) = (tc, xc);
-        while start < node {
-            let super::pieces::Stretch { piece, end, .. } = self.inputs.stretch(start, node, None);
-            let x_end = stepping!(self).integrate_within_step(k, tc, xc, end);
-            let a = self.switch_function(start, &x_start, &piece);
-            let b = self.switch_function(end, &x_end, &piece);
-            // A start on the other side by rounding only, and leaving it,
-            // is a switch just made (or a graze), not a new one.
-            let skip_start = start == tc
-                && a[0] >= -self.switch_rounding(start, &x_start, &piece)
-                && a[1] >= 0.0;
-            if let Some([lo, root, hi]) = holding::first_fall(end - start, a, b, skip_start) {
-                if hi == 0.0 {
-                    return Some(start);
-                }
-                let bracket = [start + lo, start + root, start + hi];
-                if let Some(time) = self.locate_switch(k, bracket, &piece) {
-                    return Some(time);
-                }
-            }
-            (start, x_start) = (end, x_end);
-        }
-        None
-    }
-
-    /// φ at time t in step k on the exact dense output from the committed
-    /// point: `[φ, φ']`.
-    fn exact_switch_function(&mut self, k: u64, t: f64, piece: &RoadPiece) -> [f64; 2] {
-        let (tc, xc) = (
-            self.trajectory.committed_time,
-            self.trajectory.committed_state,
-        );
-        let x = if t == tc {
-            xc
-        } else {
-            stepping!(self).integrate_within_step(k, tc, xc, t)
-        };
-        self.switch_function(t, &x, piece)
-    }
-
-    /// The root of φ where the cubic falls through 0, given as `[lo, root,
-    /// hi]` (times of step k: the cubic's root and a bracket of it), on the
-    /// exact dense output: the first time past it by at most
-    /// [`LOCATION_TOLERANCE`] where φ is below 0, so that the new mode
-    /// starts on its side; `None` when φ does not fall through 0 there (a
-    /// graze).
-    ///
-    /// The cubic's root is within its error (some 1e-14 m in φ) of the
-    /// exact one, so Newton's method from it usually converges in two
-    /// steps; otherwise the bracket is checked on the exact output and
-    /// narrowed by Newton steps kept inside it by bisection.
-    fn locate_switch(
-        &mut self,
-        k: u64,
-        [lo, root, hi]: [f64; 3],
-        piece: &RoadPiece,
-    ) -> Option<f64> {
-        let mut t = root;
-        for _ in 0..2 {
-            let [phi, rate] = self.exact_switch_function(k, t, piece);
-            let next = t - phi / rate;
-            if !(rate < 0.0 && next >= lo && next <= hi) {
-                break;
-            }
-            if (next - t).abs() <= 0.25 * LOCATION_TOLERANCE {
-                let past = (next + 0.5 * LOCATION_TOLERANCE).min(hi);
-                if self.exact_switch_function(k, past, piece)[0] < 0.0 {
-                    return Some(past);
-                }
-                break;
-            }
-            t = next;
-        }
-        self.locate_switch_in_bracket(k, (lo, hi), piece)
-    }
-
-    /// [`Self::locate_switch`] from the bracket alone.
-    fn locate_switch_in_bracket(
-        &mut self,
-        k: u64,
-        (mut lo, mut hi): (f64, f64),
-        piece: &RoadPiece,
-    ) -> Option<f64> {
-        let at_lo = self.exact_switch_function(k, lo, piece);
-        let at_hi = self.exact_switch_function(k, hi, piece);
-        if at_hi[0] >= 0.0 || at_lo[0] < 0.0 {
-            return None;
-        }
-        // Start from the secant root.
-        let mut t = lo + (hi - lo) * at_lo[0] / (at_lo[0] - at_hi[0]);
-        for _ in 0..LOCATION_ITERATIONS {
-            if hi - lo <= LOCATION_TOLERANCE {
-                break;
-            }
-            if !(t > lo && t < hi) {
-                t = 0.5 * (lo + hi);
-            }
-            let [phi, rate] = self.exact_switch_function(k, t, piece);
-            if phi < 0.0 {
-                hi = t;
-            } else {
-                lo = t;
-            }
-            let newton = t - phi / rate;
-            let step = (newton - t).abs();
-            t = newton;
-            if step <= 0.25 * LOCATION_TOLERANCE && t > lo && t < hi {
-                let past = (t + LOCATION_TOLERANCE / 2.0).min(hi);
-                if self.exact_switch_function(k, past, piece)[0] < 0.0 {
-                    hi = past;
-                }
-                break;
-            }
-        }
-        Some(hi)
-    }
-
     /// In unilateral mode: the first switch in grid step k after the
     /// committed point, if it comes at or before `until`, is committed and
     /// the mode flipped (`Ok(true)`); `Ok(false)` if none comes by then.
     /// `switches`: the switches made in this step so far (refused beyond
     /// [`MAX_SWITCHES_PER_STEP`]).
     pub(super) fn switch_by(&mut self, k: u64, until: f64, switches: &mut u32) -> Result<bool> {
-        let Some(time) = self.next_switch(k) else {
+        let from = (
+            self.trajectory.committed_time,
+            self.trajectory.committed_state,
+        );
+        let Some(time) = stepping!(self).next_switch(k, from) else {
             return Ok(false);
         };
         if time > until && !self.snaps(until, time) {
@@ -332,7 +184,7 @@ impl Simulator {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::{TireContact, V_T};
+    use crate::model::{State, TireContact, V_T, X_T};
     use crate::solver::SimulationConfig;
 
     #[test]

@@ -2,7 +2,7 @@
 //!
 //! [`Simulator::advance_to`] ends at a time `t` that is either a grid node
 //! (its state comes with the step), within the snap tolerance of the
-//! committed node (the state by [`Simulator::state_near_committed`]), or
+//! committed node (the state by [`Stepping::state_near`](super::stepping::Stepping::state_near)), or
 //! inside a step (the state by the exact partial steps of
 //! [`super::dense`]). The last two cost more than the whole step itself,
 //! and a master often does not ask for the state at every communication
@@ -46,17 +46,18 @@
 //! the state is computed and the exact test runs.
 
 use super::linalg::{hermite_bound, scaled_norm};
-use super::stepping::stepping;
-use super::{Simulator, divergence_bound, series_order};
+use super::stepping::{series_order, stepping};
+use super::{Simulator, divergence_bound};
 use crate::model::State;
 use crate::road::RoadPiece;
 
 /// What finds a deferred state.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum Kind {
-    /// [`Simulator::state_near_committed`].
+    /// [`Stepping::state_near`](super::stepping::Stepping::state_near).
     NearNode,
-    /// [`Simulator::integrate_within_step`] from the committed point.
+    /// [`Stepping::integrate_within_step`](super::stepping::Stepping::integrate_within_step)
+    /// from the committed point.
     InsideStep,
 }
 
@@ -91,7 +92,7 @@ impl Simulator {
                 self.trajectory.current_time,
             );
             self.trajectory.current_state = match deferred.kind {
-                Kind::NearNode => self.state_near_committed(t - tc),
+                Kind::NearNode => stepping!(self).state_near(&self.trajectory.committed(), t - tc),
                 Kind::InsideStep => stepping!(self).integrate_within_step(k, tc, xc, t),
             };
         }
@@ -124,7 +125,7 @@ impl Simulator {
     }
 
     /// Bounds of `|x_i − x_c,i|` for the state x that
-    /// [`Self::state_near_committed`] gives at `delta` from the committed
+    /// [`Stepping::state_near`](super::stepping::Stepping::state_near) gives at `delta` from the committed
     /// point `x_c` when that point is grid node k (`None` elsewhere).
     ///
     /// Its series of order p is `x = x_c + Σ_{j=1..p} delta^j/j! d_j`,
@@ -271,7 +272,7 @@ mod tests {
                 for _ in 0..200 {
                     // Offsets of every order of the series, both signs.
                     let delta = (2.0 * random.next() - 1.0) * limit * 1e-9f64.powf(random.next());
-                    let series = sim.state_near_committed(delta);
+                    let series = stepping!(sim).state_near(&sim.trajectory.committed(), delta);
                     let bounds = sim.drift_bounds(delta).unwrap();
                     for i in 0..6 {
                         assert!(
@@ -385,7 +386,10 @@ mod tests {
                 }
                 deferred += 1;
                 let delta = t - sim.trajectory.committed_time;
-                let at_once = sim.clone().state_near_committed(delta);
+                let at_once = {
+                    let mut copy = sim.clone();
+                    stepping!(copy).state_near(&copy.trajectory.committed(), delta)
+                };
                 let bits = |x: State| x.map(f64::to_bits);
                 assert_eq!(bits(sim.state()), bits(at_once), "{name}, t = {t}");
                 same_as_at_once(name, &sim);

@@ -403,7 +403,7 @@ impl DenseOutput {
     }
 
     /// The W_k filter's rows of `e^{M_w σ} [z; w]` (M_w the 22-dimensional
-    /// matrix of [`super::filter`]).
+    /// matrix of [`super::system`]).
     pub(super) fn filter(
         &mut self,
         key: u64,

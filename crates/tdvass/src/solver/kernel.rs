@@ -381,7 +381,8 @@ pub(super) fn wide_vectors() -> bool {
 
 impl Simulator {
     /// [`Self::whole_steps`] on piecewise-linear roads: a step that a road
-    /// breakpoint splits goes through [`Self::integrate_within_step`].
+    /// breakpoint splits goes through
+    /// [`Stepping::integrate_split_step`](super::stepping::Stepping::integrate_split_step).
     pub(super) fn whole_steps_with<const DELAY: bool>(&mut self, last: u64) -> Result<bool> {
         #[cfg(target_arch = "x86_64")]
         if wide_vectors() {

@@ -66,12 +66,13 @@ mod config;
 mod contact;
 mod deferred;
 mod dense;
+mod events;
 pub mod expm;
-mod filter;
 mod grid;
 mod grid_step;
 mod holding;
 mod inputs;
+mod integrals;
 mod kernel;
 mod linalg;
 mod modes;
@@ -91,6 +92,7 @@ use crate::road::{Road, RoadPiece};
 pub use grid::{DelayGrid, DelayRegime, MAX_HISTORY_NODES, MIN_RESOLVED_DELAY};
 use holding::Holding;
 use inputs::Inputs;
+use integrals::{INTEGRALS, SquareIntegral};
 use modes::Modes;
 pub use outputs::{
     ComfortValues, ContactLoss, Instantaneous, OutputDerivatives, Outputs, RoadHolding, RunSummary,
@@ -99,12 +101,11 @@ pub use outputs::{
 pub use persist::STATE_FORMAT_VERSION;
 use stepping::stepping;
 use system::Filter;
-use time_average::series_order;
-use time_average::{INTEGRALS, SquareIntegral};
 
 pub use accuracy::StepChoice;
 pub use config::{DEFAULT_TOLERANCE, Metrics, SimulationConfig};
-pub use contact::{LOCATION_TOLERANCE, LiftOff, MAX_SWITCHES_PER_STEP};
+pub use contact::{LiftOff, MAX_SWITCHES_PER_STEP};
+pub use events::LOCATION_TOLERANCE;
 /// Rounding drift covered by the snap tolerance, in additions: a time
 /// accumulated as `t += step` over N steps is off by at most `N ε |t| / 2`,
 /// so `2^22 ε |t|` covers 2^22 steps with a factor 2 to spare (1.4e-8 s at
@@ -180,6 +181,18 @@ struct Trajectory {
     /// flight in progress (s); `None` in contact. The flights that ended
     /// are in the road-holding accumulators' lost time.
     flight_start: Option<f64>,
+}
+
+impl Trajectory {
+    /// The committed point, as stepping takes it.
+    fn committed(&self) -> stepping::Committed {
+        stepping::Committed {
+            k: self.grid_index,
+            time: self.committed_time,
+            state: self.committed_state,
+            filter: self.committed_filter,
+        }
+    }
 }
 
 /// What the run accumulates up to the committed point, for its outputs.
@@ -370,7 +383,7 @@ impl Simulator {
         };
         let piece = sim.inputs.piece_from(start_time);
         let rest = Filter::zeros();
-        sim.observers.integral.anchor = sim.squares_at(
+        sim.observers.integral.anchor = stepping!(sim).squares_at(
             0,
             start_time,
             &initial,
@@ -378,7 +391,7 @@ impl Simulator {
             (start_time, initial),
             &piece,
         );
-        let margin = sim.margin_at(start_time, &initial, &piece);
+        let margin = stepping!(sim).margin_at(start_time, &initial, &piece);
         sim.observers.holding = Holding::new(
             initial[crate::model::X_S] - initial[X_T],
             margin[0],
@@ -627,8 +640,15 @@ impl Simulator {
         let w = stepping!(self).filter_within_step(k, from, &w_from, next_node);
         let anchor = self.observers.integral.anchor;
         let mut holding = self.observers.holding;
-        let (step_integral, at_end, last_piece) =
-            self.integral_within_step(k, from, &w_from, anchor, next_node, (&x, &w), &mut holding);
+        let (step_integral, at_end, last_piece) = stepping!(self).integral_within_step(
+            k,
+            from,
+            &w_from,
+            anchor,
+            next_node,
+            (&x, &w),
+            &mut holding,
+        );
         self.observers.holding = holding;
         self.commit_node(
             k + 1,
@@ -640,14 +660,14 @@ impl Simulator {
     }
 
     /// Ends an advance at `t_end`, which snaps to the committed point: the
-    /// state there by [`Self::state_near_committed`], deferred where that
+    /// state there by [`Stepping::state_near`](stepping::Stepping::state_near), deferred where that
     /// is shown to be safe ([`deferred`]).
     fn finish_near_committed(&mut self, t_end: f64) -> Result<()> {
         let delta = t_end - self.trajectory.committed_time;
         if delta != 0.0 && self.defer(t_end, deferred::Kind::NearNode) {
             return Ok(());
         }
-        let x = self.state_near_committed(delta);
+        let x = stepping!(self).state_near(&self.trajectory.committed(), delta);
         self.check_divergence(t_end, &x)?;
         self.set_current(t_end, x);
         Ok(())
@@ -683,7 +703,7 @@ impl Simulator {
         k: u64,
         (time, x, w): (f64, State, Filter),
         step_integral: [f64; INTEGRALS],
-        arrival: (time_average::Squares, RoadPiece),
+        arrival: (integrals::Squares, RoadPiece),
     ) {
         self.inputs.record_node(k, [x[X_T], x[V_T]]);
         self.trajectory.grid_index = k;

@@ -2,8 +2,8 @@
 //! derivatives, and the summary of a run.
 
 use super::Simulator;
+use super::integrals::{Accumulated, WEIGHTED_FOURTH, WEIGHTED_SQUARE, rms_from_integral};
 use super::stepping::stepping;
-use super::time_average::{Accumulated, WEIGHTED_FOURTH, WEIGHTED_SQUARE, rms_from_integral};
 use crate::metrics::RmsValues;
 use crate::model::{Performance, State, V_T, X_S, X_T};
 use crate::road::RoadPiece;
@@ -393,8 +393,8 @@ impl Simulator {
                 return None;
             }
             let (a, b) = (
-                self.margin_kept(tc, &xc, &piece),
-                self.margin_kept(t, &x, &piece),
+                stepping!(self).margin_kept(tc, &xc, &piece),
+                stepping!(self).margin_kept(t, &x, &piece),
             );
             if !super::holding::may_lose_contact(t - tc, a, b) {
                 return None;
@@ -532,7 +532,7 @@ impl Simulator {
         let in_contact = if self.config.tire_contact.is_unilateral() {
             !self.in_flight()
         } else {
-            self.margin_at(t, &x, &piece)[0] >= 0.0
+            stepping!(self).margin_at(t, &x, &piece)[0] >= 0.0
         };
         OutputDerivatives {
             comfort,

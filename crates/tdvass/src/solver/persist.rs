@@ -9,7 +9,7 @@
 //! never a panic.
 
 use super::holding::Holding;
-use super::time_average::{INTEGRALS, WEIGHTED_FOURTH, WEIGHTED_SQUARE};
+use super::integrals::{INTEGRALS, WEIGHTED_FOURTH, WEIGHTED_SQUARE};
 use super::{Metrics, SimulationConfig, Simulator, accuracy};
 use crate::bytes::{ByteReader, ByteWriter};
 use crate::error::{Error, Result};

@@ -9,6 +9,7 @@ use super::inputs::PHASE_ANCHOR;
 use super::kernel::{
     HarmonicPhase, HotState, LinearPiece, Segment, SegmentEnd, run_segment, within_bounds,
 };
+use super::stepping::stepping;
 use super::system::Filter;
 use crate::error::Result;
 use crate::metrics::RunningRms;
@@ -300,8 +301,8 @@ impl Simulator {
         );
         let anchor = self.observers.integral.anchor;
         let mut step_holding = *holding;
-        let (x_end, w_end, step_integral, at_end, last_piece) =
-            self.integrate_split_step(k, t, node, node_filter, anchor, to, &mut step_holding);
+        let (x_end, w_end, step_integral, at_end, last_piece) = stepping!(self)
+            .integrate_split_step(k, t, node, node_filter, anchor, to, &mut step_holding);
         let x_next: [f64; 6] = x_end.into();
         if (k + 1).is_multiple_of(PHASE_ANCHOR) {
             self.inputs.road.release_before(t);

@@ -2,8 +2,30 @@
 //! augmented layout of Eq. (23)'s step maps (the plant, the generators of
 //! the delayed input and of the roads), the selection of the history's
 //! `(x_t, v_t)`, and the ISO 2631-1 W_k filter's coupling to the body
-//! acceleration (the 22-dimensional matrix of `super::filter`'s
-//! documentation). It knows no step, no accumulator and no simulator.
+//! acceleration (below). It knows no step, no accumulator and no simulator.
+//!
+//! **The W_k filter** weights the body acceleration inside the precise
+//! integration (only with the comfort metrics). The realization of [`crate::comfort::wk_state_space`],
+//! `ẇ = A_w w + b_w BA`, `a_w = c_w w` (8 states, m/s²), is driven by
+//! `BA = c X + β_u u + β_g x_g` (row V_S of the solver's A, and the V_S
+//! entries of b and e, which are zero in every variant). The plant and the
+//! filter together form the block lower-triangular system
+//!
+//! ```text
+//! d/dt [X]   [ A        0  ] [X]   [ b      ]       [ e      ]
+//!      [w] = [ b_w c    A_w] [w] + [ b_w β_u] u  +  [ b_w β_g] x_g
+//! ```
+//!
+//! with the same inputs as the plant alone (the delayed tire displacement
+//! as a cubic, the road as a line or a sine), so one exponential of the
+//! 22-dimensional augmented matrix (plant 6, delayed input 4, linear road
+//! 2, harmonic road 2, filter 8) gives the filter's exact step
+//! `w(a+δ) = Φ_ww w(a) + Φ_wx X(a) + Γ_wu p + Γ_wl q + Γ_wh z`
+//! (`operators::FilterRows`). The plant keeps the matrices of its own
+//! 14-dimensional exponential: turning the filter on changes no bit of the
+//! plant's states or of the BA, SDD, TDD values.
+//!
+//! The filter starts from rest (`w(t_0) = 0`).
 
 use crate::comfort::{WK_STATES, WkStateSpace, wk_state_space};
 use crate::model::{Plant, State, V_S, V_T, X_T};

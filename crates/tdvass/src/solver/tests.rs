@@ -145,8 +145,15 @@ fn whole_steps_match_the_general_step_closely() {
             let w = stepping!(general).filter_within_step(k, from, &w_from, to);
             let anchor = general.observers.integral.anchor;
             let mut holding = general.observers.holding;
-            let (step_integral, at_end, piece) =
-                general.integral_within_step(k, from, &w_from, anchor, to, (&x, &w), &mut holding);
+            let (step_integral, at_end, piece) = stepping!(general).integral_within_step(
+                k,
+                from,
+                &w_from,
+                anchor,
+                to,
+                (&x, &w),
+                &mut holding,
+            );
             general.observers.holding = holding;
             general.commit_node(k + 1, (to, x, w), step_integral, (at_end, piece));
         }
