@@ -27,22 +27,19 @@ const FOLDERS: &[&str] = &["model", "road", "analysis"];
 /// The files of `crates/tdvass/src/solver`, from the ground up.
 const SOLVER_LAYERS: &[(&str, &[&str])] = &[
     ("linear algebra", &["expm", "linalg"]),
-    ("system", &["system", "grid", "holding", "config"]),
+    ("system", &["system", "grid", "holding", "config", "contact"]),
     ("step maps and inputs", &["operators", "pieces", "inputs"]),
     ("grid and dense steps", &["grid_step", "dense"]),
     ("modes", &["modes"]),
-    ("stepping", &["stepping", "integrals", "events"]),
+    ("stepping", &["stepping", "integrals", "events", "deferred"]),
     (
         "driver",
         &[
             "mod",
             "accuracy",
-            "contact",
-            "deferred",
             "kernel",
             "outputs",
             "persist",
-            "steps",
             "time_average",
         ],
     ),

@@ -46,16 +46,11 @@
 //! in the mode at the step's start. Both are within the tolerance's step
 //! choice, which probes the unilateral run itself.
 
-use super::Simulator;
-use super::stepping::stepping;
-use crate::error::{Error, Result};
-use crate::model::X_T;
-
 /// Most switches between contact and flight inside one internal step.
 pub const MAX_SWITCHES_PER_STEP: u32 = 16;
 
 /// Lift-offs kept for the front-ends' event log between two takes.
-const LIFT_OFF_LOG: usize = 64;
+pub(super) const LIFT_OFF_LOG: usize = 64;
 
 /// A lift-off, as logged.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -76,116 +71,12 @@ pub(super) struct LiftOffLog {
     pub(super) dropped: u64,
 }
 
-impl Simulator {
-    /// Whether the wheel is in flight now (unilateral tire only).
-    pub fn in_flight(&self) -> bool {
-        self.trajectory.flight_start.is_some()
-    }
-
-    /// The lift-offs since the last call (at most 64; the second value
-    /// counts those left out), for an event log.
-    pub fn take_lift_offs(&mut self) -> (Vec<LiftOff>, u64) {
-        let log = std::mem::take(&mut self.observers.lift_off_log);
-        (log.events, log.dropped)
-    }
-
-    /// The tire load as the tire law gives it (N): `load` =
-    /// `k_t (x_g − x_t)`, at least −W with the unilateral tire.
-    pub(super) fn tire_load(&self, load: f64) -> f64 {
-        if self.config.tire_contact.is_unilateral() {
-            load.max(-self.static_load())
-        } else {
-            load
-        }
-    }
-
-    /// Puts the operators of the mode the holding state says, the contact
-    /// operators being in force (after a restore or a rebuild of them).
-    pub(super) fn enter_recorded_mode(&mut self) {
-        self.modes.other_mode = None;
-        if self.in_flight() {
-            self.modes.swap(&self.plant, self.grid.step);
-        }
-    }
-
-    /// In unilateral mode: the first switch in grid step k after the
-    /// committed point, if it comes at or before `until`, is committed and
-    /// the mode flipped (`Ok(true)`); `Ok(false)` if none comes by then.
-    /// `switches`: the switches made in this step so far (refused beyond
-    /// [`MAX_SWITCHES_PER_STEP`]).
-    pub(super) fn switch_by(&mut self, k: u64, until: f64, switches: &mut u32) -> Result<bool> {
-        let from = (
-            self.trajectory.committed_time,
-            self.trajectory.committed_state,
-        );
-        let Some(time) = stepping!(self).next_switch(k, from) else {
-            return Ok(false);
-        };
-        if time > until && !self.snaps(until, time) {
-            return Ok(false);
-        }
-        *switches += 1;
-        if *switches > MAX_SWITCHES_PER_STEP {
-            return Err(Error::Numerical {
-                what: "the unilateral tire (tire_contact = 1)",
-                reason: format!(
-                    "more than {MAX_SWITCHES_PER_STEP} switches between contact and flight in the internal step from {} s: the margin to W/k_t = {} m changes sign faster than a step of {} s resolves; use a tighter tolerance or a smaller max_internal_step, or the bilateral tire",
-                    self.grid_time(k),
-                    self.modes.grid_step.contact.limit,
-                    self.grid.step
-                ),
-            });
-        }
-        self.commit_switch(k, time)
-    }
-
-    /// Commits the state at the switch time `time` in step k and flips the
-    /// mode.
-    fn commit_switch(&mut self, k: u64, time: f64) -> Result<bool> {
-        let (tc, xc) = (
-            self.trajectory.committed_time,
-            self.trajectory.committed_state,
-        );
-        let x = if time == tc {
-            xc
-        } else {
-            stepping!(self).integrate_within_step(k, tc, xc, time)
-        };
-        self.check_divergence(time, &x)?;
-        self.observers.outputs_cache = None;
-        self.set_current(time, x);
-        self.close_run_here();
-        let piece = self.inputs.piece_from(time);
-        if self.in_flight() {
-            let start = self.trajectory.flight_start.take().unwrap_or(time);
-            self.observers.holding.lost_time += time - start;
-        } else {
-            let limit = self.modes.grid_step.contact.limit;
-            self.trajectory.flight_start = Some(time);
-            self.observers.holding.lift_offs += 1;
-            self.observers.holding.first_loss.get_or_insert(time);
-            let event = LiftOff {
-                time,
-                tire_deflection: x[X_T] - piece.value(time),
-                limit,
-            };
-            if self.observers.lift_off_log.events.len() < LIFT_OFF_LOG {
-                self.observers.lift_off_log.events.push(event);
-            } else {
-                self.observers.lift_off_log.dropped += 1;
-            }
-        }
-        self.modes.swap(&self.plant, self.grid.step);
-        self.reanchor_after_input();
-        Ok(true)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::model::{State, TireContact, V_T, X_T};
     use crate::solver::SimulationConfig;
+    use crate::solver::Simulator;
 
     #[test]
     fn more_switches_in_one_step_than_the_limit_are_refused_with_the_cause() {

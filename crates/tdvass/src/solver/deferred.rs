@@ -1,6 +1,6 @@
 //! A current state found when first asked for.
 //!
-//! [`Simulator::advance_to`] ends at a time `t` that is either a grid node
+//! `Simulator::advance_to` ends at a time `t` that is either a grid node
 //! (its state comes with the step), within the snap tolerance of the
 //! committed node (the state by [`Stepping::state_near`](super::stepping::Stepping::state_near)), or
 //! inside a step (the state by the exact partial steps of
@@ -8,7 +8,7 @@
 //! and a master often does not ask for the state at every communication
 //! point (a getter of the time averages does not need it). So the
 //! simulator may defer it: `current_state` then holds the committed state
-//! and [`Simulator::settle`] computes the state at `t` when it is first
+//! and `Simulator::settle` computes the state at `t` when it is first
 //! needed (the state, the outputs, the saved bytes, a change of the
 //! operators or of the road), by the same function of the same values
 //! (the committed point, the step, the history and the road do not change
@@ -20,9 +20,9 @@
 //! the divergence bound. Where a bound is not available or too large, the
 //! state is computed at once and checked, as before.
 //!
-//! - Near the node ([`Simulator::drift_bounds`]): the terms of the Taylor
+//! - Near the node ([`Stepping::drift_bounds`]): the terms of the Taylor
 //!   series.
-//! - Inside a step ([`Simulator::inside_bounds`]): with `y = x − x_c`,
+//! - Inside a step ([`Stepping::inside_bounds`]): with `y = x − x_c`,
 //!   `y' = A y + f`, `f = A x_c + b u + e x_g`, `y(0) = 0`, and a diagonal
 //!   `D` of powers of two balancing A (`ν = ‖D⁻¹ A D‖_∞`),
 //!
@@ -40,15 +40,13 @@
 //!   the largest value in the tests of `dense`).
 //!
 //! **The contact-loss test** of the stretch from the committed point
-//! ([`Simulator::first_contact_loss`]) runs on the same bounds: its
+//! (`Simulator::first_contact_loss`) runs on the same bounds: its
 //! evaluation is monotone in the end point's `x_t` and `|v_t|`, so a
 //! stretch that passes with the bounds passes with the state; otherwise
 //! the state is computed and the exact test runs.
 
 use super::linalg::{hermite_bound, scaled_norm};
-use super::stepping::{series_order, stepping};
-use super::{Simulator, divergence_bound};
-use crate::model::State;
+use super::stepping::{Committed, Stepping, series_order};
 use crate::road::RoadPiece;
 
 /// What finds a deferred state.
@@ -64,66 +62,11 @@ pub(super) enum Kind {
 /// A deferred current state: what finds it and bounds of `|x_i − x_c,i|`.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Deferred {
-    kind: Kind,
-    drift: [f64; 6],
+    pub(super) kind: Kind,
+    pub(super) drift: [f64; 6],
 }
 
-impl Simulator {
-    /// The current state if it has been computed; `None` while it is
-    /// deferred: [`Self::advance_to`] may leave the state at a point near
-    /// a node or inside a step to be found when first asked for
-    /// ([`Self::state`], the outputs), after showing that it passes the
-    /// divergence check.
-    pub fn computed_state(&self) -> Option<State> {
-        self.trajectory
-            .deferred
-            .is_none()
-            .then_some(self.trajectory.current_state)
-    }
-
-    /// Computes a deferred current state (the same value as when it is
-    /// computed at once).
-    pub(super) fn settle(&mut self) {
-        if let Some(deferred) = self.trajectory.deferred.take() {
-            let (k, tc, xc, t) = (
-                self.trajectory.grid_index,
-                self.trajectory.committed_time,
-                self.trajectory.committed_state,
-                self.trajectory.current_time,
-            );
-            self.trajectory.current_state = match deferred.kind {
-                Kind::NearNode => stepping!(self).state_near(&self.trajectory.committed(), t - tc),
-                Kind::InsideStep => stepping!(self).integrate_within_step(k, tc, xc, t),
-            };
-        }
-    }
-
-    /// Bounds of how far the deferred state lies from the committed one
-    /// (`None` when it is computed).
-    pub(super) fn deferred_drift(&self) -> Option<[f64; 6]> {
-        self.trajectory.deferred.map(|d| d.drift)
-    }
-
-    /// Makes `t` the current time with its state deferred, where the
-    /// bounds of `kind` show that the state passes the divergence check;
-    /// `false` (the current point unchanged) otherwise.
-    pub(super) fn defer(&mut self, t: f64, kind: Kind) -> bool {
-        let drift = match kind {
-            Kind::NearNode => self.drift_bounds(t - self.trajectory.committed_time),
-            Kind::InsideStep => self.inside_bounds(t),
-        };
-        let x = self.trajectory.committed_state;
-        let Some(drift) = drift
-            .filter(|drift| (0..6).all(|i| x[i].abs() + drift[i] <= 0.5 * divergence_bound(i)))
-        else {
-            return false;
-        };
-        self.trajectory.current_time = t;
-        self.trajectory.current_state = x;
-        self.trajectory.deferred = Some(Deferred { kind, drift });
-        true
-    }
-
+impl Stepping<'_> {
     /// Bounds of `|x_i − x_c,i|` for the state x that
     /// [`Stepping::state_near`](super::stepping::Stepping::state_near) gives at `delta` from the committed
     /// point `x_c` when that point is grid node k (`None` elsewhere).
@@ -147,13 +90,9 @@ impl Simulator {
     ///
     /// The sum is bounded with `|delta|^j` for `|delta|^j/j!`; the
     /// factor 1.001 and `4 ε |x_c,i|` cover the rounding of the series.
-    pub(super) fn drift_bounds(&mut self, delta: f64) -> Option<[f64; 6]> {
-        let (k, t, x) = (
-            self.trajectory.grid_index,
-            self.trajectory.committed_time,
-            self.trajectory.committed_state,
-        );
-        if t != self.grid_time(k) {
+    pub(super) fn drift_bounds(&mut self, at: &Committed, delta: f64) -> Option<[f64; 6]> {
+        let (k, t, x) = (at.k, at.time, at.state);
+        if t != self.inputs.node_time(k) {
             return None;
         }
         let norm = self.modes.solver_matrix_norm;
@@ -169,7 +108,7 @@ impl Simulator {
             input[3] = (12.0 * rise + 6.0 * slopes) / (h * h);
         }
         let road_piece = self.inputs.piece_from(t + delta);
-        let road = stepping!(self).forcing(&road_piece).derivative_bounds(t);
+        let road = self.forcing(&road_piece).derivative_bounds(t);
         let (b, e) = (self.modes.input_column, self.plant.e);
         let (b_max, e_max) = (b.amax(), e.amax());
         let mut previous = x.amax();
@@ -190,22 +129,18 @@ impl Simulator {
     /// Bounds of `|x_i − x_c,i|` over the stretch from the committed point
     /// to `t` inside its step (see the module docs); `None` where the
     /// stretch crosses a road breakpoint or `ν (t − t_c) > 1`.
-    pub(super) fn inside_bounds(&mut self, t: f64) -> Option<[f64; 6]> {
-        let (k, tc, xc) = (
-            self.trajectory.grid_index,
-            self.trajectory.committed_time,
-            self.trajectory.committed_state,
-        );
+    pub(super) fn inside_bounds(&mut self, at: &Committed, t: f64) -> Option<[f64; 6]> {
+        let (k, tc, xc) = (at.k, at.time, at.state);
         let length = t - tc;
         let road_piece = self.inputs.piece_from(tc);
         if length.is_nan() || length <= 0.0 || road_piece.end() < t {
             return None;
         }
-        let road = match stepping!(self).forcing(&road_piece) {
+        let road = match self.forcing(&road_piece) {
             RoadPiece::Harmonic { amplitude, .. } => amplitude.abs(),
             piece @ RoadPiece::Linear { .. } => piece.value(tc).abs().max(piece.value(t).abs()),
         };
-        let scaling = stepping!(self).dense_output().scaling;
+        let scaling = self.dense_output().scaling;
         let theta = scaling.norm * length;
         if theta.is_nan() || theta > 1.0 {
             return None;
@@ -215,10 +150,12 @@ impl Simulator {
             0.0
         } else {
             let mut bound = hermite_bound(self.inputs.delayed_nodes(k), h);
-            if self.grid.delay_inside_step() && t > self.grid_time(k) + self.grid.inner_delay() {
+            if self.grid.delay_inside_step()
+                && t > self.inputs.node_time(k) + self.grid.inner_delay()
+            {
                 // The piece after t_k + tau interpolates node k and the
                 // step's end node.
-                let (_, [end_x, end_v]) = stepping!(self).inner_delay_next_node(k, tc, xc);
+                let (_, [end_x, end_v]) = self.inner_delay_next_node(k, tc, xc);
                 let [node_x, node_v] = self.inputs.node_tire(k);
                 bound = bound.max(hermite_bound([node_x, node_v, end_x, end_v], h));
             }
@@ -237,9 +174,12 @@ impl Simulator {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+
+    use crate::model::State;
     use crate::solver::SimulationConfig;
+    use crate::solver::Simulator;
     use crate::solver::dense::tests::Lcg;
+    use crate::solver::stepping::stepping;
     use crate::solver::time_average::tests::configs;
 
     /// The configurations of the time-average tests and the unilateral
@@ -273,7 +213,9 @@ mod tests {
                     // Offsets of every order of the series, both signs.
                     let delta = (2.0 * random.next() - 1.0) * limit * 1e-9f64.powf(random.next());
                     let series = stepping!(sim).state_near(&sim.trajectory.committed(), delta);
-                    let bounds = sim.drift_bounds(delta).unwrap();
+                    let bounds = stepping!(sim)
+                        .drift_bounds(&sim.trajectory.committed(), delta)
+                        .unwrap();
                     for i in 0..6 {
                         assert!(
                             (series[i] - x[i]).abs() <= bounds[i],
@@ -303,7 +245,8 @@ mod tests {
                 let next = sim.grid_time(k + 1);
                 for _ in 0..100 {
                     let t = tc + (next - tc) * random.next();
-                    let Some(bounds) = sim.inside_bounds(t) else {
+                    let Some(bounds) = stepping!(sim).inside_bounds(&sim.trajectory.committed(), t)
+                    else {
                         continue;
                     };
                     used += 1;

@@ -81,7 +81,6 @@ mod outputs;
 mod persist;
 mod pieces;
 mod stepping;
-mod steps;
 mod system;
 mod time_average;
 
@@ -89,6 +88,8 @@ use crate::error::{Error, Result};
 use crate::metrics::{RunningRms, Weights};
 use crate::model::{Params, Plant, State, V_T, Variant, X_T};
 use crate::road::{Road, RoadPiece};
+use contact::LIFT_OFF_LOG;
+use deferred::{Deferred, Kind};
 pub use grid::{DelayGrid, DelayRegime, MAX_HISTORY_NODES, MIN_RESOLVED_DELAY};
 use holding::Holding;
 use inputs::Inputs;
@@ -784,6 +785,167 @@ impl Simulator {
             rms_dynamic_tire_load_ratio: outputs.rms_dynamic_tire_load_ratio,
             road_holding: outputs.road_holding,
         })
+    }
+
+    /// The current state if it has been computed; `None` while it is
+    /// deferred: [`Self::advance_to`] may leave the state at a point near
+    /// a node or inside a step to be found when first asked for
+    /// ([`Self::state`], the outputs), after showing that it passes the
+    /// divergence check.
+    pub fn computed_state(&self) -> Option<State> {
+        self.trajectory
+            .deferred
+            .is_none()
+            .then_some(self.trajectory.current_state)
+    }
+
+    /// Computes a deferred current state (the same value as when it is
+    /// computed at once).
+    fn settle(&mut self) {
+        if let Some(deferred) = self.trajectory.deferred.take() {
+            let (k, tc, xc, t) = (
+                self.trajectory.grid_index,
+                self.trajectory.committed_time,
+                self.trajectory.committed_state,
+                self.trajectory.current_time,
+            );
+            self.trajectory.current_state = match deferred.kind {
+                Kind::NearNode => stepping!(self).state_near(&self.trajectory.committed(), t - tc),
+                Kind::InsideStep => stepping!(self).integrate_within_step(k, tc, xc, t),
+            };
+        }
+    }
+
+    /// Bounds of how far the deferred state lies from the committed one
+    /// (`None` when it is computed).
+    fn deferred_drift(&self) -> Option<[f64; 6]> {
+        self.trajectory.deferred.map(|d| d.drift)
+    }
+
+    /// Makes `t` the current time with its state deferred, where the
+    /// bounds of `kind` show that the state passes the divergence check;
+    /// `false` (the current point unchanged) otherwise.
+    fn defer(&mut self, t: f64, kind: Kind) -> bool {
+        let drift = match kind {
+            Kind::NearNode => stepping!(self).drift_bounds(
+                &self.trajectory.committed(),
+                t - self.trajectory.committed_time,
+            ),
+            Kind::InsideStep => stepping!(self).inside_bounds(&self.trajectory.committed(), t),
+        };
+        let x = self.trajectory.committed_state;
+        let Some(drift) = drift
+            .filter(|drift| (0..6).all(|i| x[i].abs() + drift[i] <= 0.5 * divergence_bound(i)))
+        else {
+            return false;
+        };
+        self.trajectory.current_time = t;
+        self.trajectory.current_state = x;
+        self.trajectory.deferred = Some(Deferred { kind, drift });
+        true
+    }
+
+    /// Whether the wheel is in flight now (unilateral tire only).
+    pub fn in_flight(&self) -> bool {
+        self.trajectory.flight_start.is_some()
+    }
+
+    /// The lift-offs since the last call (at most 64; the second value
+    /// counts those left out), for an event log.
+    pub fn take_lift_offs(&mut self) -> (Vec<LiftOff>, u64) {
+        let log = std::mem::take(&mut self.observers.lift_off_log);
+        (log.events, log.dropped)
+    }
+
+    /// The tire load as the tire law gives it (N): `load` =
+    /// `k_t (x_g − x_t)`, at least −W with the unilateral tire.
+    fn tire_load(&self, load: f64) -> f64 {
+        if self.config.tire_contact.is_unilateral() {
+            load.max(-self.static_load())
+        } else {
+            load
+        }
+    }
+
+    /// Puts the operators of the mode the holding state says, the contact
+    /// operators being in force (after a restore or a rebuild of them).
+    fn enter_recorded_mode(&mut self) {
+        self.modes.other_mode = None;
+        if self.in_flight() {
+            self.modes.swap(&self.plant, self.grid.step);
+        }
+    }
+
+    /// In unilateral mode: the first switch in grid step k after the
+    /// committed point, if it comes at or before `until`, is committed and
+    /// the mode flipped (`Ok(true)`); `Ok(false)` if none comes by then.
+    /// `switches`: the switches made in this step so far (refused beyond
+    /// [`MAX_SWITCHES_PER_STEP`]).
+    fn switch_by(&mut self, k: u64, until: f64, switches: &mut u32) -> Result<bool> {
+        let from = (
+            self.trajectory.committed_time,
+            self.trajectory.committed_state,
+        );
+        let Some(time) = stepping!(self).next_switch(k, from) else {
+            return Ok(false);
+        };
+        if time > until && !self.snaps(until, time) {
+            return Ok(false);
+        }
+        *switches += 1;
+        if *switches > MAX_SWITCHES_PER_STEP {
+            return Err(Error::Numerical {
+                what: "the unilateral tire (tire_contact = 1)",
+                reason: format!(
+                    "more than {MAX_SWITCHES_PER_STEP} switches between contact and flight in the internal step from {} s: the margin to W/k_t = {} m changes sign faster than a step of {} s resolves; use a tighter tolerance or a smaller max_internal_step, or the bilateral tire",
+                    self.grid_time(k),
+                    self.modes.grid_step.contact.limit,
+                    self.grid.step
+                ),
+            });
+        }
+        self.commit_switch(k, time)
+    }
+
+    /// Commits the state at the switch time `time` in step k and flips the
+    /// mode.
+    fn commit_switch(&mut self, k: u64, time: f64) -> Result<bool> {
+        let (tc, xc) = (
+            self.trajectory.committed_time,
+            self.trajectory.committed_state,
+        );
+        let x = if time == tc {
+            xc
+        } else {
+            stepping!(self).integrate_within_step(k, tc, xc, time)
+        };
+        self.check_divergence(time, &x)?;
+        self.observers.outputs_cache = None;
+        self.set_current(time, x);
+        self.close_run_here();
+        let piece = self.inputs.piece_from(time);
+        if self.in_flight() {
+            let start = self.trajectory.flight_start.take().unwrap_or(time);
+            self.observers.holding.lost_time += time - start;
+        } else {
+            let limit = self.modes.grid_step.contact.limit;
+            self.trajectory.flight_start = Some(time);
+            self.observers.holding.lift_offs += 1;
+            self.observers.holding.first_loss.get_or_insert(time);
+            let event = LiftOff {
+                time,
+                tire_deflection: x[X_T] - piece.value(time),
+                limit,
+            };
+            if self.observers.lift_off_log.events.len() < LIFT_OFF_LOG {
+                self.observers.lift_off_log.events.push(event);
+            } else {
+                self.observers.lift_off_log.dropped += 1;
+            }
+        }
+        self.modes.swap(&self.plant, self.grid.step);
+        self.reanchor_after_input();
+        Ok(true)
     }
 }
 
