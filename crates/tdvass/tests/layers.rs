@@ -27,21 +27,18 @@ const FOLDERS: &[&str] = &["model", "road", "analysis"];
 /// The files of `crates/tdvass/src/solver`, from the ground up.
 const SOLVER_LAYERS: &[(&str, &[&str])] = &[
     ("linear algebra", &["expm", "linalg"]),
-    ("system", &["system", "grid", "holding", "config", "contact"]),
+    (
+        "system",
+        &["system", "grid", "holding", "config", "contact"],
+    ),
     ("step maps and inputs", &["operators", "pieces", "inputs"]),
     ("grid and dense steps", &["grid_step", "dense"]),
     ("modes", &["modes"]),
     ("stepping", &["stepping", "integrals", "events", "deferred"]),
+    ("observers", &["observers"]),
     (
         "driver",
-        &[
-            "mod",
-            "accuracy",
-            "kernel",
-            "outputs",
-            "persist",
-            "time_average",
-        ],
+        &["mod", "accuracy", "kernel", "outputs", "persist"],
     ),
 ];
 

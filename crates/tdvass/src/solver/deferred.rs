@@ -179,8 +179,8 @@ mod tests {
     use crate::solver::SimulationConfig;
     use crate::solver::Simulator;
     use crate::solver::dense::tests::Lcg;
+    use crate::solver::observers::tests::configs;
     use crate::solver::stepping::stepping;
-    use crate::solver::time_average::tests::configs;
 
     /// The configurations of the time-average tests and the unilateral
     /// tire in flight (the flight plant and its constant forcing).

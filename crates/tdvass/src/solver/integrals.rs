@@ -36,7 +36,7 @@
 //! ([`SquareIntegral`]) and the integrals over a stretch inside a step,
 //! which stepping computes from the exact partial steps
 //! ([`Stepping::integral_within_step`], [`Stepping::integrate_split_step`]);
-//! the simulator's `time_average` closes and reads the runs.
+//! the observers (`observers`) close and read the runs.
 
 use super::holding::{Holding, deflection, margin};
 use super::stepping::Stepping;

@@ -594,11 +594,10 @@ impl Simulator {
                     // The node is a road breakpoint: x_g has a kink there,
                     // so the RMS run of nodes closes at it.
                     let after = self.inputs.piece_from(now);
-                    self.close_run_at_node(
+                    self.observers.close_run_at_node(
+                        &mut stepping!(self),
                         k,
-                        now,
-                        &State::from(x),
-                        &Filter::from(w),
+                        (now, &State::from(x), &Filter::from(w)),
                         &mut rms,
                         &mut weighted,
                         &piece,
@@ -659,11 +658,10 @@ impl Simulator {
         let node = State::from(x);
         let node_filter = Filter::from(w);
         let piece_at_start = self.inputs.piece_from(t);
-        self.close_run_at_node(
+        self.observers.close_run_at_node(
+            &mut stepping!(self),
             k,
-            t,
-            &node,
-            &node_filter,
+            (t, &node, &node_filter),
             rms,
             weighted,
             &piece_at_start,
@@ -686,7 +684,8 @@ impl Simulator {
             *holding = step_holding;
             holding.add_node(&x_next);
         }
-        self.restart_run_after_step(
+        self.observers.restart_run_after_step(
+            &mut stepping!(self),
             k + 1,
             (to, &x_end, &w_end),
             step_integral,

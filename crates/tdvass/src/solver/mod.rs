@@ -76,16 +76,16 @@ mod integrals;
 mod kernel;
 mod linalg;
 mod modes;
+mod observers;
 mod operators;
 mod outputs;
 mod persist;
 mod pieces;
 mod stepping;
 mod system;
-mod time_average;
 
 use crate::error::{Error, Result};
-use crate::metrics::{RunningRms, Weights};
+use crate::metrics::{RmsValues, Weights};
 use crate::model::{Params, Plant, State, V_T, Variant, X_T};
 use crate::road::{Road, RoadPiece};
 use contact::LIFT_OFF_LOG;
@@ -93,8 +93,10 @@ use deferred::{Deferred, Kind};
 pub use grid::{DelayGrid, DelayRegime, MAX_HISTORY_NODES, MIN_RESOLVED_DELAY};
 use holding::Holding;
 use inputs::Inputs;
-use integrals::{INTEGRALS, SquareIntegral};
+use integrals::INTEGRALS;
+use integrals::{Accumulated, rms_from_integral};
 use modes::Modes;
+use observers::Observers;
 pub use outputs::{
     ComfortValues, ContactLoss, Instantaneous, OutputDerivatives, Outputs, RoadHolding, RunSummary,
     TimeAverages,
@@ -158,6 +160,9 @@ pub struct Simulator {
     trajectory: Trajectory,
     /// What the run accumulates for its outputs.
     observers: Observers,
+    /// The outputs at the current time, once computed (cleared by every
+    /// change of the state, the time or a parameter).
+    outputs_cache: Option<Outputs>,
 }
 
 /// Where the run is: the committed point (a grid node, or a point where
@@ -194,27 +199,6 @@ impl Trajectory {
             filter: self.committed_filter,
         }
     }
-}
-
-/// What the run accumulates up to the committed point, for its outputs.
-#[derive(Debug, Clone)]
-struct Observers {
-    /// `Σ y²` of BA, SDD, TDD over the grid nodes of the open run (after
-    /// the anchor of `integral`, up to `grid_index`).
-    rms: RunningRms,
-    /// The time integral of `y²` (see [`time_average`]).
-    integral: SquareIntegral,
-    /// `Σ a_w²`, `Σ a_w⁴` over the grid nodes of the open run (as `rms`).
-    weighted: [f64; 2],
-    /// Road holding and working space up to the committed point.
-    holding: Holding,
-    /// The dynamic tire load at the start (N).
-    start_load: f64,
-    /// Lift-offs not yet taken by a front-end's event log.
-    lift_off_log: contact::LiftOffLog,
-    /// The outputs at the current time, once computed (cleared by every
-    /// change of the state, the time or a parameter).
-    outputs_cache: Option<Outputs>,
 }
 
 impl Simulator {
@@ -371,15 +355,8 @@ impl Simulator {
                 deferred: None,
                 flight_start: None,
             },
-            observers: Observers {
-                rms: RunningRms::default(),
-                integral: SquareIntegral::new(start_time, Default::default()),
-                weighted: [0.0; 2],
-                holding: Holding::new(0.0, 1.0, start_time),
-                start_load: 0.0,
-                lift_off_log: contact::LiftOffLog::default(),
-                outputs_cache: None,
-            },
+            observers: Observers::new(start_time),
+            outputs_cache: None,
             config,
         };
         let piece = sim.inputs.piece_from(start_time);
@@ -537,7 +514,7 @@ impl Simulator {
     /// ([`Self::computed_state`]): bounds show that it passes the
     /// divergence check, and it is the same value to the bit.
     pub fn advance_to(&mut self, t_end: f64) -> Result<()> {
-        self.observers.outputs_cache = None;
+        self.outputs_cache = None;
         if !t_end.is_finite()
             || (t_end < self.trajectory.current_time
                 && !self.snaps(t_end, self.trajectory.current_time))
@@ -628,7 +605,15 @@ impl Simulator {
             );
             let piece = self.inputs.piece_from(t);
             let (mut rms, mut weighted) = (self.observers.rms, self.observers.weighted);
-            self.close_run_at_node(k, t, &x, &w, &mut rms, &mut weighted, &piece, &piece);
+            self.observers.close_run_at_node(
+                &mut stepping!(self),
+                k,
+                (t, &x, &w),
+                &mut rms,
+                &mut weighted,
+                &piece,
+                &piece,
+            );
             (self.observers.rms, self.observers.weighted) = (rms, weighted);
         }
         let from = (
@@ -715,7 +700,13 @@ impl Simulator {
         if self.config.metrics.road_holding() {
             self.observers.holding.add_node(&x.into());
         }
-        self.restart_run_after_step(k, (time, &x, &w), step_integral, arrival);
+        self.observers.restart_run_after_step(
+            &mut stepping!(self),
+            k,
+            (time, &x, &w),
+            step_integral,
+            arrival,
+        );
         self.inputs.road.release_before(time);
     }
 
@@ -725,7 +716,7 @@ impl Simulator {
     /// that point instead.
     pub fn set_road_input(&mut self, value: f64, slope: f64) -> Result<()> {
         self.settle();
-        self.observers.outputs_cache = None;
+        self.outputs_cache = None;
         if !self.inputs.road.is_input() {
             return Err(Error::InvalidSetting {
                 name: "road",
@@ -739,7 +730,8 @@ impl Simulator {
         self.modes.next_node = None;
         let start = self.close_run_for_input();
         self.inputs.road.set_input(start, value, slope)?;
-        self.reanchor_after_input();
+        self.observers
+            .reanchor(&mut stepping!(self), &self.trajectory.committed());
         Ok(())
     }
 
@@ -747,7 +739,7 @@ impl Simulator {
     /// [`crate::limits::check_rates`]); the history is kept.
     pub fn set_gain(&mut self, g: f64) -> Result<()> {
         self.settle();
-        self.observers.outputs_cache = None;
+        self.outputs_cache = None;
         let params = Params {
             g,
             ..self.config.params
@@ -770,7 +762,7 @@ impl Simulator {
 
     /// Changes the weights of J (tunable).
     pub fn set_weights(&mut self, weights: Weights) {
-        self.observers.outputs_cache = None;
+        self.outputs_cache = None;
         self.config.weights = weights;
     }
 
@@ -920,7 +912,7 @@ impl Simulator {
             stepping!(self).integrate_within_step(k, tc, xc, time)
         };
         self.check_divergence(time, &x)?;
-        self.observers.outputs_cache = None;
+        self.outputs_cache = None;
         self.set_current(time, x);
         self.close_run_here();
         let piece = self.inputs.piece_from(time);
@@ -944,8 +936,98 @@ impl Simulator {
             }
         }
         self.modes.swap(&self.plant, self.grid.step);
-        self.reanchor_after_input();
+        self.observers
+            .reanchor(&mut stepping!(self), &self.trajectory.committed());
         Ok(true)
+    }
+
+    /// Everything accumulated from `t_0` to the current time
+    /// ([`Observers::accumulated`]).
+    fn accumulated_now(&mut self) -> Accumulated {
+        self.settle();
+        let (t, x) = (self.trajectory.current_time, self.trajectory.current_state);
+        let drift = self.snaps(t, self.trajectory.committed_time);
+        self.observers.accumulated(
+            &mut stepping!(self),
+            &self.trajectory.committed(),
+            (t, x),
+            drift,
+        )
+    }
+
+    /// `∫_{t_0}^{t} y² dt` of BA, SDD and TDD at the current time t
+    /// ([`Observers::rms_integral`]).
+    fn rms_integral_now(&mut self) -> [f64; 3] {
+        let (t, tc) = (self.trajectory.current_time, self.trajectory.committed_time);
+        let inside = t != tc && !self.snaps(t, tc);
+        if inside {
+            self.settle();
+        }
+        let x = self.trajectory.current_state;
+        self.observers.rms_integral(
+            &mut stepping!(self),
+            &self.trajectory.committed(),
+            (t, x),
+            inside,
+        )
+    }
+
+    /// The running RMS values at the current time.
+    fn rms_now(&mut self) -> RmsValues {
+        let integral = self.rms_integral_now();
+        rms_from_integral(
+            &integral,
+            self.trajectory.current_time - self.config.start_time,
+        )
+    }
+
+    /// Before the external road input changes at the current time: closes
+    /// the run there. Returns the time from which the new input applies:
+    /// the committed point when the current time snaps to it (a time drift
+    /// is not a different time), else the current time, which then becomes
+    /// the committed point (its filter state and road-holding accumulators
+    /// with it).
+    fn close_run_for_input(&mut self) -> f64 {
+        let (tc, t) = (self.trajectory.committed_time, self.trajectory.current_time);
+        if self.snaps(t, tc) {
+            let (closed, _) = self
+                .observers
+                .integral_to_committed(&mut stepping!(self), &self.trajectory.committed());
+            self.observers.integral.closed = closed;
+            self.observers
+                .start_run(self.trajectory.grid_index, self.trajectory.committed_time);
+        } else {
+            self.close_run_here();
+        }
+        self.trajectory.committed_time
+    }
+
+    /// Commits the current time, however close to the committed point it
+    /// is (a switch of the tire's contact, a change of the road input):
+    /// it becomes the committed point, with its filter state and
+    /// road-holding accumulators, and the run closes there.
+    fn close_run_here(&mut self) {
+        self.settle();
+        if self.trajectory.current_time == self.trajectory.committed_time {
+            let (closed, _) = self
+                .observers
+                .integral_to_committed(&mut stepping!(self), &self.trajectory.committed());
+            self.observers.integral.closed = closed;
+        } else {
+            let now = self.accumulated_now();
+            self.observers.integral.closed = now.integral;
+            self.observers.holding = now.holding;
+            if self.config.metrics.road_holding() {
+                self.observers
+                    .holding
+                    .add_node(&self.trajectory.current_state.into());
+            }
+            self.trajectory.committed_filter = now.filter;
+            self.trajectory.committed_time = self.trajectory.current_time;
+            self.trajectory.committed_state = self.trajectory.current_state;
+        }
+        self.observers
+            .start_run(self.trajectory.grid_index, self.trajectory.committed_time);
     }
 }
 

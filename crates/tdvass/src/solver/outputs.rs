@@ -247,7 +247,7 @@ impl Simulator {
     /// [`Self::outputs`] gives, at less cost when the others are not
     /// needed: the integrals from the start are not closed.
     pub fn instantaneous(&mut self) -> Instantaneous {
-        match &self.observers.outputs_cache {
+        match &self.outputs_cache {
             Some(outputs) => Instantaneous {
                 time: outputs.time,
                 state: outputs.state,
@@ -281,7 +281,7 @@ impl Simulator {
 
     /// All outputs at the current time.
     pub fn outputs(&mut self) -> Outputs {
-        if let Some(outputs) = self.observers.outputs_cache {
+        if let Some(outputs) = self.outputs_cache {
             return outputs;
         }
         let instant = self.instantaneous_now();
@@ -316,7 +316,7 @@ impl Simulator {
                 lift_off_count: now.holding.lift_offs,
             }),
         };
-        self.observers.outputs_cache = Some(outputs);
+        self.outputs_cache = Some(outputs);
         outputs
     }
 
@@ -325,7 +325,7 @@ impl Simulator {
     /// outputs are not needed: the integrals from the start are closed at
     /// the current time, the instantaneous outputs are not computed.
     pub fn time_averages(&mut self) -> TimeAverages {
-        if let Some(outputs) = &self.observers.outputs_cache {
+        if let Some(outputs) = &self.outputs_cache {
             return outputs.time_averages();
         }
         let integral = self.rms_integral_now();
