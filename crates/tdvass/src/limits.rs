@@ -32,6 +32,43 @@ pub const DIVERGENCE_DISPLACEMENT: f64 = 1e3;
 /// initial velocity or road slope may exceed it.
 pub const DIVERGENCE_VELOCITY: f64 = 1e6;
 
+/// The divergence bound of state i: [`DIVERGENCE_DISPLACEMENT`] for the
+/// displacements (even i), [`DIVERGENCE_VELOCITY`] for the velocities.
+pub(crate) fn divergence_bound(i: usize) -> f64 {
+    if i.is_multiple_of(2) {
+        DIVERGENCE_DISPLACEMENT
+    } else {
+        DIVERGENCE_VELOCITY
+    }
+}
+
+/// Divergence bounds in state order.
+pub(crate) const DIVERGENCE_BOUNDS: [f64; 6] = [
+    DIVERGENCE_DISPLACEMENT,
+    DIVERGENCE_VELOCITY,
+    DIVERGENCE_DISPLACEMENT,
+    DIVERGENCE_VELOCITY,
+    DIVERGENCE_DISPLACEMENT,
+    DIVERGENCE_VELOCITY,
+];
+
+/// Checks a state at `time` against the divergence bounds: an error
+/// naming the first component beyond its bound (or NaN).
+pub(crate) fn check_divergence(time: f64, x: &State) -> Result<()> {
+    for (i, value) in x.iter().enumerate() {
+        let bound = divergence_bound(i);
+        if value.is_nan() || value.abs() > bound {
+            return Err(Error::Diverged {
+                time,
+                variable: crate::model::STATE_NAMES[i],
+                value: *value,
+                bound,
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Largest stiffness, damping or gain over a mass (1/s²) or damping over a
 /// mass (1/s).
 pub const MAX_RATE: f64 = 1e12;

@@ -35,7 +35,8 @@ const SOLVER_LAYERS: &[(&str, &[&str])] = &[
     ("grid and dense steps", &["grid_step", "dense"]),
     ("modes", &["modes"]),
     ("stepping", &["stepping", "integrals", "events", "deferred"]),
-    ("observers", &["observers"]),
+    ("observers", &["observers", "trajectory"]),
+    ("whole steps", &["kernel"]),
     (
         "driver",
         &["mod", "accuracy", "kernel", "outputs", "persist"],

@@ -8,16 +8,23 @@
 //! only after a run-time check that the CPU has it.
 #![allow(unsafe_code)]
 
+use super::config::SimulationConfig;
+use super::grid::DelayGrid;
 use super::grid_step::{FilterGridStep, GridStep, filter_combine};
 use super::holding::{Holding, check_step, deflection, margin};
+use super::inputs::Inputs;
 use super::inputs::PHASE_ANCHOR;
 use super::linalg::{add6, combine2, combine4, combine6};
+use super::modes::Modes;
+use super::observers::Observers;
 use super::stepping::stepping;
 use super::system::Filter;
-use super::{DIVERGENCE_BOUNDS, Simulator};
+use super::trajectory::Trajectory;
 use crate::comfort::WK_STATES;
 use crate::error::Result;
+use crate::limits::DIVERGENCE_BOUNDS;
 use crate::metrics::RunningRms;
+use crate::model::Plant;
 use crate::model::{State, V_T, X_T};
 use crate::road::{RoadPiece, RoadSpec};
 
@@ -386,7 +393,26 @@ pub(super) fn wide_vectors() -> bool {
     })
 }
 
-impl Simulator {
+/// A view of a simulator for its whole steps: the configuration, plant,
+/// grid, modes and inputs, and the trajectory and observers that the
+/// whole steps move (the simulator's own fields, borrowed for one call).
+pub(super) struct WholeSteps<'a> {
+    pub(super) config: &'a SimulationConfig,
+    pub(super) plant: &'a Plant,
+    pub(super) grid: DelayGrid,
+    pub(super) modes: &'a mut Modes,
+    pub(super) inputs: &'a mut Inputs,
+    pub(super) trajectory: &'a mut Trajectory,
+    pub(super) observers: &'a mut Observers,
+}
+
+impl WholeSteps<'_> {
+    /// Whether times `a` and `b` are the same on this grid
+    /// ([`super::pieces::coincide`]).
+    fn coincide(&self, a: f64, b: f64) -> bool {
+        super::pieces::coincide(a, b, self.grid.step)
+    }
+
     /// Commits the grid nodes `grid_index + 1 ..= last`, each by one whole
     /// step from the node before (the committed state is on node
     /// `grid_index`). Each node's state is a function of its index alone.
@@ -465,9 +491,10 @@ impl Simulator {
         self.inputs.keep_node_phase(hot.k, hot.road.0);
         self.set_committed_node(first, hot.k, hot.x, hot.w);
         match end_reason {
-            SegmentEnd::Diverged(x) => self
-                .check_divergence(self.grid_time(hot.k + 1), &State::from(x))
-                .map(|()| false),
+            SegmentEnd::Diverged(x) => {
+                crate::limits::check_divergence(self.inputs.node_time(hot.k + 1), &State::from(x))
+                    .map(|()| false)
+            }
             SegmentEnd::Switch => Ok(true),
             SegmentEnd::Reached => Ok(false),
         }
@@ -477,12 +504,13 @@ impl Simulator {
     /// the committed and current state, with its filter state w.
     fn set_committed_node(&mut self, first: u64, k: u64, x: [f64; 6], w: [f64; 8]) {
         if k > first {
-            let time = self.grid_time(k);
+            let time = self.inputs.node_time(k);
             self.trajectory.grid_index = k;
             self.trajectory.committed_time = time;
             self.trajectory.committed_state = State::from(x);
             self.trajectory.committed_filter = Filter::from(w);
-            self.set_current(time, self.trajectory.committed_state);
+            self.trajectory
+                .set_current(time, self.trajectory.committed_state);
             self.inputs.road.release_before(time);
         }
     }
@@ -518,7 +546,7 @@ impl Simulator {
             if k >= last {
                 break Ok(false);
             }
-            let (t, to) = (self.grid_time(k), self.grid_time(k + 1));
+            let (t, to) = (self.inputs.node_time(k), self.inputs.node_time(k + 1));
             let covering = self.inputs.piece_over(t, to, piece_at_node.take());
             if let Some(
                 piece @ RoadPiece::Linear {
@@ -567,20 +595,22 @@ impl Simulator {
                 (w, weighted, holding) = (hot.w, hot.weighted, hot.holding);
                 match end_reason {
                     SegmentEnd::Diverged(x_next) => {
-                        break self
-                            .check_divergence(self.grid_time(k + 1), &State::from(x_next))
-                            .map(|()| false);
+                        break crate::limits::check_divergence(
+                            self.inputs.node_time(k + 1),
+                            &State::from(x_next),
+                        )
+                        .map(|()| false);
                     }
                     SegmentEnd::Switch => {
                         if k > started {
-                            op.count(&mut rms, &x, piece.value(self.grid_time(k)));
+                            op.count(&mut rms, &x, piece.value(self.inputs.node_time(k)));
                             op.count_weighted(&w, &mut weighted);
                         }
                         break Ok(true);
                     }
                     SegmentEnd::Reached => {}
                 }
-                let now = self.grid_time(k);
+                let now = self.inputs.node_time(k);
                 // `road.piece(now)` is this piece exactly when the node lies
                 // inside it.
                 let piece_now = if k == inside {
@@ -604,7 +634,9 @@ impl Simulator {
                         &after,
                     );
                 }
-                self.inputs.road.release_before(self.grid_time(k - 1));
+                self.inputs
+                    .road
+                    .release_before(self.inputs.node_time(k - 1));
                 piece_at_node = Some(piece_now);
                 continue;
             }
@@ -677,7 +709,7 @@ impl Simulator {
         }
         let piece_next = self.inputs.road.piece(to);
         if !within_bounds(&x_next) {
-            self.check_divergence(to, &State::from(x_next))?;
+            crate::limits::check_divergence(to, &State::from(x_next))?;
         }
         self.inputs.history[slot] = [x_next[X_T], x_next[V_T]];
         if self.config.metrics.road_holding() {
@@ -699,7 +731,7 @@ impl Simulator {
     /// (before it and not coinciding with it).
     fn last_node_inside(&self, k: u64, last: u64, end: f64) -> u64 {
         let inside = |j: u64| {
-            let t = self.grid_time(j);
+            let t = self.inputs.node_time(j);
             t < end && !self.coincide(end, t)
         };
         let estimate = ((end - self.config.start_time) / self.grid.step).floor();
@@ -735,6 +767,7 @@ impl Simulator {
 mod tests {
     use super::*;
     use crate::solver::SimulationConfig;
+    use crate::solver::Simulator;
 
     #[cfg(target_arch = "x86_64")]
     #[test]

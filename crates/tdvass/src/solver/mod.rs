@@ -83,6 +83,7 @@ mod persist;
 mod pieces;
 mod stepping;
 mod system;
+mod trajectory;
 
 use crate::error::{Error, Result};
 use crate::metrics::{RmsValues, Weights};
@@ -104,6 +105,7 @@ pub use outputs::{
 pub use persist::STATE_FORMAT_VERSION;
 use stepping::stepping;
 use system::Filter;
+use trajectory::Trajectory;
 
 pub use accuracy::StepChoice;
 pub use config::{DEFAULT_TOLERANCE, Metrics, SimulationConfig};
@@ -119,26 +121,6 @@ const SNAPPED_ADDITIONS: f64 = 4_194_304.0;
 /// model or its roads).
 const SNAP_STEP_FRACTION: f64 = 1.0 / 1024.0;
 pub use crate::limits::{DIVERGENCE_DISPLACEMENT, DIVERGENCE_VELOCITY};
-
-/// The divergence bound of state i: [`DIVERGENCE_DISPLACEMENT`] for the
-/// displacements (even i), [`DIVERGENCE_VELOCITY`] for the velocities.
-fn divergence_bound(i: usize) -> f64 {
-    if i.is_multiple_of(2) {
-        DIVERGENCE_DISPLACEMENT
-    } else {
-        DIVERGENCE_VELOCITY
-    }
-}
-
-/// Divergence bounds in state order.
-const DIVERGENCE_BOUNDS: [f64; 6] = [
-    DIVERGENCE_DISPLACEMENT,
-    DIVERGENCE_VELOCITY,
-    DIVERGENCE_DISPLACEMENT,
-    DIVERGENCE_VELOCITY,
-    DIVERGENCE_DISPLACEMENT,
-    DIVERGENCE_VELOCITY,
-];
 
 /// The simulator: a quarter car on a road, advanced in time by the precise
 /// integration method. `Clone` is a complete snapshot of it.
@@ -163,42 +145,6 @@ pub struct Simulator {
     /// The outputs at the current time, once computed (cleared by every
     /// change of the state, the time or a parameter).
     outputs_cache: Option<Outputs>,
-}
-
-/// Where the run is: the committed point (a grid node, or a point where
-/// an external road input changed or the tire contact switched) and the
-/// current point.
-#[derive(Debug, Clone)]
-struct Trajectory {
-    /// Index k of the grid node at or before the committed time.
-    grid_index: u64,
-    committed_time: f64,
-    committed_state: State,
-    /// The W_k filter state at the committed point (zero without it).
-    committed_filter: Filter,
-    current_time: f64,
-    /// The state at `current_time`, unless `deferred`.
-    current_state: State,
-    /// `Some` while `current_state` is still to be found ([`deferred`]):
-    /// what finds it and the bounds that showed it passes the divergence
-    /// check.
-    deferred: Option<deferred::Deferred>,
-    /// The tire's mode: with the unilateral tire, the start of the
-    /// flight in progress (s); `None` in contact. The flights that ended
-    /// are in the road-holding accumulators' lost time.
-    flight_start: Option<f64>,
-}
-
-impl Trajectory {
-    /// The committed point, as stepping takes it.
-    fn committed(&self) -> stepping::Committed {
-        stepping::Committed {
-            k: self.grid_index,
-            time: self.committed_time,
-            state: self.committed_state,
-            filter: self.committed_filter,
-        }
-    }
 }
 
 impl Simulator {
@@ -431,13 +377,6 @@ impl Simulator {
         }
     }
 
-    /// Sets the current point (time, state computed).
-    fn set_current(&mut self, time: f64, x: State) {
-        self.trajectory.current_time = time;
-        self.trajectory.current_state = x;
-        self.trajectory.deferred = None;
-    }
-
     fn grid_time(&self, k: u64) -> f64 {
         self.inputs.node_time(k)
     }
@@ -482,21 +421,6 @@ impl Simulator {
         (a - b).abs() <= self.snap_tolerance(a.abs().max(b.abs()))
     }
 
-    fn check_divergence(&self, time: f64, x: &State) -> Result<()> {
-        for (i, value) in x.iter().enumerate() {
-            let bound = divergence_bound(i);
-            if value.is_nan() || value.abs() > bound {
-                return Err(Error::Diverged {
-                    time,
-                    variable: crate::model::STATE_NAMES[i],
-                    value: *value,
-                    bound,
-                });
-            }
-        }
-        Ok(())
-    }
-
     /// Advances to `t_end` (any length; any number of calls). On divergence
     /// the simulator stays at the last good grid node and returns
     /// [`Error::Diverged`].
@@ -538,7 +462,7 @@ impl Simulator {
                     // interval reaches, in one tight loop; with a
                     // unilateral tire, up to a step that may lift off.
                     let last = self.last_node_until(t_end);
-                    if self.whole_steps(last)? {
+                    if self.whole_steps_view().whole_steps(last)? {
                         self.step_to_node_switching(&mut switches)?;
                     }
                 } else if unilateral {
@@ -568,8 +492,8 @@ impl Simulator {
                     self.trajectory.committed_state,
                     t_end,
                 );
-                self.check_divergence(t_end, &x)?;
-                self.set_current(t_end, x);
+                crate::limits::check_divergence(t_end, &x)?;
+                self.trajectory.set_current(t_end, x);
                 return Ok(());
             }
         }
@@ -621,7 +545,7 @@ impl Simulator {
             self.trajectory.committed_state,
         );
         let x = stepping!(self).integrate_within_step(k, from.0, from.1, next_node);
-        self.check_divergence(next_node, &x)?;
+        crate::limits::check_divergence(next_node, &x)?;
         let w_from = self.trajectory.committed_filter;
         let w = stepping!(self).filter_within_step(k, from, &w_from, next_node);
         let anchor = self.observers.integral.anchor;
@@ -654,8 +578,8 @@ impl Simulator {
             return Ok(());
         }
         let x = stepping!(self).state_near(&self.trajectory.committed(), delta);
-        self.check_divergence(t_end, &x)?;
-        self.set_current(t_end, x);
+        crate::limits::check_divergence(t_end, &x)?;
+        self.trajectory.set_current(t_end, x);
         Ok(())
     }
 
@@ -696,7 +620,7 @@ impl Simulator {
         self.trajectory.committed_time = time;
         self.trajectory.committed_state = x;
         self.trajectory.committed_filter = w;
-        self.set_current(time, x);
+        self.trajectory.set_current(time, x);
         if self.config.metrics.road_holding() {
             self.observers.holding.add_node(&x.into());
         }
@@ -826,9 +750,9 @@ impl Simulator {
             Kind::InsideStep => stepping!(self).inside_bounds(&self.trajectory.committed(), t),
         };
         let x = self.trajectory.committed_state;
-        let Some(drift) = drift
-            .filter(|drift| (0..6).all(|i| x[i].abs() + drift[i] <= 0.5 * divergence_bound(i)))
-        else {
+        let Some(drift) = drift.filter(|drift| {
+            (0..6).all(|i| x[i].abs() + drift[i] <= 0.5 * crate::limits::divergence_bound(i))
+        }) else {
             return false;
         };
         self.trajectory.current_time = t;
@@ -911,9 +835,9 @@ impl Simulator {
         } else {
             stepping!(self).integrate_within_step(k, tc, xc, time)
         };
-        self.check_divergence(time, &x)?;
+        crate::limits::check_divergence(time, &x)?;
         self.outputs_cache = None;
-        self.set_current(time, x);
+        self.trajectory.set_current(time, x);
         self.close_run_here();
         let piece = self.inputs.piece_from(time);
         if self.in_flight() {
@@ -1028,6 +952,20 @@ impl Simulator {
         }
         self.observers
             .start_run(self.trajectory.grid_index, self.trajectory.committed_time);
+    }
+
+    /// The view of this simulator that runs its whole steps
+    /// ([`kernel::WholeSteps`]).
+    fn whole_steps_view(&mut self) -> kernel::WholeSteps<'_> {
+        kernel::WholeSteps {
+            config: &self.config,
+            plant: &self.plant,
+            grid: self.grid,
+            modes: &mut self.modes,
+            inputs: &mut self.inputs,
+            trajectory: &mut self.trajectory,
+            observers: &mut self.observers,
+        }
     }
 }
 

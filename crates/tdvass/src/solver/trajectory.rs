@@ -1,0 +1,52 @@
+//! The trajectory: the committed point (a grid node, or a point where an
+//! external road input changed or the tire's contact switched), the
+//! current point with its state (or the bounds of a deferred one), and the
+//! tire's mode. Only the driver moves the committed point.
+
+use super::deferred::Deferred;
+use super::stepping::Committed;
+use super::system::Filter;
+use crate::model::State;
+
+/// Where the run is: the committed point (a grid node, or a point where
+/// an external road input changed or the tire contact switched) and the
+/// current point.
+#[derive(Debug, Clone)]
+pub(super) struct Trajectory {
+    /// Index k of the grid node at or before the committed time.
+    pub(super) grid_index: u64,
+    pub(super) committed_time: f64,
+    pub(super) committed_state: State,
+    /// The W_k filter state at the committed point (zero without it).
+    pub(super) committed_filter: Filter,
+    pub(super) current_time: f64,
+    /// The state at `current_time`, unless `deferred`.
+    pub(super) current_state: State,
+    /// `Some` while `current_state` is still to be found ([`super::deferred`]):
+    /// what finds it and the bounds that showed it passes the divergence
+    /// check.
+    pub(super) deferred: Option<Deferred>,
+    /// The tire's mode: with the unilateral tire, the start of the
+    /// flight in progress (s); `None` in contact. The flights that ended
+    /// are in the road-holding accumulators' lost time.
+    pub(super) flight_start: Option<f64>,
+}
+
+impl Trajectory {
+    /// The committed point, as stepping takes it.
+    pub(super) fn committed(&self) -> Committed {
+        Committed {
+            k: self.grid_index,
+            time: self.committed_time,
+            state: self.committed_state,
+            filter: self.committed_filter,
+        }
+    }
+
+    /// Sets the current point (time, state computed).
+    pub(super) fn set_current(&mut self, time: f64, x: State) {
+        self.current_time = time;
+        self.current_state = x;
+        self.deferred = None;
+    }
+}
