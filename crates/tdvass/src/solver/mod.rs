@@ -967,6 +967,55 @@ impl Simulator {
             observers: &mut self.observers,
         }
     }
+
+    /// The instantaneous outputs at the current time, the same values as
+    /// [`Self::outputs`] gives, at less cost when the others are not
+    /// needed: the integrals from the start are not closed.
+    pub fn instantaneous(&mut self) -> Instantaneous {
+        outputs::instantaneous(self)
+    }
+
+    /// All outputs at the current time.
+    pub fn outputs(&mut self) -> Outputs {
+        outputs::outputs(self)
+    }
+
+    /// The time averages among the outputs at the current time, the same
+    /// values as [`Self::outputs`] gives, at less cost when the other
+    /// outputs are not needed: the integrals from the start are closed at
+    /// the current time, the instantaneous outputs are not computed.
+    pub fn time_averages(&mut self) -> TimeAverages {
+        outputs::time_averages(self)
+    }
+
+    /// The static tire load W (N) of the configured variant
+    /// ([`crate::model::Params::static_load`]).
+    pub fn static_load(&self) -> f64 {
+        outputs::static_load(self)
+    }
+
+    /// The first loss of tire contact so far, if any (see [`ContactLoss`];
+    /// always `None` below [`Metrics::RoadHolding`]).
+    ///
+    /// Cheap where nothing is lost: the committed accumulators answer up to
+    /// the committed point, and the stretch from there to now is decided
+    /// from its end margins (the bound of `solver::holding`; on the
+    /// harmonic road first from bounds that need no sine, see
+    /// `stretch_keeps_contact`); only a stretch that may lose contact
+    /// computes the outputs.
+    pub fn first_contact_loss(&mut self) -> Option<ContactLoss> {
+        outputs::first_contact_loss(self)
+    }
+
+    /// Exact first time derivatives of the instantaneous outputs.
+    pub fn output_derivatives(&mut self) -> OutputDerivatives {
+        outputs::output_derivatives(self)
+    }
+
+    /// RMS values so far (time averages from the start to now).
+    pub fn rms(&mut self) -> RmsValues {
+        outputs::rms(self)
+    }
 }
 
 /// Simulates `config` from its start for `duration` seconds.
