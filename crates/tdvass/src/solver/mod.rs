@@ -1016,6 +1016,40 @@ impl Simulator {
     pub fn rms(&mut self) -> RmsValues {
         outputs::rms(self)
     }
+
+    /// Encodes the whole simulator.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        persist::to_bytes(self)
+    }
+
+    /// Rebuilds a simulator from [`Simulator::to_bytes`]; the result continues
+    /// bit-identically.
+    ///
+    /// Besides the layout, the configuration (as [`Simulator::new`]) and
+    /// finite times and states, it checks what bounds the work of the next
+    /// [`Simulator::advance_to`] by the length of the interval it is asked
+    /// to cover, with the tolerance at which the solver takes two times as
+    /// the same (so that every state the simulator saves is accepted):
+    /// - `grid_index` k is below `u64::MAX` and step k has a positive
+    ///   length: `t_k < t_{k+1}`, with `t_k = t_0 + k h`;
+    /// - `committed_time` lies in step k: `t_k <= committed_time < t_{k+1}`,
+    ///   or it coincides with `t_k` (after an external road input changes,
+    ///   it may lie strictly inside the step);
+    /// - `current_time` is reachable from `committed_time` inside step k:
+    ///   `committed_time <= current_time <= t_{k+1}`, each bound up to the
+    ///   snap tolerance ([`Simulator::snap_tolerance`]);
+    /// - the road generator is consistent with `committed_time` (see
+    ///   `Road::restore_dynamic_state`, with the horizon `t_{k+2}`).
+    ///
+    /// The comfort and road-holding accumulators must be consistent too:
+    /// finite; the filter state and the a_w integrals zero without the
+    /// filter; the largest |SDD| not below the committed point's; the time
+    /// without contact within the time run, with a first loss recorded
+    /// whenever there is such time, at a time between the start and the
+    /// committed point.
+    pub fn from_bytes(bytes: &[u8]) -> Result<Simulator> {
+        persist::from_bytes(bytes)
+    }
 }
 
 /// Simulates `config` from its start for `duration` seconds.

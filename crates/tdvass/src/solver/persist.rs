@@ -210,394 +210,368 @@ fn read_road_state(r: &mut ByteReader) -> Result<RoadState> {
     Ok(road)
 }
 
-impl Simulator {
-    /// Encodes the whole simulator.
-    pub fn to_bytes(&self) -> Vec<u8> {
-        if self.computed_state().is_none() {
-            // The same bytes as when the state was computed at once.
-            let mut settled = self.clone();
-            settled.settle();
-            return settled.to_bytes();
-        }
-        let mut w = ByteWriter::default();
-        w.u64(STATE_FORMAT_VERSION);
-        write_config(&mut w, &self.config);
-        w.f64(self.step_choice.step_bound);
-        w.u64(self.trajectory.grid_index);
-        w.f64(self.trajectory.committed_time);
-        self.trajectory
-            .committed_state
-            .iter()
-            .for_each(|&v| w.f64(v));
-        w.f64(self.trajectory.current_time);
-        self.trajectory.current_state.iter().for_each(|&v| w.f64(v));
-        let flat: Vec<f64> = self.inputs.history.iter().flatten().copied().collect();
-        w.f64s(&flat);
-        self.observers
-            .rms
-            .sums_of_squares
-            .iter()
-            .for_each(|&v| w.f64(v));
-        w.u64(self.observers.rms.samples);
-        let integral = &self.observers.integral;
-        integral.closed.iter().for_each(|&v| w.f64(v));
-        w.u64(integral.anchor_index);
-        w.f64(integral.anchor_time);
-        integral.anchor.value.iter().for_each(|&v| w.f64(v));
-        integral.anchor.rate.iter().for_each(|&v| w.f64(v));
-        self.observers.weighted.iter().for_each(|&v| w.f64(v));
-        self.trajectory
-            .committed_filter
-            .iter()
-            .for_each(|&v| w.f64(v));
-        let holding = &self.observers.holding;
-        w.f64(holding.max_deflection);
-        w.u64(holding.lost_steps);
-        w.f64(holding.lost_time);
-        match holding.first_loss {
-            Some(time) => {
-                w.u64(1);
-                w.f64(time);
-            }
-            None => w.u64(0),
-        }
-        w.u64(holding.lift_offs);
-        match self.trajectory.flight_start {
-            Some(time) => {
-                w.u64(1);
-                w.f64(time);
-            }
-            None => w.u64(0),
-        }
-        let road = self.inputs.road.dynamic_state();
-        w.u128(road.word_position);
-        w.u64(road.first_node);
-        w.f64s(&road.nodes);
-        match road.input {
-            Some((start, value, slope)) => {
-                w.u64(1);
-                w.f64(start);
-                w.f64(value);
-                w.f64(slope);
-            }
-            None => w.u64(0),
-        }
-        w.bytes
+/// [`Simulator::to_bytes`].
+pub(super) fn to_bytes(sim: &Simulator) -> Vec<u8> {
+    if sim.computed_state().is_none() {
+        // The same bytes as when the state was computed at once.
+        let mut settled = sim.clone();
+        settled.settle();
+        return settled.to_bytes();
     }
-
-    /// Rebuilds a simulator from [`Simulator::to_bytes`]; the result continues
-    /// bit-identically.
-    ///
-    /// Besides the layout, the configuration (as [`Simulator::new`]) and
-    /// finite times and states, it checks what bounds the work of the next
-    /// [`Simulator::advance_to`] by the length of the interval it is asked
-    /// to cover, with the tolerance at which the solver takes two times as
-    /// the same (so that every state the simulator saves is accepted):
-    /// - `grid_index` k is below `u64::MAX` and step k has a positive
-    ///   length: `t_k < t_{k+1}`, with `t_k = t_0 + k h`;
-    /// - `committed_time` lies in step k: `t_k <= committed_time < t_{k+1}`,
-    ///   or it coincides with `t_k` (after an external road input changes,
-    ///   it may lie strictly inside the step);
-    /// - `current_time` is reachable from `committed_time` inside step k:
-    ///   `committed_time <= current_time <= t_{k+1}`, each bound up to the
-    ///   snap tolerance ([`Simulator::snap_tolerance`]);
-    /// - the road generator is consistent with `committed_time` (see
-    ///   `Road::restore_dynamic_state`, with the horizon `t_{k+2}`).
-    ///
-    /// The comfort and road-holding accumulators must be consistent too:
-    /// finite; the filter state and the a_w integrals zero without the
-    /// filter; the largest |SDD| not below the committed point's; the time
-    /// without contact within the time run, with a first loss recorded
-    /// whenever there is such time, at a time between the start and the
-    /// committed point.
-    pub fn from_bytes(bytes: &[u8]) -> Result<Simulator> {
-        let mut r = ByteReader::new(bytes);
-        let version = r.u64()?;
-        if version != STATE_FORMAT_VERSION {
-            return Err(Error::InvalidState(format!(
-                "state format version {version}: only version {STATE_FORMAT_VERSION} is read"
-            )));
+    let mut w = ByteWriter::default();
+    w.u64(STATE_FORMAT_VERSION);
+    write_config(&mut w, &sim.config);
+    w.f64(sim.step_choice.step_bound);
+    w.u64(sim.trajectory.grid_index);
+    w.f64(sim.trajectory.committed_time);
+    sim.trajectory
+        .committed_state
+        .iter()
+        .for_each(|&v| w.f64(v));
+    w.f64(sim.trajectory.current_time);
+    sim.trajectory.current_state.iter().for_each(|&v| w.f64(v));
+    let flat: Vec<f64> = sim.inputs.history.iter().flatten().copied().collect();
+    w.f64s(&flat);
+    sim.observers
+        .rms
+        .sums_of_squares
+        .iter()
+        .for_each(|&v| w.f64(v));
+    w.u64(sim.observers.rms.samples);
+    let integral = &sim.observers.integral;
+    integral.closed.iter().for_each(|&v| w.f64(v));
+    w.u64(integral.anchor_index);
+    w.f64(integral.anchor_time);
+    integral.anchor.value.iter().for_each(|&v| w.f64(v));
+    integral.anchor.rate.iter().for_each(|&v| w.f64(v));
+    sim.observers.weighted.iter().for_each(|&v| w.f64(v));
+    sim.trajectory
+        .committed_filter
+        .iter()
+        .for_each(|&v| w.f64(v));
+    let holding = &sim.observers.holding;
+    w.f64(holding.max_deflection);
+    w.u64(holding.lost_steps);
+    w.f64(holding.lost_time);
+    match holding.first_loss {
+        Some(time) => {
+            w.u64(1);
+            w.f64(time);
         }
-        let config = read_config(&mut r)?;
-        let step_bound = read_step_bound(&mut r, &config)?;
-        let mut sim = Simulator::with_step_bound(config, step_bound)?;
-        sim.read_trajectory(&mut r)?;
-        sim.read_accumulators(&mut r)?;
-        let initial_holding = sim.observers.holding;
-        (sim.observers.holding, sim.trajectory.flight_start) = read_holding(&mut r)?;
-        sim.enter_recorded_mode();
-        let road = read_road_state(&mut r)?;
-        if !r.is_empty() {
-            return Err(Error::InvalidState("trailing bytes".into()));
-        }
-        let values_finite = sim
-            .trajectory
-            .committed_state
-            .iter()
-            .chain(sim.trajectory.current_state.iter())
-            .all(|v| v.is_finite());
-        if !values_finite {
-            return Err(Error::InvalidState("non-finite state".into()));
-        }
-        sim.check_times()?;
-        sim.check_rms()?;
-        sim.check_comfort()?;
-        if sim.config.metrics.road_holding() || sim.config.tire_contact.is_unilateral() {
-            sim.check_holding()?;
-        } else if sim.observers.holding != initial_holding {
-            return Err(Error::InvalidState(
-                "road-holding accumulators moved, but road holding is off".into(),
-            ));
-        }
-        let horizon = sim.grid_time(sim.trajectory.grid_index.saturating_add(2));
-        sim.inputs
-            .road
-            .restore_dynamic_state(&road, sim.trajectory.committed_time, horizon)?;
-        Ok(sim)
+        None => w.u64(0),
     }
-
-    /// The grid node, the committed and current points and the delay
-    /// history, as [`Self::to_bytes`] wrote them.
-    fn read_trajectory(&mut self, r: &mut ByteReader) -> Result<()> {
-        self.trajectory.grid_index = r.u64()?;
-        self.trajectory.committed_time = r.f64()?;
-        for v in self.trajectory.committed_state.iter_mut() {
-            *v = r.f64()?;
+    w.u64(holding.lift_offs);
+    match sim.trajectory.flight_start {
+        Some(time) => {
+            w.u64(1);
+            w.f64(time);
         }
-        self.trajectory.current_time = r.f64()?;
-        for v in self.trajectory.current_state.iter_mut() {
-            *v = r.f64()?;
-        }
-        let flat = r.f64s(2 * super::MAX_HISTORY_NODES + 2)?;
-        if flat.len() != 2 * self.inputs.history.len() {
-            return Err(Error::InvalidState(format!(
-                "history of {} values where {} were expected",
-                flat.len(),
-                2 * self.inputs.history.len()
-            )));
-        }
-        for (slot, pair) in self.inputs.history.iter_mut().zip(flat.chunks(2)) {
-            *slot = [pair[0], pair[1]];
-        }
-        Ok(())
+        None => w.u64(0),
     }
-
-    /// The RMS sums, the time integral with its anchor, the a_w sums and
-    /// the filter state, as [`Self::to_bytes`] wrote them.
-    fn read_accumulators(&mut self, r: &mut ByteReader) -> Result<()> {
-        let mut rms = RunningRms::default();
-        for v in rms.sums_of_squares.iter_mut() {
-            *v = r.f64()?;
+    let road = sim.inputs.road.dynamic_state();
+    w.u128(road.word_position);
+    w.u64(road.first_node);
+    w.f64s(&road.nodes);
+    match road.input {
+        Some((start, value, slope)) => {
+            w.u64(1);
+            w.f64(start);
+            w.f64(value);
+            w.f64(slope);
         }
-        rms.samples = r.u64()?;
-        self.observers.rms = rms;
-        for v in self.observers.integral.closed.iter_mut() {
-            *v = r.f64()?;
-        }
-        self.observers.integral.anchor_index = r.u64()?;
-        self.observers.integral.anchor_time = r.f64()?;
-        for v in self.observers.integral.anchor.value.iter_mut() {
-            *v = r.f64()?;
-        }
-        for v in self.observers.integral.anchor.rate.iter_mut() {
-            *v = r.f64()?;
-        }
-        for v in self.observers.weighted.iter_mut() {
-            *v = r.f64()?;
-        }
-        for v in self.trajectory.committed_filter.iter_mut() {
-            *v = r.f64()?;
-        }
-        Ok(())
+        None => w.u64(0),
     }
+    w.bytes
+}
 
-    /// The RMS accumulators of [`Simulator::from_bytes`]: one sample per
-    /// grid node of the open run, which starts at the anchor node
-    /// (`anchor_index + samples = grid_index`, the anchor on its node when
-    /// the run holds nodes, else at the committed point); sums of squares
-    /// that are finite and not negative; a finite closed integral and
-    /// anchor squares.
-    fn check_rms(&self) -> Result<()> {
-        let (samples, k) = (self.observers.rms.samples, self.trajectory.grid_index);
-        let anchor = self.observers.integral.anchor_index;
-        if anchor.checked_add(samples) != Some(k) {
+/// [`Simulator::from_bytes`].
+pub(super) fn from_bytes(bytes: &[u8]) -> Result<Simulator> {
+    let mut r = ByteReader::new(bytes);
+    let version = r.u64()?;
+    if version != STATE_FORMAT_VERSION {
+        return Err(Error::InvalidState(format!(
+            "state format version {version}: only version {STATE_FORMAT_VERSION} is read"
+        )));
+    }
+    let config = read_config(&mut r)?;
+    let step_bound = read_step_bound(&mut r, &config)?;
+    let mut sim = Simulator::with_step_bound(config, step_bound)?;
+    read_trajectory(&mut sim, &mut r)?;
+    read_accumulators(&mut sim, &mut r)?;
+    let initial_holding = sim.observers.holding;
+    (sim.observers.holding, sim.trajectory.flight_start) = read_holding(&mut r)?;
+    sim.enter_recorded_mode();
+    let road = read_road_state(&mut r)?;
+    if !r.is_empty() {
+        return Err(Error::InvalidState("trailing bytes".into()));
+    }
+    let values_finite = sim
+        .trajectory
+        .committed_state
+        .iter()
+        .chain(sim.trajectory.current_state.iter())
+        .all(|v| v.is_finite());
+    if !values_finite {
+        return Err(Error::InvalidState("non-finite state".into()));
+    }
+    check_times(&sim)?;
+    check_rms(&sim)?;
+    check_comfort(&sim)?;
+    if sim.config.metrics.road_holding() || sim.config.tire_contact.is_unilateral() {
+        check_holding(&sim)?;
+    } else if sim.observers.holding != initial_holding {
+        return Err(Error::InvalidState(
+            "road-holding accumulators moved, but road holding is off".into(),
+        ));
+    }
+    let horizon = sim.grid_time(sim.trajectory.grid_index.saturating_add(2));
+    sim.inputs
+        .road
+        .restore_dynamic_state(&road, sim.trajectory.committed_time, horizon)?;
+    Ok(sim)
+}
+
+/// The grid node, the committed and current points and the delay
+/// history, as [`Simulator::to_bytes`] wrote them.
+fn read_trajectory(sim: &mut Simulator, r: &mut ByteReader) -> Result<()> {
+    sim.trajectory.grid_index = r.u64()?;
+    sim.trajectory.committed_time = r.f64()?;
+    for v in sim.trajectory.committed_state.iter_mut() {
+        *v = r.f64()?;
+    }
+    sim.trajectory.current_time = r.f64()?;
+    for v in sim.trajectory.current_state.iter_mut() {
+        *v = r.f64()?;
+    }
+    let flat = r.f64s(2 * super::MAX_HISTORY_NODES + 2)?;
+    if flat.len() != 2 * sim.inputs.history.len() {
+        return Err(Error::InvalidState(format!(
+            "history of {} values where {} were expected",
+            flat.len(),
+            2 * sim.inputs.history.len()
+        )));
+    }
+    for (slot, pair) in sim.inputs.history.iter_mut().zip(flat.chunks(2)) {
+        *slot = [pair[0], pair[1]];
+    }
+    Ok(())
+}
+
+/// The RMS sums, the time integral with its anchor, the a_w sums and
+/// the filter state, as [`Simulator::to_bytes`] wrote them.
+fn read_accumulators(sim: &mut Simulator, r: &mut ByteReader) -> Result<()> {
+    let mut rms = RunningRms::default();
+    for v in rms.sums_of_squares.iter_mut() {
+        *v = r.f64()?;
+    }
+    rms.samples = r.u64()?;
+    sim.observers.rms = rms;
+    for v in sim.observers.integral.closed.iter_mut() {
+        *v = r.f64()?;
+    }
+    sim.observers.integral.anchor_index = r.u64()?;
+    sim.observers.integral.anchor_time = r.f64()?;
+    for v in sim.observers.integral.anchor.value.iter_mut() {
+        *v = r.f64()?;
+    }
+    for v in sim.observers.integral.anchor.rate.iter_mut() {
+        *v = r.f64()?;
+    }
+    for v in sim.observers.weighted.iter_mut() {
+        *v = r.f64()?;
+    }
+    for v in sim.trajectory.committed_filter.iter_mut() {
+        *v = r.f64()?;
+    }
+    Ok(())
+}
+
+/// The RMS accumulators of [`Simulator::from_bytes`]: one sample per
+/// grid node of the open run, which starts at the anchor node
+/// (`anchor_index + samples = grid_index`, the anchor on its node when
+/// the run holds nodes, else at the committed point); sums of squares
+/// that are finite and not negative; a finite closed integral and
+/// anchor squares.
+fn check_rms(sim: &Simulator) -> Result<()> {
+    let (samples, k) = (sim.observers.rms.samples, sim.trajectory.grid_index);
+    let anchor = sim.observers.integral.anchor_index;
+    if anchor.checked_add(samples) != Some(k) {
+        return Err(Error::InvalidState(format!(
+            "rms samples {samples}: one per grid node after the anchor node {anchor} was expected, grid_index = {k}"
+        )));
+    }
+    let anchor_time = sim.observers.integral.anchor_time;
+    let expected = if samples > 0 {
+        sim.grid_time(anchor)
+    } else {
+        sim.trajectory.committed_time
+    };
+    if anchor_time != expected {
+        return Err(Error::InvalidState(format!(
+            "rms anchor time {anchor_time} s: {expected} s was expected"
+        )));
+    }
+    let integral = &sim.observers.integral;
+    let values = integral
+        .closed
+        .iter()
+        .chain(&integral.anchor.value)
+        .chain(&integral.anchor.rate);
+    if let Some(bad) = values.copied().find(|v| !v.is_finite()) {
+        return Err(Error::InvalidState(format!(
+            "rms integral value {bad} is not finite"
+        )));
+    }
+    for (name, sum) in ["BA", "SDD", "TDD"]
+        .iter()
+        .zip(sim.observers.rms.sums_of_squares)
+    {
+        if !(sum.is_finite() && sum >= 0.0) {
             return Err(Error::InvalidState(format!(
-                "rms samples {samples}: one per grid node after the anchor node {anchor} was expected, grid_index = {k}"
+                "rms sum of squares of {name} {sum} is not finite and >= 0"
             )));
         }
-        let anchor_time = self.observers.integral.anchor_time;
-        let expected = if samples > 0 {
-            self.grid_time(anchor)
-        } else {
-            self.trajectory.committed_time
-        };
-        if anchor_time != expected {
-            return Err(Error::InvalidState(format!(
-                "rms anchor time {anchor_time} s: {expected} s was expected"
-            )));
-        }
-        let integral = &self.observers.integral;
-        let values = integral
-            .closed
-            .iter()
-            .chain(&integral.anchor.value)
-            .chain(&integral.anchor.rate);
-        if let Some(bad) = values.copied().find(|v| !v.is_finite()) {
-            return Err(Error::InvalidState(format!(
-                "rms integral value {bad} is not finite"
-            )));
-        }
-        for (name, sum) in ["BA", "SDD", "TDD"]
-            .iter()
-            .zip(self.observers.rms.sums_of_squares)
+    }
+    Ok(())
+}
+
+/// The W_k accumulators of [`Simulator::from_bytes`]: finite, the node
+/// sums not negative, and all zero without the filter.
+fn check_comfort(sim: &Simulator) -> Result<()> {
+    let integral = &sim.observers.integral;
+    let weighted = [WEIGHTED_SQUARE, WEIGHTED_FOURTH];
+    let values: Vec<f64> = weighted
+        .iter()
+        .flat_map(|&i| {
+            [
+                integral.closed[i],
+                integral.anchor.value[i],
+                integral.anchor.rate[i],
+            ]
+        })
+        .chain(sim.observers.weighted)
+        .chain(sim.trajectory.committed_filter.iter().copied())
+        .collect();
+    if let Some(bad) = values.iter().find(|v| !v.is_finite()) {
+        return Err(Error::InvalidState(format!(
+            "comfort (a_w) accumulator {bad} is not finite"
+        )));
+    }
+    if let Some(bad) = sim.observers.weighted.iter().find(|v| **v < 0.0) {
+        return Err(Error::InvalidState(format!(
+            "comfort (a_w) sum {bad} is negative"
+        )));
+    }
+    if sim.modes.coupling.is_none() && values.iter().any(|v| *v != 0.0) {
+        return Err(Error::InvalidState(
+            "comfort (a_w) accumulators are not zero, but the W_k filter is off".into(),
+        ));
+    }
+    debug_assert_eq!(INTEGRALS, 5);
+    Ok(())
+}
+
+/// The road-holding accumulators of [`Simulator::from_bytes`].
+fn check_holding(sim: &Simulator) -> Result<()> {
+    let holding = &sim.observers.holding;
+    let x = sim.trajectory.committed_state;
+    let committed = (x[crate::model::X_S] - x[crate::model::X_T]).abs();
+    let deflection = holding.max_deflection;
+    // Below road holding (a unilateral tire at the paper level) the
+    // largest |SDD| is not kept.
+    let kept = sim.config.metrics.road_holding();
+    if kept && !(deflection.is_finite() && deflection >= committed) {
+        return Err(Error::InvalidState(format!(
+            "max suspension deflection {deflection} m is not finite or below the committed |SDD| {committed} m"
+        )));
+    }
+    let elapsed = sim.trajectory.committed_time - sim.config.start_time;
+    let lost = holding.lost_steps as f64 * sim.grid.step + holding.lost_time;
+    let tolerance = sim.snap_tolerance(sim.trajectory.committed_time) + 1e-9 * elapsed.abs();
+    if holding.lost_steps > sim.trajectory.grid_index
+        || !(holding.lost_time.is_finite()
+            && holding.lost_time >= 0.0
+            && lost <= elapsed + tolerance)
+    {
+        return Err(Error::InvalidState(format!(
+            "contact loss time {lost} s ({} whole steps and {} s) does not fit in the {elapsed} s run",
+            holding.lost_steps, holding.lost_time
+        )));
+    }
+    match holding.first_loss {
+        None if lost > 0.0 => Err(Error::InvalidState(format!(
+            "contact loss time {lost} s without a first contact loss"
+        ))),
+        Some(time)
+            if !(time >= sim.config.start_time
+                && time <= sim.trajectory.committed_time + tolerance) =>
         {
-            if !(sum.is_finite() && sum >= 0.0) {
-                return Err(Error::InvalidState(format!(
-                    "rms sum of squares of {name} {sum} is not finite and >= 0"
-                )));
-            }
+            Err(Error::InvalidState(format!(
+                "first contact loss at {time} s lies outside the run up to the committed_time {} s",
+                sim.trajectory.committed_time
+            )))
         }
-        Ok(())
+        _ => Ok(()),
+    }?;
+    if holding.lift_offs > 0 && holding.first_loss.is_none() {
+        return Err(Error::InvalidState(format!(
+            "{} lift-offs without a first contact loss",
+            holding.lift_offs
+        )));
     }
-
-    /// The W_k accumulators of [`Simulator::from_bytes`]: finite, the node
-    /// sums not negative, and all zero without the filter.
-    fn check_comfort(&self) -> Result<()> {
-        let integral = &self.observers.integral;
-        let weighted = [WEIGHTED_SQUARE, WEIGHTED_FOURTH];
-        let values: Vec<f64> = weighted
-            .iter()
-            .flat_map(|&i| {
-                [
-                    integral.closed[i],
-                    integral.anchor.value[i],
-                    integral.anchor.rate[i],
-                ]
-            })
-            .chain(self.observers.weighted)
-            .chain(self.trajectory.committed_filter.iter().copied())
-            .collect();
-        if let Some(bad) = values.iter().find(|v| !v.is_finite()) {
-            return Err(Error::InvalidState(format!(
-                "comfort (a_w) accumulator {bad} is not finite"
-            )));
-        }
-        if let Some(bad) = self.observers.weighted.iter().find(|v| **v < 0.0) {
-            return Err(Error::InvalidState(format!(
-                "comfort (a_w) sum {bad} is negative"
-            )));
-        }
-        if self.modes.coupling.is_none() && values.iter().any(|v| *v != 0.0) {
-            return Err(Error::InvalidState(
-                "comfort (a_w) accumulators are not zero, but the W_k filter is off".into(),
-            ));
-        }
-        debug_assert_eq!(INTEGRALS, 5);
-        Ok(())
-    }
-
-    /// The road-holding accumulators of [`Simulator::from_bytes`].
-    fn check_holding(&self) -> Result<()> {
-        let holding = &self.observers.holding;
-        let x = self.trajectory.committed_state;
-        let committed = (x[crate::model::X_S] - x[crate::model::X_T]).abs();
-        let deflection = holding.max_deflection;
-        // Below road holding (a unilateral tire at the paper level) the
-        // largest |SDD| is not kept.
-        let kept = self.config.metrics.road_holding();
-        if kept && !(deflection.is_finite() && deflection >= committed) {
-            return Err(Error::InvalidState(format!(
-                "max suspension deflection {deflection} m is not finite or below the committed |SDD| {committed} m"
-            )));
-        }
-        let elapsed = self.trajectory.committed_time - self.config.start_time;
-        let lost = holding.lost_steps as f64 * self.grid.step + holding.lost_time;
-        let tolerance = self.snap_tolerance(self.trajectory.committed_time) + 1e-9 * elapsed.abs();
-        if holding.lost_steps > self.trajectory.grid_index
-            || !(holding.lost_time.is_finite()
-                && holding.lost_time >= 0.0
-                && lost <= elapsed + tolerance)
+    match sim.trajectory.flight_start {
+        Some(_) if !sim.config.tire_contact.is_unilateral() => Err(Error::InvalidState(
+            "a flight in progress, but the tire is bilateral".into(),
+        )),
+        Some(time)
+            if !(time >= sim.config.start_time
+                && time <= sim.trajectory.committed_time + tolerance
+                && holding.lift_offs > 0) =>
         {
-            return Err(Error::InvalidState(format!(
-                "contact loss time {lost} s ({} whole steps and {} s) does not fit in the {elapsed} s run",
-                holding.lost_steps, holding.lost_time
-            )));
+            Err(Error::InvalidState(format!(
+                "a flight from {time} s does not fit in the run up to the committed time {} s after {} lift-offs",
+                sim.trajectory.committed_time, holding.lift_offs
+            )))
         }
-        match holding.first_loss {
-            None if lost > 0.0 => Err(Error::InvalidState(format!(
-                "contact loss time {lost} s without a first contact loss"
-            ))),
-            Some(time)
-                if !(time >= self.config.start_time
-                    && time <= self.trajectory.committed_time + tolerance) =>
-            {
-                Err(Error::InvalidState(format!(
-                    "first contact loss at {time} s lies outside the run up to the committed_time {} s",
-                    self.trajectory.committed_time
-                )))
-            }
-            _ => Ok(()),
-        }?;
-        if holding.lift_offs > 0 && holding.first_loss.is_none() {
-            return Err(Error::InvalidState(format!(
-                "{} lift-offs without a first contact loss",
-                holding.lift_offs
-            )));
-        }
-        match self.trajectory.flight_start {
-            Some(_) if !self.config.tire_contact.is_unilateral() => Err(Error::InvalidState(
-                "a flight in progress, but the tire is bilateral".into(),
-            )),
-            Some(time)
-                if !(time >= self.config.start_time
-                    && time <= self.trajectory.committed_time + tolerance
-                    && holding.lift_offs > 0) =>
-            {
-                Err(Error::InvalidState(format!(
-                    "a flight from {time} s does not fit in the run up to the committed time {} s after {} lift-offs",
-                    self.trajectory.committed_time, holding.lift_offs
-                )))
-            }
-            _ => Ok(()),
-        }
+        _ => Ok(()),
     }
+}
 
-    /// The time checks of [`Simulator::from_bytes`] on `grid_index`,
-    /// `committed_time` and `current_time`.
-    fn check_times(&self) -> Result<()> {
-        let (k, committed, current) = (
-            self.trajectory.grid_index,
-            self.trajectory.committed_time,
-            self.trajectory.current_time,
-        );
-        for (name, t) in [("committed_time", committed), ("current_time", current)] {
-            if !t.is_finite() {
-                return Err(Error::InvalidState(format!("{name} {t} s is not finite")));
-            }
+/// The time checks of [`Simulator::from_bytes`] on `grid_index`,
+/// `committed_time` and `current_time`.
+fn check_times(sim: &Simulator) -> Result<()> {
+    let (k, committed, current) = (
+        sim.trajectory.grid_index,
+        sim.trajectory.committed_time,
+        sim.trajectory.current_time,
+    );
+    for (name, t) in [("committed_time", committed), ("current_time", current)] {
+        if !t.is_finite() {
+            return Err(Error::InvalidState(format!("{name} {t} s is not finite")));
         }
-        let node = self.grid_time(k);
-        let next = self.grid_time(k.saturating_add(1));
-        if k == u64::MAX || node >= next {
-            return Err(Error::InvalidState(format!(
-                "grid_index {k}: internal step {k} starts at {node} s and has no positive length"
-            )));
-        }
-        if !((committed >= node || self.coincide(committed, node)) && committed < next) {
-            return Err(Error::InvalidState(format!(
-                "committed_time {committed} s does not lie in internal step grid_index = {k}, \
-                 [{node} s, {next} s)"
-            )));
-        }
-        if !((current >= committed || self.snaps(current, committed))
-            && (current <= next || self.snaps(current, next)))
-        {
-            return Err(Error::InvalidState(format!(
-                "current_time {current} s does not lie between committed_time {committed} s \
-                 and the end of internal step grid_index = {k} at {next} s"
-            )));
-        }
-        Ok(())
     }
+    let node = sim.grid_time(k);
+    let next = sim.grid_time(k.saturating_add(1));
+    if k == u64::MAX || node >= next {
+        return Err(Error::InvalidState(format!(
+            "grid_index {k}: internal step {k} starts at {node} s and has no positive length"
+        )));
+    }
+    if !((committed >= node || sim.coincide(committed, node)) && committed < next) {
+        return Err(Error::InvalidState(format!(
+            "committed_time {committed} s does not lie in internal step grid_index = {k}, \
+             [{node} s, {next} s)"
+        )));
+    }
+    if !((current >= committed || sim.snaps(current, committed))
+        && (current <= next || sim.snaps(current, next)))
+    {
+        return Err(Error::InvalidState(format!(
+            "current_time {current} s does not lie between committed_time {committed} s \
+             and the end of internal step grid_index = {k} at {next} s"
+        )));
+    }
+    Ok(())
 }
 
 #[cfg(test)]
