@@ -29,7 +29,7 @@ const SOLVER_LAYERS: &[(&str, &[&str])] = &[
     ("linear algebra", &["expm", "linalg"]),
     (
         "system",
-        &["system", "grid", "holding", "config", "contact"],
+        &["system", "grid", "holding", "config", "contact", "reports"],
     ),
     ("step maps and inputs", &["operators", "pieces", "inputs"]),
     ("grid and dense steps", &["grid_step", "dense"]),
@@ -37,10 +37,9 @@ const SOLVER_LAYERS: &[(&str, &[&str])] = &[
     ("stepping", &["stepping", "integrals", "events", "deferred"]),
     ("observers", &["observers", "trajectory"]),
     ("whole steps", &["kernel"]),
-    (
-        "driver",
-        &["mod", "accuracy", "kernel", "outputs", "persist"],
-    ),
+    ("driver", &["driver"]),
+    ("clients", &["accuracy", "outputs", "persist"]),
+    ("facade", &["mod"]),
 ];
 
 /// A module's place: `("", name)` for a top-level module, `("solver",

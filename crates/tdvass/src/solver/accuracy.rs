@@ -89,18 +89,18 @@
 //! `h = tau / m`). Each is accurate to the tolerance, so J(tau) is
 //! continuous across the regime changes to within the tolerance.
 
-use super::{DelayGrid, SimulationConfig, Simulator};
+use super::config::SimulationConfig;
+use super::driver::Simulator;
+use super::grid::DelayGrid;
 use crate::error::{Error, Result};
 use crate::model::{Plant, V_H, V_S, V_T, X_H, X_S, X_T};
 use crate::road::{ISO_NODE_INTERVAL, RoadSpec};
 use nalgebra::{Matrix6, Schur};
 
-pub use super::config::DEFAULT_TOLERANCE;
-/// Loosest tolerance accepted: beyond it the numbers would mean little.
-pub const MAX_TOLERANCE: f64 = 0.1;
-/// Tightest tolerance accepted: below it rounding, not the step, sets the
-/// error of a 15 s run.
-pub const MIN_TOLERANCE: f64 = 1e-12;
+pub use super::config::{
+    DEFAULT_TOLERANCE, MAX_TOLERANCE, MIN_TOLERANCE, StepChoice, check_communication_step,
+    check_max_internal_step, check_tolerance,
+};
 /// Largest internal step (s).
 pub const LARGEST_STEP: f64 = 0.01;
 /// Smallest internal step a tolerance may ask for (s); a tolerance that
@@ -130,55 +130,6 @@ pub const ROUGHNESS_DENSE: f64 = 2e-2;
 const MIN_ROAD_BASE: f64 = 10.0 * SMALLEST_STEP;
 /// Most QR sweeps of the Schur form that finds the plant's eigenvalues.
 const SCHUR_ITERATIONS: usize = 200;
-
-/// Checks a tolerance: finite, within [`MIN_TOLERANCE`], [`MAX_TOLERANCE`].
-pub fn check_tolerance(tolerance: f64) -> Result<()> {
-    if !tolerance.is_finite() || tolerance <= 0.0 {
-        return Err(Error::InvalidParameter {
-            name: "tolerance",
-            value: tolerance,
-            reason: "the relative tolerance must be finite and > 0",
-        });
-    }
-    if tolerance > MAX_TOLERANCE {
-        return Err(Error::InvalidParameter {
-            name: "tolerance",
-            value: tolerance,
-            reason: "the relative tolerance must be at most 0.1 to mean anything",
-        });
-    }
-    if tolerance < MIN_TOLERANCE {
-        return Err(Error::InvalidParameter {
-            name: "tolerance",
-            value: tolerance,
-            reason: "the relative tolerance must be at least 1e-12: below it rounding, not the step, sets the error",
-        });
-    }
-    Ok(())
-}
-
-/// Checks `max_internal_step`: 0 (no bound) or finite and > 0.
-pub fn check_max_internal_step(bound: f64) -> Result<()> {
-    check_optional_step(
-        "max_internal_step",
-        bound,
-        "must be finite and >= 0 (0 = no bound: the tolerance sets the step)",
-    )
-}
-
-/// Checks `communication_step`: 0 (none) or finite and > 0.
-pub fn check_communication_step(step: f64) -> Result<()> {
-    check_optional_step(
-        "communication_step",
-        step,
-        "must be finite and >= 0 (0 = none)",
-    )
-}
-
-/// An optional time (s): 0 or finite and > 0.
-fn check_optional_step(name: &'static str, value: f64, reason: &'static str) -> Result<()> {
-    crate::model::check(name, value, value >= 0.0, reason)
-}
 
 /// The bound `γ + √κ` (1/s) on the plant's eigenvalues (module docs), from
 /// the solver matrix (A with the feedback folded in).
@@ -246,20 +197,6 @@ fn roughness(road: &RoadSpec) -> f64 {
         RoadSpec::Iso8608(_) => ROUGHNESS_DENSE,
         _ => ROUGHNESS_SPARSE,
     }
-}
-
-/// What the step choice found.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct StepChoice {
-    /// The bound of the internal step handed to the delay grid (s).
-    pub step_bound: f64,
-    /// The model's first step `h_0` (s), before the ladder.
-    pub model_step: f64,
-    /// The estimated relative error of the accepted step, from the last
-    /// probe that ran at it (NaN when none did).
-    pub probe_error: f64,
-    /// Probe rounds run.
-    pub probe_rounds: usize,
 }
 
 /// The step on the ladder `base / n`, capped by `max_internal_step` (when

@@ -1,8 +1,9 @@
 //! The configuration of a simulation ([`SimulationConfig`]) and what a run
 //! accumulates ([`Metrics`]): values, checked by `Simulator::new`, that
 //! the solver reads and never changes (but for the tunable gain and
-//! weights). It imports the model, the road and the metrics, nothing of
-//! the solver.
+//! weights), the checks of the solver's own settings, and how the
+//! internal step came from the tolerance ([`StepChoice`]). It imports the
+//! model, the road and the metrics, nothing of the solver.
 
 use crate::error::{Error, Result};
 use crate::metrics::Weights;
@@ -120,4 +121,74 @@ impl Default for SimulationConfig {
             metrics: Metrics::Paper,
         }
     }
+}
+
+/// Tightest tolerance accepted: below it rounding, not the step, sets the
+/// error of a 15 s run.
+pub const MIN_TOLERANCE: f64 = 1e-12;
+
+/// Loosest tolerance accepted: beyond it the numbers would mean little.
+pub const MAX_TOLERANCE: f64 = 0.1;
+
+/// Checks a tolerance: finite, within [`MIN_TOLERANCE`], [`MAX_TOLERANCE`].
+pub fn check_tolerance(tolerance: f64) -> Result<()> {
+    if !tolerance.is_finite() || tolerance <= 0.0 {
+        return Err(Error::InvalidParameter {
+            name: "tolerance",
+            value: tolerance,
+            reason: "the relative tolerance must be finite and > 0",
+        });
+    }
+    if tolerance > MAX_TOLERANCE {
+        return Err(Error::InvalidParameter {
+            name: "tolerance",
+            value: tolerance,
+            reason: "the relative tolerance must be at most 0.1 to mean anything",
+        });
+    }
+    if tolerance < MIN_TOLERANCE {
+        return Err(Error::InvalidParameter {
+            name: "tolerance",
+            value: tolerance,
+            reason: "the relative tolerance must be at least 1e-12: below it rounding, not the step, sets the error",
+        });
+    }
+    Ok(())
+}
+
+/// Checks `max_internal_step`: 0 (no bound) or finite and > 0.
+pub fn check_max_internal_step(bound: f64) -> Result<()> {
+    check_optional_step(
+        "max_internal_step",
+        bound,
+        "must be finite and >= 0 (0 = no bound: the tolerance sets the step)",
+    )
+}
+
+/// Checks `communication_step`: 0 (none) or finite and > 0.
+pub fn check_communication_step(step: f64) -> Result<()> {
+    check_optional_step(
+        "communication_step",
+        step,
+        "must be finite and >= 0 (0 = none)",
+    )
+}
+
+/// An optional time (s): 0 or finite and > 0.
+fn check_optional_step(name: &'static str, value: f64, reason: &'static str) -> Result<()> {
+    crate::model::check(name, value, value >= 0.0, reason)
+}
+
+/// What the step choice found.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepChoice {
+    /// The bound of the internal step handed to the delay grid (s).
+    pub step_bound: f64,
+    /// The model's first step `h_0` (s), before the ladder.
+    pub model_step: f64,
+    /// The estimated relative error of the accepted step, from the last
+    /// probe that ran at it (NaN when none did).
+    pub probe_error: f64,
+    /// Probe rounds run.
+    pub probe_rounds: usize,
 }

@@ -8,9 +8,11 @@
 //! refuses truncated, foreign-version or inconsistent input with an error,
 //! never a panic.
 
+use super::accuracy;
+use super::config::{Metrics, SimulationConfig};
+use super::driver::Simulator;
 use super::holding::Holding;
 use super::integrals::{INTEGRALS, WEIGHTED_FOURTH, WEIGHTED_SQUARE};
-use super::{Metrics, SimulationConfig, Simulator, accuracy};
 use crate::bytes::{ByteReader, ByteWriter};
 use crate::error::{Error, Result};
 use crate::metrics::{RunningRms, Weights};
@@ -343,7 +345,7 @@ fn read_trajectory(sim: &mut Simulator, r: &mut ByteReader) -> Result<()> {
     for v in sim.trajectory.current_state.iter_mut() {
         *v = r.f64()?;
     }
-    let flat = r.f64s(2 * super::MAX_HISTORY_NODES + 2)?;
+    let flat = r.f64s(2 * super::grid::MAX_HISTORY_NODES + 2)?;
     if flat.len() != 2 * sim.inputs.history.len() {
         return Err(Error::InvalidState(format!(
             "history of {} values where {} were expected",

@@ -1,6 +1,7 @@
 use super::*;
 use crate::model::Performance;
 use crate::model::TireContact;
+use crate::model::{Params, State, Variant};
 use crate::road::RandomRoad;
 use crate::road::RoadSpec;
 use crate::solver::stepping::stepping;

@@ -1,0 +1,854 @@
+//! The driver: the [`Simulator`] and its step. It holds the grouped parts
+//! (configuration, modes, inputs, trajectory, observers), advances them
+//! ([`Simulator::advance_to`]: whole steps through `kernel`, points inside
+//! a step through `stepping`, the tire's switches through `events`), and
+//! alone moves the committed point and tells the observers of it. The
+//! public constructors and readers that need the clients (`accuracy`,
+//! `outputs`, `persist`) are declared in the solver's module.
+
+use super::config::{
+    SimulationConfig, StepChoice, check_communication_step, check_max_internal_step,
+    check_tolerance,
+};
+use super::contact::{LIFT_OFF_LOG, LiftOff, MAX_SWITCHES_PER_STEP};
+use super::deferred::{Deferred, Kind};
+use super::grid::DelayGrid;
+use super::holding::Holding;
+use super::inputs::Inputs;
+use super::integrals::{Accumulated, INTEGRALS, Squares, rms_from_integral};
+use super::kernel;
+use super::modes::Modes;
+use super::observers::Observers;
+use super::pieces;
+use super::reports::{Outputs, RunSummary};
+use super::stepping::stepping;
+use super::system::Filter;
+use super::trajectory::Trajectory;
+use crate::error::{Error, Result};
+use crate::metrics::{RmsValues, Weights};
+use crate::model::{Params, Plant, State, V_T, Variant, X_T};
+use crate::road::{Road, RoadPiece};
+
+/// Rounding drift covered by the snap tolerance, in additions: a time
+/// accumulated as `t += step` over N steps is off by at most `N ε |t| / 2`,
+/// so `2^22 ε |t|` covers 2^22 steps with a factor 2 to spare (1.4e-8 s at
+/// t = 15 s).
+const SNAPPED_ADDITIONS: f64 = 4_194_304.0;
+/// The snap tolerance never exceeds this fraction of the internal step
+/// (2^-10: 1e-7 s at the default step, far below any time scale of the
+/// model or its roads).
+const SNAP_STEP_FRACTION: f64 = 1.0 / 1024.0;
+
+/// The simulator: a quarter car on a road, advanced in time by the precise
+/// integration method. `Clone` is a complete snapshot of it.
+#[derive(Debug, Clone)]
+pub struct Simulator {
+    /// The configuration, as given (the gain and the weights are tunable).
+    pub(super) config: SimulationConfig,
+    /// The plant of the configuration (A, b, e of Eq. (2)).
+    pub(super) plant: Plant,
+    /// The internal grid: the step and how the delay lies on it.
+    pub(super) grid: DelayGrid,
+    /// How the internal step came from the tolerance.
+    pub(super) step_choice: StepChoice,
+    /// The operators of the tire's modes and their caches.
+    pub(super) modes: Modes,
+    /// The road and the delay history.
+    pub(super) inputs: Inputs,
+    /// The committed point and the current point.
+    pub(super) trajectory: Trajectory,
+    /// What the run accumulates for its outputs.
+    pub(super) observers: Observers,
+    /// The outputs at the current time, once computed (cleared by every
+    /// change of the state, the time or a parameter).
+    pub(super) outputs_cache: Option<Outputs>,
+}
+
+impl Simulator {
+    /// Largest |start time| in internal steps (2^42). Node times
+    /// `t_0 + k h` then resolve every step to 2^-10 h near the start; from
+    /// 2^53 steps on, `t_0 + h` can round to `t_0` and a step would no
+    /// longer advance time.
+    pub const MAX_START_TIME_IN_STEPS: f64 = 4_398_046_511_104.0;
+
+    /// As [`Self::new`], with the internal step bound given (a restored
+    /// state keeps the step it was saved with).
+    pub(crate) fn with_step_bound(config: SimulationConfig, step_bound: f64) -> Result<Simulator> {
+        let plant = Self::validate(&config)?;
+        check_tolerance(config.tolerance)?;
+        check_max_internal_step(config.max_internal_step)?;
+        check_communication_step(config.communication_step)?;
+        let grid = DelayGrid::new(Self::resolved_delay(&config), step_bound)?;
+        let mut sim = Self::with_grid(config, plant, grid)?;
+        sim.step_choice.step_bound = step_bound;
+        Ok(sim)
+    }
+
+    /// The delay the grid resolves: tau with the controller, else 0.
+    pub(super) fn resolved_delay(config: &SimulationConfig) -> f64 {
+        if config.variant.has_control() {
+            config.params.tau
+        } else {
+            0.0
+        }
+    }
+
+    /// The plant of a configuration whose every value is checked.
+    pub(super) fn validate(config: &SimulationConfig) -> Result<Plant> {
+        let plant = Plant::new(config.params, config.variant)?;
+        if !config.start_time.is_finite() {
+            return Err(Error::InvalidTime {
+                name: "start_time",
+                value: config.start_time,
+                reason: "must be finite",
+            });
+        }
+        for (i, value) in config.initial_state.iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Error::InvalidParameter {
+                    name: crate::model::STATE_NAMES[i],
+                    value: *value,
+                    reason: "the initial state must be finite",
+                });
+            }
+        }
+        let w = config.weights;
+        for (name, value) in [
+            ("w_ba", w.body_acceleration),
+            ("w_sdd", w.suspension_deflection),
+            ("w_tdd", w.tire_deflection),
+        ] {
+            if !value.is_finite() {
+                return Err(Error::InvalidParameter {
+                    name,
+                    value,
+                    reason: "a weight must be finite",
+                });
+            }
+        }
+        crate::limits::check_config(
+            &config.params,
+            config.variant,
+            &config.road,
+            &config.initial_state,
+            &config.weights,
+        )?;
+        Ok(plant)
+    }
+
+    /// The simulator of a checked configuration on the given grid.
+    pub(crate) fn with_grid(
+        config: SimulationConfig,
+        plant: Plant,
+        grid: DelayGrid,
+    ) -> Result<Simulator> {
+        if config.start_time.abs() > grid.step * Self::MAX_START_TIME_IN_STEPS {
+            return Err(Error::InvalidTime {
+                name: "start_time",
+                value: config.start_time,
+                reason: "|start_time| must be at most 2^42 internal steps (the step the tolerance sets, max_internal_step, or less to divide tau) so that node times resolve the step",
+            });
+        }
+        let road = Road::new(&config.road, config.start_time)?;
+        let mut initial = config.initial_state;
+        if config.variant == Variant::Cs {
+            initial[crate::model::X_H] = 0.0;
+            initial[crate::model::V_H] = 0.0;
+        }
+        let inputs = Inputs::new(
+            road,
+            &config.road,
+            grid,
+            config.start_time,
+            [initial[X_T], initial[V_T]],
+        );
+        let modes = Modes::new(&plant, &config, &grid, inputs.angular_frequency())?;
+        let start_time = config.start_time;
+        let mut sim = Simulator {
+            plant,
+            grid,
+            step_choice: StepChoice {
+                step_bound: grid.step,
+                model_step: f64::NAN,
+                probe_error: f64::NAN,
+                probe_rounds: 0,
+            },
+            modes,
+            inputs,
+            trajectory: Trajectory {
+                grid_index: 0,
+                committed_time: config.start_time,
+                committed_state: initial,
+                committed_filter: Filter::zeros(),
+                current_time: config.start_time,
+                current_state: initial,
+                deferred: None,
+                flight_start: None,
+            },
+            observers: Observers::new(start_time),
+            outputs_cache: None,
+            config,
+        };
+        let piece = sim.inputs.piece_from(start_time);
+        let rest = Filter::zeros();
+        sim.observers.integral.anchor = stepping!(sim).squares_at(
+            0,
+            start_time,
+            &initial,
+            &rest,
+            (start_time, initial),
+            &piece,
+        );
+        let margin = stepping!(sim).margin_at(start_time, &initial, &piece);
+        sim.observers.holding = Holding::new(
+            initial[crate::model::X_S] - initial[X_T],
+            margin[0],
+            start_time,
+        );
+        sim.observers.start_load = sim.config.params.k_t * (piece.value(start_time) - initial[X_T]);
+        if sim.config.tire_contact.is_unilateral() {
+            // A start without contact is a lift-off at the start, made by
+            // the first step's switch search.
+            sim.observers.holding.first_loss = None;
+            sim.observers.holding.lift_offs = 0;
+        }
+        sim.enter_recorded_mode();
+        Ok(sim)
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &SimulationConfig {
+        &self.config
+    }
+
+    /// The plant (A, b, e of Eq. (2)).
+    pub fn plant(&self) -> &Plant {
+        &self.plant
+    }
+
+    /// The internal grid (step and delay in steps).
+    pub fn grid(&self) -> DelayGrid {
+        self.grid
+    }
+
+    /// How the internal step came from the tolerance (the model's step,
+    /// the probe's estimate; see [`super::accuracy`]).
+    pub fn step_choice(&self) -> StepChoice {
+        self.step_choice
+    }
+
+    /// Current time (s).
+    pub fn time(&self) -> f64 {
+        self.trajectory.current_time
+    }
+
+    /// Time of the last committed state (s): the last grid node reached, or
+    /// the last change of an external road input.
+    pub fn committed_time(&self) -> f64 {
+        self.trajectory.committed_time
+    }
+
+    /// Current state `X` (solver coordinates); a deferred one
+    /// ([`Self::computed_state`]) is computed on a copy.
+    pub fn state(&self) -> State {
+        match self.computed_state() {
+            Some(x) => x,
+            None => {
+                let mut settled = self.clone();
+                settled.settle();
+                settled.trajectory.current_state
+            }
+        }
+    }
+
+    pub(super) fn grid_time(&self, k: u64) -> f64 {
+        self.inputs.node_time(k)
+    }
+
+    /// Whether times `a` and `b` are the same on this grid
+    /// ([`pieces::coincide`]).
+    pub(super) fn coincide(&self, a: f64, b: f64) -> bool {
+        pieces::coincide(a, b, self.grid.step)
+    }
+
+    /// The snap tolerance at time `t` (s): `2^22 ε |t|` (the rounding drift
+    /// of 2^22 additions `t += step`, with a factor 2 to spare), at most
+    /// `h / 1024`, at least `1e-9 h + 8 ε |t|` (the tolerance within which
+    /// two times are the same node).
+    pub fn snap_tolerance(&self, t: f64) -> f64 {
+        let drift = SNAPPED_ADDITIONS * f64::EPSILON * t.abs();
+        let floor = 1e-9 * self.grid.step + 8.0 * f64::EPSILON * t.abs();
+        drift.min(self.grid.step * SNAP_STEP_FRACTION).max(floor)
+    }
+
+    /// The time of the first internal grid node after the committed one
+    /// that is at or after `t` (s): where a master can be called back
+    /// inside a step (FMI 3.0 intermediate updates) without moving the
+    /// grid.
+    pub fn node_at_or_after(&self, t: f64) -> f64 {
+        let first = self.trajectory.grid_index.saturating_add(1);
+        // `as` saturates (and maps NaN to 0); the loops correct the guess.
+        let mut k = (((t - self.config.start_time) / self.grid.step).ceil() as u64).max(first);
+        while k > first && self.grid_time(k - 1) >= t {
+            k -= 1;
+        }
+        while self.grid_time(k) < t && k < u64::MAX - 1 {
+            k += 1;
+        }
+        self.grid_time(k)
+    }
+
+    /// Whether a requested time `a` and a grid time `b` differ only by
+    /// floating-point accumulation: then `b` is reached (committed) and
+    /// the outputs are evaluated at `a` itself from there.
+    pub(super) fn snaps(&self, a: f64, b: f64) -> bool {
+        (a - b).abs() <= self.snap_tolerance(a.abs().max(b.abs()))
+    }
+
+    /// Advances to `t_end` (any length; any number of calls). On divergence
+    /// the simulator stays at the last good grid node and returns
+    /// [`Error::Diverged`].
+    ///
+    /// A `t_end` within the snap tolerance of a grid node
+    /// ([`Self::snap_tolerance`]) commits that node, as if it had been
+    /// asked for exactly; the state at `t_end` itself then comes from the
+    /// node by a short Taylor series. So a caller that accumulates its
+    /// communication times (`t += step`) commits the same nodes, does the
+    /// same work and gets the same RMS integrals as one that computes them
+    /// exactly; its outputs differ only by the drift times their rates.
+    ///
+    /// The state at a `t_end` that is not a grid node (near one, or inside
+    /// a step) may be left to be found when first asked for
+    /// ([`Self::computed_state`]): bounds show that it passes the
+    /// divergence check, and it is the same value to the bit.
+    pub fn advance_to(&mut self, t_end: f64) -> Result<()> {
+        self.outputs_cache = None;
+        if !t_end.is_finite()
+            || (t_end < self.trajectory.current_time
+                && !self.snaps(t_end, self.trajectory.current_time))
+        {
+            return Err(Error::InvalidTime {
+                name: "t_end",
+                value: t_end,
+                reason: "must be finite and not before the current time",
+            });
+        }
+        let unilateral = self.config.tire_contact.is_unilateral();
+        // Switches of the tire contact made in the current step.
+        let mut switches = 0;
+        loop {
+            let k = self.trajectory.grid_index;
+            let next_node = self.grid_time(k + 1);
+            if next_node < t_end || self.snaps(t_end, next_node) {
+                let on_node = self.trajectory.committed_time == self.grid_time(k);
+                if on_node && !self.in_flight() && switches == 0 {
+                    // On a grid node: whole steps up to the last node the
+                    // interval reaches, in one tight loop; with a
+                    // unilateral tire, up to a step that may lift off.
+                    let last = self.last_node_until(t_end);
+                    if self.whole_steps_view().whole_steps(last)? {
+                        self.step_to_node_switching(&mut switches)?;
+                    }
+                } else if unilateral {
+                    self.step_to_node_switching(&mut switches)?;
+                } else {
+                    self.step_to_node()?;
+                }
+                if self.trajectory.grid_index > k {
+                    switches = 0;
+                }
+                if self.snaps(t_end, self.trajectory.committed_time) {
+                    return self.finish_near_committed(t_end);
+                }
+            } else {
+                if self.snaps(t_end, self.trajectory.committed_time) {
+                    return self.finish_near_committed(t_end);
+                }
+                if unilateral && self.switch_by(k, t_end, &mut switches)? {
+                    continue;
+                }
+                if self.defer(t_end, Kind::InsideStep) {
+                    return Ok(());
+                }
+                let x = stepping!(self).integrate_within_step(
+                    k,
+                    self.trajectory.committed_time,
+                    self.trajectory.committed_state,
+                    t_end,
+                );
+                crate::limits::check_divergence(t_end, &x)?;
+                self.trajectory.set_current(t_end, x);
+                return Ok(());
+            }
+        }
+    }
+
+    /// With a unilateral tire: to the end node of the current step,
+    /// through the switches of the tire contact inside it.
+    pub(super) fn step_to_node_switching(&mut self, switches: &mut u32) -> Result<()> {
+        let k = self.trajectory.grid_index;
+        let next_node = self.grid_time(k + 1);
+        while self.switch_by(k, next_node, switches)? {
+            if self.snaps(next_node, self.trajectory.committed_time) {
+                break;
+            }
+        }
+        self.step_to_node()
+    }
+
+    /// From the committed point inside the current step (where an
+    /// external road input changed or the tire contact switched), or from
+    /// its start node, to its end node, which is committed.
+    pub(super) fn step_to_node(&mut self) -> Result<()> {
+        let k = self.trajectory.grid_index;
+        let next_node = self.grid_time(k + 1);
+        if self.observers.rms.samples > 0 {
+            // From a node that ends a run of the whole-step loop (a
+            // unilateral tire's step that may lift off, or a step that a
+            // road breakpoint splits): the run closes there first.
+            let (t, x, w) = (
+                self.trajectory.committed_time,
+                self.trajectory.committed_state,
+                self.trajectory.committed_filter,
+            );
+            let piece = self.inputs.piece_from(t);
+            let (mut rms, mut weighted) = (self.observers.rms, self.observers.weighted);
+            self.observers.close_run_at_node(
+                &mut stepping!(self),
+                k,
+                (t, &x, &w),
+                &mut rms,
+                &mut weighted,
+                &piece,
+                &piece,
+            );
+            (self.observers.rms, self.observers.weighted) = (rms, weighted);
+        }
+        let from = (
+            self.trajectory.committed_time,
+            self.trajectory.committed_state,
+        );
+        let x = stepping!(self).integrate_within_step(k, from.0, from.1, next_node);
+        crate::limits::check_divergence(next_node, &x)?;
+        let w_from = self.trajectory.committed_filter;
+        let w = stepping!(self).filter_within_step(k, from, &w_from, next_node);
+        let anchor = self.observers.integral.anchor;
+        let mut holding = self.observers.holding;
+        let (step_integral, at_end, last_piece) = stepping!(self).integral_within_step(
+            k,
+            from,
+            &w_from,
+            anchor,
+            next_node,
+            (&x, &w),
+            &mut holding,
+        );
+        self.observers.holding = holding;
+        self.commit_node(
+            k + 1,
+            (next_node, x, w),
+            step_integral,
+            (at_end, last_piece),
+        );
+        Ok(())
+    }
+
+    /// Ends an advance at `t_end`, which snaps to the committed point: the
+    /// state there by [`Stepping::state_near`](super::stepping::Stepping::state_near), deferred where that
+    /// is shown to be safe ([`super::deferred`]).
+    pub(super) fn finish_near_committed(&mut self, t_end: f64) -> Result<()> {
+        let delta = t_end - self.trajectory.committed_time;
+        if delta != 0.0 && self.defer(t_end, Kind::NearNode) {
+            return Ok(());
+        }
+        let x = stepping!(self).state_near(&self.trajectory.committed(), delta);
+        crate::limits::check_divergence(t_end, &x)?;
+        self.trajectory.set_current(t_end, x);
+        Ok(())
+    }
+
+    /// The largest grid index `j >= grid_index` whose node lies before
+    /// `t_end` or snaps to it (at most `u64::MAX - 1`, so `j + 1`
+    /// exists). Node times never decrease with the index, so `j` is found
+    /// from the estimate `(t_end − t_0) / h` by
+    /// [`crate::monotone::last_index_where`] in a bounded number of
+    /// evaluations, even where many indices share one floating-point time.
+    /// The usual call of a master that steps one internal step at a time,
+    /// to the next node (or a time that snaps to it), is tested first.
+    pub(super) fn last_node_until(&self, t_end: f64) -> u64 {
+        let reached = |j: u64| {
+            let t = self.grid_time(j);
+            t < t_end || self.snaps(t_end, t)
+        };
+        let k = self.trajectory.grid_index;
+        if k < u64::MAX - 2 && reached(k + 1) && !reached(k + 2) {
+            return k + 1;
+        }
+        // `as` saturates (and maps NaN to 0); the search clamps the guess.
+        let estimate = ((t_end - self.config.start_time) / self.grid.step).floor() as u64;
+        crate::monotone::last_index_where(k, u64::MAX - 1, estimate, reached)
+    }
+
+    /// Commits grid node k (time, state x, filter state w) reached from a
+    /// point inside step k − 1; `step_integral`: `∫ f` from the committed
+    /// point to it.
+    pub(super) fn commit_node(
+        &mut self,
+        k: u64,
+        (time, x, w): (f64, State, Filter),
+        step_integral: [f64; INTEGRALS],
+        arrival: (Squares, RoadPiece),
+    ) {
+        self.inputs.record_node(k, [x[X_T], x[V_T]]);
+        self.trajectory.grid_index = k;
+        self.trajectory.committed_time = time;
+        self.trajectory.committed_state = x;
+        self.trajectory.committed_filter = w;
+        self.trajectory.set_current(time, x);
+        if self.config.metrics.road_holding() {
+            self.observers.holding.add_node(&x.into());
+        }
+        self.observers.restart_run_after_step(
+            &mut stepping!(self),
+            k,
+            (time, &x, &w),
+            step_integral,
+            arrival,
+        );
+        self.inputs.road.release_before(time);
+    }
+
+    /// Sets the external road input from the current time on (only with
+    /// `RoadSpec::Input`): `x_g(t) = value + slope (t − now)`. A current
+    /// time that snaps to the committed point (a time drift) sets it from
+    /// that point instead.
+    pub fn set_road_input(&mut self, value: f64, slope: f64) -> Result<()> {
+        self.settle();
+        self.outputs_cache = None;
+        if !self.inputs.road.is_input() {
+            return Err(Error::InvalidSetting {
+                name: "road",
+                value: 0,
+                reason: "the input x_g is only used when road = 0",
+            });
+        }
+        // Checked before the RMS run is closed, so that a refused value
+        // changes nothing.
+        Road::check_input(value, slope)?;
+        self.modes.next_node = None;
+        let start = self.close_run_for_input();
+        self.inputs.road.set_input(start, value, slope)?;
+        self.observers
+            .reanchor(&mut stepping!(self), &self.trajectory.committed());
+        Ok(())
+    }
+
+    /// Changes the feedback gain g (tunable; within the rate limit of
+    /// [`crate::limits::check_rates`]); the history is kept.
+    pub fn set_gain(&mut self, g: f64) -> Result<()> {
+        self.settle();
+        self.outputs_cache = None;
+        let params = Params {
+            g,
+            ..self.config.params
+        };
+        let plant = Plant::new(params, self.config.variant)?;
+        crate::limits::check_rates(&params, Some(self.config.variant))?;
+        self.config.params = params;
+        self.modes = Modes::new(
+            &plant,
+            &self.config,
+            &self.grid,
+            self.inputs.angular_frequency(),
+        )?;
+        self.plant = plant;
+        // The contact operators were rebuilt: the flight ones follow, and
+        // a flight in progress goes on with them.
+        self.enter_recorded_mode();
+        Ok(())
+    }
+
+    /// Changes the weights of J (tunable).
+    pub fn set_weights(&mut self, weights: Weights) {
+        self.outputs_cache = None;
+        self.config.weights = weights;
+    }
+
+    /// Runs from the current time for `duration` seconds and summarises.
+    pub fn run_for(&mut self, duration: f64) -> Result<RunSummary> {
+        self.advance_to(self.trajectory.current_time + duration)?;
+        let outputs = self.outputs();
+        Ok(RunSummary {
+            rms: outputs.rms,
+            objective: outputs.objective,
+            comfort: outputs.comfort,
+            rms_dynamic_tire_load_ratio: outputs.rms_dynamic_tire_load_ratio,
+            road_holding: outputs.road_holding,
+        })
+    }
+
+    /// The current state if it has been computed; `None` while it is
+    /// deferred: [`Self::advance_to`] may leave the state at a point near
+    /// a node or inside a step to be found when first asked for
+    /// ([`Self::state`], the outputs), after showing that it passes the
+    /// divergence check.
+    pub fn computed_state(&self) -> Option<State> {
+        self.trajectory
+            .deferred
+            .is_none()
+            .then_some(self.trajectory.current_state)
+    }
+
+    /// Computes a deferred current state (the same value as when it is
+    /// computed at once).
+    pub(super) fn settle(&mut self) {
+        if let Some(deferred) = self.trajectory.deferred.take() {
+            let (k, tc, xc, t) = (
+                self.trajectory.grid_index,
+                self.trajectory.committed_time,
+                self.trajectory.committed_state,
+                self.trajectory.current_time,
+            );
+            self.trajectory.current_state = match deferred.kind {
+                Kind::NearNode => stepping!(self).state_near(&self.trajectory.committed(), t - tc),
+                Kind::InsideStep => stepping!(self).integrate_within_step(k, tc, xc, t),
+            };
+        }
+    }
+
+    /// Bounds of how far the deferred state lies from the committed one
+    /// (`None` when it is computed).
+    pub(super) fn deferred_drift(&self) -> Option<[f64; 6]> {
+        self.trajectory.deferred.map(|d| d.drift)
+    }
+
+    /// Makes `t` the current time with its state deferred, where the
+    /// bounds of `kind` show that the state passes the divergence check;
+    /// `false` (the current point unchanged) otherwise.
+    pub(super) fn defer(&mut self, t: f64, kind: Kind) -> bool {
+        let drift = match kind {
+            Kind::NearNode => stepping!(self).drift_bounds(
+                &self.trajectory.committed(),
+                t - self.trajectory.committed_time,
+            ),
+            Kind::InsideStep => stepping!(self).inside_bounds(&self.trajectory.committed(), t),
+        };
+        let x = self.trajectory.committed_state;
+        let Some(drift) = drift.filter(|drift| {
+            (0..6).all(|i| x[i].abs() + drift[i] <= 0.5 * crate::limits::divergence_bound(i))
+        }) else {
+            return false;
+        };
+        self.trajectory.current_time = t;
+        self.trajectory.current_state = x;
+        self.trajectory.deferred = Some(Deferred { kind, drift });
+        true
+    }
+
+    /// Whether the wheel is in flight now (unilateral tire only).
+    pub fn in_flight(&self) -> bool {
+        self.trajectory.flight_start.is_some()
+    }
+
+    /// The lift-offs since the last call (at most 64; the second value
+    /// counts those left out), for an event log.
+    pub fn take_lift_offs(&mut self) -> (Vec<LiftOff>, u64) {
+        let log = std::mem::take(&mut self.observers.lift_off_log);
+        (log.events, log.dropped)
+    }
+
+    /// The tire load as the tire law gives it (N): `load` =
+    /// `k_t (x_g − x_t)`, at least −W with the unilateral tire.
+    pub(super) fn tire_load(&self, load: f64) -> f64 {
+        if self.config.tire_contact.is_unilateral() {
+            load.max(-self.static_load())
+        } else {
+            load
+        }
+    }
+
+    /// Puts the operators of the mode the holding state says, the contact
+    /// operators being in force (after a restore or a rebuild of them).
+    pub(super) fn enter_recorded_mode(&mut self) {
+        self.modes.other_mode = None;
+        if self.in_flight() {
+            self.modes.swap(&self.plant, self.grid.step);
+        }
+    }
+
+    /// In unilateral mode: the first switch in grid step k after the
+    /// committed point, if it comes at or before `until`, is committed and
+    /// the mode flipped (`Ok(true)`); `Ok(false)` if none comes by then.
+    /// `switches`: the switches made in this step so far (refused beyond
+    /// [`MAX_SWITCHES_PER_STEP`]).
+    pub(super) fn switch_by(&mut self, k: u64, until: f64, switches: &mut u32) -> Result<bool> {
+        let from = (
+            self.trajectory.committed_time,
+            self.trajectory.committed_state,
+        );
+        let Some(time) = stepping!(self).next_switch(k, from) else {
+            return Ok(false);
+        };
+        if time > until && !self.snaps(until, time) {
+            return Ok(false);
+        }
+        *switches += 1;
+        if *switches > MAX_SWITCHES_PER_STEP {
+            return Err(Error::Numerical {
+                what: "the unilateral tire (tire_contact = 1)",
+                reason: format!(
+                    "more than {MAX_SWITCHES_PER_STEP} switches between contact and flight in the internal step from {} s: the margin to W/k_t = {} m changes sign faster than a step of {} s resolves; use a tighter tolerance or a smaller max_internal_step, or the bilateral tire",
+                    self.grid_time(k),
+                    self.modes.grid_step.contact.limit,
+                    self.grid.step
+                ),
+            });
+        }
+        self.commit_switch(k, time)
+    }
+
+    /// Commits the state at the switch time `time` in step k and flips the
+    /// mode.
+    pub(super) fn commit_switch(&mut self, k: u64, time: f64) -> Result<bool> {
+        let (tc, xc) = (
+            self.trajectory.committed_time,
+            self.trajectory.committed_state,
+        );
+        let x = if time == tc {
+            xc
+        } else {
+            stepping!(self).integrate_within_step(k, tc, xc, time)
+        };
+        crate::limits::check_divergence(time, &x)?;
+        self.outputs_cache = None;
+        self.trajectory.set_current(time, x);
+        self.close_run_here();
+        let piece = self.inputs.piece_from(time);
+        if self.in_flight() {
+            let start = self.trajectory.flight_start.take().unwrap_or(time);
+            self.observers.holding.lost_time += time - start;
+        } else {
+            let limit = self.modes.grid_step.contact.limit;
+            self.trajectory.flight_start = Some(time);
+            self.observers.holding.lift_offs += 1;
+            self.observers.holding.first_loss.get_or_insert(time);
+            let event = LiftOff {
+                time,
+                tire_deflection: x[X_T] - piece.value(time),
+                limit,
+            };
+            if self.observers.lift_off_log.events.len() < LIFT_OFF_LOG {
+                self.observers.lift_off_log.events.push(event);
+            } else {
+                self.observers.lift_off_log.dropped += 1;
+            }
+        }
+        self.modes.swap(&self.plant, self.grid.step);
+        self.observers
+            .reanchor(&mut stepping!(self), &self.trajectory.committed());
+        Ok(true)
+    }
+
+    /// Everything accumulated from `t_0` to the current time
+    /// ([`Observers::accumulated`]).
+    pub(super) fn accumulated_now(&mut self) -> Accumulated {
+        self.settle();
+        let (t, x) = (self.trajectory.current_time, self.trajectory.current_state);
+        let drift = self.snaps(t, self.trajectory.committed_time);
+        self.observers.accumulated(
+            &mut stepping!(self),
+            &self.trajectory.committed(),
+            (t, x),
+            drift,
+        )
+    }
+
+    /// `∫_{t_0}^{t} y² dt` of BA, SDD and TDD at the current time t
+    /// ([`Observers::rms_integral`]).
+    pub(super) fn rms_integral_now(&mut self) -> [f64; 3] {
+        let (t, tc) = (self.trajectory.current_time, self.trajectory.committed_time);
+        let inside = t != tc && !self.snaps(t, tc);
+        if inside {
+            self.settle();
+        }
+        let x = self.trajectory.current_state;
+        self.observers.rms_integral(
+            &mut stepping!(self),
+            &self.trajectory.committed(),
+            (t, x),
+            inside,
+        )
+    }
+
+    /// The running RMS values at the current time.
+    pub(super) fn rms_now(&mut self) -> RmsValues {
+        let integral = self.rms_integral_now();
+        rms_from_integral(
+            &integral,
+            self.trajectory.current_time - self.config.start_time,
+        )
+    }
+
+    /// Before the external road input changes at the current time: closes
+    /// the run there. Returns the time from which the new input applies:
+    /// the committed point when the current time snaps to it (a time drift
+    /// is not a different time), else the current time, which then becomes
+    /// the committed point (its filter state and road-holding accumulators
+    /// with it).
+    pub(super) fn close_run_for_input(&mut self) -> f64 {
+        let (tc, t) = (self.trajectory.committed_time, self.trajectory.current_time);
+        if self.snaps(t, tc) {
+            let (closed, _) = self
+                .observers
+                .integral_to_committed(&mut stepping!(self), &self.trajectory.committed());
+            self.observers.integral.closed = closed;
+            self.observers
+                .start_run(self.trajectory.grid_index, self.trajectory.committed_time);
+        } else {
+            self.close_run_here();
+        }
+        self.trajectory.committed_time
+    }
+
+    /// Commits the current time, however close to the committed point it
+    /// is (a switch of the tire's contact, a change of the road input):
+    /// it becomes the committed point, with its filter state and
+    /// road-holding accumulators, and the run closes there.
+    pub(super) fn close_run_here(&mut self) {
+        self.settle();
+        if self.trajectory.current_time == self.trajectory.committed_time {
+            let (closed, _) = self
+                .observers
+                .integral_to_committed(&mut stepping!(self), &self.trajectory.committed());
+            self.observers.integral.closed = closed;
+        } else {
+            let now = self.accumulated_now();
+            self.observers.integral.closed = now.integral;
+            self.observers.holding = now.holding;
+            if self.config.metrics.road_holding() {
+                self.observers
+                    .holding
+                    .add_node(&self.trajectory.current_state.into());
+            }
+            self.trajectory.committed_filter = now.filter;
+            self.trajectory.committed_time = self.trajectory.current_time;
+            self.trajectory.committed_state = self.trajectory.current_state;
+        }
+        self.observers
+            .start_run(self.trajectory.grid_index, self.trajectory.committed_time);
+    }
+
+    /// The view of this simulator that runs its whole steps
+    /// ([`kernel::WholeSteps`]).
+    pub(super) fn whole_steps_view(&mut self) -> kernel::WholeSteps<'_> {
+        kernel::WholeSteps {
+            config: &self.config,
+            plant: &self.plant,
+            grid: self.grid,
+            modes: &mut self.modes,
+            inputs: &mut self.inputs,
+            trajectory: &mut self.trajectory,
+            observers: &mut self.observers,
+        }
+    }
+}
