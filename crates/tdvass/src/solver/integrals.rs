@@ -175,6 +175,34 @@ pub(crate) fn rms_from_integral(integral: &[f64], duration: f64) -> RmsValues {
 }
 
 impl Stepping<'_> {
+    /// Adds the stretch from `start` (state `x_start`) to `end` (state
+    /// `x_end`) on `piece` to the road-holding accumulators, when they run:
+    /// the time without contact of the bilateral tire (the margin's cubic,
+    /// `Holding::add_interval`) and the largest |SDD| on it.
+    fn hold_stretch(
+        &mut self,
+        holding: &mut Holding,
+        (start, x_start): (f64, &State),
+        (end, x_end): (f64, &State),
+        piece: &RoadPiece,
+    ) {
+        if !self.config.metrics.road_holding() {
+            return;
+        }
+        let (a, b) = (
+            self.margin_at(start, x_start, piece),
+            self.margin_at(end, x_end, piece),
+        );
+        if !self.config.tire_contact.is_unilateral() {
+            holding.add_interval(start, end - start, a, b);
+        }
+        holding.add_deflection(
+            end - start,
+            deflection(&(*x_start).into()),
+            deflection(&(*x_end).into()),
+        );
+    }
+
     /// The integrands and their rates at time `t` of step k with state `x`
     /// and filter state `w`, the road given by `piece` (which side of a
     /// breakpoint is the caller's choice).
@@ -305,21 +333,8 @@ impl Stepping<'_> {
             };
             let at_end = self.squares_with(k, end, &x_end, w_end.as_ref(), from, &piece);
             total = add(total, corrected_trapezoid(end - start, &at_start, &at_end));
-            if let Some(holding) = holding.as_deref_mut()
-                && self.config.metrics.road_holding()
-            {
-                let (a, b) = (
-                    self.margin_at(start, &x_start, &piece),
-                    self.margin_at(end, &x_end, &piece),
-                );
-                if !self.config.tire_contact.is_unilateral() {
-                    holding.add_interval(start, end - start, a, b);
-                }
-                holding.add_deflection(
-                    end - start,
-                    deflection(&x_start.into()),
-                    deflection(&x_end.into()),
-                );
+            if let Some(holding) = holding.as_deref_mut() {
+                self.hold_stretch(holding, (start, &x_start), (end, &x_end), &piece);
             }
             if end == to {
                 return (total, at_end, piece);
@@ -386,20 +401,7 @@ impl Stepping<'_> {
             let w_end = self.filter_within_step(k, (start, x_start), &w_start, end);
             let at_end = self.squares_at(k, end, &x_end, &w_end, (start, x_start), &piece);
             total = add(total, corrected_trapezoid(end - start, &at, &at_end));
-            if self.config.metrics.road_holding() {
-                let (a, b) = (
-                    self.margin_at(start, &x_start, &piece),
-                    self.margin_at(end, &x_end, &piece),
-                );
-                if !self.config.tire_contact.is_unilateral() {
-                    holding.add_interval(start, end - start, a, b);
-                }
-                holding.add_deflection(
-                    end - start,
-                    deflection(&x_start.into()),
-                    deflection(&x_end.into()),
-                );
-            }
+            self.hold_stretch(holding, (start, &x_start), (end, &x_end), &piece);
             if end == to {
                 return (x_end, w_end, total, at_end, piece);
             }

@@ -33,14 +33,14 @@
 //! committed where the input changes.
 //!
 //! **Hot path.** From a committed grid node, [`Simulator::advance_to`] runs
-//! every whole step the call reaches in one loop (see BENCHMARKS.md): the
-//! delayed input acts on the two history nodes through `Γ_u H`
-//! precomputed, the harmonic road phase is rotated from node to node
-//! (exact every `PHASE_ANCHOR` = 1024 nodes), a linear road piece gives
-//! `x_g` from the node index until the piece ends, and BA, SDD, TDD go
-//! straight into the RMS sums. Each node's state, phase and sums are functions of its
-//! index alone, so splits and `to_bytes`/`from_bytes` stay bit-identical
-//! (unit tests at the end of this file).
+//! every whole step the call reaches in one loop (`kernel`, see
+//! BENCHMARKS.md): the delayed input acts on the two history nodes through
+//! `Γ_u H` precomputed, the harmonic road phase is rotated from node to
+//! node (exact every `PHASE_ANCHOR` = 1024 nodes), a linear road piece
+//! gives `x_g` from the node index until the piece ends, and BA, SDD, TDD
+//! go straight into the RMS sums. Each node's state, phase and sums are
+//! functions of its index alone, so splits and `to_bytes`/`from_bytes`
+//! stay bit-identical (the unit tests in `tests.rs`).
 //!
 //! **The step.** The internal step comes from the tolerance
 //! ([`SimulationConfig::tolerance`]): an error model of what depends on it
@@ -48,18 +48,22 @@
 //! quadrature, the located extrema) gives a first step, and a
 //! step-doubling probe checks and refines it ([`accuracy`]).
 //!
-//! **Files.** `accuracy` (the step from the tolerance), `grid` (the
-//! internal step and how the delay lies on it),
-//! `operators` (the exact step maps), `dense` (the partial steps),
-//! `kernel` (the whole-step loop and its
-//! AVX2 build: all of the solver's `unsafe`; the crate denies it elsewhere),
-//! `steps` (whole steps and steps that a road breakpoint splits), `contact`
-//! (the unilateral tire: flight, and the switches located inside steps),
-//! `deferred` (a current state found when first asked for),
-//! `outputs`
-//! (what the simulator reports), `time_average` (the RMS values),
-//! `persist` (the byte form), `expm` (the 2^N exponential); this file holds
-//! the configuration, the `Simulator` and its general step.
+//! **Layers** (each module's documentation says what it owns and imports;
+//! the test `crates/tdvass/tests/layers.rs` keeps every import pointing
+//! down; docs/architecture.md draws them), from the ground up: the linear
+//! algebra (`expm`, `linalg`); the system (`system`: the augmented layout
+//! and the W_k filter's coupling; `grid`, `config`, `holding`, `contact`,
+//! `reports`); the step maps (`operators`) and the inputs (`pieces`: the
+//! breakpoint rule; `inputs`: road pieces, delay history, harmonic
+//! phases); the whole and partial steps (`grid_step`, `dense`); the modes
+//! of the tire (`modes`); stepping inside a step (`stepping`, `integrals`,
+//! `events`, `deferred`), on a view of the simulator's parts
+//! (`stepping!`); the observers (`observers`, `trajectory`); the whole-step
+//! loop (`kernel`: all of the solver's `unsafe`; the crate denies it
+//! elsewhere); the driver (`driver`: the [`Simulator`] and its step); the
+//! clients (`accuracy`, `outputs`, `persist`); and this file, which
+//! declares the simulator's public constructors and readers over the
+//! clients and re-exports the public names.
 
 pub mod accuracy;
 mod config;
