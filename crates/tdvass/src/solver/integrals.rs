@@ -310,7 +310,7 @@ impl Stepping<'_> {
     ) -> ([f64; INTEGRALS], Squares, RoadPiece) {
         let (to, x_to) = to;
         let w_to = filter.map(|(_, w)| *w);
-        let (mut start, mut at_start, mut x_start) = (from.0, at_from, from.1);
+        let (start, at_start, x_start) = (from.0, at_from, from.1);
         if to <= start {
             let piece = self.inputs.road.piece(to);
             let at_to = self.squares_with(k, to, x_to, w_to.as_ref(), from, &piece);
@@ -320,29 +320,39 @@ impl Stepping<'_> {
                 piece,
             );
         }
-        let mut total = [0.0; INTEGRALS];
-        loop {
-            let super::pieces::Stretch { piece, end, .. } = self.inputs.stretch(start, to, None);
-            let (x_end, w_end) = if end == to {
-                (*x_to, w_to)
-            } else {
-                (
-                    self.integrate_within_step(k, from.0, from.1, end),
-                    filter.map(|(w_from, _)| self.filter_within_step(k, from, w_from, end)),
-                )
-            };
-            let at_end = self.squares_with(k, end, &x_end, w_end.as_ref(), from, &piece);
-            total = add(total, corrected_trapezoid(end - start, &at_start, &at_end));
-            if let Some(holding) = holding.as_deref_mut() {
-                self.hold_stretch(holding, (start, &x_start), (end, &x_end), &piece);
-            }
-            if end == to {
-                return (total, at_end, piece);
-            }
-            let next = self.inputs.piece_from(end);
-            at_start = self.squares_with(k, end, &x_end, w_end.as_ref(), from, &next);
-            (start, x_start) = (end, x_end);
-        }
+        let first = (at_start, x_start, [0.0; INTEGRALS], None);
+        let (at_end, _, total, piece) = self.through_stretches(
+            start,
+            to,
+            None,
+            first,
+            |s, start, stretch, (at_start, x_start, total, _)| {
+                let (piece, end) = (stretch.piece, stretch.end);
+                let (x_end, w_end) = if end == to {
+                    (*x_to, w_to)
+                } else {
+                    (
+                        s.integrate_within_step(k, from.0, from.1, end),
+                        filter.map(|(w_from, _)| s.filter_within_step(k, from, w_from, end)),
+                    )
+                };
+                let at_end = s.squares_with(k, end, &x_end, w_end.as_ref(), from, &piece);
+                let total = add(total, corrected_trapezoid(end - start, &at_start, &at_end));
+                if let Some(holding) = holding.as_deref_mut() {
+                    s.hold_stretch(holding, (start, &x_start), (end, &x_end), &piece);
+                }
+                // The squares where the next stretch starts, on its piece.
+                let at_next = if end == to {
+                    at_end
+                } else {
+                    let next = s.inputs.piece_from(end);
+                    s.squares_with(k, end, &x_end, w_end.as_ref(), from, &next)
+                };
+                (at_next, x_end, total, Some(piece))
+            },
+        );
+        let piece = piece.expect("a stretch reaches `to`");
+        (total, at_end, piece)
     }
 
     /// [`Self::squares_at`] with filter state `w`, or without one the
@@ -393,22 +403,32 @@ impl Stepping<'_> {
                 self.integral_within_step(k, (t, x), &w, at_start, to, (&x_to, &w_to), holding);
             return (x_to, w_to, integral, at_end, piece);
         }
-        let mut total = [0.0; INTEGRALS];
-        let (mut start, mut x_start, mut w_start, mut at) = (t, x, w, at_start);
-        loop {
-            let super::pieces::Stretch { piece, end, .. } = self.inputs.stretch(start, to, None);
-            let x_end = self.integrate_within_step(k, start, x_start, end);
-            let w_end = self.filter_within_step(k, (start, x_start), &w_start, end);
-            let at_end = self.squares_at(k, end, &x_end, &w_end, (start, x_start), &piece);
-            total = add(total, corrected_trapezoid(end - start, &at, &at_end));
-            self.hold_stretch(holding, (start, &x_start), (end, &x_end), &piece);
-            if end == to {
-                return (x_end, w_end, total, at_end, piece);
-            }
-            let next = self.inputs.piece_from(end);
-            at = self.across_breakpoint(at_end, end, &x_end, &piece, &next);
-            (start, x_start, w_start) = (end, x_end, w_end);
-        }
+        let first = (x, w, at_start, [0.0; INTEGRALS], None);
+        let (x_end, w_end, at_end, total, piece) = self.through_stretches(
+            t,
+            to,
+            None,
+            first,
+            |s, start, stretch, (x_start, w_start, at, total, _)| {
+                let (piece, end) = (stretch.piece, stretch.end);
+                let x_end = s.integrate_within_step(k, start, x_start, end);
+                let w_end = s.filter_within_step(k, (start, x_start), &w_start, end);
+                let at_end = s.squares_at(k, end, &x_end, &w_end, (start, x_start), &piece);
+                let total = add(total, corrected_trapezoid(end - start, &at, &at_end));
+                s.hold_stretch(holding, (start, &x_start), (end, &x_end), &piece);
+                // The squares where the next stretch starts: across the
+                // breakpoint that ends this one.
+                let at_next = if end == to {
+                    at_end
+                } else {
+                    let next = s.inputs.piece_from(end);
+                    s.across_breakpoint(at_end, end, &x_end, &piece, &next)
+                };
+                (x_end, w_end, at_next, total, Some(piece))
+            },
+        );
+        let piece = piece.expect("a stretch reaches `to`");
+        (x_end, w_end, total, at_end, piece)
     }
 
     /// The squares at a road breakpoint `t` (state x) on the side of the

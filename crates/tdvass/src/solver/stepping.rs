@@ -17,7 +17,7 @@ use super::grid::DelayGrid;
 use super::inputs::Inputs;
 use super::linalg::{self, hermite, hermite_matrix};
 use super::modes::{Modes, NextNode};
-use super::pieces;
+use super::pieces::{self, Stretch};
 use super::system::{DELAY_INPUT, Filter, tire_pick};
 use crate::model::{Plant, State, V_T, X_T};
 use crate::road::RoadPiece;
@@ -130,6 +130,30 @@ impl Stepping<'_> {
         self.dense_output().plant(key, z)
     }
 
+    /// The one loop that advances inside a step: the stretches from `start`
+    /// to `to` ([`Inputs::stretch`]: ending at road breakpoints, and at
+    /// `switch` too when given), each handed to `each` with its start and
+    /// the value carried so far; the value after the last stretch.
+    #[inline(always)]
+    pub(super) fn through_stretches<T>(
+        &mut self,
+        start: f64,
+        to: f64,
+        switch: Option<f64>,
+        value: T,
+        mut each: impl FnMut(&mut Self, f64, Stretch, T) -> T,
+    ) -> T {
+        let (mut start, mut value) = (start, value);
+        loop {
+            let stretch = self.inputs.stretch(start, to, switch);
+            value = each(self, start, stretch, value);
+            if stretch.end == to {
+                return value;
+            }
+            start = stretch.end;
+        }
+    }
+
     /// Integrates from (a, x) to b, all inside grid step k, splitting at road
     /// breakpoints.
     pub(super) fn integrate_within_step(&mut self, k: u64, from: f64, x: State, to: f64) -> State {
@@ -140,29 +164,22 @@ impl Stepping<'_> {
             return self.integrate_inner_delay_to(k, from, x, to);
         }
         let step_start = self.inputs.node_time(k);
-        let mut start = from;
-        let mut state = x;
-        loop {
-            let pieces::Stretch { piece, end, .. } = self.inputs.stretch(start, to, None);
-            let delayed = self
+        self.through_stretches(from, to, None, x, |s, start, stretch, state| {
+            let delayed = s
                 .grid
                 .resolves_delay()
-                .then(|| self.inputs.delayed_input(k, start - step_start));
-            let length = end - start;
-            let drive = self.forcing(&piece);
-            state = if self.coincide(length, self.grid.step) {
-                self.modes
+                .then(|| s.inputs.delayed_input(k, start - step_start));
+            let length = stretch.end - start;
+            let drive = s.forcing(&stretch.piece);
+            if s.coincide(length, s.grid.step) {
+                s.modes
                     .full_step
                     .apply(&state, delayed.as_ref(), &drive, start)
             } else {
-                let z = self.augmented(&state, delayed.as_ref(), &drive, start);
-                self.partial_step(length, &z)
-            };
-            if end == to {
-                return state;
+                let z = s.augmented(&state, delayed.as_ref(), &drive, start);
+                s.partial_step(length, &z)
             }
-            start = end;
-        }
+        })
     }
 
     /// Delay inside the step ([`DelayRegime::InsideStep`](super::grid::DelayRegime::InsideStep)): the state at grid
@@ -267,42 +284,34 @@ impl Stepping<'_> {
         let step_start = self.inputs.node_time(k);
         let switch = step_start + tau;
         let [node_x, node_v] = self.inputs.node_tire(k);
-        let mut start = from;
-        let mut state = x;
-        let mut sensitivity = SMatrix::<f64, 6, 2>::zeros();
-        loop {
-            let (piece, end, earlier) = self.inner_delay_piece(start, to, switch);
-            let piece = self.forcing(&piece);
-            // The state and the two columns of its sensitivity, in one
-            // application of the partial step.
-            let mut z = dense::Augmented::<3>::zeros();
-            z.fixed_view_mut::<6, 2>(0, 1).copy_from(&sensitivity);
-            let delayed = if earlier {
-                self.inputs.delayed_input(k, h - tau + (start - step_start))
-            } else {
-                let interpolant = hermite_matrix(h, (start - switch).max(0.0));
-                z.fixed_view_mut::<4, 2>(DELAY_INPUT, 1)
-                    .copy_from(&interpolant.fixed_view::<4, 2>(0, 2));
-                interpolant * Vector4::new(node_x, node_v, 0.0, 0.0)
-            };
-            z.set_column(0, &self.augmented(&state, Some(&delayed), &piece, start));
-            let next = self.partial_step(end - start, &z);
-            state = next.column(0).into_owned();
-            sensitivity = next.fixed_columns::<2>(1).into_owned();
-            if end == to {
-                return (state, sensitivity);
-            }
-            start = end;
-        }
-    }
-
-    /// Delay inside the step: the road piece at `start`, where the stretch
-    /// from `start` ends (the piece's end, `to`, or the switch `t_k + tau`
-    /// of the delayed argument, whichever comes first), and whether
-    /// `start` lies before the switch.
-    fn inner_delay_piece(&mut self, start: f64, to: f64, switch: f64) -> (RoadPiece, f64, bool) {
-        let stretch = self.inputs.stretch(start, to, Some(switch));
-        (stretch.piece, stretch.end, stretch.before_switch)
+        let at_rest = (x, SMatrix::<f64, 6, 2>::zeros());
+        self.through_stretches(
+            from,
+            to,
+            Some(switch),
+            at_rest,
+            |s, start, stretch, (state, sensitivity)| {
+                let piece = s.forcing(&stretch.piece);
+                // The state and the two columns of its sensitivity, in one
+                // application of the partial step.
+                let mut z = dense::Augmented::<3>::zeros();
+                z.fixed_view_mut::<6, 2>(0, 1).copy_from(&sensitivity);
+                let delayed = if stretch.before_switch {
+                    s.inputs.delayed_input(k, h - tau + (start - step_start))
+                } else {
+                    let interpolant = hermite_matrix(h, (start - switch).max(0.0));
+                    z.fixed_view_mut::<4, 2>(DELAY_INPUT, 1)
+                        .copy_from(&interpolant.fixed_view::<4, 2>(0, 2));
+                    interpolant * Vector4::new(node_x, node_v, 0.0, 0.0)
+                };
+                z.set_column(0, &s.augmented(&state, Some(&delayed), &piece, start));
+                let next = s.partial_step(stretch.end - start, &z);
+                (
+                    next.column(0).into_owned(),
+                    next.fixed_columns::<2>(1).into_owned(),
+                )
+            },
+        )
     }
 
     /// Delay inside the step: the state at `to` in grid step k from
@@ -316,24 +325,17 @@ impl Stepping<'_> {
         let step_start = self.inputs.node_time(k);
         let switch = step_start + tau;
         let [node_x, node_v] = self.inputs.node_tire(k);
-        let mut start = from;
-        let mut state = x;
-        loop {
-            let (piece, end_time, earlier) = self.inner_delay_piece(start, to, switch);
-            let piece = self.forcing(&piece);
-            let delayed = if earlier {
-                self.inputs.delayed_input(k, h - tau + (start - step_start))
+        self.through_stretches(from, to, Some(switch), x, |s, start, stretch, state| {
+            let piece = s.forcing(&stretch.piece);
+            let delayed = if stretch.before_switch {
+                s.inputs.delayed_input(k, h - tau + (start - step_start))
             } else {
-                let (_, [end_x, end_v]) = self.inner_delay_next_node(k, from, x);
+                let (_, [end_x, end_v]) = s.inner_delay_next_node(k, from, x);
                 hermite([node_x, node_v, end_x, end_v], h, (start - switch).max(0.0))
             };
-            let z = self.augmented(&state, Some(&delayed), &piece, start);
-            state = self.partial_step(end_time - start, &z);
-            if end_time == to {
-                return state;
-            }
-            start = end_time;
-        }
+            let z = s.augmented(&state, Some(&delayed), &piece, start);
+            s.partial_step(stretch.end - start, &z)
+        })
     }
 
     /// The W_k filter state at `to` inside grid step k, from the point
@@ -355,32 +357,35 @@ impl Stepping<'_> {
             .grid
             .delay_inside_step()
             .then(|| self.inputs.node_time(k) + self.grid.inner_delay());
-        let (mut start, mut x, mut w) = (from.0, from.1, *w);
-        loop {
-            let super::pieces::Stretch { piece, end, .. } = self.inputs.stretch(start, to, switch);
-            let delayed = self
-                .grid
-                .resolves_delay()
-                .then(|| self.delayed_vector_at(k, start, from, &x));
-            let length = end - start;
-            let drive = self.forcing(&piece);
-            if self.coincide(length, self.grid.step) {
-                let op = &self.modes.full_step;
-                let rows = op.filter.as_ref().expect("the filter is on");
-                w = rows.apply(&w, &x, delayed.as_ref(), &drive, start);
-                x = op.apply(&x, delayed.as_ref(), &drive, start);
-            } else {
-                // The plant's state by the same operations as
-                // `integrate_within_step`, the filter's from its own rows.
-                let z = self.augmented(&x, delayed.as_ref(), &drive, start);
-                w = self.partial_filter_step(length, &z, &w);
-                x = self.partial_step(length, &z);
-            }
-            if end == to {
-                return w;
-            }
-            start = end;
-        }
+        let start_point = (from.1, *w);
+        let (_, w) = self.through_stretches(
+            from.0,
+            to,
+            switch,
+            start_point,
+            |s, start, stretch, (x, w)| {
+                let delayed = s
+                    .grid
+                    .resolves_delay()
+                    .then(|| s.delayed_vector_at(k, start, from, &x));
+                let length = stretch.end - start;
+                let drive = s.forcing(&stretch.piece);
+                if s.coincide(length, s.grid.step) {
+                    let op = &s.modes.full_step;
+                    let rows = op.filter.as_ref().expect("the filter is on");
+                    let w = rows.apply(&w, &x, delayed.as_ref(), &drive, start);
+                    (op.apply(&x, delayed.as_ref(), &drive, start), w)
+                } else {
+                    // The plant's state by the same operations as
+                    // `integrate_within_step`, the filter's from its own
+                    // rows.
+                    let z = s.augmented(&x, delayed.as_ref(), &drive, start);
+                    let w = s.partial_filter_step(length, &z, &w);
+                    (s.partial_step(length, &z), w)
+                }
+            },
+        );
+        w
     }
 
     /// The W_k filter state after a partial step of length `length` from
