@@ -465,7 +465,9 @@ impl WholeSteps<'_> {
             if hot.k.is_multiple_of(PHASE_ANCHOR) {
                 hot.road = HarmonicPhase(self.inputs.exact_phase(hot.k));
             }
-            if end_reason == SegmentEnd::Switch && hot.k > start {
+            // The node that ends the segment, reached without diverging,
+            // joins the run's sums.
+            if hot.k > start && !matches!(end_reason, SegmentEnd::Diverged(_)) {
                 self.modes
                     .grid_step
                     .count(&mut hot.rms, &hot.x, hot.road.0[0]);
@@ -475,14 +477,6 @@ impl WholeSteps<'_> {
             }
             if end_reason != SegmentEnd::Reached {
                 break;
-            }
-            if hot.k > start {
-                self.modes
-                    .grid_step
-                    .count(&mut hot.rms, &hot.x, hot.road.0[0]);
-                self.modes
-                    .grid_step
-                    .count_weighted(&hot.w, &mut hot.weighted);
             }
         }
         self.observers.rms = hot.rms;
