@@ -34,6 +34,7 @@ pub const DIVERGENCE_VELOCITY: f64 = 1e6;
 
 /// The divergence bound of state i: [`DIVERGENCE_DISPLACEMENT`] for the
 /// displacements (even i), [`DIVERGENCE_VELOCITY`] for the velocities.
+#[inline]
 pub(crate) fn divergence_bound(i: usize) -> f64 {
     if i.is_multiple_of(2) {
         DIVERGENCE_DISPLACEMENT
@@ -54,6 +55,7 @@ pub(crate) const DIVERGENCE_BOUNDS: [f64; 6] = [
 
 /// Checks a state at `time` against the divergence bounds: an error
 /// naming the first component beyond its bound (or NaN).
+#[inline]
 pub(crate) fn check_divergence(time: f64, x: &State) -> Result<()> {
     for (i, value) in x.iter().enumerate() {
         let bound = divergence_bound(i);

@@ -88,6 +88,9 @@
 //! which keeps the three regimes (folded, inside the step, whole steps of
 //! `h = tau / m`). Each is accurate to the tolerance, so J(tau) is
 //! continuous across the regime changes to within the tolerance.
+//!
+//! Layer: clients (docs/architecture.md); it imports the solver's `config`,
+//! `driver`, `grid` and the crate's `error`, `model`, `road`.
 
 use super::config::SimulationConfig;
 use super::driver::Simulator;

@@ -45,6 +45,8 @@
 //! delay inside the step (`0 < tau < h`) the step's end node is predicted
 //! in the mode at the step's start. Both are within the tolerance's step
 //! choice, which probes the unilateral run itself.
+//!
+//! Layer: system (docs/architecture.md); it imports nothing of the crate.
 
 /// Most switches between contact and flight inside one internal step.
 pub const MAX_SWITCHES_PER_STEP: u32 = 16;

@@ -44,9 +44,13 @@
 //! evaluation is monotone in the end point's `x_t` and `|v_t|`, so a
 //! stretch that passes with the bounds passes with the state; otherwise
 //! the state is computed and the exact test runs.
+//!
+//! Layer: stepping (docs/architecture.md); it imports the solver's
+//! `linalg`, `stepping` and the crate's `road`.
 
 use super::linalg::{hermite_bound, scaled_norm};
-use super::stepping::{Committed, Stepping, series_order};
+use super::stepping::{Stepping, series_order};
+use crate::model::State;
 use crate::road::RoadPiece;
 
 /// What finds a deferred state.
@@ -90,8 +94,12 @@ impl Stepping<'_> {
     ///
     /// The sum is bounded with `|delta|^j` for `|delta|^j/j!`; the
     /// factor 1.001 and `4 ε |x_c,i|` cover the rounding of the series.
-    pub(super) fn drift_bounds(&mut self, at: &Committed, delta: f64) -> Option<[f64; 6]> {
-        let (k, t, x) = (at.k, at.time, at.state);
+    #[inline]
+    pub(super) fn drift_bounds(
+        &mut self,
+        (k, t, x): (u64, f64, &State),
+        delta: f64,
+    ) -> Option<[f64; 6]> {
         if t != self.inputs.node_time(k) {
             return None;
         }
@@ -129,8 +137,12 @@ impl Stepping<'_> {
     /// Bounds of `|x_i − x_c,i|` over the stretch from the committed point
     /// to `t` inside its step (see the module docs); `None` where the
     /// stretch crosses a road breakpoint or `ν (t − t_c) > 1`.
-    pub(super) fn inside_bounds(&mut self, at: &Committed, t: f64) -> Option<[f64; 6]> {
-        let (k, tc, xc) = (at.k, at.time, at.state);
+    #[inline]
+    pub(super) fn inside_bounds(
+        &mut self,
+        (k, tc, xc): (u64, f64, &State),
+        t: f64,
+    ) -> Option<[f64; 6]> {
         let length = t - tc;
         let road_piece = self.inputs.piece_from(tc);
         if length.is_nan() || length <= 0.0 || road_piece.end() < t {
@@ -155,7 +167,7 @@ impl Stepping<'_> {
             {
                 // The piece after t_k + tau interpolates node k and the
                 // step's end node.
-                let (_, [end_x, end_v]) = self.inner_delay_next_node(k, tc, xc);
+                let (_, [end_x, end_v]) = self.inner_delay_next_node(k, tc, *xc);
                 let [node_x, node_v] = self.inputs.node_tire(k);
                 bound = bound.max(hermite_bound([node_x, node_v, end_x, end_v], h));
             }
@@ -214,7 +226,7 @@ mod tests {
                     let delta = (2.0 * random.next() - 1.0) * limit * 1e-9f64.powf(random.next());
                     let series = stepping!(sim).state_near(&sim.trajectory.committed(), delta);
                     let bounds = stepping!(sim)
-                        .drift_bounds(&sim.trajectory.committed(), delta)
+                        .drift_bounds(sim.trajectory.committed_point(), delta)
                         .unwrap();
                     for i in 0..6 {
                         assert!(
@@ -245,7 +257,8 @@ mod tests {
                 let next = sim.grid_time(k + 1);
                 for _ in 0..100 {
                     let t = tc + (next - tc) * random.next();
-                    let Some(bounds) = stepping!(sim).inside_bounds(&sim.trajectory.committed(), t)
+                    let Some(bounds) =
+                        stepping!(sim).inside_bounds(sim.trajectory.committed_point(), t)
                     else {
                         continue;
                     };

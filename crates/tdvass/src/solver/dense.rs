@@ -84,6 +84,10 @@
 //! `in_step_points_leave_the_nodes_unchanged`); what is committed inside a
 //! step (a road breakpoint, a switch of the tire contact, a change of an
 //! external road input) is located from committed values alone, as before.
+//!
+//! Layer: grid and dense steps (docs/architecture.md); it imports the
+//! solver's `expm`, `linalg`, `system` and the crate's `comfort`, `model`,
+//! `road`.
 
 use super::expm;
 use super::linalg::{Scaling, balanced_norm};

@@ -5,6 +5,12 @@
 //! alone moves the committed point and tells the observers of it. The
 //! public constructors and readers that need the clients (`accuracy`,
 //! `outputs`, `persist`) are declared in the solver's module.
+//!
+//! Layer: driver (docs/architecture.md); it imports the solver's `config`,
+//! `contact`, `deferred`, `grid`, `holding`, `inputs`, `integrals`,
+//! `kernel`, `modes`, `observers`, `pieces`, `reports`, `stepping`,
+//! `system`, `trajectory` and the crate's `error`, `limits`, `metrics`,
+//! `model`, `monotone`, `road`.
 
 use super::config::{
     SimulationConfig, StepChoice, check_communication_step, check_max_internal_step,
@@ -625,13 +631,14 @@ impl Simulator {
     /// Makes `t` the current time with its state deferred, where the
     /// bounds of `kind` show that the state passes the divergence check;
     /// `false` (the current point unchanged) otherwise.
+    #[inline]
     pub(super) fn defer(&mut self, t: f64, kind: Kind) -> bool {
         let drift = match kind {
             Kind::NearNode => stepping!(self).drift_bounds(
-                &self.trajectory.committed(),
+                self.trajectory.committed_point(),
                 t - self.trajectory.committed_time,
             ),
-            Kind::InsideStep => stepping!(self).inside_bounds(&self.trajectory.committed(), t),
+            Kind::InsideStep => stepping!(self).inside_bounds(self.trajectory.committed_point(), t),
         };
         let x = self.trajectory.committed_state;
         let Some(drift) = drift.filter(|drift| {
@@ -840,6 +847,7 @@ impl Simulator {
 
     /// The view of this simulator that runs its whole steps
     /// ([`kernel::WholeSteps`]).
+    #[inline]
     pub(super) fn whole_steps_view(&mut self) -> kernel::WholeSteps<'_> {
         kernel::WholeSteps {
             config: &self.config,

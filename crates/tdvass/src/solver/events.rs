@@ -10,6 +10,9 @@
 //! exact output, kept inside the bracket by bisection, locates it within
 //! [`LOCATION_TOLERANCE`], on the new mode's side. Road breakpoints end
 //! the stretches, so a switch is never searched across a kink of the road.
+//!
+//! Layer: stepping (docs/architecture.md); it imports the solver's
+//! `holding`, `pieces`, `stepping` and the crate's `model`, `road`.
 
 use super::holding;
 use super::stepping::Stepping;

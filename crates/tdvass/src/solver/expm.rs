@@ -2,6 +2,9 @@
 //! scaling by 2^N, a fourth-order Taylor increment, and N squarings that
 //! carry the increment `T_a = e^{Aτ} − I` apart from the identity so that
 //! no digits are lost to round-off (Zhong's 2^N algorithm).
+//!
+//! Layer: linear algebra (docs/architecture.md); it imports nothing of the
+//! crate.
 
 use nalgebra::SMatrix;
 

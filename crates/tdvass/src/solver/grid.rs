@@ -1,6 +1,8 @@
 //! The internal grid of the solver: the step h and how the delay is
 //! resolved on it (section 4.1: the step divides tau, or the delay lies
 //! inside one step, or it is folded into the plant).
+//!
+//! Layer: system (docs/architecture.md); it imports the crate's `error`.
 
 use crate::error::{Error, Result};
 

@@ -2,6 +2,10 @@
 //! ([`super::kernel`]): the plant's ([`GridStep`]) and the W_k filter's
 //! ([`FilterGridStep`]), built from the step maps of
 //! [`super::operators`].
+//!
+//! Layer: grid and dense steps (docs/architecture.md); it imports the
+//! solver's `holding`, `linalg`, `operators`, `system` and the crate's
+//! `comfort`, `metrics`, `model`.
 
 use super::holding::ContactCheck;
 use super::linalg::{Columns, columns, hermite_matrix};

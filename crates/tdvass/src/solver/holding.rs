@@ -35,6 +35,8 @@
 //! The accumulators are functions of the node index alone (a whole step's
 //! lost time is counted as one step, its length added at read-out), so
 //! they do not depend on how a run is split.
+//!
+//! Layer: system (docs/architecture.md); it imports the crate's `model`.
 
 use crate::model::{V_S, V_T, X_S, X_T};
 

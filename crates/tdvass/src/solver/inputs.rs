@@ -111,12 +111,14 @@ impl Inputs {
     }
 
     /// The road piece in force from `t` on ([`pieces::piece_from`]).
+    #[inline]
     pub(super) fn piece_from(&mut self, t: f64) -> RoadPiece {
         pieces::piece_from(&mut self.road, t, self.grid.step)
     }
 
     /// The stretch of integration from `start` towards `to`
     /// ([`pieces::stretch`]), ending at `switch` too when given.
+    #[inline]
     pub(super) fn stretch(&mut self, start: f64, to: f64, switch: Option<f64>) -> Stretch {
         pieces::stretch(&mut self.road, start, to, switch, self.grid.step)
     }
@@ -172,6 +174,7 @@ impl Inputs {
     }
 
     /// The constant history before the start, as Hermite nodes.
+    #[inline]
     pub(super) fn before_start(&self) -> [f64; 4] {
         let x = self.initial_tire;
         [x, 0.0, x, 0.0]
@@ -185,6 +188,7 @@ impl Inputs {
     }
 
     /// `A [sin ω t_k, cos ω t_k]` of the harmonic road, evaluated directly.
+    #[inline]
     pub(super) fn exact_phase(&self, k: u64) -> [f64; 2] {
         let Some((amplitude, angular_frequency)) = self.harmonic else {
             return [0.0; 2];
@@ -195,6 +199,7 @@ impl Inputs {
 
     /// The harmonic road phase at grid node k as the whole-step loop
     /// carries it: exact at the last anchor node, then rotated.
+    #[inline]
     pub(super) fn harmonic_phase(&self, k: u64) -> [f64; 2] {
         if let Some((index, z)) = self.phase
             && index == k
@@ -211,6 +216,7 @@ impl Inputs {
 
     /// [`Self::harmonic_phase`] at node k, kept for the whole-step loop
     /// (the same value).
+    #[inline]
     pub(super) fn node_phase(&mut self, k: u64) -> [f64; 2] {
         let z = self.harmonic_phase(k);
         self.phase = Some((k, z));
@@ -218,11 +224,13 @@ impl Inputs {
     }
 
     /// Keeps the phase `z` of node k, as the whole-step loop carried it.
+    #[inline]
     pub(super) fn keep_node_phase(&mut self, k: u64, z: [f64; 2]) {
         self.phase = Some((k, z));
     }
 
     /// The kept phase of node k, if the last one kept is k's.
+    #[inline]
     pub(super) fn kept_node_phase(&self, k: u64) -> Option<[f64; 2]> {
         self.phase.and_then(|(index, z)| (index == k).then_some(z))
     }

@@ -37,6 +37,10 @@
 //! which stepping computes from the exact partial steps
 //! ([`Stepping::integral_within_step`], [`Stepping::integrate_split_step`]);
 //! the observers (`observers`) close and read the runs.
+//!
+//! Layer: stepping (docs/architecture.md); it imports the solver's
+//! `holding`, `stepping`, `system` and the crate's `metrics`, `model`,
+//! `road`.
 
 use super::holding::{Holding, deflection, margin};
 use super::stepping::Stepping;

@@ -6,6 +6,12 @@
 //! and writes of the delay history ring, whose indices the loop keeps below
 //! the ring's length, and the calls of functions compiled for AVX2, made
 //! only after a run-time check that the CPU has it.
+//!
+//! Layer: whole steps (docs/architecture.md); it imports the solver's
+//! `config`, `grid`, `grid_step`, `holding`, `inputs`, `linalg`, `modes`,
+//! `observers`, `pieces`, `stepping`, `system`, `trajectory` and the
+//! crate's `comfort`, `error`, `limits`, `metrics`, `model`, `monotone`,
+//! `road`.
 #![allow(unsafe_code)]
 
 use super::config::SimulationConfig;
@@ -419,6 +425,7 @@ impl WholeSteps<'_> {
     /// Returns `true` when it stopped early, before a step in which a
     /// unilateral tire may lift off or a road breakpoint splits (the caller
     /// integrates that step with its switches, `solver::contact`).
+    #[inline]
     pub(super) fn whole_steps(&mut self, last: u64) -> Result<bool> {
         let harmonic = matches!(self.config.road, RoadSpec::Harmonic { .. });
         match (self.grid.resolves_delay(), harmonic) {
@@ -432,6 +439,7 @@ impl WholeSteps<'_> {
     /// [`Self::whole_steps`] on the harmonic road: segments that end at the
     /// phase anchors (and at node m, where the history starts), each run by
     /// [`super::kernel::segment`].
+    #[inline]
     fn harmonic_whole_steps<const DELAY: bool>(&mut self, last: u64) -> Result<bool> {
         let m = self.grid.delay_steps();
         let first = self.trajectory.grid_index;

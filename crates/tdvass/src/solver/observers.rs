@@ -55,6 +55,7 @@ impl Observers {
 
     /// Starts a new, empty run at grid index k and time t (s): the anchor
     /// moves there, its squares unchanged.
+    #[inline]
     pub(super) fn start_run(&mut self, k: u64, t: f64) {
         self.rms = RunningRms::default();
         self.weighted = [0.0; 2];

@@ -3,6 +3,10 @@
 //! every matrix of a step of the plant ([`StepOperator`]), and one of the
 //! 22-dimensional matrix the W_k filter's rows ([`FilterRows`]). They know
 //! nothing of accumulators, contact checks or the simulator.
+//!
+//! Layer: step maps and inputs (docs/architecture.md); it imports the
+//! solver's `expm`, `system` and the crate's `comfort`, `math`, `model`,
+//! `road`.
 
 use super::expm;
 use super::system::{

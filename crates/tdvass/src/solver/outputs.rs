@@ -1,5 +1,9 @@
 //! What the simulator reports: the outputs at an instant, their time
 //! derivatives, and the summary of a run.
+//!
+//! Layer: clients (docs/architecture.md); it imports the solver's `driver`,
+//! `holding`, `integrals`, `reports`, `stepping` and the crate's `metrics`,
+//! `model`, `road`.
 
 use super::driver::Simulator;
 use super::integrals::{Accumulated, WEIGHTED_FOURTH, WEIGHTED_SQUARE, rms_from_integral};

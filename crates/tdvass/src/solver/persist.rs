@@ -7,6 +7,10 @@
 //! read with the one codec of [`crate::bytes`]. This layer
 //! refuses truncated, foreign-version or inconsistent input with an error,
 //! never a panic.
+//!
+//! Layer: clients (docs/architecture.md); it imports the solver's
+//! `accuracy`, `config`, `driver`, `grid`, `holding`, `integrals` and the
+//! crate's `bytes`, `error`, `metrics`, `model`, `road`.
 
 use super::accuracy;
 use super::config::{Metrics, SimulationConfig};

@@ -10,6 +10,10 @@
 //! caches (the dense table, the next node, the road's window and the
 //! phases). It knows nothing of the trajectory's commits or of the
 //! accumulators; the whole-step loop is `kernel`'s.
+//!
+//! Layer: stepping (docs/architecture.md); it imports the solver's
+//! `config`, `dense`, `grid`, `inputs`, `linalg`, `modes`, `pieces`,
+//! `system` and the crate's `model`, `road`.
 
 use super::config::SimulationConfig;
 use super::dense;
@@ -469,6 +473,7 @@ impl Stepping<'_> {
     /// needs 4, for a truncation below 1e-17). Before a node (negative
     /// `delta`) the interpolant after the node is used; the delayed input
     /// is C¹ there, so that costs `delta² |Δu''| / 2`.
+    #[inline]
     pub(super) fn state_near(&mut self, at: &Committed, delta: f64) -> State {
         let (k, t, x) = (at.k, at.time, at.state);
         if delta == 0.0 {

@@ -26,6 +26,9 @@
 //! plant's states or of the BA, SDD, TDD values.
 //!
 //! The filter starts from rest (`w(t_0) = 0`).
+//!
+//! Layer: system (docs/architecture.md); it imports the crate's `comfort`,
+//! `math`, `model`.
 
 use crate::comfort::{WK_STATES, WkStateSpace, wk_state_space};
 use crate::model::{Plant, State, V_S, V_T, X_T};

@@ -2,6 +2,9 @@
 //! external road input changed or the tire's contact switched), the
 //! current point with its state (or the bounds of a deferred one), and the
 //! tire's mode. Only the driver moves the committed point.
+//!
+//! Layer: observers (docs/architecture.md); it imports the solver's
+//! `deferred`, `stepping`, `system` and the crate's `model`.
 
 use super::deferred::Deferred;
 use super::stepping::Committed;
@@ -34,6 +37,7 @@ pub(super) struct Trajectory {
 
 impl Trajectory {
     /// The committed point, as stepping takes it.
+    #[inline]
     pub(super) fn committed(&self) -> Committed {
         Committed {
             k: self.grid_index,
@@ -43,7 +47,14 @@ impl Trajectory {
         }
     }
 
+    /// The committed point's grid index, time and state.
+    #[inline]
+    pub(super) fn committed_point(&self) -> (u64, f64, &State) {
+        (self.grid_index, self.committed_time, &self.committed_state)
+    }
+
     /// Sets the current point (time, state computed).
+    #[inline]
     pub(super) fn set_current(&mut self, time: f64, x: State) {
         self.current_time = time;
         self.current_state = x;
