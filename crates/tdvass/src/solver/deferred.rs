@@ -224,7 +224,7 @@ mod tests {
                 for _ in 0..200 {
                     // Offsets of every order of the series, both signs.
                     let delta = (2.0 * random.next() - 1.0) * limit * 1e-9f64.powf(random.next());
-                    let series = stepping!(sim).state_near(&sim.trajectory.committed(), delta);
+                    let series = stepping!(sim).state_near(sim.trajectory.committed_point(), delta);
                     let bounds = stepping!(sim)
                         .drift_bounds(sim.trajectory.committed_point(), delta)
                         .unwrap();
@@ -344,7 +344,7 @@ mod tests {
                 let delta = t - sim.trajectory.committed_time;
                 let at_once = {
                     let mut copy = sim.clone();
-                    stepping!(copy).state_near(&copy.trajectory.committed(), delta)
+                    stepping!(copy).state_near(copy.trajectory.committed_point(), delta)
                 };
                 let bits = |x: State| x.map(f64::to_bits);
                 assert_eq!(bits(sim.state()), bits(at_once), "{name}, t = {t}");

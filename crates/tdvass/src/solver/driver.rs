@@ -467,7 +467,7 @@ impl Simulator {
         if delta != 0.0 && self.defer(t_end, Kind::NearNode) {
             return Ok(());
         }
-        let x = stepping!(self).state_near(&self.trajectory.committed(), delta);
+        let x = stepping!(self).state_near(self.trajectory.committed_point(), delta);
         crate::limits::check_divergence(t_end, &x)?;
         self.trajectory.set_current(t_end, x);
         Ok(())
@@ -616,7 +616,9 @@ impl Simulator {
                 self.trajectory.current_time,
             );
             self.trajectory.current_state = match deferred.kind {
-                Kind::NearNode => stepping!(self).state_near(&self.trajectory.committed(), t - tc),
+                Kind::NearNode => {
+                    stepping!(self).state_near(self.trajectory.committed_point(), t - tc)
+                }
                 Kind::InsideStep => stepping!(self).integrate_within_step(k, tc, xc, t),
             };
         }

@@ -463,7 +463,8 @@ impl Stepping<'_> {
         }
     }
 
-    /// The state at `at.time + delta` for a `delta` within the snap
+    /// The state at `t + delta` (grid index k, state x at t: the committed
+    /// point) for a `delta` within the snap
     /// tolerance, by the Taylor series of the exact solution,
     /// `X^{(j+1)} = A X^{(j)} + b u^{(j)} + e x_g^{(j)}`, with the delayed
     /// input's derivatives from its cubic interpolant and the road's own.
@@ -473,9 +474,9 @@ impl Stepping<'_> {
     /// needs 4, for a truncation below 1e-17). Before a node (negative
     /// `delta`) the interpolant after the node is used; the delayed input
     /// is C¹ there, so that costs `delta² |Δu''| / 2`.
-    #[inline]
-    pub(super) fn state_near(&mut self, at: &Committed, delta: f64) -> State {
-        let (k, t, x) = (at.k, at.time, at.state);
+    #[inline(always)]
+    pub(super) fn state_near(&mut self, (k, t, x): (u64, f64, &State), delta: f64) -> State {
+        let x = *x;
         if delta == 0.0 {
             return x;
         }
@@ -514,7 +515,7 @@ impl Stepping<'_> {
         if delta == 0.0 {
             return w;
         }
-        let plant = self.derivatives_at(at, delta);
+        let plant = self.derivatives_at((at.k, at.time, &at.state), delta);
         let (a_w, b_w) = (&coupling.wk.state_matrix, &coupling.wk.input_vector);
         let acceleration = |x: &State| (coupling.acceleration_row * x)[0];
         let mut derivative = a_w * w + b_w * acceleration(&plant[0]);
@@ -528,12 +529,13 @@ impl Stepping<'_> {
         result
     }
 
-    /// `X, X', X'', X'''` at the committed point `at` (the recursion of
+    /// `X, X', X'', X'''` at the committed point (grid index k, time t,
+    /// state x; the recursion of
     /// [`Self::state_near`] at its highest order), for the filter's Taylor
     /// series; the road derivatives are those of the piece in force at
-    /// `at.time + delta`.
-    fn derivatives_at(&mut self, at: &Committed, delta: f64) -> [State; 4] {
-        let (k, t, x) = (at.k, at.time, at.state);
+    /// `t + delta`.
+    fn derivatives_at(&mut self, (k, t, x): (u64, f64, &State), delta: f64) -> [State; 4] {
+        let x = *x;
         let p = self.delayed_vector_at(k, t, (t, x), &x);
         let road_piece = self.inputs.piece_from(t + delta);
         let piece = self.forcing(&road_piece);

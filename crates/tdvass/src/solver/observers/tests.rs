@@ -200,7 +200,7 @@ fn taylor_dense_output_near_a_node_matches_the_exact_step() {
         assert_eq!(t, sim.grid_time(k));
         let h = sim.grid.step;
         for delta in [1e-13, 3e-11, h / 1024.0] {
-            let series = stepping!(sim).state_near(&sim.trajectory.committed(), delta);
+            let series = stepping!(sim).state_near(sim.trajectory.committed_point(), delta);
             let exact = stepping!(sim).integrate_within_step(k, t, x, t + delta);
             let scale = exact.amax();
             let error = (series - exact).amax();
