@@ -3,6 +3,7 @@
  *
  *   dostep_cost LIB GUID [REPEATS]
  *   dostep_cost --interleaved GUID CALLS ROUNDS LIB [LIB ...]
+ *   dostep_cost --case N GUID CALLS LIB
  *
  * The first form:
  * 1. The fixed call cost, with the internal step pinned at 1e-4 s
@@ -24,6 +25,11 @@
  * case above at the default tolerance with every library in turn, and the
  * fastest run of each (library, case). Interleaving puts the libraries
  * under the same load, which separate runs on a shared machine do not.
+ *
+ * The third form runs CALLS calls of case N alone (0 aligned, 1 1 ms with
+ * t += h, 2 0.7 ms, 3 9.9e-5 s, 4 1e-7 s, 5 varying), for an instruction
+ * count: under callgrind, the difference of two CALLS over their
+ * difference is the cost of one call.
  *
  * Figures in BENCHMARKS.md.
  */
@@ -193,8 +199,23 @@ static int interleaved(int argc, char **argv) {
     return 0;
 }
 
+static int one_case(int argc, char **argv) {
+    int which = argc == 6 ? atoi(argv[2]) : -1;
+    long calls = argc == 6 ? atol(argv[4]) : 0;
+    if (which < 0 || which >= CASES || calls <= 0) {
+        fprintf(stderr, "usage: %s --case N GUID CALLS LIB (N in 0..%d, CALLS > 0)\n", argv[0],
+                CASES - 1);
+        return 2;
+    }
+    Library l = load(argv[5]);
+    double s = run(&l, argv[3], CASE_STEP[which], CASE_ACCUMULATED[which], 0.0, calls);
+    printf("%s: %.3f us per call\n", CASE_NAME[which], s * 1e6);
+    return 0;
+}
+
 int main(int argc, char **argv) {
     if (argc > 1 && strcmp(argv[1], "--interleaved") == 0) return interleaved(argc, argv);
+    if (argc > 1 && strcmp(argv[1], "--case") == 0) return one_case(argc, argv);
     if (argc < 3) {
         fprintf(stderr, "usage: %s LIB GUID [REPEATS]\n", argv[0]);
         return 2;
