@@ -2,9 +2,10 @@
 //! (configuration, modes, inputs, trajectory, observers), advances them
 //! ([`Simulator::advance_to`]: whole steps through `kernel`, points inside
 //! a step through `stepping`, the tire's switches through `events`), and
-//! alone moves the committed point and tells the observers of it. The
-//! public constructors and readers that need the clients (`accuracy`,
-//! `outputs`, `persist`) are declared in the solver's module.
+//! alone moves the committed point and tells the observers of it (the
+//! whole steps do it through the view `kernel::WholeSteps` it lends them).
+//! The public constructors and readers that need the clients
+//! (`accuracy`, `outputs`, `persist`) are declared in the solver's module.
 //!
 //! Layer: driver (docs/architecture.md); it imports the solver's `config`,
 //! `contact`, `deferred`, `grid`, `holding`, `inputs`, `integrals`,
