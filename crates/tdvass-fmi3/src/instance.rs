@@ -255,61 +255,65 @@ impl Instance {
 
     // ------------------------------------------------------------- values
 
-    /// The variables behind `vrs`, each of FMI 3.0 value type `expected`
+    /// Checks that the variables behind `vrs` are each of FMI 3.0 value type `expected`
     /// and accessible now (`write`: to be set): in Configuration Mode only
     /// structural parameters; inside an intermediate update only the
     /// variables marked `intermediateUpdate`, outputs when reading is
     /// allowed and inputs when setting is requested.
-    fn typed(
+    fn typed(&self, vrs: &[u32], expected: ValueType, write: bool) -> Result<(), FmiError> {
+        for &vr in vrs {
+            self.typed_one(vr, expected, write)?;
+        }
+        Ok(())
+    }
+
+    /// The variable behind `vr`, checked as [`Self::typed`] checks each.
+    fn typed_one(
         &self,
-        vrs: &[u32],
+        vr: u32,
         expected: ValueType,
         write: bool,
-    ) -> Result<Vec<&'static Variable>, FmiError> {
-        vrs.iter()
-            .map(|&vr| {
-                let var = by_vr(FmiVersion::Fmi3, vr).ok_or_else(|| {
-                    FmiError::error(format!(
-                        "unknown value reference {vr} (for a {})",
-                        expected.name()
-                    ))
-                })?;
-                let actual = fmi3_type(var).value_type();
-                if actual != expected {
-                    return Err(FmiError::error(format!(
-                        "value reference {vr} is `{}`, a {}, not a {}",
-                        var.name,
-                        actual.name(),
-                        expected.name()
-                    )));
-                }
-                if self.configuration && var.causality != Causality::StructuralParameter {
-                    return Err(FmiError::error(format!(
-                        "`{}` is not a structural parameter: only those are accessible in Configuration Mode",
-                        var.name
-                    )));
-                }
-                if let Some(point) = self.intermediate {
-                    let (allowed, what) = if write {
-                        (point.set_requested, "setting was not requested")
+    ) -> Result<&'static Variable, FmiError> {
+        let var = by_vr(FmiVersion::Fmi3, vr).ok_or_else(|| {
+            FmiError::error(format!(
+                "unknown value reference {vr} (for a {})",
+                expected.name()
+            ))
+        })?;
+        let actual = fmi3_type(var).value_type();
+        if actual != expected {
+            return Err(FmiError::error(format!(
+                "value reference {vr} is `{}`, a {}, not a {}",
+                var.name,
+                actual.name(),
+                expected.name()
+            )));
+        }
+        if self.configuration && var.causality != Causality::StructuralParameter {
+            return Err(FmiError::error(format!(
+                "`{}` is not a structural parameter: only those are accessible in Configuration Mode",
+                var.name
+            )));
+        }
+        if let Some(point) = self.intermediate {
+            let (allowed, what) = if write {
+                (point.set_requested, "setting was not requested")
+            } else {
+                (point.get_allowed, "reading is not allowed")
+            };
+            if !var.intermediate_update || !allowed {
+                return Err(FmiError::error(format!(
+                    "`{}` is not accessible in this intermediate update ({})",
+                    var.name,
+                    if var.intermediate_update {
+                        what
                     } else {
-                        (point.get_allowed, "reading is not allowed")
-                    };
-                    if !var.intermediate_update || !allowed {
-                        return Err(FmiError::error(format!(
-                            "`{}` is not accessible in this intermediate update ({})",
-                            var.name,
-                            if var.intermediate_update {
-                                what
-                            } else {
-                                "it is not an intermediate-update variable"
-                            }
-                        )));
+                        "it is not an intermediate-update variable"
                     }
-                }
-                Ok(var)
-            })
-            .collect()
+                )));
+            }
+        }
+        Ok(var)
     }
 
     /// `fmi3GetFloat64` (arrays element by element).
@@ -374,12 +378,13 @@ impl Instance {
         ty: ValueType,
         narrow: impl Fn(T) -> Option<i32>,
     ) -> Result<Status, FmiError> {
-        let vars = self.typed(vrs, ty, true)?;
+        self.typed(vrs, ty, true)?;
         Self::check_count(vrs, values.len())?;
-        let narrowed = vars
+        let narrowed = vrs
             .iter()
             .zip(values)
-            .map(|(var, &value)| {
+            .map(|(&vr, &value)| {
+                let var = self.typed_one(vr, ty, true)?;
                 narrow(value).ok_or_else(|| {
                     FmiError::error(format!(
                         "invalid value {value} for `{}`: {}",

@@ -296,7 +296,11 @@ pub mod fmu_state {
             return Err(FmiError::error(format!(
                 "the buffer has {size} bytes, the state needs {} ({})",
                 bytes.len(),
-                slave.call(&format!("Serialized{}Size", slave.dialect().fmu_state))
+                format_args!(
+                    "{}Serialized{}Size",
+                    slave.dialect().prefix,
+                    slave.dialect().fmu_state
+                )
             )));
         }
         // SAFETY: forwarded contract: `buffer` holds `size` writable bytes,

@@ -87,7 +87,7 @@ pub fn check_step_work(
     s: &Settings,
     grid_step: f64,
     h: f64,
-    function: &str,
+    function: impl std::fmt::Display,
 ) -> Result<(), FmiError> {
     let work = step_work(s, grid_step, h);
     if work > MAX_WORK_PER_STEP {

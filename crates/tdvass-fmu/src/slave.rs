@@ -11,6 +11,7 @@ use crate::settings::Settings;
 use crate::variables::FmiVersion;
 use crate::{FmiError, Status};
 use std::collections::HashMap;
+use std::fmt;
 use tdvass::model::Params;
 use tdvass::solver::{DelayGrid, Simulator};
 
@@ -147,6 +148,20 @@ pub struct Slave {
     read_plan: values::ReadPlan,
 }
 
+/// The C name of a function (`fmi2DoStep`, ...): its dialect's prefix and
+/// the name, joined when a message is written.
+#[derive(Debug, Clone, Copy)]
+pub struct CallName {
+    prefix: &'static str,
+    function: &'static str,
+}
+
+impl fmt::Display for CallName {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}{}", self.prefix, self.function)
+    }
+}
+
 impl Slave {
     /// A slave at its start values, speaking `dialect`; serialized states
     /// carry (and must match) `token`.
@@ -162,9 +177,13 @@ impl Slave {
         }
     }
 
-    /// The C name of `function` (without prefix) in this dialect.
-    pub fn call(&self, function: &str) -> String {
-        format!("{}{function}", self.dialect.prefix)
+    /// The C name of `function` (without prefix) in this dialect, written
+    /// only when a message is (naming a call allocates nothing).
+    pub fn call(&self, function: &'static str) -> CallName {
+        CallName {
+            prefix: self.dialect.prefix,
+            function,
+        }
     }
 
     /// The settings.
@@ -177,12 +196,14 @@ impl Slave {
         self.state.sim.as_ref()
     }
 
-    fn event(&self, message: String) {
-        self.logger.log(Status::Ok, &message);
+    /// Logs an event; the message is formatted only when events are on.
+    fn event(&self, message: fmt::Arguments) {
+        self.logger.log_lazily(Status::Ok, message);
     }
 
-    fn warning(&self, message: String) {
-        self.logger.log(Status::Warning, &message);
+    /// Logs a warning; the message is formatted only when warnings are on.
+    fn warning(&self, message: fmt::Arguments) {
+        self.logger.log_lazily(Status::Warning, message);
     }
 
     /// The phase.
@@ -310,6 +331,9 @@ impl Slave {
         if m.settings.road_is_input() {
             sim.set_road_input(m.settings.x_g, m.input_slope)?;
         }
+        // Stepping, the getters and the setters allocate nothing from here
+        // on (docs/fmu.md, "Real-time").
+        sim.reserve();
         if let Some((name, value)) = guards::non_finite_output(&sim.outputs()) {
             return Err(FmiError::error(format!(
                 "the settings give a non-finite initial output `{name}` = {value}"
@@ -333,7 +357,7 @@ impl Slave {
         self.state.last_successful_time = self.state.start_time;
         self.state.terminate_requested = false;
         let s = &self.state.settings;
-        self.event(format!(
+        self.event(format_args!(
             "{}: variant {}, road {}, tire_contact {}, tolerance {}, internal step {} s ({}), start {} s, stop {}",
             self.call("ExitInitializationMode"),
             s.variant,
@@ -352,15 +376,15 @@ impl Slave {
                 .map(|t| format!("{t} s"))
                 .unwrap_or_else(|| "not defined".into())
         ));
-        Ok(self.stability_check(&self.call("ExitInitializationMode")))
+        Ok(self.stability_check(self.call("ExitInitializationMode")))
     }
 
     /// Logs a warning (and returns `Warning`) when (g, tau) is unstable.
-    fn stability_check(&mut self, function: &str) -> Status {
+    fn stability_check(&mut self, function: CallName) -> Status {
         let s = self.state.settings;
         match self.spectral_abscissa() {
             Ok(a) if a >= 0.0 => {
-                self.warning(format!(
+                self.warning(format_args!(
                     "{function}: unstable feedback: g = {} N/m, tau = {} s gives spectral abscissa {a} 1/s >= 0; the response will grow without bound",
                     s.params.g, s.params.tau
                 ));
@@ -368,7 +392,7 @@ impl Slave {
             }
             Ok(_) => Status::Ok,
             Err(e) => {
-                self.warning(format!(
+                self.warning(format_args!(
                     "{function}: stability of g = {} N/m, tau = {} s not determined: {e}",
                     s.params.g, s.params.tau
                 ));
@@ -380,7 +404,7 @@ impl Slave {
     /// `Terminate`.
     pub fn terminate(&mut self) -> Result<Status, FmiError> {
         self.state.phase = Phase::Terminated;
-        self.event(format!(
+        self.event(format_args!(
             "{}: at t = {} s",
             self.call("Terminate"),
             self.time()
@@ -393,7 +417,10 @@ impl Slave {
     /// states handed out stay valid.
     pub fn reset(&mut self) -> Result<Status, FmiError> {
         self.state = SlaveState::new();
-        self.event(format!("{}: back to the start values", self.call("Reset")));
+        self.event(format_args!(
+            "{}: back to the start values",
+            self.call("Reset")
+        ));
         Ok(Status::Ok)
     }
 

@@ -457,7 +457,7 @@ mod tests {
         }
         // The slave takes the lift-offs after every step (they are not
         // part of the state).
-        assert!(!sim.take_lift_offs().0.is_empty());
+        assert!(!sim.take_lift_offs().events().is_empty());
         model.sim = Some(sim);
         model.phase = Phase::StepComplete;
         model.last_successful_time = t;

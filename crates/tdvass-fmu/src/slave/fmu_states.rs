@@ -36,9 +36,9 @@ impl Slave {
     /// of this instance. Returns the handle (the `FMUstate` value).
     pub fn get_fmu_state(&mut self, reuse: Option<usize>) -> Result<usize, FmiError> {
         let handle = self.store(self.state.clone(), reuse)?;
-        self.event(format!(
+        self.event(format_args!(
             "{}: state {handle:#x} at t = {} s",
-            self.call(&format!("Get{}", self.dialect.fmu_state)),
+            format_args!("{}Get{}", self.dialect.prefix, self.dialect.fmu_state),
             self.time()
         ));
         Ok(handle)
@@ -47,9 +47,14 @@ impl Slave {
     /// `SetFMUstate`: only states of this instance are accepted.
     pub fn set_fmu_state(&mut self, handle: usize) -> Result<Status, FmiError> {
         self.state = self.owned(handle)?.clone();
-        self.event(format!(
+        // A deserialized state carries no tables: build them here, not
+        // in the next step.
+        if let Some(sim) = self.state.sim.as_mut() {
+            sim.reserve();
+        }
+        self.event(format_args!(
             "{}: state {handle:#x}, now at t = {} s in state {}",
-            self.call(&format!("Set{}", self.dialect.fmu_state)),
+            format_args!("{}Set{}", self.dialect.prefix, self.dialect.fmu_state),
             self.time(),
             self.state.phase.name()
         ));
@@ -80,7 +85,7 @@ impl Slave {
         }
         let model = snapshot::deserialize(bytes, &self.token)?;
         let handle = self.store(model, reuse)?;
-        self.event(format!(
+        self.event(format_args!(
             "{}: {} bytes into state {handle:#x}",
             self.call(self.dialect.deserialize_state),
             bytes.len()

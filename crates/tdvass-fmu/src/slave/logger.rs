@@ -40,6 +40,20 @@ impl Logger {
         }
     }
 
+    /// Whether messages of `status` reach the sink.
+    pub fn enabled(&self, status: Status) -> bool {
+        let category = Self::category_of(status);
+        category >= 2 || self.enabled[category]
+    }
+
+    /// Logs `message` under the category of `status`, formatting it only
+    /// when the category is on: a message nobody reads allocates nothing.
+    pub fn log_lazily(&self, status: Status, message: std::fmt::Arguments) {
+        if self.enabled(status) {
+            self.log(status, &message.to_string());
+        }
+    }
+
     /// Switches `categories` (empty: all) on or off. Unknown categories
     /// refuse the whole call.
     pub fn set_categories(&mut self, on: bool, categories: &[&str]) -> Result<Status, FmiError> {

@@ -81,7 +81,7 @@ impl Slave {
         let (settings, step) = (&self.state.settings, sim.grid().step);
         // The function's name is formatted only for the message.
         if guards::step_work(settings, step, target - now) > guards::MAX_WORK_PER_STEP {
-            guards::check_step_work(settings, step, target - now, &self.call("DoStep"))?;
+            guards::check_step_work(settings, step, target - now, self.call("DoStep"))?;
         }
         guards::check_time_resolution("the step end", target, step)?;
         Ok(target)
@@ -151,7 +151,7 @@ impl Slave {
                         };
                     if let Some(loss) = loss {
                         self.state.contact_warned = true;
-                        self.warning(format!(
+                        self.warning(format_args!(
                             "{}: the tire leaves the road at t = {} s: `dynamic_tire_load` = {} N is below minus the static load {} N, so the linear model no longer holds from there (the simulation goes on; `contact_loss_time` accumulates the time without contact)",
                             self.call("DoStep"),
                             loss.time,
@@ -200,20 +200,21 @@ impl Slave {
         let Some(sim) = self.state.sim.as_mut() else {
             return;
         };
-        let (lift_offs, dropped) = sim.take_lift_offs();
+        let log = sim.take_lift_offs();
+        let (lift_offs, dropped) = (log.events(), log.dropped);
         let now = sim.time();
         if lift_offs.is_empty() && dropped == 0 {
             return;
         }
         let function = self.call("DoStep");
-        for l in &lift_offs {
-            self.event(format!(
+        for l in lift_offs {
+            self.event(format_args!(
                 "{function}: lift-off at t = {} s: the wheel leaves the road (TDD = {} m reaches W/k_t = {} m, where the tire load falls to 0; tire_contact = 1)",
                 l.time, l.tire_deflection, l.limit
             ));
         }
         if dropped > 0 {
-            self.event(format!(
+            self.event(format_args!(
                 "{function}: ... and {dropped} more lift-offs up to t = {now} s, not listed one by one (`lift_off_count` counts every one)"
             ));
         }
@@ -258,7 +259,7 @@ impl Slave {
         }
         if h > HOLD_WARNING_STEP && rate != 0.0 && !m.hold_warned {
             self.state.hold_warned = true;
-            self.warning(format!(
+            self.warning(format_args!(
                 "{}: x_g is held over communication steps of {h} s (no input derivative, input_extrapolation = 0); at its current rate of change {rate:.4e} m/s the held value lags by about {:.3e} m on average ({:.3e} m at the step end). Set input_extrapolation = 2 (or 1), {}, or use steps of at most 1 ms.",
                 self.call("DoStep"),
                 0.5 * rate.abs() * h,
@@ -315,7 +316,7 @@ impl Slave {
         if ignored.is_empty() {
             Ok(Status::Ok)
         } else {
-            self.warning(format!(
+            self.warning(format_args!(
                 "{}: derivative orders {ignored:?} of `x_g` ignored (the input is extrapolated linearly)",
                 self.call(self.dialect.set_input_derivatives)
             ));

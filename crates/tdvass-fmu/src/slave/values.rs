@@ -383,7 +383,10 @@ impl Slave {
                 self.state.input_slope_given = false;
                 self.state.input_pending = true;
             }
-            ("g", Some(sim)) => sim.set_gain(value)?,
+            ("g", Some(sim)) => {
+                sim.set_gain(value)?;
+                sim.reserve();
+            }
             ("w_ba" | "w_sdd" | "w_tdd", Some(sim)) => sim.set_weights(weights),
             _ => {}
         }
@@ -393,29 +396,30 @@ impl Slave {
     /// `SetReal`. All values are checked first; a refused value leaves
     /// every variable unchanged. Tuning `g` to an unstable value while
     /// simulating gives `Warning`.
+    /// Nothing is allocated: the checks look each variable up again
+    /// instead of collecting them.
     pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Result<Status, FmiError> {
-        let mut checked = Vec::with_capacity(vrs.len());
         for (&vr, &value) in vrs.iter().zip(values) {
             let var = self.variable(vr, VarType::Real)?;
             self.check_settable(var, value)?;
-            checked.push((var, value));
         }
         if self.state.phase.is_simulating() {
             let mut candidate = self.state.settings;
-            for (var, value) in &checked {
-                if let Access::Real { set, .. } = var.access {
-                    set(&mut candidate, *value);
+            for (&vr, &value) in vrs.iter().zip(values) {
+                if let Access::Real { set, .. } = self.variable(vr, VarType::Real)?.access {
+                    set(&mut candidate, value);
                 }
             }
             guards::check_rates(&candidate)?;
         }
         let mut gain_tuned = false;
-        for (var, value) in checked {
+        for (&vr, &value) in vrs.iter().zip(values) {
+            let var = self.variable(vr, VarType::Real)?;
+            gain_tuned |= var.name == "g" && self.state.settings.params.g != value;
             self.apply_real(var, value)?;
-            gain_tuned |= var.name == "g";
         }
         if gain_tuned && self.state.phase.is_simulating() {
-            return Ok(self.stability_check(&self.call(self.dialect.set_float)));
+            return Ok(self.stability_check(self.call(self.dialect.set_float)));
         }
         Ok(Status::Ok)
     }

@@ -51,11 +51,13 @@
 /// Most switches between contact and flight inside one internal step.
 pub const MAX_SWITCHES_PER_STEP: u32 = 16;
 
-/// Lift-offs kept for the front-ends' event log between two takes.
-pub(super) const LIFT_OFF_LOG: usize = 64;
+/// Lift-offs kept for the front-ends' event log between two takes (a
+/// fixed array: logging a lift-off allocates nothing; later ones are
+/// counted in [`LiftOffLog::dropped`]).
+pub const LIFT_OFF_LOG: usize = 64;
 
 /// A lift-off, as logged.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct LiftOff {
     /// When (s).
     pub time: f64,
@@ -65,12 +67,42 @@ pub struct LiftOff {
     pub limit: f64,
 }
 
-/// Lift-offs since the front-end last took them.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub(super) struct LiftOffLog {
-    pub(super) events: Vec<LiftOff>,
+/// Lift-offs since the front-end last took them: the first
+/// [`LIFT_OFF_LOG`] in a fixed array, and the count of those that did not
+/// fit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LiftOffLog {
+    events: [LiftOff; LIFT_OFF_LOG],
+    len: usize,
     /// Lift-offs that did not fit.
-    pub(super) dropped: u64,
+    pub dropped: u64,
+}
+
+impl Default for LiftOffLog {
+    fn default() -> Self {
+        LiftOffLog {
+            events: [LiftOff::default(); LIFT_OFF_LOG],
+            len: 0,
+            dropped: 0,
+        }
+    }
+}
+
+impl LiftOffLog {
+    /// The lift-offs kept, oldest first.
+    pub fn events(&self) -> &[LiftOff] {
+        &self.events[..self.len]
+    }
+
+    /// Keeps `event`, or counts it as dropped when the log is full.
+    pub(super) fn record(&mut self, event: LiftOff) {
+        if self.len < LIFT_OFF_LOG {
+            self.events[self.len] = event;
+            self.len += 1;
+        } else {
+            self.dropped += 1;
+        }
+    }
 }
 
 #[cfg(test)]

@@ -162,8 +162,9 @@ struct Table<const D: usize, const R: usize> {
     /// `L_i = e^{M h 2^{i−n}} − I`, i = 0 … n.
     ladder: Vec<SMatrix<f64, D, D>>,
     /// The kept rows of `T_j`, j = 0 … 2^n, as built (`T_0 = 0` is never
-    /// stored).
-    entries: Vec<Option<Box<SMatrix<f64, R, D>>>>,
+    /// stored): room for every entry is made with the table, so building
+    /// one later allocates nothing.
+    entries: Vec<Option<SMatrix<f64, R, D>>>,
 }
 
 impl<const D: usize, const R: usize> Table<D, R> {
@@ -217,16 +218,16 @@ impl<const D: usize, const R: usize> Table<D, R> {
                 if self.entries[next].is_none() {
                     let ladder = &self.ladder[bit];
                     let rows = ladder.fixed_rows::<R>(self.first_row).into_owned();
-                    let value = match self.entries[prefix].as_deref() {
+                    let value = match self.entries[prefix].as_ref() {
                         Some(before) => before + rows + before * ladder,
                         None => rows,
                     };
-                    self.entries[next] = Some(Box::new(value));
+                    self.entries[next] = Some(value);
                 }
                 prefix = next;
             }
         }
-        self.entries[j].as_deref().expect("built above")
+        self.entries[j].as_ref().expect("built above")
     }
 
     /// `rows (I + T_j) y`.
@@ -406,6 +407,18 @@ impl DenseOutput {
         self.plant.finish(j, &y)
     }
 
+    /// Builds the filter's table now (once), for the coupling `coupling`.
+    pub(super) fn reserve_filter(&mut self, coupling: &FilterCoupling) {
+        if self.filter.is_none() {
+            let m = augmented_matrix(&self.a, &self.b, &self.e, self.angular_frequency);
+            let full = with_filter_matrix(&m, coupling);
+            self.filter = Some(FilterTable {
+                rows: full.fixed_rows::<WK_STATES>(AUGMENTED).into_owned(),
+                table: Table::new(&full, self.h, AUGMENTED),
+            });
+        }
+    }
+
     /// The W_k filter's rows of `e^{M_w σ} [z; w]` (M_w the 22-dimensional
     /// matrix of [`super::system`]).
     pub(super) fn filter(
@@ -425,14 +438,7 @@ impl DenseOutput {
             let sigma = key as f64 * self.h * 0.5f64.powi(OFFSET_BITS as i32);
             return expm::precise_exp(&(full * sigma)).fixed_rows::<WK_STATES>(AUGMENTED) * big;
         }
-        if self.filter.is_none() {
-            let m = augmented_matrix(&self.a, &self.b, &self.e, self.angular_frequency);
-            let full = with_filter_matrix(&m, coupling);
-            self.filter = Some(FilterTable {
-                rows: full.fixed_rows::<WK_STATES>(AUGMENTED).into_owned(),
-                table: Table::new(&full, self.h, AUGMENTED),
-            });
-        }
+        self.reserve_filter(coupling);
         let Some((j, sigma)) = self.filter.as_ref().and_then(|f| f.table.split(key)) else {
             let m = augmented_matrix(&self.a, &self.b, &self.e, self.angular_frequency);
             let full = with_filter_matrix(&m, coupling);

@@ -17,7 +17,9 @@ use super::config::{
     SimulationConfig, StepChoice, check_communication_step, check_max_internal_step,
     check_tolerance,
 };
-use super::contact::{LIFT_OFF_LOG, LiftOff, MAX_SWITCHES_PER_STEP};
+#[cfg(doc)]
+use super::contact::LIFT_OFF_LOG;
+use super::contact::{LiftOff, LiftOffLog, MAX_SWITCHES_PER_STEP};
 use super::deferred::{Deferred, Kind};
 use super::grid::DelayGrid;
 use super::holding::Holding;
@@ -553,6 +555,11 @@ impl Simulator {
     /// Changes the feedback gain g (tunable; within the rate limit of
     /// [`crate::limits::check_rates`]); the history is kept.
     pub fn set_gain(&mut self, g: f64) -> Result<()> {
+        if g.to_bits() == self.config.params.g.to_bits() {
+            // The same gain: the operators stand (a master that sets every
+            // tunable parameter at every step rebuilds nothing).
+            return Ok(());
+        }
         self.settle();
         self.outputs_cache = None;
         let params = Params {
@@ -573,6 +580,18 @@ impl Simulator {
         // a flight in progress goes on with them.
         self.enter_recorded_mode();
         Ok(())
+    }
+
+    /// Builds now every table that stepping would build at its first use
+    /// (the partial steps' maps of both tire modes, the W_k filter's, the
+    /// flight operators), so that stepping from here on allocates
+    /// nothing; a front-end with real-time callers calls it once the run
+    /// is set up. The tables are caches of functions of the operators:
+    /// results are the same with or without it. A gain change
+    /// ([`Self::set_gain`]) drops them (call it again after one).
+    pub fn reserve(&mut self) {
+        let unilateral = self.config.tire_contact.is_unilateral();
+        self.modes.reserve(&self.plant, &self.grid, unilateral);
     }
 
     /// Changes the weights of J (tunable).
@@ -660,11 +679,11 @@ impl Simulator {
         self.trajectory.flight_start.is_some()
     }
 
-    /// The lift-offs since the last call (at most 64; the second value
-    /// counts those left out), for an event log.
-    pub fn take_lift_offs(&mut self) -> (Vec<LiftOff>, u64) {
-        let log = std::mem::take(&mut self.observers.lift_off_log);
-        (log.events, log.dropped)
+    /// The lift-offs since the last call (at most [`LIFT_OFF_LOG`], and
+    /// the count of those left out), for an event log; a copy of a fixed
+    /// array, so taking them allocates nothing.
+    pub fn take_lift_offs(&mut self) -> LiftOffLog {
+        std::mem::take(&mut self.observers.lift_off_log)
     }
 
     /// The tire load as the tire law gives it (N): `load` =
@@ -747,11 +766,7 @@ impl Simulator {
                 tire_deflection: x[X_T] - piece.value(time),
                 limit,
             };
-            if self.observers.lift_off_log.events.len() < LIFT_OFF_LOG {
-                self.observers.lift_off_log.events.push(event);
-            } else {
-                self.observers.lift_off_log.dropped += 1;
-            }
+            self.observers.lift_off_log.record(event);
         }
         self.modes.swap(&self.plant, self.grid.step);
         self.observers

@@ -151,7 +151,9 @@ pub(crate) fn largest_magnitude(length: f64, a: [f64; 2], b: [f64; 2]) -> f64 {
             - d1 * (s * s * r)
     };
     quadratic_roots(3.0 * c3, 2.0 * c2, d0)
-        .into_iter()
+        .as_slice()
+        .iter()
+        .copied()
         .filter(|s| *s > 0.0 && *s < 1.0)
         .map(|s| p(s).abs())
         .fold(ends, f64::max)
@@ -286,7 +288,11 @@ pub(crate) struct BelowZero {
 /// the points cutting `[0, 1]` into sub-intervals on each of which p keeps
 /// its sign: the ends, its critical points and its roots (by bisection on
 /// its monotone pieces).
-fn sign_pieces(length: f64, a: [f64; 2], b: [f64; 2]) -> (impl Fn(f64) -> f64, Vec<f64>) {
+fn sign_pieces(
+    length: f64,
+    a: [f64; 2],
+    b: [f64; 2],
+) -> (impl Fn(f64) -> f64, Points<SIGN_POINTS>) {
     // p(σ) = c0 + c1 σ + c2 σ² + c3 σ³ on σ ∈ [0, 1].
     let (g0, d0, g1, d1) = (a[0], a[1] * length, b[0], b[1] * length);
     let c = [
@@ -303,14 +309,18 @@ fn sign_pieces(length: f64, a: [f64; 2], b: [f64; 2]) -> (impl Fn(f64) -> f64, V
             - d1 * (s * s * r)
     };
     // Monotone pieces: split at the roots of p' = c1 + 2 c2 σ + 3 c3 σ².
-    let mut cuts = vec![0.0];
+    let mut cuts = Points::<4>::starting_at(0.0);
     let mut critical = quadratic_roots(3.0 * c[3], 2.0 * c[2], c[1]);
-    critical.sort_by(f64::total_cmp);
-    cuts.extend(critical.into_iter().filter(|s| *s > 0.0 && *s < 1.0));
+    critical.values[..critical.len].sort_by(f64::total_cmp);
+    for &s in critical.as_slice() {
+        if s > 0.0 && s < 1.0 {
+            cuts.push(s);
+        }
+    }
     cuts.push(1.0);
     // Every root of p inside a piece where it changes sign.
-    let mut points = vec![0.0];
-    for pair in cuts.windows(2) {
+    let mut points = Points::<SIGN_POINTS>::starting_at(0.0);
+    for pair in cuts.as_slice().windows(2) {
         let (mut lo, mut hi) = (pair[0], pair[1]);
         let (p_lo, p_hi) = (p(lo), p(hi));
         if (p_lo < 0.0) != (p_hi < 0.0) {
@@ -331,6 +341,51 @@ fn sign_pieces(length: f64, a: [f64; 2], b: [f64; 2]) -> (impl Fn(f64) -> f64, V
     (p, points)
 }
 
+/// The most points [`sign_pieces`] gives: 0, then for each of the at most
+/// three monotone pieces a root and the piece's end.
+const SIGN_POINTS: usize = 7;
+
+/// A list of at most `N` offsets kept on the stack (the sign pieces of a
+/// cubic are computed inside a step, where nothing is allocated).
+#[derive(Debug, Clone, Copy)]
+struct Points<const N: usize> {
+    values: [f64; N],
+    len: usize,
+}
+
+impl<const N: usize> Points<N> {
+    fn starting_at(first: f64) -> Self {
+        let mut points = Points {
+            values: [0.0; N],
+            len: 0,
+        };
+        points.push(first);
+        points
+    }
+
+    /// Appends `value`; the callers' counts never exceed `N`.
+    fn push(&mut self, value: f64) {
+        self.values[self.len] = value;
+        self.len += 1;
+    }
+
+    fn as_slice(&self) -> &[f64] {
+        &self.values[..self.len]
+    }
+
+    /// Removes consecutive repeats.
+    fn dedup(&mut self) {
+        let mut kept = 0;
+        for i in 0..self.len {
+            if kept == 0 || self.values[i] != self.values[kept - 1] {
+                self.values[kept] = self.values[i];
+                kept += 1;
+            }
+        }
+        self.len = kept;
+    }
+}
+
 /// [`BelowZero`] of the cubic Hermite interpolant through
 /// `a = [g_0, g'_0]` at 0 and `b = [g_1, g'_1]` at `length`: the time (s)
 /// during which it is negative and the first offset (s) at which it is;
@@ -348,7 +403,7 @@ pub(crate) fn below_zero(length: f64, a: [f64; 2], b: [f64; 2]) -> BelowZero {
     // Sum the sub-intervals on which p is negative (tested at the middle;
     // a sub-interval of zero length adds nothing).
     let mut negative_before = a[0] < 0.0;
-    for pair in points.windows(2) {
+    for pair in points.as_slice().windows(2) {
         let (lo, hi) = (pair[0], pair[1]);
         if hi <= lo {
             continue;
@@ -389,7 +444,7 @@ pub(crate) fn first_fall(
     let mut before = 0.0;
     // The fall found: (its lo, its root, the deepest middle so far, p there).
     let mut fall: Option<(f64, f64, f64, f64)> = None;
-    for pair in points.windows(2) {
+    for pair in points.as_slice().windows(2) {
         let (lo, hi) = (pair[0], pair[1]);
         if hi <= lo {
             continue;
@@ -423,21 +478,31 @@ pub(crate) fn first_fall(
 
 /// Real roots of `a s² + b s + c` (none, one or two; a linear or constant
 /// polynomial when a = 0).
-fn quadratic_roots(a: f64, b: f64, c: f64) -> Vec<f64> {
+fn quadratic_roots(a: f64, b: f64, c: f64) -> Points<2> {
+    let mut roots = Points {
+        values: [0.0; 2],
+        len: 0,
+    };
     if a == 0.0 {
-        return if b == 0.0 { vec![] } else { vec![-c / b] };
+        if b != 0.0 {
+            roots.push(-c / b);
+        }
+        return roots;
     }
     let discriminant = b * b - 4.0 * a * c;
     if discriminant < 0.0 {
-        return vec![];
+        return roots;
     }
     // The root of larger magnitude first, the other from the product
     // (no cancellation).
     let q = -0.5 * (b + b.signum() * discriminant.sqrt());
     if q == 0.0 {
-        return vec![0.0];
+        roots.push(0.0);
+        return roots;
     }
-    vec![q / a, c / q]
+    roots.push(q / a);
+    roots.push(c / q);
+    roots
 }
 
 #[cfg(test)]

@@ -95,7 +95,7 @@ use crate::error::Result;
 pub use crate::limits::{DIVERGENCE_DISPLACEMENT, DIVERGENCE_VELOCITY};
 use crate::metrics::RmsValues;
 pub use config::{DEFAULT_TOLERANCE, Metrics, SimulationConfig, StepChoice};
-pub use contact::{LiftOff, MAX_SWITCHES_PER_STEP};
+pub use contact::{LIFT_OFF_LOG, LiftOff, LiftOffLog, MAX_SWITCHES_PER_STEP};
 pub use driver::Simulator;
 pub use events::LOCATION_TOLERANCE;
 pub use grid::{DelayGrid, DelayRegime, MAX_HISTORY_NODES, MIN_RESOLVED_DELAY};

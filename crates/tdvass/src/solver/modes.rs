@@ -10,7 +10,7 @@
 //! the trajectory or the accumulators.
 
 use super::config::SimulationConfig;
-use super::dense::DenseOutput;
+use super::dense::{self, DenseOutput};
 use super::grid::DelayGrid;
 use super::grid_step::{FilterGridStep, GridStep};
 use super::linalg::infinity_norm;
@@ -164,6 +164,67 @@ impl Modes {
             full_step: StepOperator::new(&a, &b, &e, omega, h, self.coupling.as_ref()),
             solver_matrix: a,
             dense: None,
+        }
+    }
+
+    /// The partial steps' maps of a mode with solver matrix `a` (the
+    /// input column and ω are the same in both modes), with the pieces
+    /// every step has when the delay is inside the step
+    /// ([`DenseOutput::with_fixed`]) and, with the W_k filter, its table.
+    fn dense_output_of(&self, a: &Matrix6<f64>, plant: &Plant, grid: &DelayGrid) -> DenseOutput {
+        let h = grid.step;
+        let dense = DenseOutput::new(a, &self.input_column, &plant.e, self.angular_frequency, h);
+        if grid.delay_inside_step() {
+            let tau = grid.inner_delay();
+            dense.with_fixed(&[dense::offset_key(tau, h), dense::offset_key(h - tau, h)])
+        } else {
+            dense
+        }
+    }
+
+    /// The mode in force's partial steps' maps, built on first use.
+    pub(super) fn dense_output(&mut self, plant: &Plant, grid: &DelayGrid) -> &mut DenseOutput {
+        if self.dense.is_none() {
+            self.dense = Some(Box::new(self.dense_output_of(
+                &self.solver_matrix,
+                plant,
+                grid,
+            )));
+        }
+        self.dense.as_deref_mut().expect("built above")
+    }
+
+    /// Builds now what stepping would otherwise build on first use, so
+    /// that stepping allocates nothing: the partial steps' maps of the
+    /// mode in force (and the filter's table with the W_k filter) and,
+    /// with `unilateral`, the flight operators and their maps. Each is
+    /// the same value whenever it is built (a cache of a function of the
+    /// operators), so the results do not change.
+    pub(super) fn reserve(&mut self, plant: &Plant, grid: &DelayGrid, unilateral: bool) {
+        let coupling = self.coupling.clone();
+        self.dense_output(plant, grid);
+        if let (Some(dense), Some(c)) = (self.dense.as_deref_mut(), coupling.as_ref()) {
+            dense.reserve_filter(c);
+        }
+        if !unilateral {
+            return;
+        }
+        if self.other_mode.is_none() {
+            // Never swapped: contact is in force.
+            let flight = self.flight_operators(plant, &self.solver_matrix, grid.step);
+            self.other_mode = Some(Box::new(flight));
+        }
+        let Some(other) = self.other_mode.as_deref() else {
+            return;
+        };
+        if other.dense.is_none() {
+            let mut dense = self.dense_output_of(&other.solver_matrix, plant, grid);
+            if let Some(c) = coupling.as_ref() {
+                dense.reserve_filter(c);
+            }
+            if let Some(other) = self.other_mode.as_deref_mut() {
+                other.dense = Some(Box::new(dense));
+            }
         }
     }
 

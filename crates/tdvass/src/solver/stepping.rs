@@ -88,24 +88,7 @@ impl Stepping<'_> {
 
     /// The dense output of the mode in force, built at its first use.
     pub(super) fn dense_output(&mut self) -> &mut dense::DenseOutput {
-        if self.modes.dense.is_none() {
-            let (a, b, e) = (
-                self.modes.solver_matrix,
-                self.modes.input_column,
-                self.plant.e,
-            );
-            let (omega, h) = (self.inputs.angular_frequency(), self.grid.step);
-            let dense = dense::DenseOutput::new(&a, &b, &e, omega, h);
-            // With the delay inside the step, the pieces [t_k, t_k + tau)
-            // and [t_k + tau, t_{k+1}) of every step have fixed lengths.
-            self.modes.dense = Some(Box::new(if self.grid.delay_inside_step() {
-                let tau = self.grid.inner_delay();
-                dense.with_fixed(&[dense::offset_key(tau, h), dense::offset_key(h - tau, h)])
-            } else {
-                dense
-            }));
-        }
-        self.modes.dense.as_deref_mut().expect("built above")
+        self.modes.dense_output(self.plant, &self.grid)
     }
 
     /// The augmented vector of a partial step from `at` ([`dense::augmented`]).
