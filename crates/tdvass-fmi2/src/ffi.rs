@@ -37,7 +37,7 @@ use libc::{c_char, c_double, c_int, c_uint, c_void, size_t};
 use std::ffi::CStr;
 use std::panic::catch_unwind;
 use tdvass_fmu::entry::{self, FrontEnd, fmu_state};
-use tdvass_fmu::pointers::{self, c_string, copy_str, input, out_value, output};
+use tdvass_fmu::pointers::{self, LogText, c_string, copy_str, input, out_value, output};
 
 pub type fmi2Component = *mut c_void;
 pub type fmi2ComponentEnvironment = *mut c_void;
@@ -123,8 +123,8 @@ fn c_logger(
 ) -> LogSink {
     let name = c_string(instance_name);
     Box::new(move |s: Status, category: &str, message: &str| {
-        let category = c_string(category);
-        let message = c_string(&message.replace('%', "%%"));
+        let category = LogText::new(category, true);
+        let message = LogText::new(message, true);
         // SAFETY: `logger` is the master's callback with the FMI signature;
         // every string is NUL-terminated and outlives the call; the message
         // contains no conversion specification (every `%` is doubled), so

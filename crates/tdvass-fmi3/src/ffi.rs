@@ -42,7 +42,7 @@ use libc::{c_char, c_int, c_void, size_t};
 use std::ffi::CStr;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use tdvass_fmu::entry::{self, FrontEnd, fmu_state};
-use tdvass_fmu::pointers::{self, c_string, copy_str, input, out_value, output};
+use tdvass_fmu::pointers::{self, LogText, copy_str, input, out_value, output};
 use tdvass_fmu::slave::LogSink;
 
 pub type fmi3Instance = *mut c_void;
@@ -124,8 +124,8 @@ fn c_logger(logger: fmi3LogMessageCallback, environment: fmi3InstanceEnvironment
         return Box::new(|_, _, _| {});
     };
     Box::new(move |s: Status, category: &str, message: &str| {
-        let category = c_string(category);
-        let message = c_string(message);
+        let category = LogText::new(category, false);
+        let message = LogText::new(message, false);
         // SAFETY: `logger` is the master's callback with the FMI 3.0
         // signature; both strings are NUL-terminated and outlive the call.
         unsafe { logger(environment, status(s), category.as_ptr(), message.as_ptr()) }

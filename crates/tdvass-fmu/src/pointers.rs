@@ -72,6 +72,56 @@ pub fn c_string(text: &str) -> CString {
     CString::new(text.replace('\0', "\\0")).unwrap_or_default()
 }
 
+/// Bytes of a log message (or category) that [`LogText`] keeps on the
+/// stack, its NUL included; a longer text is allocated.
+const LOG_TEXT_CAPACITY: usize = 2048;
+
+/// A NUL-terminated copy of a log text for the master's logger, on the
+/// stack when it fits (logging a message allocates nothing): interior
+/// NULs shown as `\0` and, with `double_percent`, every `%` doubled (an
+/// FMI 2.0 logger is printf-like).
+pub struct LogText {
+    stack: [u8; LOG_TEXT_CAPACITY],
+    heap: Option<CString>,
+}
+
+impl LogText {
+    /// The C text of `text`.
+    pub fn new(text: &str, double_percent: bool) -> LogText {
+        let mut out = LogText {
+            stack: [0; LOG_TEXT_CAPACITY],
+            heap: None,
+        };
+        let mut len = 0;
+        for &byte in text.as_bytes() {
+            let escaped: &[u8] = match byte {
+                0 => b"\\0",
+                b'%' if double_percent => b"%%",
+                _ => std::slice::from_ref(&byte),
+            };
+            if len + escaped.len() >= LOG_TEXT_CAPACITY {
+                let mut owned = text.replace('\0', "\\0");
+                if double_percent {
+                    owned = owned.replace('%', "%%");
+                }
+                out.heap = Some(CString::new(owned).unwrap_or_default());
+                return out;
+            }
+            out.stack[len..len + escaped.len()].copy_from_slice(escaped);
+            len += escaped.len();
+        }
+        out
+    }
+
+    /// The NUL-terminated text, valid while `self` lives.
+    pub fn as_ptr(&self) -> *const c_char {
+        match &self.heap {
+            Some(text) => text.as_ptr(),
+            None => self.stack.as_ptr().cast(),
+        }
+    }
+}
+
 /// Copies a C string (lossy UTF-8), `None` for NULL.
 ///
 /// # Safety

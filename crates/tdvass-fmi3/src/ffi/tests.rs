@@ -3,6 +3,7 @@
 //! from the callback), early return, the types of the values, FMU states.
 
 use super::*;
+use tdvass_fmu::pointers::c_string;
 use tdvass_fmu::variables::{FmiVersion, by_name};
 
 fn vr(name: &str) -> u32 {

@@ -1,6 +1,29 @@
 //! Logging of a slave: the master's sink and the categories switched on.
 
 use crate::{FmiError, LOG_CATEGORIES, Status};
+use std::fmt;
+
+/// Bytes of a message formatted on the stack; a longer one is allocated.
+const MESSAGE_CAPACITY: usize = 1536;
+
+/// A message formatted on the stack ([`Logger::log_lazily`]): writing
+/// fails, without a partial character, when it does not fit.
+struct MessageText {
+    bytes: [u8; MESSAGE_CAPACITY],
+    len: usize,
+}
+
+impl fmt::Write for MessageText {
+    fn write_str(&mut self, s: &str) -> fmt::Result {
+        let end = self.len + s.len();
+        if end > MESSAGE_CAPACITY {
+            return Err(fmt::Error);
+        }
+        self.bytes[self.len..end].copy_from_slice(s.as_bytes());
+        self.len = end;
+        Ok(())
+    }
+}
 
 /// Receives log messages: `(status, category, message)`.
 pub type LogSink = Box<dyn Fn(Status, &str, &str)>;
@@ -48,8 +71,21 @@ impl Logger {
 
     /// Logs `message` under the category of `status`, formatting it only
     /// when the category is on: a message nobody reads allocates nothing.
-    pub fn log_lazily(&self, status: Status, message: std::fmt::Arguments) {
-        if self.enabled(status) {
+    pub fn log_lazily(&self, status: Status, message: fmt::Arguments) {
+        if !self.enabled(status) {
+            return;
+        }
+        let mut text = MessageText {
+            bytes: [0; MESSAGE_CAPACITY],
+            len: 0,
+        };
+        if fmt::write(&mut text, message).is_ok() {
+            // Only whole UTF-8 characters are written.
+            self.log(
+                status,
+                std::str::from_utf8(&text.bytes[..text.len]).unwrap_or(""),
+            );
+        } else {
             self.log(status, &message.to_string());
         }
     }

@@ -1,0 +1,531 @@
+/*
+ * Real-time harness of the shipped Linux libraries (FMI 2.0 and FMI 3.0
+ * Co-Simulation): heap allocations while stepping, and the worst call.
+ *
+ *   realtime list
+ *   realtime count FMI LIB TOKEN CASE
+ *   realtime worst FMI LIB TOKEN CASE REPEATS SECONDS
+ *
+ *   FMI     2 or 3
+ *   LIB     binaries/linux64/tdvass.so (FMI 2.0) or
+ *           binaries/x86_64-linux/tdvass.so (FMI 3.0) of the shipped FMU
+ *   TOKEN   the GUID / instantiationToken of its modelDescription.xml
+ *   CASE    a case name of `realtime list`: road, tire and step pattern
+ *
+ * The harness defines malloc, calloc, realloc, free, posix_memalign,
+ * aligned_alloc, memalign and valloc itself (linked with -rdynamic, so the
+ * dlopen'ed library binds to them) and forwards them to glibc's
+ * __libc_* functions. Counting starts when the Exit Initialization Mode
+ * call has returned and stops before the instance is freed; the master's
+ * own memory callbacks (FMI 2.0 allocateMemory) count too.
+ *
+ * A case's run, 30 s of simulated time (SECONDS in `worst`), does at
+ * every communication point what a real-time master does:
+ *   - in `count`, sets g to its value (a tunable parameter); on the input road
+ *     x_g = 0.05 sin(5 t) with its first derivative (FMI 2.0);
+ *   - one doStep;
+ *   - reads every Float64/Real output, lift_off_count and (FMI 2.0) the
+ *     first derivatives of the outputs;
+ * `count` also changes g's value at 10 s and back at 20 s; these two
+ * calls rebuild the operators and check the stability of the new gain,
+ * which allocates: their allocations are counted apart. In FMI 3.0 the
+ * instance is created with earlyReturnAllowed and an intermediate-update
+ * callback that reads every output at every internal node and asks for an
+ * early return at every 7th one; the master then goes on from
+ * lastSuccessfulTime.
+ *
+ * `count` prints "allocations N calls M (g value changes: 2 calls, G
+ * allocations)" and exits 0 when N is 0, 1 otherwise. `worst` runs the case REPEATS times (the same calls, the same
+ * results), takes each call's minimum time over the repetitions and prints
+ * the median of these minima, the largest, the call it belongs to and their
+ * ratio. Exit code 2: the library could not be loaded or a call failed.
+ */
+#define _GNU_SOURCE
+#include <dlfcn.h>
+#include <errno.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "../include/fmi3_types.h"
+
+/* ---- the interposed allocator ---- */
+
+extern void *__libc_malloc(size_t);
+extern void *__libc_calloc(size_t, size_t);
+extern void *__libc_realloc(void *, size_t);
+extern void __libc_free(void *);
+extern void *__libc_memalign(size_t, size_t);
+
+static int counting;
+static long allocations;
+/* Allocations inside the calls that change g's value (not counted above). */
+static int counting_gain_change;
+static long gain_change_allocations;
+
+static void note_allocation(void) {
+    if (counting) allocations++;
+    if (counting_gain_change) gain_change_allocations++;
+}
+
+/* Counts the allocations of a call that changes g's value apart. */
+static void begin_gain_change(void) {
+    counting = 0;
+    counting_gain_change = 1;
+}
+
+static void end_gain_change(void) {
+    counting_gain_change = 0;
+    counting = 1;
+}
+
+void *malloc(size_t size) {
+    note_allocation();
+    return __libc_malloc(size);
+}
+
+void *calloc(size_t count, size_t size) {
+    note_allocation();
+    return __libc_calloc(count, size);
+}
+
+void *realloc(void *pointer, size_t size) {
+    note_allocation();
+    return __libc_realloc(pointer, size);
+}
+
+void free(void *pointer) { __libc_free(pointer); }
+
+void *memalign(size_t alignment, size_t size) {
+    note_allocation();
+    return __libc_memalign(alignment, size);
+}
+
+void *aligned_alloc(size_t alignment, size_t size) { return memalign(alignment, size); }
+
+void *valloc(size_t size) { return memalign(4096, size); }
+
+int posix_memalign(void **out, size_t alignment, size_t size) {
+    void *pointer = memalign(alignment, size);
+    if (!pointer) return ENOMEM;
+    *out = pointer;
+    return 0;
+}
+
+/* ---- the cases ---- */
+
+enum { PATTERN_ALIGNED, PATTERN_IN_STEP, PATTERN_VARYING, PATTERN_LONG };
+enum { ROAD_INPUT = 0, ROAD_HARMONIC = 1, ROAD_ISO = 2, ROAD_PAPER = 3 };
+
+typedef struct {
+    const char *name;
+    int road;
+    int road_class; /* ISO 8608: 1 = A ... 8 = H */
+    double speed;   /* m/s */
+    int tire;       /* 0 bilateral, 1 unilateral */
+    int pattern;
+} Case;
+
+static const char *PATTERN_NAME[] = {"aligned", "0.7ms", "varying", "10ms"};
+static const char *ROAD_NAME[] = {"input", "harmonic", "iso", "paper"};
+/* The varying master's steps (s), taken in turn: 0.1 ... 1.9 ms. */
+static const double VARYING[] = {0.13e-3, 1.9e-3, 0.71e-3, 0.29e-3, 1.37e-3, 0.53e-3, 1.03e-3, 0.1e-3};
+#define N_VARYING (sizeof VARYING / sizeof VARYING[0])
+
+#define MAX_CASES 64
+static Case cases[MAX_CASES];
+static int n_cases;
+static char names[MAX_CASES][48];
+
+static void add_case(int road, int road_class, double speed, int tire, int pattern) {
+    Case *c = &cases[n_cases];
+    c->road = road;
+    c->road_class = road_class;
+    c->speed = speed;
+    c->tire = tire;
+    c->pattern = pattern;
+    if (road == ROAD_ISO)
+        snprintf(names[n_cases], sizeof names[0], "iso-%c-%g-%s-%s", 'A' + road_class - 1, speed,
+                 tire ? "unilateral" : "bilateral", PATTERN_NAME[pattern]);
+    else
+        snprintf(names[n_cases], sizeof names[0], "%s-%s-%s", ROAD_NAME[road],
+                 tire ? "unilateral" : "bilateral", PATTERN_NAME[pattern]);
+    c->name = names[n_cases];
+    n_cases++;
+}
+
+/* Every road (the ISO road as class D at 20 m/s and class E at 30 m/s, the
+ * most lift-offs) x both tires x every step pattern. */
+static void make_cases(void) {
+    for (int pattern = 0; pattern < 4; pattern++)
+        for (int tire = 0; tire < 2; tire++) {
+            add_case(ROAD_INPUT, 3, 20.0, tire, pattern);
+            add_case(ROAD_HARMONIC, 3, 20.0, tire, pattern);
+            add_case(ROAD_ISO, 4, 20.0, tire, pattern);
+            add_case(ROAD_ISO, 5, 30.0, tire, pattern);
+            add_case(ROAD_PAPER, 3, 20.0, tire, pattern);
+        }
+}
+
+static const Case *find_case(const char *name) {
+    for (int i = 0; i < n_cases; i++)
+        if (!strcmp(cases[i].name, name)) return &cases[i];
+    fprintf(stderr, "unknown case %s (see `realtime list`)\n", name);
+    exit(2);
+}
+
+static double step_of(const Case *c, long k) {
+    switch (c->pattern) {
+    case PATTERN_ALIGNED: return 1e-3;
+    case PATTERN_IN_STEP: return 0.7e-3;
+    case PATTERN_VARYING: return VARYING[k % N_VARYING];
+    default: return 10e-3;
+    }
+}
+
+/* ---- the variables ---- */
+
+enum {
+    VR_G = 10,
+    VR_ROAD = 12,
+    VR_ROAD_CLASS = 15,
+    VR_VEHICLE_SPEED = 16,
+    VR_X_G = 30,
+    VR_TIRE_CONTACT = 60,
+    VR_LIFT_OFF_COUNT = 61,
+};
+static const unsigned OUTPUTS[] = {31, 32, 33, 34, 35, 36, 37, 38, 39, 40, 41, 42, 43,
+                                   44, 45, 53, 54, 55, 56, 57, 58, 59};
+#define N_OUTPUTS (sizeof OUTPUTS / sizeof OUTPUTS[0])
+static const double G = 5386.0;
+
+static double road_input(double t) { return 0.05 * sin(5.0 * t); }
+static double road_input_rate(double t) { return 0.25 * cos(5.0 * t); }
+
+static void fail(const char *what, double t) {
+    counting = 0;
+    fprintf(stderr, "%s failed at t = %.17g\n", what, t);
+    exit(2);
+}
+
+static void *symbol(void *library, const char *name) {
+    void *address = dlsym(library, name);
+    if (!address) {
+        fprintf(stderr, "the library does not export %s\n", name);
+        exit(2);
+    }
+    return address;
+}
+
+static void *open_library(const char *path) {
+    void *library = dlopen(path, RTLD_NOW | RTLD_LOCAL);
+    if (!library) {
+        fprintf(stderr, "dlopen: %s\n", dlerror());
+        exit(2);
+    }
+    return library;
+}
+
+#define SYM(variable, library, name) memcpy(&(variable), &(void *){symbol(library, name)}, sizeof(void *))
+
+/* `count` also sets g at every call (as masters that set every tunable
+ * parameter do); `worst` times doStep and the getters alone. */
+static int set_gain_every_call;
+
+/* One call's time, or nothing (NULL). */
+static double *call_times;
+static long max_calls;
+
+static double seconds_now(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+/* ---- FMI 2.0 ---- */
+
+typedef void *fmi2Component;
+typedef int fmi2Status;
+typedef struct {
+    void (*logger)(void *, const char *, fmi2Status, const char *, const char *, ...);
+    void *(*allocateMemory)(size_t, size_t);
+    void (*freeMemory)(void *);
+    void (*stepFinished)(void *, fmi2Status);
+    void *componentEnvironment;
+} fmi2CallbackFunctions;
+
+static void logger2(void *env, const char *name, fmi2Status status, const char *category,
+                    const char *message, ...) {
+    (void)env, (void)name, (void)status, (void)category;
+    if (status > 1) fprintf(stderr, "log: %s\n", message);
+}
+
+static void *master_allocate(size_t count, size_t size) { return calloc(count, size); }
+
+static long run_fmi2(void *library, const char *token, const Case *c, double seconds, int change_g) {
+    fmi2Component (*instantiate)(const char *, int, const char *, const char *,
+                                 const fmi2CallbackFunctions *, int, int);
+    void (*free_instance)(fmi2Component);
+    fmi2Status (*setup)(fmi2Component, int, double, double, int, double);
+    fmi2Status (*enter_init)(fmi2Component);
+    fmi2Status (*exit_init)(fmi2Component);
+    fmi2Status (*do_step)(fmi2Component, double, double, int);
+    fmi2Status (*set_real)(fmi2Component, const unsigned *, size_t, const double *);
+    fmi2Status (*set_integer)(fmi2Component, const unsigned *, size_t, const int *);
+    fmi2Status (*get_real)(fmi2Component, const unsigned *, size_t, double *);
+    fmi2Status (*get_integer)(fmi2Component, const unsigned *, size_t, int *);
+    fmi2Status (*set_input_derivatives)(fmi2Component, const unsigned *, size_t, const int *,
+                                        const double *);
+    fmi2Status (*get_output_derivatives)(fmi2Component, const unsigned *, size_t, const int *,
+                                         double *);
+    SYM(instantiate, library, "fmi2Instantiate");
+    SYM(free_instance, library, "fmi2FreeInstance");
+    SYM(setup, library, "fmi2SetupExperiment");
+    SYM(enter_init, library, "fmi2EnterInitializationMode");
+    SYM(exit_init, library, "fmi2ExitInitializationMode");
+    SYM(do_step, library, "fmi2DoStep");
+    SYM(set_real, library, "fmi2SetReal");
+    SYM(set_integer, library, "fmi2SetInteger");
+    SYM(get_real, library, "fmi2GetReal");
+    SYM(get_integer, library, "fmi2GetInteger");
+    SYM(set_input_derivatives, library, "fmi2SetRealInputDerivatives");
+    SYM(get_output_derivatives, library, "fmi2GetRealOutputDerivatives");
+
+    static const fmi2CallbackFunctions callbacks = {logger2, master_allocate, free, NULL, NULL};
+    fmi2Component instance = instantiate("realtime", 1, token, NULL, &callbacks, 0, 0);
+    if (!instance) fail("fmi2Instantiate", 0.0);
+    const unsigned integer_vrs[] = {VR_ROAD, VR_ROAD_CLASS, VR_TIRE_CONTACT};
+    const int integers[] = {c->road, c->road_class, c->tire};
+    const unsigned speed_vr = VR_VEHICLE_SPEED, g_vr = VR_G, x_g_vr = VR_X_G;
+    if (set_integer(instance, integer_vrs, 3, integers) || set_real(instance, &speed_vr, 1, &c->speed))
+        fail("setting the parameters", 0.0);
+    if (setup(instance, 0, 0.0, 0.0, 0, 0.0) || enter_init(instance)) fail("initialization", 0.0);
+    if (c->road == ROAD_INPUT) {
+        double x_g = road_input(0.0);
+        if (set_real(instance, &x_g_vr, 1, &x_g)) fail("fmi2SetReal x_g", 0.0);
+    }
+    if (exit_init(instance)) fail("fmi2ExitInitializationMode", 0.0);
+
+    int orders[N_OUTPUTS];
+    for (size_t i = 0; i < N_OUTPUTS; i++) orders[i] = 1;
+    double values[N_OUTPUTS], rates[N_OUTPUTS];
+    int lift_offs = 0;
+    const unsigned lift_off_vr = VR_LIFT_OFF_COUNT;
+    double t = 0.0, last_g = G;
+    long k = 0;
+    counting = 1;
+    while (t < seconds - 1e-9) {
+        double step = step_of(c, k);
+        double g = G;
+        if (change_g && t >= 10.0 && t < 20.0) g = 0.8 * G;
+        double start = call_times ? seconds_now() : 0.0;
+        int change = set_gain_every_call && g != last_g;
+        if (change) begin_gain_change();
+        if (set_gain_every_call && set_real(instance, &g_vr, 1, &g) > 1) fail("fmi2SetReal g", t);
+        if (change) end_gain_change();
+        last_g = g;
+        if (c->road == ROAD_INPUT) {
+            double x_g = road_input(t), rate = road_input_rate(t);
+            const int order = 1;
+            if (set_real(instance, &x_g_vr, 1, &x_g) ||
+                set_input_derivatives(instance, &x_g_vr, 1, &order, &rate))
+                fail("setting x_g", t);
+        }
+        if (do_step(instance, t, step, 1)) fail("fmi2DoStep", t);
+        if (get_real(instance, OUTPUTS, N_OUTPUTS, values) ||
+            get_integer(instance, &lift_off_vr, 1, &lift_offs) ||
+            get_output_derivatives(instance, OUTPUTS, N_OUTPUTS, orders, rates))
+            fail("reading the outputs", t);
+        if (call_times && k < max_calls) call_times[k] = seconds_now() - start;
+        t = c->pattern == PATTERN_ALIGNED || c->pattern == PATTERN_LONG ? (double)(k + 1) * step
+                                                                        : t + step;
+        k++;
+    }
+    counting = 0;
+    free_instance(instance);
+    return k;
+}
+
+/* ---- FMI 3.0 ---- */
+
+static fmi3GetFloat64TYPE get_float64;
+static fmi3Instance instance3;
+static long intermediate_calls;
+
+static void logger3(fmi3InstanceEnvironment env, fmi3Status status, fmi3String category,
+                    fmi3String message) {
+    (void)env, (void)category;
+    if (status > fmi3Warning) fprintf(stderr, "log: %s\n", message);
+}
+
+static void intermediate_update(fmi3InstanceEnvironment env, fmi3Float64 time,
+                                fmi3Boolean set_requested, fmi3Boolean get_allowed,
+                                fmi3Boolean step_finished, fmi3Boolean can_return_early,
+                                fmi3Boolean *early_return_requested,
+                                fmi3Float64 *early_return_time) {
+    (void)env, (void)set_requested, (void)step_finished;
+    double values[N_OUTPUTS];
+    if (get_allowed && get_float64(instance3, OUTPUTS, N_OUTPUTS, values, N_OUTPUTS) != fmi3OK)
+        fail("fmi3GetFloat64 in an intermediate update", time);
+    intermediate_calls++;
+    *early_return_requested = can_return_early && intermediate_calls % 7 == 0;
+    *early_return_time = time;
+}
+
+static long run_fmi3(void *library, const char *token, const Case *c, double seconds, int change_g) {
+    fmi3InstantiateCoSimulationTYPE instantiate;
+    fmi3FreeInstanceTYPE free_instance;
+    fmi3EnterInitializationModeTYPE enter_init;
+    fmi3ExitInitializationModeTYPE exit_init;
+    fmi3DoStepTYPE do_step;
+    fmi3SetFloat64TYPE set_float64;
+    fmi3SetInt64TYPE set_int64;
+    fmi3Status (*get_int32)(fmi3Instance, const fmi3ValueReference[], size_t, fmi3Int32[], size_t);
+    fmi3Status (*get_output_derivatives)(fmi3Instance, const fmi3ValueReference[], size_t,
+                                         const fmi3Int32[], fmi3Float64[], size_t);
+    SYM(instantiate, library, "fmi3InstantiateCoSimulation");
+    SYM(free_instance, library, "fmi3FreeInstance");
+    SYM(enter_init, library, "fmi3EnterInitializationMode");
+    SYM(exit_init, library, "fmi3ExitInitializationMode");
+    SYM(do_step, library, "fmi3DoStep");
+    SYM(set_float64, library, "fmi3SetFloat64");
+    SYM(set_int64, library, "fmi3SetInt64");
+    SYM(get_float64, library, "fmi3GetFloat64");
+    SYM(get_int32, library, "fmi3GetInt32");
+    SYM(get_output_derivatives, library, "fmi3GetOutputDerivatives");
+
+    instance3 = instantiate("realtime", token, NULL, 0, 0, 0, 1, NULL, 0, NULL, logger3,
+                            intermediate_update);
+    if (!instance3) fail("fmi3InstantiateCoSimulation", 0.0);
+    const fmi3ValueReference enum_vrs[] = {VR_ROAD, VR_ROAD_CLASS, VR_TIRE_CONTACT};
+    const fmi3Int64 enums[] = {c->road, c->road_class, c->tire};
+    const fmi3ValueReference speed_vr = VR_VEHICLE_SPEED, g_vr = VR_G, x_g_vr = VR_X_G;
+    if (set_int64(instance3, enum_vrs, 3, enums, 3) ||
+        set_float64(instance3, &speed_vr, 1, &c->speed, 1))
+        fail("setting the parameters", 0.0);
+    if (enter_init(instance3, 0, 0.0, 0.0, 0, 0.0)) fail("initialization", 0.0);
+    if (c->road == ROAD_INPUT) {
+        double x_g = road_input(0.0);
+        if (set_float64(instance3, &x_g_vr, 1, &x_g, 1)) fail("fmi3SetFloat64 x_g", 0.0);
+    }
+    if (exit_init(instance3)) fail("fmi3ExitInitializationMode", 0.0);
+
+    fmi3Int32 orders[N_OUTPUTS];
+    for (size_t i = 0; i < N_OUTPUTS; i++) orders[i] = 1;
+    double values[N_OUTPUTS], rates[N_OUTPUTS];
+    fmi3Int32 lift_offs = 0;
+    const fmi3ValueReference lift_off_vr = VR_LIFT_OFF_COUNT;
+    double t = 0.0, last_g = G;
+    long k = 0;
+    intermediate_calls = 0;
+    counting = 1;
+    while (t < seconds - 1e-9) {
+        double step = step_of(c, k);
+        double g = G;
+        if (change_g && t >= 10.0 && t < 20.0) g = 0.8 * G;
+        double start = call_times ? seconds_now() : 0.0;
+        int change = set_gain_every_call && g != last_g;
+        if (change) begin_gain_change();
+        if (set_gain_every_call && set_float64(instance3, &g_vr, 1, &g, 1) > fmi3Warning)
+            fail("fmi3SetFloat64 g", t);
+        if (change) end_gain_change();
+        last_g = g;
+        if (c->road == ROAD_INPUT) {
+            double x_g = road_input(t);
+            if (set_float64(instance3, &x_g_vr, 1, &x_g, 1)) fail("fmi3SetFloat64 x_g", t);
+        }
+        fmi3Boolean event_needed, terminate, early_return;
+        double last_time = t;
+        if (do_step(instance3, t, step, 1, &event_needed, &terminate, &early_return, &last_time))
+            fail("fmi3DoStep", t);
+        if (get_float64(instance3, OUTPUTS, N_OUTPUTS, values, N_OUTPUTS) ||
+            get_int32(instance3, &lift_off_vr, 1, &lift_offs, 1) ||
+            get_output_derivatives(instance3, OUTPUTS, N_OUTPUTS, orders, rates, N_OUTPUTS))
+            fail("reading the outputs", t);
+        if (call_times && k < max_calls) call_times[k] = seconds_now() - start;
+        if (early_return)
+            t = last_time;
+        else
+            t = c->pattern == PATTERN_ALIGNED || c->pattern == PATTERN_LONG ? (double)(k + 1) * step
+                                                                            : t + step;
+        k++;
+    }
+    counting = 0;
+    free_instance(instance3);
+    return k;
+}
+
+static long run(int fmi, void *library, const char *token, const Case *c, double seconds,
+                int change_g) {
+    return fmi == 2 ? run_fmi2(library, token, c, seconds, change_g)
+                    : run_fmi3(library, token, c, seconds, change_g);
+}
+
+static int compare(const void *a, const void *b) {
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+int main(int argc, char **argv) {
+    make_cases();
+    if (argc == 2 && !strcmp(argv[1], "list")) {
+        for (int i = 0; i < n_cases; i++) printf("%s\n", cases[i].name);
+        return 0;
+    }
+    int count_mode = argc == 6 && !strcmp(argv[1], "count");
+    int worst_mode = argc == 8 && !strcmp(argv[1], "worst");
+    if (!count_mode && !worst_mode) {
+        fprintf(stderr,
+                "usage: %s list | count FMI LIB TOKEN CASE | worst FMI LIB TOKEN CASE REPEATS SECONDS\n",
+                argv[0]);
+        return 2;
+    }
+    int fmi = atoi(argv[2]);
+    if (fmi != 2 && fmi != 3) {
+        fprintf(stderr, "FMI must be 2 or 3\n");
+        return 2;
+    }
+    void *library = open_library(argv[3]);
+    const char *token = argv[4];
+    const Case *c = find_case(argv[5]);
+    if (count_mode) {
+        set_gain_every_call = 1;
+        long calls = run(fmi, library, token, c, 30.0, 1);
+        printf("allocations %ld calls %ld (g value changes: 2 calls, %ld allocations)\n",
+               allocations, calls, gain_change_allocations);
+        return allocations == 0 ? 0 : 1;
+    }
+    int repeats = atoi(argv[6]);
+    double seconds = atof(argv[7]);
+    if (repeats < 1 || !(seconds > 0.0)) {
+        fprintf(stderr, "REPEATS and SECONDS must be positive\n");
+        return 2;
+    }
+    max_calls = (long)(seconds / 0.1e-3) + 16;
+    call_times = __libc_malloc(sizeof(double) * (size_t)max_calls);
+    double *minima = __libc_malloc(sizeof(double) * (size_t)max_calls);
+    long calls = 0;
+    for (int r = 0; r < repeats; r++) {
+        long n = run(fmi, library, token, c, seconds, 0);
+        if (r > 0 && n != calls) {
+            fprintf(stderr, "repetition %d made %ld calls, the first %ld\n", r, n, calls);
+            return 2;
+        }
+        calls = n < max_calls ? n : max_calls;
+        for (long k = 0; k < calls; k++)
+            minima[k] = r == 0 || call_times[k] < minima[k] ? call_times[k] : minima[k];
+    }
+    long worst = 0;
+    for (long k = 1; k < calls; k++)
+        if (minima[k] > minima[worst]) worst = k;
+    double largest = minima[worst];
+    qsort(minima, (size_t)calls, sizeof(double), compare);
+    double median = minima[calls / 2];
+    printf("%s FMI %d: %ld calls, %d repetitions; per-call minimum: median %.3f us, largest %.3f us "
+           "(call %ld), largest/median %.1f\n",
+           c->name, fmi, calls, repeats, median * 1e6, largest * 1e6, worst, largest / median);
+    return 0;
+}
