@@ -457,7 +457,7 @@ mod tests {
         }
         // The slave takes the lift-offs after every step (they are not
         // part of the state).
-        assert!(!sim.take_lift_offs().events().is_empty());
+        assert!(!sim.lift_offs().events().is_empty());
         model.sim = Some(sim);
         model.phase = Phase::StepComplete;
         model.last_successful_time = t;
@@ -470,7 +470,7 @@ mod tests {
         a.advance_to(1.5).unwrap();
         b.advance_to(1.5).unwrap();
         assert_eq!(a.outputs(), b.outputs());
-        assert_eq!(a.take_lift_offs(), b.take_lift_offs());
+        assert_eq!(a.lift_offs(), b.lift_offs());
         // The setting is checked like every other one.
         let mut bad = SlaveState::new();
         bad.settings.tire_contact = 2;

@@ -197,15 +197,15 @@ impl Slave {
     /// reached; those the simulator did not keep are counted in one more
     /// message.
     fn log_lift_offs(&mut self) {
-        let Some(sim) = self.state.sim.as_mut() else {
+        let Some(sim) = self.state.sim.as_ref() else {
             return;
         };
-        let log = sim.take_lift_offs();
-        let (lift_offs, dropped) = (log.events(), log.dropped);
-        let now = sim.time();
-        if lift_offs.is_empty() && dropped == 0 {
+        let log = sim.lift_offs();
+        if log.is_empty() {
             return;
         }
+        let (lift_offs, dropped) = (log.events(), log.dropped);
+        let now = sim.time();
         let function = self.call("DoStep");
         for l in lift_offs {
             self.event(format_args!(
@@ -217,6 +217,9 @@ impl Slave {
             self.event(format_args!(
                 "{function}: ... and {dropped} more lift-offs up to t = {now} s, not listed one by one (`lift_off_count` counts every one)"
             ));
+        }
+        if let Some(sim) = self.state.sim.as_mut() {
+            sim.clear_lift_offs();
         }
     }
 

@@ -446,6 +446,9 @@ impl RoadPiece {
 /// time, so a piece lookup never needs node `n + 1` beyond it.
 const MAX_NODE: u64 = 1 << 53;
 
+/// Room for generated road nodes made with the road.
+const NODE_WINDOW: usize = 64;
+
 /// Random road node generator: node `n` is at `origin + n · interval`.
 #[derive(Debug, Clone)]
 struct NodeSequence {
@@ -471,8 +474,18 @@ impl NodeSequence {
             seed,
             rng: ChaCha8Rng::seed_from_u64(seed),
             first: 0,
-            nodes: VecDeque::from([0.0]),
+            nodes: Self::window(),
         }
+    }
+
+    /// The generated nodes at the start: node 0, with room for
+    /// [`NODE_WINDOW`] (the solver releases the nodes behind its committed
+    /// point as it goes, so a run keeps a few; generating them allocates
+    /// nothing).
+    fn window() -> VecDeque<f64> {
+        let mut nodes = VecDeque::with_capacity(NODE_WINDOW);
+        nodes.push_back(0.0);
+        nodes
     }
 
     fn node_time(&self, n: u64) -> f64 {

@@ -94,6 +94,17 @@ impl LiftOffLog {
         &self.events[..self.len]
     }
 
+    /// Whether no lift-off was logged or dropped.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0 && self.dropped == 0
+    }
+
+    /// Forgets the lift-offs logged.
+    pub(super) fn clear(&mut self) {
+        self.len = 0;
+        self.dropped = 0;
+    }
+
     /// Keeps `event`, or counts it as dropped when the log is full.
     pub(super) fn record(&mut self, event: LiftOff) {
         if self.len < LIFT_OFF_LOG {

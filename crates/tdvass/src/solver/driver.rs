@@ -679,11 +679,16 @@ impl Simulator {
         self.trajectory.flight_start.is_some()
     }
 
-    /// The lift-offs since the last call (at most [`LIFT_OFF_LOG`], and
-    /// the count of those left out), for an event log; a copy of a fixed
-    /// array, so taking them allocates nothing.
-    pub fn take_lift_offs(&mut self) -> LiftOffLog {
-        std::mem::take(&mut self.observers.lift_off_log)
+    /// The lift-offs since the log was last cleared (at most
+    /// [`LIFT_OFF_LOG`], and the count of those left out), for an event
+    /// log; a fixed array, so keeping them allocates nothing.
+    pub fn lift_offs(&self) -> &LiftOffLog {
+        &self.observers.lift_off_log
+    }
+
+    /// Empties the lift-off log ([`Self::lift_offs`]).
+    pub fn clear_lift_offs(&mut self) {
+        self.observers.lift_off_log.clear();
     }
 
     /// The tire load as the tire law gives it (N): `load` =
