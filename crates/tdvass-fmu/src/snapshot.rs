@@ -458,6 +458,7 @@ mod tests {
         // The slave takes the lift-offs after every step (they are not
         // part of the state).
         assert!(!sim.lift_offs().events().is_empty());
+        sim.clear_lift_offs();
         model.sim = Some(sim);
         model.phase = Phase::StepComplete;
         model.last_successful_time = t;

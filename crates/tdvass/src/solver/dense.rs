@@ -148,6 +148,9 @@ fn product<const R: usize, const D: usize, const C: usize>(
     out
 }
 
+/// A table entry not built yet.
+const NOT_BUILT: u32 = u32::MAX;
+
 /// The table of one augmented matrix (D dimensions), giving the R rows
 /// from `first_row` of `e^{M j h 2^-n} − I`.
 #[derive(Debug, Clone)]
@@ -161,10 +164,13 @@ struct Table<const D: usize, const R: usize> {
     unit: f64,
     /// `L_i = e^{M h 2^{i−n}} − I`, i = 0 … n.
     ladder: Vec<SMatrix<f64, D, D>>,
-    /// The kept rows of `T_j`, j = 0 … 2^n, as built (`T_0 = 0` is never
-    /// stored): room for every entry is made with the table, so building
+    /// Where `T_j`'s kept rows are in `built` (j = 0 … 2^n; `NOT_BUILT`
+    /// until built; `T_0 = 0` is never stored).
+    slots: Vec<u32>,
+    /// The kept rows of the entries built, in the order built. Room for
+    /// every entry is reserved with the table (not written), so building
     /// one later allocates nothing.
-    entries: Vec<Option<SMatrix<f64, R, D>>>,
+    built: Vec<SMatrix<f64, R, D>>,
 }
 
 impl<const D: usize, const R: usize> Table<D, R> {
@@ -189,7 +195,17 @@ impl<const D: usize, const R: usize> Table<D, R> {
             order: taylor_order(theta),
             unit: h * 0.5f64.powi(OFFSET_BITS as i32),
             ladder,
-            entries: vec![None; (1 << bits) + 1],
+            slots: vec![NOT_BUILT; (1 << bits) + 1],
+            built: Vec::with_capacity((1 << bits) + 1),
+        }
+    }
+
+    /// The kept rows of `T_j` if built.
+    #[inline]
+    fn built_entry(&self, j: usize) -> Option<&SMatrix<f64, R, D>> {
+        match self.slots[j] {
+            NOT_BUILT => None,
+            slot => Some(&self.built[slot as usize]),
         }
     }
 
@@ -208,26 +224,28 @@ impl<const D: usize, const R: usize> Table<D, R> {
     /// The kept rows of `T_j` (1 ≤ j ≤ 2^n): from j's bits, lowest first,
     /// every prefix kept.
     fn entry(&mut self, j: usize) -> &SMatrix<f64, R, D> {
-        if self.entries[j].is_none() {
+        if self.slots[j] == NOT_BUILT {
             let mut prefix = 0usize;
             for bit in 0..=self.bits as usize {
                 if (j >> bit) & 1 == 0 {
                     continue;
                 }
                 let next = prefix | (1 << bit);
-                if self.entries[next].is_none() {
+                if self.slots[next] == NOT_BUILT {
                     let ladder = &self.ladder[bit];
                     let rows = ladder.fixed_rows::<R>(self.first_row).into_owned();
-                    let value = match self.entries[prefix].as_ref() {
+                    let value = match self.built_entry(prefix) {
                         Some(before) => before + rows + before * ladder,
                         None => rows,
                     };
-                    self.entries[next] = Some(value);
+                    // At most 2^n + 1 entries: within the reserved room.
+                    self.slots[next] = self.built.len() as u32;
+                    self.built.push(value);
                 }
                 prefix = next;
             }
         }
-        self.entries[j].as_ref().expect("built above")
+        self.built_entry(j).expect("built above")
     }
 
     /// `rows (I + T_j) y`.

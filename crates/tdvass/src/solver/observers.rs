@@ -36,8 +36,9 @@ pub(super) struct Observers {
     pub(super) holding: Holding,
     /// The dynamic tire load at the start (N).
     pub(super) start_load: f64,
-    /// Lift-offs not yet taken by a front-end's event log.
-    pub(super) lift_off_log: LiftOffLog,
+    /// Lift-offs not yet taken by a front-end's event log (boxed: made
+    /// once, and a simulator moves without copying it).
+    pub(super) lift_off_log: Box<LiftOffLog>,
 }
 
 impl Observers {
@@ -49,7 +50,7 @@ impl Observers {
             weighted: [0.0; 2],
             holding: Holding::new(0.0, 1.0, start_time),
             start_load: 0.0,
-            lift_off_log: LiftOffLog::default(),
+            lift_off_log: Box::default(),
         }
     }
 
