@@ -201,3 +201,33 @@ pub fn panic_text(payload: &(dyn std::any::Any + Send)) -> String {
         .or_else(|| payload.downcast_ref::<String>().cloned())
         .unwrap_or_else(|| "unknown panic".into())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn text_of(log: &LogText) -> String {
+        // SAFETY: `as_ptr` is NUL-terminated and lives as long as `log`.
+        unsafe { CStr::from_ptr(log.as_ptr()) }
+            .to_string_lossy()
+            .into_owned()
+    }
+
+    #[test]
+    fn log_texts_escape_nuls_and_double_percent_signs_on_the_stack_and_beyond() {
+        let short = LogText::new("a\0b 5%", true);
+        assert!(short.heap.is_none());
+        assert_eq!(text_of(&short), "a\\0b 5%%");
+        assert_eq!(text_of(&LogText::new("5%", false)), "5%");
+        // Longer than the stack buffer: allocated, escaped the same way.
+        let long = "x%".repeat(LOG_TEXT_CAPACITY);
+        let heap = LogText::new(&long, true);
+        assert!(heap.heap.is_some());
+        assert_eq!(text_of(&heap), long.replace('%', "%%"));
+        // Exactly filling the buffer but for the NUL stays on the stack.
+        let fits = "y".repeat(LOG_TEXT_CAPACITY - 1);
+        let stack = LogText::new(&fits, true);
+        assert!(stack.heap.is_none());
+        assert_eq!(text_of(&stack), fits);
+    }
+}

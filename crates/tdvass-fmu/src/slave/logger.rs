@@ -117,3 +117,30 @@ impl Logger {
         Ok(Status::Ok)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::cell::RefCell;
+    use std::rc::Rc;
+
+    #[test]
+    fn lazy_messages_reach_the_sink_whole_and_only_when_their_category_is_on() {
+        let seen = Rc::new(RefCell::new(Vec::new()));
+        let sink = Rc::clone(&seen);
+        let logger = Logger::new(
+            Box::new(move |status, _, message: &str| {
+                sink.borrow_mut().push((status, message.to_string()))
+            }),
+            false,
+        );
+        logger.log_lazily(Status::Ok, format_args!("event {}", 1));
+        logger.log_lazily(Status::Warning, format_args!("warning {}", 2));
+        let long = "z".repeat(MESSAGE_CAPACITY + 10);
+        logger.log_lazily(Status::Warning, format_args!("{long}"));
+        let seen = seen.borrow();
+        assert_eq!(seen.len(), 2, "events are off");
+        assert_eq!(seen[0], (Status::Warning, "warning 2".to_string()));
+        assert_eq!(seen[1].1, long, "a message beyond the stack is whole");
+    }
+}

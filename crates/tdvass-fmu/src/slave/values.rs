@@ -394,10 +394,11 @@ impl Slave {
     }
 
     /// `SetReal`. All values are checked first; a refused value leaves
-    /// every variable unchanged. Tuning `g` to an unstable value while
-    /// simulating gives `Warning`.
-    /// Nothing is allocated: the checks look each variable up again
-    /// instead of collecting them.
+    /// every variable unchanged. Tuning `g` to a new, unstable value
+    /// while simulating gives `Warning` (setting the value it has changes
+    /// nothing and checks nothing). Nothing is allocated but for a new
+    /// `g`: the checks look each variable up again instead of collecting
+    /// them.
     pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Result<Status, FmiError> {
         for (&vr, &value) in vrs.iter().zip(values) {
             let var = self.variable(vr, VarType::Real)?;

@@ -23,8 +23,10 @@
 //! ```
 //!
 //! where `T_j = e^{M j h 2^-n} − I` comes from a table built once per mode
-//! (lazily, at the first point inside a step, so a simulator that never
-//! stops inside a step, as in the PSO, never builds it) and `y` is the
+//! (at the first point inside a step, so a simulator that never stops
+//! inside a step, as in the PSO, never builds it; or, for the FMUs, when
+//! the run starts: `Simulator::reserve`, so that stepping allocates
+//! nothing) and `y` is the
 //! Taylor polynomial of order K, by Horner's rule on the vector
 //! (`y ← z + (σ_f/k) M y`, k = K … 1) with the structure of M (the plant's
 //! 6×6 block and two columns, the shifts of the cubic, the road's
@@ -150,6 +152,9 @@ fn product<const R: usize, const D: usize, const C: usize>(
 
 /// A table entry not built yet.
 const NOT_BUILT: u32 = u32::MAX;
+/// Tables of at most this many entries are filled when reserved
+/// ([`DenseOutput::reserve`]); 257 is n = 8.
+const FILLED_ENTRIES: usize = 257;
 
 /// The table of one augmented matrix (D dimensions), giving the R rows
 /// from `first_row` of `e^{M j h 2^-n} − I`.
@@ -246,6 +251,18 @@ impl<const D: usize, const R: usize> Table<D, R> {
             }
         }
         self.built_entry(j).expect("built above")
+    }
+
+    /// Builds every entry now when the table has at most
+    /// [`FILLED_ENTRIES`] (n ≤ 8), so that no later point pays for one;
+    /// larger tables keep building theirs at first use.
+    fn fill(&mut self) {
+        let count = (1usize << self.bits) + 1;
+        if count <= FILLED_ENTRIES {
+            for j in 1..count {
+                self.entry(j);
+            }
+        }
     }
 
     /// `rows (I + T_j) y`.
@@ -425,8 +442,23 @@ impl DenseOutput {
         self.plant.finish(j, &y)
     }
 
+    /// Builds now what a point inside a step would build at first use:
+    /// every entry of the plant's table and, with `coupling` (the W_k
+    /// filter), the filter's table and its entries (for tables of at most
+    /// [`FILLED_ENTRIES`] entries). The entries depend on j alone, so the
+    /// results are the same to the bit.
+    pub(super) fn reserve(&mut self, coupling: Option<&FilterCoupling>) {
+        self.plant.fill();
+        if let Some(c) = coupling {
+            self.reserve_filter(c);
+            if let Some(f) = self.filter.as_mut() {
+                f.table.fill();
+            }
+        }
+    }
+
     /// Builds the filter's table now (once), for the coupling `coupling`.
-    pub(super) fn reserve_filter(&mut self, coupling: &FilterCoupling) {
+    fn reserve_filter(&mut self, coupling: &FilterCoupling) {
         if self.filter.is_none() {
             let m = augmented_matrix(&self.a, &self.b, &self.e, self.angular_frequency);
             let full = with_filter_matrix(&m, coupling);

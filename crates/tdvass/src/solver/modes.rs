@@ -170,7 +170,8 @@ impl Modes {
     /// The partial steps' maps of a mode with solver matrix `a` (the
     /// input column and ω are the same in both modes), with the pieces
     /// every step has when the delay is inside the step
-    /// ([`DenseOutput::with_fixed`]) and, with the W_k filter, its table.
+    /// ([`DenseOutput::with_fixed`]); the W_k filter's table is built by
+    /// [`Self::reserve`] or at its first use.
     fn dense_output_of(&self, a: &Matrix6<f64>, plant: &Plant, grid: &DelayGrid) -> DenseOutput {
         let h = grid.step;
         let dense = DenseOutput::new(a, &self.input_column, &plant.e, self.angular_frequency, h);
@@ -196,16 +197,14 @@ impl Modes {
 
     /// Builds now what stepping would otherwise build on first use, so
     /// that stepping allocates nothing: the partial steps' maps of the
-    /// mode in force (and the filter's table with the W_k filter) and,
-    /// with `unilateral`, the flight operators and their maps. Each is
+    /// mode in force (their table's entries, and the filter's table with
+    /// the W_k filter: [`DenseOutput::reserve`]) and, with `unilateral`,
+    /// the flight operators and their maps. Each is
     /// the same value whenever it is built (a cache of a function of the
     /// operators), so the results do not change.
     pub(super) fn reserve(&mut self, plant: &Plant, grid: &DelayGrid, unilateral: bool) {
         let coupling = self.coupling.clone();
-        self.dense_output(plant, grid);
-        if let (Some(dense), Some(c)) = (self.dense.as_deref_mut(), coupling.as_ref()) {
-            dense.reserve_filter(c);
-        }
+        self.dense_output(plant, grid).reserve(coupling.as_ref());
         if !unilateral {
             return;
         }
@@ -219,9 +218,7 @@ impl Modes {
         };
         if other.dense.is_none() {
             let mut dense = self.dense_output_of(&other.solver_matrix, plant, grid);
-            if let Some(c) = coupling.as_ref() {
-                dense.reserve_filter(c);
-            }
+            dense.reserve(coupling.as_ref());
             if let Some(other) = self.other_mode.as_deref_mut() {
                 other.dense = Some(Box::new(dense));
             }
