@@ -448,6 +448,11 @@ const MAX_NODE: u64 = 1 << 53;
 
 /// Room for generated road nodes made with the road.
 const NODE_WINDOW: usize = 64;
+/// Nodes reserved beyond those of the span asked for
+/// ([`Road::reserve_window`]).
+const NODE_MARGIN: usize = 8;
+/// Most nodes [`Road::reserve_window`] reserves (8 MB of nodes).
+const MAX_RESERVED_NODES: usize = 1 << 20;
 
 /// Random road node generator: node `n` is at `origin + n · interval`.
 #[derive(Debug, Clone)]
@@ -687,6 +692,26 @@ impl Road {
     /// Whether the road comes from outside.
     pub fn is_input(&self) -> bool {
         matches!(self.kind, RoadKind::Input(_))
+    }
+
+    /// Makes room for the generated nodes of `span` seconds (at least
+    /// [`NODE_WINDOW`]), so that generating them allocates nothing: the
+    /// solver keeps the nodes from the step before its committed point to
+    /// the end of the next step (`span` = a few internal steps).
+    pub fn reserve_window(&mut self, span: f64) {
+        if let RoadKind::Nodes(nodes) = &mut self.kind {
+            let wanted = (span / nodes.interval).ceil();
+            let wanted = if wanted.is_finite() && wanted > 0.0 {
+                (wanted as usize).min(MAX_RESERVED_NODES)
+            } else {
+                0
+            };
+            let room = (wanted + NODE_MARGIN).max(NODE_WINDOW);
+            let length = nodes.nodes.len();
+            if nodes.nodes.capacity() < room {
+                nodes.nodes.reserve(room.saturating_sub(length));
+            }
+        }
     }
 
     /// Frees generated nodes that lie wholly before `t`.

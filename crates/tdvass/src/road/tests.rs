@@ -90,6 +90,50 @@ fn saved_state_continues_identically() {
     }
 }
 
+#[test]
+fn a_reserved_window_holds_the_nodes_of_its_span_without_growing() {
+    let spec = RoadSpec::Iso8608(RandomRoad::default());
+    let mut road = Road::new(&spec, 0.0).unwrap();
+    road.value(3.0);
+    road.release_before(2.9995);
+    // A restored road comes with room for its few nodes only.
+    let saved = road.dynamic_state();
+    let mut restored = Road::new(&spec, 0.0).unwrap();
+    restored.restore_dynamic_state(&saved, 2.9995, 3.0).unwrap();
+    let RoadKind::Nodes(nodes) = &restored.kind else {
+        panic!("an ISO 8608 road has nodes")
+    };
+    assert!(nodes.nodes.capacity() < 64, "{}", nodes.nodes.capacity());
+    let span = 0.2; // 200 nodes of 1 ms
+    restored.reserve_window(span);
+    let RoadKind::Nodes(nodes) = &restored.kind else {
+        unreachable!()
+    };
+    let room = nodes.nodes.capacity();
+    assert!(room >= 208, "{room}");
+    // Sliding a window of `span` along the road, releasing behind it,
+    // never needs more room.
+    for i in 0..2000 {
+        let t = 3.0 + i as f64 * 1e-3;
+        restored.release_before(t - 0.5 * span);
+        restored.value(t + 0.5 * span);
+        let RoadKind::Nodes(nodes) = &restored.kind else {
+            unreachable!()
+        };
+        assert_eq!(nodes.nodes.capacity(), room, "at t = {t}");
+    }
+    // Degenerate spans reserve the default window.
+    for span in [f64::NAN, -1.0, f64::INFINITY] {
+        let mut fresh = Road::new(&spec, 0.0).unwrap();
+        fresh.reserve_window(span);
+        let RoadKind::Nodes(nodes) = &fresh.kind else {
+            unreachable!()
+        };
+        assert!(nodes.nodes.capacity() >= NODE_WINDOW);
+        assert!(nodes.nodes.capacity() <= MAX_RESERVED_NODES + NODE_MARGIN + 1);
+    }
+}
+
 /// Asserts that `piece` is finite and its `[start, end)` holds `t`.
 fn holds(piece: RoadPiece, t: f64) {
     let RoadPiece::Linear {

@@ -584,7 +584,8 @@ impl Simulator {
 
     /// Builds now every table that stepping would build at its first use
     /// (the partial steps' maps of both tire modes, the W_k filter's, the
-    /// flight operators), so that stepping from here on allocates
+    /// flight operators) and makes room for the road's nodes (also after
+    /// a restored state, whose nodes come without room), so that stepping from here on allocates
     /// nothing; a front-end with real-time callers calls it once the run
     /// is set up. The tables are caches of functions of the operators:
     /// results are the same with or without it. A gain change
@@ -592,6 +593,9 @@ impl Simulator {
     pub fn reserve(&mut self) {
         let unilateral = self.config.tire_contact.is_unilateral();
         self.modes.reserve(&self.plant, &self.grid, unilateral);
+        // The road keeps its nodes from the step before the committed
+        // point to the end of the next step.
+        self.inputs.road.reserve_window(4.0 * self.grid.step);
     }
 
     /// Changes the weights of J (tunable).
