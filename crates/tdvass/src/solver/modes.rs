@@ -68,7 +68,8 @@ pub(super) struct Modes {
     /// How BA drives the W_k filter (only with the comfort metrics).
     pub(super) coupling: Option<FilterCoupling>,
     /// Unilateral tire: the operators of the mode not in force; `None`
-    /// with the bilateral tire, and until the first lift-off.
+    /// with the bilateral tire, and until the first lift-off or
+    /// [`Self::reserve`].
     pub(super) other_mode: Option<Box<ModeOperators>>,
     /// The road's angular frequency ω (0 but on the harmonic road).
     angular_frequency: f64,
@@ -226,8 +227,9 @@ impl Modes {
     }
 
     /// Swaps the operators in force with those of the other mode. Those
-    /// of flight are made at the first lift-off: until then (`other_mode`
-    /// empty) the contact operators are in force.
+    /// of flight are made at the first lift-off unless [`Self::reserve`]
+    /// made them: until then (`other_mode` empty) the contact operators
+    /// are in force.
     pub(super) fn swap(&mut self, plant: &Plant, h: f64) {
         if self.other_mode.is_none() {
             let flight = self.flight_operators(plant, &self.solver_matrix, h);
