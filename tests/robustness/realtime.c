@@ -26,7 +26,10 @@
  *   - one doStep;
  *   - reads every Float64/Real output, lift_off_count and (FMI 2.0) the
  *     first derivatives of the outputs;
- * `count` also changes g's value at 10 s and back at 20 s; these two
+ * `count` also saves the state in the middle of the run, serializes it,
+ * deserializes it and restores it (not counted: FMU-state functions may
+ * allocate), and goes on counting from the restored state; it changes g's
+ * value at 10 s and back at 20 s; these two
  * calls rebuild the operators and check the stability of the new gain,
  * which allocates: their allocations are counted apart. In FMI 3.0 the
  * instance is created with earlyReturnAllowed and an intermediate-update
@@ -235,6 +238,10 @@ static void *open_library(const char *path) {
  * parameter do); `worst` times doStep and the getters alone. */
 static int set_gain_every_call;
 
+/* `count` restores a serialized copy of the state before this call (the
+ * middle of the run); -1: never. */
+static long restore_at = -1;
+
 /* One call's time, or nothing (NULL). */
 static double *call_times;
 static long max_calls;
@@ -293,6 +300,18 @@ static long run_fmi2(void *library, const char *token, const Case *c, double sec
     SYM(get_integer, library, "fmi2GetInteger");
     SYM(set_input_derivatives, library, "fmi2SetRealInputDerivatives");
     SYM(get_output_derivatives, library, "fmi2GetRealOutputDerivatives");
+    fmi2Status (*get_state)(fmi2Component, void **);
+    fmi2Status (*set_state)(fmi2Component, void *);
+    fmi2Status (*free_state)(fmi2Component, void **);
+    fmi2Status (*state_size)(fmi2Component, void *, size_t *);
+    fmi2Status (*serialize)(fmi2Component, void *, char *, size_t);
+    fmi2Status (*deserialize)(fmi2Component, const char *, size_t, void **);
+    SYM(get_state, library, "fmi2GetFMUstate");
+    SYM(set_state, library, "fmi2SetFMUstate");
+    SYM(free_state, library, "fmi2FreeFMUstate");
+    SYM(state_size, library, "fmi2SerializedFMUstateSize");
+    SYM(serialize, library, "fmi2SerializeFMUstate");
+    SYM(deserialize, library, "fmi2DeSerializeFMUstate");
 
     static const fmi2CallbackFunctions callbacks = {logger2, master_allocate, free, NULL, NULL};
     fmi2Component instance = instantiate("realtime", 1, token, NULL, &callbacks, 0, 0);
@@ -333,6 +352,21 @@ static long run_fmi2(void *library, const char *token, const Case *c, double sec
             if (set_real(instance, &x_g_vr, 1, &x_g) ||
                 set_input_derivatives(instance, &x_g_vr, 1, &order, &rate))
                 fail("setting x_g", t);
+        }
+        if (restore_at == k) {
+            /* Save, serialize, deserialize and restore (these may
+             * allocate); stepping on from the restored state must not. */
+            counting = 0;
+            void *state = NULL, *restored = NULL;
+            size_t size = 0;
+            char *bytes = NULL;
+            if (get_state(instance, &state) || state_size(instance, state, &size) ||
+                !(bytes = malloc(size)) || serialize(instance, state, bytes, size) ||
+                deserialize(instance, bytes, size, &restored) || set_state(instance, restored) ||
+                free_state(instance, &state) || free_state(instance, &restored))
+                fail("restoring a serialized FMU state", t);
+            free(bytes);
+            counting = 1;
         }
         if (do_step(instance, t, step, 1)) fail("fmi2DoStep", t);
         if (get_real(instance, OUTPUTS, N_OUTPUTS, values) ||
@@ -396,6 +430,18 @@ static long run_fmi3(void *library, const char *token, const Case *c, double sec
     SYM(get_float64, library, "fmi3GetFloat64");
     SYM(get_int32, library, "fmi3GetInt32");
     SYM(get_output_derivatives, library, "fmi3GetOutputDerivatives");
+    fmi3GetFMUStateTYPE get_state;
+    fmi3SetFMUStateTYPE set_state;
+    fmi3FreeFMUStateTYPE free_state;
+    fmi3SerializedFMUStateSizeTYPE state_size;
+    fmi3SerializeFMUStateTYPE serialize;
+    fmi3DeserializeFMUStateTYPE deserialize;
+    SYM(get_state, library, "fmi3GetFMUState");
+    SYM(set_state, library, "fmi3SetFMUState");
+    SYM(free_state, library, "fmi3FreeFMUState");
+    SYM(state_size, library, "fmi3SerializedFMUStateSize");
+    SYM(serialize, library, "fmi3SerializeFMUState");
+    SYM(deserialize, library, "fmi3DeserializeFMUState");
 
     instance3 = instantiate("realtime", token, NULL, 0, 0, 0, 1, NULL, 0, NULL, logger3,
                             intermediate_update);
@@ -436,6 +482,19 @@ static long run_fmi3(void *library, const char *token, const Case *c, double sec
         if (c->road == ROAD_INPUT) {
             double x_g = road_input(t);
             if (set_float64(instance3, &x_g_vr, 1, &x_g, 1)) fail("fmi3SetFloat64 x_g", t);
+        }
+        if (restore_at == k) {
+            counting = 0;
+            fmi3FMUState state = NULL, restored = NULL;
+            size_t size = 0;
+            fmi3Byte *bytes = NULL;
+            if (get_state(instance3, &state) || state_size(instance3, state, &size) ||
+                !(bytes = malloc(size)) || serialize(instance3, state, bytes, size) ||
+                deserialize(instance3, bytes, size, &restored) || set_state(instance3, restored) ||
+                free_state(instance3, &state) || free_state(instance3, &restored))
+                fail("restoring a serialized FMU state", t);
+            free(bytes);
+            counting = 1;
         }
         fmi3Boolean event_needed, terminate, early_return;
         double last_time = t;
@@ -493,6 +552,7 @@ int main(int argc, char **argv) {
     const Case *c = find_case(argv[5]);
     if (count_mode) {
         set_gain_every_call = 1;
+        restore_at = c->pattern == PATTERN_LONG ? 1500 : 15000;
         long calls = run(fmi, library, token, c, 30.0, 1);
         printf("allocations %ld calls %ld (g value changes: 2 calls, %ld allocations)\n",
                allocations, calls, gain_change_allocations);

@@ -4,8 +4,10 @@ shipped Linux library of each FMU over every road x tire mode x step
 pattern (aligned 1 ms, 0.7 ms, a varying master, 10 ms steps of many
 internal steps) for 30 s, setting g and the road input and reading every
 output, lift_off_count and the output derivatives at every point (FMI 3.0:
-intermediate updates with early returns too), and counts every allocation
-from the return of Exit Initialization Mode on. The calls that change g's
+intermediate updates with early returns too), restores a serialized copy
+of its state in the middle of the run (the state functions themselves are
+not counted), and counts every allocation from the return of Exit
+Initialization Mode on. The calls that change g's
 value are counted apart (they rebuild the operators and check stability)."""
 
 import re
