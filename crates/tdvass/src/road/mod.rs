@@ -694,8 +694,8 @@ impl Road {
         matches!(self.kind, RoadKind::Input(_))
     }
 
-    /// Makes room for the generated nodes of `span` seconds (at least
-    /// [`NODE_WINDOW`]), so that generating them allocates nothing: the
+    /// Makes room for the generated nodes of `span` seconds (at least 64),
+    /// so that generating them allocates nothing: the
     /// solver keeps the nodes from the step before its committed point to
     /// the end of the next step (`span` = a few internal steps).
     pub fn reserve_window(&mut self, span: f64) {
