@@ -695,9 +695,9 @@ impl Road {
     }
 
     /// Makes room for the generated nodes of `span` seconds (at least 64),
-    /// so that generating them allocates nothing: the
-    /// solver keeps the nodes from the step before its committed point to
-    /// the end of the next step (`span` = a few internal steps).
+    /// so that generating them allocates nothing: the solver keeps the
+    /// nodes from the step before its committed point to the end of the
+    /// next step (`span` = a few internal steps).
     pub fn reserve_window(&mut self, span: f64) {
         if let RoadKind::Nodes(nodes) = &mut self.kind {
             let wanted = (span / nodes.interval).ceil();
