@@ -101,8 +101,9 @@ pub use events::LOCATION_TOLERANCE;
 pub use grid::{DelayGrid, DelayRegime, MAX_HISTORY_NODES, MIN_RESOLVED_DELAY};
 pub use persist::STATE_FORMAT_VERSION;
 pub use reports::{
-    ComfortValues, ContactLoss, Instantaneous, OutputDerivatives, Outputs, RoadHolding, RunSummary,
-    TimeAverages,
+    CONTINUOUS_STATES, ComfortValues, ContactLoss, FILTER_STATES_AT, INTEGRAL_NAMES,
+    INTEGRAL_STATES, INTEGRALS_AT, Instantaneous, OutputDerivatives, Outputs, RoadHolding,
+    RunSummary, TimeAverages,
 };
 
 /// The constructors that choose the internal step (`accuracy`), and the
@@ -190,6 +191,18 @@ impl Simulator {
     /// RMS values so far (time averages from the start to now).
     pub fn rms(&mut self) -> RmsValues {
         outputs::rms(self)
+    }
+
+    /// The continuous states now, in the layout of Model Exchange
+    /// ([`CONTINUOUS_STATES`]): the reported plant state, the W_k filter
+    /// (zero below [`Metrics::Comfort`]) and the integrals from the start.
+    pub fn continuous_states(&mut self) -> [f64; CONTINUOUS_STATES] {
+        outputs::continuous_states(self)
+    }
+
+    /// The time derivatives of [`Self::continuous_states`].
+    pub fn continuous_state_derivatives(&mut self) -> [f64; CONTINUOUS_STATES] {
+        outputs::continuous_state_derivatives(self)
     }
 
     /// Encodes the whole simulator.

@@ -8,8 +8,8 @@
 use super::driver::Simulator;
 use super::integrals::{Accumulated, WEIGHTED_FOURTH, WEIGHTED_SQUARE, rms_from_integral};
 use super::reports::{
-    ComfortValues, ContactLoss, Instantaneous, OutputDerivatives, Outputs, RoadHolding,
-    TimeAverages,
+    CONTINUOUS_STATES, ComfortValues, ContactLoss, FILTER_STATES_AT, INTEGRAL_STATES, INTEGRALS_AT,
+    Instantaneous, OutputDerivatives, Outputs, RoadHolding, TimeAverages,
 };
 use super::stepping::stepping;
 use crate::metrics::RmsValues;
@@ -347,6 +347,45 @@ pub(super) fn output_derivatives(sim: &mut Simulator) -> OutputDerivatives {
         road_displacement: road_rate,
         control_force: gain * delayed_rate,
     }
+}
+
+/// [`Simulator::continuous_states`].
+pub(super) fn continuous_states(sim: &mut Simulator) -> [f64; CONTINUOUS_STATES] {
+    let now = sim.accumulated_now();
+    let reported = sim.plant.reported_state(&sim.trajectory.current_state);
+    let mut states = [0.0; CONTINUOUS_STATES];
+    states[..6].copy_from_slice(reported.as_slice());
+    states[FILTER_STATES_AT..INTEGRALS_AT].copy_from_slice(now.filter.as_slice());
+    states[INTEGRALS_AT..INTEGRALS_AT + INTEGRAL_STATES - 1].copy_from_slice(&now.integral);
+    states[CONTINUOUS_STATES - 1] = outputs(sim)
+        .road_holding
+        .map_or(0.0, |r| r.contact_loss_time);
+    states
+}
+
+/// [`Simulator::continuous_state_derivatives`].
+pub(super) fn continuous_state_derivatives(sim: &mut Simulator) -> [f64; CONTINUOUS_STATES] {
+    let d = output_derivatives(sim);
+    let o = outputs(sim);
+    let filter = sim.accumulated_now().filter;
+    let mut rates = [0.0; CONTINUOUS_STATES];
+    rates[..6].copy_from_slice(d.state.as_slice());
+    let body_acceleration = o.performance.body_acceleration;
+    if let Some(coupling) = &sim.modes.coupling {
+        let filter_rate = coupling.wk.derivative(&filter, body_acceleration);
+        rates[FILTER_STATES_AT..INTEGRALS_AT].copy_from_slice(filter_rate.as_slice());
+    }
+    let weighted = o.comfort.map_or(0.0, |c| c.weighted_body_acceleration);
+    let integrands = [
+        body_acceleration * body_acceleration,
+        o.performance.suspension_deflection * o.performance.suspension_deflection,
+        o.performance.tire_deflection * o.performance.tire_deflection,
+        weighted * weighted,
+        weighted * weighted * weighted * weighted,
+        d.road_holding.map_or(0.0, |r| r.contact_loss_time),
+    ];
+    rates[INTEGRALS_AT..].copy_from_slice(&integrands);
+    rates
 }
 
 /// [`Simulator::rms`].
