@@ -8,6 +8,8 @@
 //! The physics is a plain, safe library:
 //! - [`model`]: parameters (Table 1), the three variants, the state-space
 //!   matrices of Eq. (2) and the outputs BA, SDD, TDD;
+//! - [`exchange`]: the same model for Model Exchange, an ODE with events
+//!   and a delay history that a master's own solver integrates;
 //! - [`solver`]: the precise (fine) integration method for the delay
 //!   differential equation, Eq. (22)-(24), its internal step chosen from a
 //!   relative tolerance ([`solver::accuracy`]);
@@ -104,6 +106,7 @@ pub mod analysis;
 pub mod bytes;
 pub mod comfort;
 pub mod error;
+pub mod exchange;
 pub mod limits;
 pub mod math;
 pub mod metrics;

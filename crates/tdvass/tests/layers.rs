@@ -17,12 +17,13 @@ const CRATE_LAYERS: &[(&str, &[&str])] = &[
     ("data", &["bytes", "model", "comfort", "road"]),
     ("checks", &["metrics", "limits"]),
     ("solver", &["solver"]),
+    ("exchange", &["exchange"]),
     ("analysis", &["analysis"]),
     ("root", &["lib"]),
 ];
 
 /// The top-level modules that are folders: their files are read as one.
-const FOLDERS: &[&str] = &["model", "road", "analysis"];
+const FOLDERS: &[&str] = &["model", "road", "analysis", "exchange"];
 
 /// The files of `crates/tdvass/src/solver`, from the ground up.
 const SOLVER_LAYERS: &[(&str, &[&str])] = &[

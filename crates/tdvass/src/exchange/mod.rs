@@ -1,0 +1,532 @@
+//! Model Exchange: the model as an ordinary differential equation with
+//! events, for a master whose own solver integrates it.
+//!
+//! **The continuous states** ([`CONTINUOUS_STATES`], the layout of
+//! [`crate::solver::CONTINUOUS_STATES`]): the plant X of Eq. (2), the W_k
+//! filter w, and the integrals from the start time behind every time
+//! average: `∫BA²`, `∫SDD²`, `∫TDD²`, `∫a_w²`, `∫a_w⁴` and the time without
+//! tire contact. Their derivatives are
+//!
+//! ```text
+//! dX/dt = A X + b x_t(t − tau) + e x_g(t)            (contact, Eq. (2))
+//! dX/dt = (A + e c_tᵀ) X + b x_t(t − tau) − e W/k_t  (flight, unilateral tire)
+//! dw/dt = A_w w + b_w BA,  a_w = c_w w               (ISO 2631-1 W_k)
+//! d/dt ∫y² = y²,  d/dt ∫a_w⁴ = a_w⁴,  d/dt t_lost = [no contact]
+//! ```
+//!
+//! (CS: `x_h`, `v_h` follow the wheel's derivatives, so they mirror it as
+//! the co-simulation reports them.) The outputs are computed from these
+//! states: RMS values `sqrt(∫y²/(t − t_0))`, J of Eq. (6), `RMS(a_w)`,
+//! `VDV = (∫a_w⁴)^{1/4}`, the dynamic tire load ratio `k_t RMS(TDD)/W`.
+//!
+//! **The delayed input** `x_t(t − tau)` comes from a [`DelayHistory`] of
+//! the evaluated points (see there). Delays below
+//! [`MIN_RESOLVED_DELAY`] are folded as in the co-simulation:
+//! `x_t(t − tau) ≈ x_t − tau v_t`.
+//!
+//! **Events.** One event indicator, the margin `W/k_t − (x_t − x_g)` (m)
+//! to the loss of tire contact, moved away from zero by a hysteresis after
+//! each event: in contact `z = margin + ε_c`, out of contact `z = margin −
+//! ε_f`, with the ε set at each event to `1e-12 W/k_t` plus whatever margin
+//! of the wrong sign the located event left, so that z ≠ 0 after every
+//! event. At an event the contact mode follows the sign of the margin:
+//! a fall through 0 is a lift-off (counted in `lift_off_count`; with the
+//! unilateral tire the wheel then flies), a rise a touch-down. With the
+//! bilateral tire the mode only counts and times the losses of contact.
+//! Outputs that are extrema or counts (the largest |SDD|, the lift-offs)
+//! are updated at completed integrator steps and events.
+//!
+//! Layer: exchange (docs/architecture.md); it imports the crate's `comfort`,
+//! `error`, `limits`, `metrics`, `model`, `road` and the solver's public
+//! configuration and report types.
+
+mod history;
+mod persist;
+
+pub use history::{DelayHistory, HistoryPoint, MAX_HISTORY_POINTS, TRIAL_REACH};
+pub use persist::EXCHANGE_FORMAT_VERSION;
+
+use crate::comfort::{WK_STATES, WkStateSpace, wk_state_space};
+use crate::error::{Error, Result};
+use crate::limits::{DIVERGENCE_BOUNDS, check_config};
+use crate::metrics::RmsValues;
+use crate::model::{Performance, Plant, STATE_NAMES, State, V_H, V_T, Variant, X_H, X_S, X_T};
+use crate::road::Road;
+use crate::solver::{
+    CONTINUOUS_STATES, ComfortValues, ContactLoss, FILTER_STATES_AT, INTEGRAL_NAMES, INTEGRALS_AT,
+    MIN_RESOLVED_DELAY, Metrics, Outputs, RoadHolding, SimulationConfig,
+};
+use nalgebra::{Matrix6, SVector};
+
+/// Number of event indicators: the margin to the loss of tire contact.
+pub const EVENT_INDICATORS: usize = 1;
+
+/// Index of the time without tire contact among the continuous states.
+const CONTACT_LOSS_TIME: usize = CONTINUOUS_STATES - 1;
+
+/// The hysteresis of the event indicator, relative to W/k_t.
+const HYSTERESIS: f64 = 1e-12;
+
+/// How the delayed input is formed.
+#[derive(Debug, Clone, PartialEq)]
+enum Delay {
+    /// No control force (CS, PVASS).
+    None,
+    /// `x_t − tau v_t` (tau below [`MIN_RESOLVED_DELAY`]).
+    Folded(f64),
+    /// From the history of evaluated points.
+    History(DelayHistory),
+}
+
+/// The discrete state: the contact mode and what events update.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Discrete {
+    /// The tire is in contact (the margin was >= 0 at the last event).
+    in_contact: bool,
+    /// ε of the event indicator (m, > 0).
+    hysteresis: f64,
+    /// Lift-offs since the start (a start without contact counts one).
+    lift_off_count: u64,
+    /// The largest |SDD| at the accepted points (m).
+    max_suspension_deflection: f64,
+    /// The first loss of contact: time (s) and dynamic tire load (N).
+    first_contact_loss: Option<(f64, f64)>,
+}
+
+/// What an event changed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ContactEvent {
+    /// The margin fell through 0 at this time (s): TDD (m) then.
+    LiftOff { time: f64, tire_deflection: f64 },
+    /// The margin rose through 0 at this time (s).
+    TouchDown { time: f64 },
+}
+
+/// One Model Exchange instance of the model; see the module documentation.
+#[derive(Debug, Clone)]
+pub struct ModelExchange {
+    config: SimulationConfig,
+    plant: Plant,
+    /// `A + e c_tᵀ`: the plant matrix in flight.
+    flight_matrix: Matrix6<f64>,
+    wk: WkStateSpace,
+    road: Road,
+    /// W/k_t (m).
+    limit: f64,
+    /// W (N).
+    static_load: f64,
+    time: f64,
+    states: [f64; CONTINUOUS_STATES],
+    delay: Delay,
+    discrete: Discrete,
+    /// The time of the last accepted point (s).
+    accepted: f64,
+}
+
+/// The names of the continuous states, in order.
+pub fn state_names() -> [String; CONTINUOUS_STATES] {
+    std::array::from_fn(|i| match i {
+        0..6 => STATE_NAMES[i].to_string(),
+        _ if i < INTEGRALS_AT => format!("wk_filter_{}", i - FILTER_STATES_AT + 1),
+        _ => INTEGRAL_NAMES[i - INTEGRALS_AT].to_string(),
+    })
+}
+
+/// The nominal values of the continuous states (their typical magnitudes
+/// on the paper's roads; a master scales its absolute tolerances by them):
+/// displacements 1e-3 m, velocities 1e-2 m/s, the W_k filter 1e-2 m/s²,
+/// `∫BA²` and the a_w integrals 1e-3, `∫SDD²`, `∫TDD²` 1e-9 m²·s, the time
+/// without contact 1e-4 s.
+pub fn nominals() -> [f64; CONTINUOUS_STATES] {
+    std::array::from_fn(|i| match i {
+        0..6 if i % 2 == 0 => 1e-3,
+        0..6 => 1e-2,
+        _ if i < INTEGRALS_AT => 1e-2,
+        _ => [1e-3, 1e-9, 1e-9, 1e-3, 1e-3, 1e-4][i - INTEGRALS_AT],
+    })
+}
+
+impl ModelExchange {
+    /// The model of `config` at its start time and initial state (the
+    /// tolerance and the internal step of the co-simulation play no part).
+    /// The configuration is checked as the simulator checks it.
+    pub fn new(config: SimulationConfig) -> Result<ModelExchange> {
+        check_config(
+            &config.params,
+            config.variant,
+            &config.road,
+            &config.initial_state,
+            &config.weights,
+        )?;
+        if !config.start_time.is_finite() {
+            return Err(Error::InvalidParameter {
+                name: "start_time",
+                value: config.start_time,
+                reason: "must be finite",
+            });
+        }
+        let plant = Plant::new(config.params, config.variant)?;
+        let k_t = config.params.k_t;
+        let mut flight_matrix = plant.a;
+        flight_matrix[(V_T, X_T)] += plant.e[V_T];
+        let static_load = config.params.static_load(config.variant);
+        let mut road = Road::new(&config.road, config.start_time)?;
+        let t0 = config.start_time;
+        let mut x = config.initial_state;
+        if config.variant == Variant::Cs {
+            x[X_H] = x[X_T];
+            x[V_H] = x[V_T];
+        }
+        let tau = config.params.tau;
+        let delay = if !config.variant.has_control() {
+            Delay::None
+        } else if tau < MIN_RESOLVED_DELAY {
+            Delay::Folded(tau)
+        } else {
+            Delay::History(DelayHistory::new(t0, x[X_T], x[V_T], tau))
+        };
+        let limit = static_load / k_t;
+        let margin = limit - (x[X_T] - road.value(t0));
+        let in_contact = margin >= 0.0;
+        let mut states = [0.0; CONTINUOUS_STATES];
+        states[..6].copy_from_slice(x.as_slice());
+        let mut model = ModelExchange {
+            plant,
+            flight_matrix,
+            wk: wk_state_space(),
+            road,
+            limit,
+            static_load,
+            time: t0,
+            states,
+            delay,
+            accepted: t0,
+            discrete: Discrete {
+                in_contact,
+                hysteresis: 0.0,
+                lift_off_count: u64::from(!in_contact),
+                max_suspension_deflection: (x[X_S] - x[X_T]).abs(),
+                first_contact_loss: None,
+            },
+            config: SimulationConfig {
+                metrics: Metrics::Comfort,
+                ..config
+            },
+        };
+        model.discrete.hysteresis = model.hysteresis_for(margin, in_contact);
+        if !in_contact {
+            model.discrete.first_contact_loss = Some((t0, k_t * (-margin - limit)));
+        }
+        Ok(model)
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &SimulationConfig {
+        &self.config
+    }
+
+    /// The current time (s).
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// The continuous states.
+    pub fn states(&self) -> &[f64; CONTINUOUS_STATES] {
+        &self.states
+    }
+
+    /// The time of the last accepted point (start, completed step,
+    /// event): the earliest time [`Self::set_time`] accepts.
+    pub fn accepted_time(&self) -> f64 {
+        self.accepted
+    }
+
+    /// Sets the time. It must be finite and not before the last accepted
+    /// point ([`Self::accepted_time`]).
+    pub fn set_time(&mut self, time: f64) -> Result<()> {
+        let accepted = self.accepted_time();
+        if !(time.is_finite() && time >= accepted) {
+            return Err(Error::InvalidState(format!(
+                "time {time} s is before the last completed integrator step or event at {accepted} s (or not finite)"
+            )));
+        }
+        self.time = time;
+        Ok(())
+    }
+
+    /// Sets the continuous states: exactly [`CONTINUOUS_STATES`] finite
+    /// values (the error names the first that is not).
+    pub fn set_states(&mut self, values: &[f64]) -> Result<()> {
+        if values.len() != CONTINUOUS_STATES {
+            return Err(Error::InvalidState(format!(
+                "{} continuous states given, the model has {CONTINUOUS_STATES}",
+                values.len()
+            )));
+        }
+        if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+            return Err(Error::InvalidState(format!(
+                "continuous state {i} (`{}`) = {} is not finite",
+                state_names()[i],
+                values[i]
+            )));
+        }
+        self.states.copy_from_slice(values);
+        Ok(())
+    }
+
+    /// Tunes the gain g (N/m) from now on; the states and the history stay.
+    pub fn set_gain(&mut self, g: f64) -> Result<()> {
+        let params = crate::model::Params {
+            g,
+            ..self.config.params
+        };
+        let plant = Plant::new(params, self.config.variant)?;
+        self.flight_matrix = plant.a;
+        self.flight_matrix[(V_T, X_T)] += plant.e[V_T];
+        self.plant = plant;
+        self.config.params = params;
+        Ok(())
+    }
+
+    /// Sets the weights of J from now on.
+    pub fn set_weights(&mut self, weights: crate::metrics::Weights) {
+        self.config.weights = weights;
+    }
+
+    /// Sets the external road input `x_g` (m; road = input only).
+    pub fn set_road_input(&mut self, value: f64) -> Result<()> {
+        self.road.set_input(self.time, value, 0.0)
+    }
+
+    fn plant_state(&self) -> State {
+        State::from_column_slice(&self.states[..6])
+    }
+
+    fn filter_state(&self) -> SVector<f64, WK_STATES> {
+        SVector::from_column_slice(&self.states[FILTER_STATES_AT..INTEGRALS_AT])
+    }
+
+    /// `x_t(t − tau)` now, without recording the point.
+    fn delayed_now(&self) -> f64 {
+        let x = &self.states;
+        match &self.delay {
+            Delay::None => 0.0,
+            Delay::Folded(tau) => x[X_T] - tau * x[V_T],
+            Delay::History(h) => h.delayed((self.time, x[X_T], x[V_T])),
+        }
+    }
+
+    fn flying(&self) -> bool {
+        self.config.tire_contact.is_unilateral() && !self.discrete.in_contact
+    }
+
+    /// The time derivatives of the continuous states at the current time
+    /// and states. The point becomes a trial point of the delay history
+    /// (see [`DelayHistory`]). A derivative that is not finite is an error
+    /// naming it.
+    pub fn derivatives(&mut self) -> Result<[f64; CONTINUOUS_STATES]> {
+        let delayed = self.delayed_now();
+        let now = (self.time, self.states[X_T], self.states[V_T]);
+        if let Delay::History(h) = &mut self.delay {
+            h.record(now, false);
+        }
+        let rates = self.rates(delayed);
+        if let Some(i) = rates.iter().position(|v| !v.is_finite()) {
+            return Err(Error::InvalidState(format!(
+                "the derivative of `{}` is {} at t = {} s",
+                state_names()[i],
+                rates[i],
+                self.time
+            )));
+        }
+        Ok(rates)
+    }
+
+    /// The derivatives for the delayed input `delayed` (m).
+    fn rates(&mut self, delayed: f64) -> [f64; CONTINUOUS_STATES] {
+        let t = self.time;
+        let x = self.plant_state();
+        let road = self.road.value(t);
+        let mut dx = if self.flying() {
+            self.flight_matrix * x + self.plant.b * delayed - self.plant.e * self.limit
+        } else {
+            self.plant.derivative(&x, delayed, road)
+        };
+        if self.config.variant == Variant::Cs {
+            dx[X_H] = dx[X_T];
+            dx[V_H] = dx[V_T];
+        }
+        let body_acceleration = self.plant.body_acceleration(&x);
+        let w = self.filter_state();
+        let dw = self.wk.derivative(&w, body_acceleration);
+        let weighted = self.wk.weighted_acceleration(&w, body_acceleration);
+        let sdd = x[X_S] - x[X_T];
+        let tdd = x[X_T] - road;
+        let mut rates = [0.0; CONTINUOUS_STATES];
+        rates[..6].copy_from_slice(dx.as_slice());
+        rates[FILTER_STATES_AT..INTEGRALS_AT].copy_from_slice(dw.as_slice());
+        let squared = weighted * weighted;
+        rates[INTEGRALS_AT..].copy_from_slice(&[
+            body_acceleration * body_acceleration,
+            sdd * sdd,
+            tdd * tdd,
+            squared,
+            squared * squared,
+            if self.discrete.in_contact { 0.0 } else { 1.0 },
+        ]);
+        rates
+    }
+
+    /// The margin `W/k_t − (x_t − x_g)` (m) now.
+    fn margin(&mut self) -> f64 {
+        let road = self.road.value(self.time);
+        self.limit - (self.states[X_T] - road)
+    }
+
+    /// The event indicators (module documentation).
+    pub fn event_indicators(&mut self) -> [f64; EVENT_INDICATORS] {
+        let margin = self.margin();
+        if self.discrete.in_contact {
+            [margin + self.discrete.hysteresis]
+        } else {
+            [margin - self.discrete.hysteresis]
+        }
+    }
+
+    /// ε for the mode `in_contact` at the margin `margin` (m): the base
+    /// hysteresis and any margin of the wrong sign for the mode.
+    fn hysteresis_for(&self, margin: f64, in_contact: bool) -> f64 {
+        let wrong_side = if in_contact { -margin } else { margin };
+        HYSTERESIS * self.limit + wrong_side.max(0.0)
+    }
+
+    /// Accepts the current point (a completed integrator step): it joins
+    /// the delay history for good and updates the largest |SDD|.
+    pub fn complete_step(&mut self) {
+        let x = &self.states;
+        let now = (self.time, x[X_T], x[V_T]);
+        let sdd = (x[X_S] - x[X_T]).abs();
+        self.discrete.max_suspension_deflection = self.discrete.max_suspension_deflection.max(sdd);
+        self.accepted = self.time;
+        let mut kept_from = self.time - TRIAL_REACH;
+        if let Delay::History(h) = &mut self.delay {
+            h.record(now, true);
+            kept_from -= h.tau();
+        }
+        self.road.release_before(kept_from);
+    }
+
+    /// Event Mode: accepts the current point and sets the contact mode from
+    /// the sign of the margin; returns the switch, if any.
+    pub fn update_discrete_states(&mut self) -> Option<ContactEvent> {
+        self.complete_step();
+        let margin = self.margin();
+        let time = self.time;
+        let event = if self.discrete.in_contact && margin < 0.0 {
+            self.discrete.in_contact = false;
+            self.discrete.lift_off_count += 1;
+            if self.discrete.first_contact_loss.is_none() {
+                self.discrete.first_contact_loss = Some((time, -self.static_load));
+            }
+            Some(ContactEvent::LiftOff {
+                time,
+                tire_deflection: self.limit - margin,
+            })
+        } else if !self.discrete.in_contact && margin > 0.0 {
+            self.discrete.in_contact = true;
+            Some(ContactEvent::TouchDown { time })
+        } else {
+            None
+        };
+        if event.is_some() {
+            self.discrete.hysteresis = self.hysteresis_for(margin, self.discrete.in_contact);
+        }
+        event
+    }
+
+    /// Whether the tire is in contact (the mode of the last event).
+    pub fn in_contact(&self) -> bool {
+        self.discrete.in_contact
+    }
+
+    /// Lift-offs since the start.
+    pub fn lift_off_count(&self) -> u64 {
+        self.discrete.lift_off_count
+    }
+
+    /// The first plant state beyond the divergence bounds of the
+    /// co-simulation (`crate::limits`): its name and value.
+    pub fn diverged(&self) -> Option<(&'static str, f64)> {
+        (0..6)
+            .find(|&i| self.states[i].is_nan() || self.states[i].abs() > DIVERGENCE_BOUNDS[i])
+            .map(|i| (STATE_NAMES[i], self.states[i]))
+    }
+
+    /// The outputs at the current time and states, from the states (the
+    /// same quantities as [`crate::solver::Simulator::outputs`]).
+    pub fn outputs(&mut self) -> Outputs {
+        let t = self.time;
+        let x = self.plant_state();
+        let road = self.road.value(t);
+        let delayed = self.delayed_now();
+        let performance = Performance::at(&self.plant, &x, road);
+        let duration = t - self.config.start_time;
+        let integral = &self.states[INTEGRALS_AT..];
+        let rms_of = |i: usize| {
+            if duration > 0.0 {
+                (integral[i].max(0.0) / duration).sqrt()
+            } else {
+                0.0
+            }
+        };
+        let rms = RmsValues {
+            body_acceleration: rms_of(0),
+            suspension_deflection: rms_of(1),
+            tire_deflection: rms_of(2),
+        };
+        let k_t = self.config.params.k_t;
+        let w = self.filter_state();
+        let dynamic_tire_load = if self.flying() {
+            -self.static_load
+        } else {
+            k_t * (road - x[X_T])
+        };
+        let static_load = self.static_load;
+        Outputs {
+            time: t,
+            state: x,
+            performance,
+            road_displacement: road,
+            control_force: self.config.params.effective_gain(self.config.variant) * delayed,
+            rms,
+            objective: rms.objective(&self.config.weights),
+            comfort: Some(ComfortValues {
+                weighted_body_acceleration: self
+                    .wk
+                    .weighted_acceleration(&w, performance.body_acceleration),
+                rms_weighted_body_acceleration: rms_of(3),
+                vibration_dose_value: integral[4].max(0.0).sqrt().sqrt(),
+            }),
+            dynamic_tire_load,
+            rms_dynamic_tire_load_ratio: k_t * rms.tire_deflection / static_load,
+            road_holding: Some(RoadHolding {
+                contact_loss_time: self.states[CONTACT_LOSS_TIME],
+                max_suspension_deflection: self
+                    .discrete
+                    .max_suspension_deflection
+                    .max(performance.suspension_deflection.abs()),
+                first_contact_loss: self.discrete.first_contact_loss.map(
+                    |(time, dynamic_tire_load)| ContactLoss {
+                        time,
+                        dynamic_tire_load,
+                        static_load,
+                    },
+                ),
+                lift_off_count: self.discrete.lift_off_count,
+            }),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,141 @@
+//! The byte form of a Model Exchange instance's dynamic state (time,
+//! continuous states, contact mode, counts, delay history), written with
+//! the crate's one codec ([`crate::bytes`]). The configuration is not in
+//! it: a state is restored into a model built from the same configuration
+//! ([`ModelExchange::restore`]). The road's random nodes are generated
+//! again from its seed.
+
+use super::{Delay, DelayHistory, HistoryPoint, ModelExchange};
+use crate::bytes::{ByteReader, ByteWriter};
+use crate::error::{Error, Result};
+use crate::solver::CONTINUOUS_STATES;
+
+/// Version of the byte form; a saved state of another version is refused.
+pub const EXCHANGE_FORMAT_VERSION: u32 = 1;
+
+/// The byte form's first word.
+const MAGIC: u32 = 0x4d45_5856; // "VXEM"
+
+fn invalid(what: String) -> Error {
+    Error::InvalidState(what)
+}
+
+impl ModelExchange {
+    /// Encodes the dynamic state (module documentation).
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut w = ByteWriter::default();
+        w.u32(MAGIC);
+        w.u32(EXCHANGE_FORMAT_VERSION);
+        w.f64(self.time);
+        w.f64(self.accepted);
+        w.f64s(&self.states);
+        let d = &self.discrete;
+        w.u8(u8::from(d.in_contact));
+        w.f64(d.hysteresis);
+        w.u64(d.lift_off_count);
+        w.f64(d.max_suspension_deflection);
+        match d.first_contact_loss {
+            Some((time, load)) => {
+                w.u8(1);
+                w.f64(time);
+                w.f64(load);
+            }
+            None => w.u8(0),
+        }
+        match &self.delay {
+            Delay::History(h) => {
+                w.u64(h.points().len() as u64);
+                for p in h.points() {
+                    w.f64(p.time);
+                    w.f64(p.position);
+                    w.f64(p.velocity);
+                    w.u8(u8::from(p.accepted));
+                }
+            }
+            _ => w.u64(0),
+        }
+        w.bytes
+    }
+
+    /// Restores a state of [`Self::to_bytes`] into this model (built from
+    /// the same configuration). Checked: version, layout, finite values,
+    /// times not before the start, a history consistent with the delay.
+    /// On error the model is unchanged.
+    pub fn restore(&mut self, bytes: &[u8]) -> Result<()> {
+        let mut r = ByteReader::new(bytes);
+        if r.u32()? != MAGIC {
+            return Err(invalid("not a Model Exchange state".into()));
+        }
+        let version = r.u32()?;
+        if version != EXCHANGE_FORMAT_VERSION {
+            return Err(invalid(format!(
+                "Model Exchange state format version {version}, this FMU reads {EXCHANGE_FORMAT_VERSION}"
+            )));
+        }
+        let start = self.config.start_time;
+        let time = r.f64()?;
+        let accepted = r.f64()?;
+        if !(time.is_finite() && accepted.is_finite() && start <= accepted && accepted <= time) {
+            return Err(invalid(format!(
+                "times {accepted} s (accepted) and {time} s (now) are not ordered after the start time {start} s"
+            )));
+        }
+        let states = r.f64s(CONTINUOUS_STATES as u64)?;
+        if states.len() != CONTINUOUS_STATES || states.iter().any(|v| !v.is_finite()) {
+            return Err(invalid(format!(
+                "{} continuous states, not {CONTINUOUS_STATES} finite values",
+                states.len()
+            )));
+        }
+        let mut discrete = self.discrete;
+        discrete.in_contact = r.u8()? != 0;
+        discrete.hysteresis = r.f64()?;
+        discrete.lift_off_count = r.u64()?;
+        discrete.max_suspension_deflection = r.f64()?;
+        discrete.first_contact_loss = match r.u8()? {
+            0 => None,
+            _ => Some((r.f64()?, r.f64()?)),
+        };
+        if !(discrete.hysteresis.is_finite()
+            && discrete.hysteresis > 0.0
+            && discrete.max_suspension_deflection.is_finite()
+            && discrete
+                .first_contact_loss
+                .is_none_or(|(t, load)| t.is_finite() && load.is_finite()))
+        {
+            return Err(invalid("the discrete state is not finite".into()));
+        }
+        let count = r.u64()?;
+        if count > super::MAX_HISTORY_POINTS as u64 {
+            return Err(invalid(format!("a delay history of {count} points")));
+        }
+        let mut points = Vec::with_capacity(count as usize);
+        for _ in 0..count {
+            points.push(HistoryPoint {
+                time: r.f64()?,
+                position: r.f64()?,
+                velocity: r.f64()?,
+                accepted: r.u8()? != 0,
+            });
+        }
+        if !r.is_empty() {
+            return Err(invalid(
+                "trailing bytes after the Model Exchange state".into(),
+            ));
+        }
+        let delay = match &self.delay {
+            Delay::History(h) => Delay::History(
+                DelayHistory::from_points(start, h.initial_position(), h.tau(), points)
+                    .map_err(invalid)?,
+            ),
+            other if count == 0 => other.clone(),
+            _ => return Err(invalid("a delay history for a model without delay".into())),
+        };
+        self.time = time;
+        self.accepted = accepted;
+        self.states.copy_from_slice(&states);
+        self.discrete = discrete;
+        self.delay = delay;
+        Ok(())
+    }
+}

@@ -1,0 +1,261 @@
+use super::*;
+use crate::model::{Params, TireContact};
+use crate::road::{RandomRoad, RoadClass, RoadSpec};
+use crate::solver::Simulator;
+
+/// Integrates `model` to `t_end` with the classical Runge–Kutta method at
+/// step `h`, completing every step (or none) and handling the events at
+/// step ends (located by bisection on the indicator to `1e-12` s).
+fn integrate(model: &mut ModelExchange, t_end: f64, h: f64, complete: bool) -> Vec<f64> {
+    let mut lift_offs = Vec::new();
+    let rhs = |m: &mut ModelExchange, t: f64, x: &[f64]| {
+        m.set_time(t).unwrap();
+        m.set_states(x).unwrap();
+        m.derivatives().unwrap()
+    };
+    let step = |m: &mut ModelExchange, t: f64, x: &[f64; CONTINUOUS_STATES], h: f64| {
+        let k1 = rhs(m, t, x);
+        let add = |a: &[f64; CONTINUOUS_STATES], k: &[f64; CONTINUOUS_STATES], c: f64| {
+            std::array::from_fn::<f64, CONTINUOUS_STATES, _>(|i| a[i] + c * k[i])
+        };
+        let k2 = rhs(m, t + h / 2.0, &add(x, &k1, h / 2.0));
+        let k3 = rhs(m, t + h / 2.0, &add(x, &k2, h / 2.0));
+        let k4 = rhs(m, t + h, &add(x, &k3, h));
+        std::array::from_fn::<f64, CONTINUOUS_STATES, _>(|i| {
+            x[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+        })
+    };
+    let mut t = model.time();
+    while t < t_end - 1e-12 {
+        let x = *model.states();
+        let before = model.event_indicators()[0];
+        let mut next = step(model, t, &x, h);
+        model.set_time(t + h).unwrap();
+        model.set_states(&next).unwrap();
+        if model.event_indicators()[0].signum() != before.signum() {
+            let (mut low, mut high) = (0.0, h);
+            while high - low > 1e-12 {
+                let mid = 0.5 * (low + high);
+                let y = step(model, t, &x, mid);
+                model.set_time(t + mid).unwrap();
+                model.set_states(&y).unwrap();
+                if model.event_indicators()[0].signum() != before.signum() {
+                    high = mid;
+                } else {
+                    low = mid;
+                }
+            }
+            next = step(model, t, &x, high);
+            model.set_time(t + high).unwrap();
+            model.set_states(&next).unwrap();
+            if let Some(ContactEvent::LiftOff { time, .. }) = model.update_discrete_states() {
+                lift_offs.push(time);
+            }
+            t += high;
+            continue;
+        }
+        if complete {
+            model.complete_step();
+        }
+        t += h;
+    }
+    lift_offs
+}
+
+fn config(variant: Variant, tau: f64, g: f64, road: RoadSpec) -> SimulationConfig {
+    SimulationConfig {
+        params: Params {
+            tau,
+            g,
+            ..Params::default()
+        },
+        variant,
+        road,
+        metrics: Metrics::Comfort,
+        ..SimulationConfig::default()
+    }
+}
+
+fn relative(a: f64, b: f64) -> f64 {
+    (a - b).abs() / b.abs().max(1e-300)
+}
+
+fn agrees_with_the_co_simulation(config: SimulationConfig, duration: f64, h: f64, tolerance: f64) {
+    let mut model = ModelExchange::new(config.clone()).unwrap();
+    integrate(&mut model, config.start_time + duration, h, true);
+    let mut sim = Simulator::new(config).unwrap();
+    sim.advance_to(model.time()).unwrap();
+    let (me, cs) = (model.outputs(), sim.outputs());
+    let pairs = [
+        (me.rms.body_acceleration, cs.rms.body_acceleration),
+        (me.rms.suspension_deflection, cs.rms.suspension_deflection),
+        (me.rms.tire_deflection, cs.rms.tire_deflection),
+        (me.objective, cs.objective),
+        (
+            me.comfort.unwrap().rms_weighted_body_acceleration,
+            cs.comfort.unwrap().rms_weighted_body_acceleration,
+        ),
+        (
+            me.rms_dynamic_tire_load_ratio,
+            cs.rms_dynamic_tire_load_ratio,
+        ),
+    ];
+    for (i, (a, b)) in pairs.iter().enumerate() {
+        assert!(relative(*a, *b) < tolerance, "output {i}: {a} vs {b}");
+    }
+}
+
+#[test]
+fn the_three_variants_agree_with_the_co_simulation() {
+    for variant in Variant::ALL {
+        agrees_with_the_co_simulation(
+            config(variant, 0.011, 5386.0, RoadSpec::paper_harmonic()),
+            2.0,
+            1e-4,
+            1e-7,
+        );
+    }
+}
+
+#[test]
+fn a_delay_below_the_step_and_a_negative_gain_agree_with_the_co_simulation() {
+    agrees_with_the_co_simulation(
+        config(Variant::Tdvass, 2e-4, 5386.0, RoadSpec::paper_harmonic()),
+        2.0,
+        1e-3 / 3.0,
+        1e-6,
+    );
+    agrees_with_the_co_simulation(
+        config(Variant::Tdvass, 0.011, -2000.0, RoadSpec::paper_harmonic()),
+        2.0,
+        1e-4,
+        1e-7,
+    );
+    agrees_with_the_co_simulation(
+        config(Variant::Tdvass, 0.0, 5386.0, RoadSpec::paper_harmonic()),
+        2.0,
+        1e-4,
+        1e-7,
+    );
+}
+
+#[test]
+fn a_random_road_agrees_with_the_co_simulation() {
+    let road = RoadSpec::Iso8608(RandomRoad {
+        class: RoadClass::D,
+        speed: 20.0,
+        ..RandomRoad::default()
+    });
+    agrees_with_the_co_simulation(
+        config(Variant::Tdvass, 0.011, 5386.0, road),
+        1.0,
+        5e-5,
+        1e-6,
+    );
+}
+
+#[test]
+fn completing_steps_or_not_gives_the_same_bits() {
+    let c = config(Variant::Tdvass, 0.011, 5386.0, RoadSpec::paper_harmonic());
+    let mut every = ModelExchange::new(c.clone()).unwrap();
+    let mut never = ModelExchange::new(c).unwrap();
+    integrate(&mut every, 0.5, 1e-4, true);
+    integrate(&mut never, 0.5, 1e-4, false);
+    assert_eq!(every.states(), never.states());
+}
+
+#[test]
+fn lift_offs_agree_with_the_located_switches_of_the_co_simulation() {
+    let road = RoadSpec::Iso8608(RandomRoad {
+        class: RoadClass::D,
+        speed: 20.0,
+        ..RandomRoad::default()
+    });
+    let c = SimulationConfig {
+        tire_contact: TireContact::Unilateral,
+        ..config(Variant::Tdvass, 0.011, 5386.0, road)
+    };
+    let mut model = ModelExchange::new(c.clone()).unwrap();
+    let lift_offs = integrate(&mut model, 3.0, 1e-4, true);
+    let mut sim = Simulator::new(c).unwrap();
+    sim.advance_to(model.time()).unwrap();
+    let located: Vec<f64> = sim.lift_offs().events().iter().map(|e| e.time).collect();
+    assert!(!located.is_empty());
+    assert_eq!(lift_offs.len(), located.len(), "{lift_offs:?} {located:?}");
+    for (a, b) in lift_offs.iter().zip(&located) {
+        assert!((a - b).abs() < 1e-6, "{a} vs {b}");
+    }
+    assert_eq!(model.lift_off_count(), located.len() as u64);
+}
+
+#[test]
+fn after_an_event_the_indicator_is_not_zero_and_has_the_modes_sign() {
+    let c = SimulationConfig {
+        tire_contact: TireContact::Unilateral,
+        ..config(Variant::Cs, 0.0, 0.0, RoadSpec::paper_harmonic())
+    };
+    let mut model = ModelExchange::new(c).unwrap();
+    let limit = model.limit;
+    let mut x = *model.states();
+    // Exactly at the margin's zero: in contact, still positive.
+    x[X_T] = limit;
+    model.set_states(&x).unwrap();
+    assert!(model.event_indicators()[0] > 0.0);
+    x[X_T] = limit * (1.0 + 1e-9);
+    model.set_states(&x).unwrap();
+    assert!(matches!(
+        model.update_discrete_states(),
+        Some(ContactEvent::LiftOff { .. })
+    ));
+    assert!(model.event_indicators()[0] < 0.0);
+    assert!(!model.in_contact());
+}
+
+#[test]
+fn a_saved_state_replays_exactly() {
+    let c = config(Variant::Tdvass, 0.011, 5386.0, RoadSpec::paper_harmonic());
+    let mut model = ModelExchange::new(c.clone()).unwrap();
+    integrate(&mut model, 0.3, 1e-4, false);
+    let bytes = model.to_bytes();
+    let mut copy = ModelExchange::new(c).unwrap();
+    copy.restore(&bytes).unwrap();
+    integrate(&mut model, 0.6, 1e-4, false);
+    integrate(&mut copy, 0.6, 1e-4, false);
+    assert_eq!(model.states(), copy.states());
+    let mut broken = bytes.clone();
+    broken[4] = 9;
+    assert!(
+        copy.restore(&broken)
+            .unwrap_err()
+            .to_string()
+            .contains("version")
+    );
+    assert!(copy.restore(&bytes[..bytes.len() - 3]).is_err());
+}
+
+#[test]
+fn bad_states_and_times_are_refused_naming_them() {
+    let c = config(Variant::Tdvass, 0.011, 5386.0, RoadSpec::paper_harmonic());
+    let mut model = ModelExchange::new(c).unwrap();
+    let mut x = *model.states();
+    x[9] = f64::NAN;
+    let e = model.set_states(&x).unwrap_err().to_string();
+    assert!(e.contains("wk_filter_4"), "{e}");
+    assert!(
+        model
+            .set_states(&x[..5])
+            .unwrap_err()
+            .to_string()
+            .contains("5 continuous states")
+    );
+    model.set_time(0.5).unwrap();
+    model.complete_step();
+    assert!(
+        model
+            .set_time(0.4)
+            .unwrap_err()
+            .to_string()
+            .contains("before")
+    );
+    assert!(model.set_time(f64::NAN).is_err());
+}
