@@ -1,6 +1,5 @@
-//! The C ABI: every fmi2 function of FMI 2.0 Co-Simulation, exported with C
-//! linkage, plus the Model Exchange functions as stubs that return
-//! `fmi2Error` with a log message. The standard has 47 functions, each a
+//! The C ABI: every fmi2 function of FMI 2.0 Co-Simulation and Model
+//! Exchange, exported with C linkage. The standard has 47 functions, each a
 //! few lines of conversions; they stay together so that every `unsafe` of
 //! this crate is in one file.
 //!
@@ -79,7 +78,7 @@ pub struct fmi2CallbackFunctions {
     pub componentEnvironment: fmi2ComponentEnvironment,
 }
 
-/// `fmi2EventInfo` (Model Exchange; only for the stub's signature).
+/// `fmi2EventInfo` (Model Exchange).
 #[repr(C)]
 pub struct fmi2EventInfo {
     pub newDiscreteStatesNeeded: fmi2Boolean,
@@ -637,93 +636,142 @@ pub unsafe extern "C" fn fmi2GetStringStatus(
     })
 }
 
-// ------------------------------------------- Model Exchange (not supported)
+// ---------------------------------------------------------- Model Exchange
 
-/// Logs that the Model Exchange function `function` was called (when `c`
-/// is a live component) and returns `fmi2Error`.
-fn model_exchange_only(c: fmi2Component, function: &str) -> fmi2Status {
-    let message =
-        || format!("{function}: Model Exchange function; this FMU implements Co-Simulation only");
-    // SAFETY: module contract.
-    status(unsafe { entry::log_refusal::<Instance, Instance>(c, HANDLE_MAGIC, message) })
+/// Writes an `fmi2Boolean` out-argument.
+fn set_flag(target: &mut fmi2Boolean, value: bool) {
+    *target = if value { FMI2_TRUE } else { FMI2_FALSE };
 }
 
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2EnterEventMode(c: fmi2Component) -> fmi2Status {
-    model_exchange_only(c, "fmi2EnterEventMode")
+    call(c, Function::EnterEventMode, |i| {
+        i.slave_mut().enter_event_mode()
+    })
 }
 
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2NewDiscreteStates(
     c: fmi2Component,
-    _eventInfo: *mut fmi2EventInfo,
+    eventInfo: *mut fmi2EventInfo,
 ) -> fmi2Status {
-    model_exchange_only(c, "fmi2NewDiscreteStates")
+    call(c, Function::NewDiscreteStates, |i| {
+        // SAFETY: module contract: eventInfo points to an fmi2EventInfo.
+        let info = unsafe { out_value(eventInfo, "eventInfo") }?;
+        let update = i.slave_mut().update_discrete_states()?;
+        set_flag(&mut info.newDiscreteStatesNeeded, false);
+        set_flag(&mut info.terminateSimulation, update.terminate_simulation);
+        set_flag(&mut info.nominalsOfContinuousStatesChanged, false);
+        set_flag(
+            &mut info.valuesOfContinuousStatesChanged,
+            update.values_of_continuous_states_changed,
+        );
+        set_flag(
+            &mut info.nextEventTimeDefined,
+            update.next_event_time.is_some(),
+        );
+        info.nextEventTime = update.next_event_time.unwrap_or(0.0);
+        Ok(Status::Ok)
+    })
 }
 
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2EnterContinuousTimeMode(c: fmi2Component) -> fmi2Status {
-    model_exchange_only(c, "fmi2EnterContinuousTimeMode")
+    call(c, Function::EnterContinuousTimeMode, |i| {
+        i.slave_mut().enter_continuous_time_mode()
+    })
 }
 
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2CompletedIntegratorStep(
     c: fmi2Component,
     _noSetFMUStatePriorToCurrentPoint: fmi2Boolean,
-    _enterEventMode: *mut fmi2Boolean,
-    _terminateSimulation: *mut fmi2Boolean,
+    enterEventMode: *mut fmi2Boolean,
+    terminateSimulation: *mut fmi2Boolean,
 ) -> fmi2Status {
-    model_exchange_only(c, "fmi2CompletedIntegratorStep")
+    call(c, Function::CompletedIntegratorStep, |i| {
+        // SAFETY: module contract: both point to an fmi2Boolean.
+        let (enter, terminate) = unsafe {
+            (
+                out_value(enterEventMode, "enterEventMode")?,
+                out_value(terminateSimulation, "terminateSimulation")?,
+            )
+        };
+        let completion = i.slave_mut().completed_integrator_step()?;
+        set_flag(enter, completion.enter_event_mode);
+        set_flag(terminate, completion.terminate_simulation);
+        Ok(Status::Ok)
+    })
 }
 
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn fmi2SetTime(c: fmi2Component, _time: fmi2Real) -> fmi2Status {
-    model_exchange_only(c, "fmi2SetTime")
+pub unsafe extern "C" fn fmi2SetTime(c: fmi2Component, time: fmi2Real) -> fmi2Status {
+    call(c, Function::SetTime, |i| i.slave_mut().set_time(time))
 }
 
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2SetContinuousStates(
     c: fmi2Component,
-    _x: *const fmi2Real,
-    _nx: size_t,
+    x: *const fmi2Real,
+    nx: size_t,
 ) -> fmi2Status {
-    model_exchange_only(c, "fmi2SetContinuousStates")
+    call(c, Function::SetContinuousStates, |i| {
+        // SAFETY: module contract (an array of nx elements).
+        let states = unsafe { input(x, nx, "x") }?;
+        i.slave_mut().set_continuous_states(states)
+    })
 }
 
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetDerivatives(
     c: fmi2Component,
-    _derivatives: *mut fmi2Real,
-    _nx: size_t,
+    derivatives: *mut fmi2Real,
+    nx: size_t,
 ) -> fmi2Status {
-    model_exchange_only(c, "fmi2GetDerivatives")
+    call(c, Function::GetDerivatives, |i| {
+        // SAFETY: module contract (an array of nx elements).
+        let out = unsafe { output(derivatives, nx, "derivatives") }?;
+        i.slave_mut().get_derivatives(out)
+    })
 }
 
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetEventIndicators(
     c: fmi2Component,
-    _eventIndicators: *mut fmi2Real,
-    _ni: size_t,
+    eventIndicators: *mut fmi2Real,
+    ni: size_t,
 ) -> fmi2Status {
-    model_exchange_only(c, "fmi2GetEventIndicators")
+    call(c, Function::GetEventIndicators, |i| {
+        // SAFETY: module contract (an array of ni elements).
+        let out = unsafe { output(eventIndicators, ni, "eventIndicators") }?;
+        i.slave_mut().get_event_indicators(out)
+    })
 }
 
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetContinuousStates(
     c: fmi2Component,
-    _x: *mut fmi2Real,
-    _nx: size_t,
+    x: *mut fmi2Real,
+    nx: size_t,
 ) -> fmi2Status {
-    model_exchange_only(c, "fmi2GetContinuousStates")
+    call(c, Function::GetContinuousStates, |i| {
+        // SAFETY: module contract (an array of nx elements).
+        let out = unsafe { output(x, nx, "x") }?;
+        i.slave_mut().get_continuous_states(out)
+    })
 }
 
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi2GetNominalsOfContinuousStates(
     c: fmi2Component,
-    _x_nominal: *mut fmi2Real,
-    _nx: size_t,
+    x_nominal: *mut fmi2Real,
+    nx: size_t,
 ) -> fmi2Status {
-    model_exchange_only(c, "fmi2GetNominalsOfContinuousStates")
+    call(c, Function::GetNominalsOfContinuousStates, |i| {
+        // SAFETY: module contract (an array of nx elements).
+        let out = unsafe { output(x_nominal, nx, "x_nominal") }?;
+        i.slave_mut().get_nominals(out)
+    })
 }
 
 const _: () = assert!(FMI2_COSIMULATION == 1);

@@ -100,15 +100,15 @@ impl Instance {
         let instantiation = Instantiation::new(FMI2_DIALECT, logger);
         let expected = crate::guid();
         let name = instantiation.instance_name(request.instance_name)?;
-        match request.fmu_type {
-            FMI2_COSIMULATION => {}
-            FMI2_MODEL_EXCHANGE => {
-                return instantiation.refuse(
-                    "fmuType fmi2ModelExchange is not supported: this FMU implements Co-Simulation only",
-                );
+        let model_exchange = match request.fmu_type {
+            FMI2_COSIMULATION => false,
+            FMI2_MODEL_EXCHANGE => true,
+            other => {
+                return instantiation.refuse(&format!(
+                    "unknown fmuType {other} (0 = fmi2ModelExchange, 1 = fmi2CoSimulation)"
+                ));
             }
-            other => return instantiation.refuse(&format!("unknown fmuType {other}")),
-        }
+        };
         instantiation.token(request.guid, &expected)?;
         let resource_path = match request.resource_location {
             None | Some("") => None,
@@ -121,13 +121,16 @@ impl Instance {
                 }
             },
         };
-        let slave = instantiation.slave(
+        let mut slave = instantiation.slave(
             &name,
             expected,
             request.logging_on,
             resource_path.as_deref(),
             "",
         );
+        if model_exchange {
+            slave.use_model_exchange();
+        }
         Some(Instance {
             name,
             resource_path,
@@ -263,11 +266,11 @@ mod tests {
             (
                 InstantiateRequest {
                     instance_name: Some("a"),
-                    fmu_type: FMI2_MODEL_EXCHANGE,
+                    fmu_type: 7,
                     guid: Some(&guid),
                     ..Default::default()
                 },
-                "fmi2ModelExchange",
+                "unknown fmuType 7",
             ),
             (
                 InstantiateRequest {

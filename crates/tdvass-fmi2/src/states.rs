@@ -19,7 +19,7 @@ use tdvass_fmu::Phase;
 
 /// A set of phases.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct PhaseSet(u8);
+pub struct PhaseSet(u16);
 
 impl PhaseSet {
     /// The set of `phases`.
@@ -73,6 +73,16 @@ pub enum Function {
     GetIntegerStatus,
     GetBooleanStatus,
     GetStringStatus,
+    EnterEventMode,
+    NewDiscreteStates,
+    EnterContinuousTimeMode,
+    CompletedIntegratorStep,
+    SetTime,
+    SetContinuousStates,
+    GetDerivatives,
+    GetEventIndicators,
+    GetContinuousStates,
+    GetNominalsOfContinuousStates,
 }
 
 impl Function {
@@ -111,6 +121,16 @@ impl Function {
             GetIntegerStatus => "fmi2GetIntegerStatus",
             GetBooleanStatus => "fmi2GetBooleanStatus",
             GetStringStatus => "fmi2GetStringStatus",
+            EnterEventMode => "fmi2EnterEventMode",
+            NewDiscreteStates => "fmi2NewDiscreteStates",
+            EnterContinuousTimeMode => "fmi2EnterContinuousTimeMode",
+            CompletedIntegratorStep => "fmi2CompletedIntegratorStep",
+            SetTime => "fmi2SetTime",
+            SetContinuousStates => "fmi2SetContinuousStates",
+            GetDerivatives => "fmi2GetDerivatives",
+            GetEventIndicators => "fmi2GetEventIndicators",
+            GetContinuousStates => "fmi2GetContinuousStates",
+            GetNominalsOfContinuousStates => "fmi2GetNominalsOfContinuousStates",
         }
     }
 
@@ -125,16 +145,20 @@ impl Function {
 }
 
 use Phase::{
-    Error as Err_, Fatal, InitializationMode as Init, Instantiated as Inst, StepComplete as Done,
-    StepFailed as Failed, Terminated as Term,
+    ContinuousTimeMode as Cont, Error as Err_, EventMode as Event, Fatal,
+    InitializationMode as Init, Instantiated as Inst, StepComplete as Done, StepFailed as Failed,
+    Terminated as Term,
 };
 
 /// Every phase but `fatal`.
-const NOT_FATAL: PhaseSet = PhaseSet::of(&[Inst, Init, Done, Failed, Term, Err_]);
+const NOT_FATAL: PhaseSet = PhaseSet::of(&[Inst, Init, Done, Failed, Term, Err_, Event, Cont]);
 /// Where values can be read.
-const READABLE: PhaseSet = PhaseSet::of(&[Init, Done, Failed, Term, Err_]);
+const READABLE: PhaseSet = PhaseSet::of(&[Init, Done, Failed, Term, Err_, Event, Cont]);
 /// Where values can be set (which ones depends on causality and variability).
-const SETTABLE: PhaseSet = PhaseSet::of(&[Inst, Init, Done]);
+const SETTABLE: PhaseSet = PhaseSet::of(&[Inst, Init, Done, Event, Cont]);
+/// Model Exchange: where the model's states, derivatives and indicators
+/// can be read.
+const MODEL_READABLE: PhaseSet = PhaseSet::of(&[Event, Cont, Term, Err_]);
 /// Where the step status can be inquired.
 const STATUS: PhaseSet = PhaseSet::of(&[Done, Failed, Term]);
 
@@ -145,12 +169,12 @@ pub const ALLOWED: &[(Function, PhaseSet)] = {
         (SetDebugLogging, NOT_FATAL),
         (
             FreeInstance,
-            PhaseSet::of(&[Inst, Init, Done, Failed, Term, Err_, Fatal]),
+            PhaseSet::of(&[Inst, Init, Done, Failed, Term, Err_, Fatal, Event, Cont]),
         ),
         (SetupExperiment, PhaseSet::of(&[Inst])),
         (EnterInitializationMode, PhaseSet::of(&[Inst])),
         (ExitInitializationMode, PhaseSet::of(&[Init])),
-        (Terminate, PhaseSet::of(&[Done, Failed])),
+        (Terminate, PhaseSet::of(&[Done, Failed, Event, Cont])),
         (Reset, NOT_FATAL),
         (GetReal, READABLE),
         (GetInteger, READABLE),
@@ -180,6 +204,19 @@ pub const ALLOWED: &[(Function, PhaseSet)] = {
         (GetIntegerStatus, STATUS),
         (GetBooleanStatus, STATUS),
         (GetStringStatus, STATUS),
+        (EnterEventMode, PhaseSet::of(&[Cont])),
+        (NewDiscreteStates, PhaseSet::of(&[Event])),
+        (EnterContinuousTimeMode, PhaseSet::of(&[Event])),
+        (CompletedIntegratorStep, PhaseSet::of(&[Cont])),
+        (SetTime, PhaseSet::of(&[Event, Cont])),
+        (SetContinuousStates, PhaseSet::of(&[Cont])),
+        (GetDerivatives, MODEL_READABLE),
+        (GetEventIndicators, MODEL_READABLE),
+        (GetContinuousStates, MODEL_READABLE),
+        (
+            GetNominalsOfContinuousStates,
+            PhaseSet::of(&[Event, Cont, Term, Err_]),
+        ),
     ]
 };
 
@@ -202,39 +239,49 @@ mod tests {
 
     /// The standard's table, restated independently: one row per function,
     /// columns instantiated, initializationMode, stepComplete, stepFailed,
-    /// terminated, error, fatal.
+    /// terminated, error, fatal, eventMode, continuousTimeMode.
     const EXPECTED: &[(&str, &str)] = &[
-        ("fmi2SetDebugLogging", "xxxxxx."),
-        ("fmi2FreeInstance", "xxxxxxx"),
-        ("fmi2SetupExperiment", "x......"),
-        ("fmi2EnterInitializationMode", "x......"),
-        ("fmi2ExitInitializationMode", ".x....."),
-        ("fmi2Terminate", "..xx..."),
-        ("fmi2Reset", "xxxxxx."),
-        ("fmi2GetReal", ".xxxxx."),
-        ("fmi2GetInteger", ".xxxxx."),
-        ("fmi2GetBoolean", ".xxxxx."),
-        ("fmi2GetString", ".xxxxx."),
-        ("fmi2SetReal", "xxx...."),
-        ("fmi2SetInteger", "xxx...."),
-        ("fmi2SetBoolean", "xxx...."),
-        ("fmi2SetString", "xxx...."),
-        ("fmi2GetFMUstate", "xxxxxx."),
-        ("fmi2SetFMUstate", "xxxxxx."),
-        ("fmi2FreeFMUstate", "xxxxxx."),
-        ("fmi2SerializedFMUstateSize", "xxxxxx."),
-        ("fmi2SerializeFMUstate", "xxxxxx."),
-        ("fmi2DeSerializeFMUstate", "xxxxxx."),
-        ("fmi2GetDirectionalDerivative", ".xxxxx."),
-        ("fmi2SetRealInputDerivatives", "xxx...."),
-        ("fmi2GetRealOutputDerivatives", "..xxxx."),
-        ("fmi2DoStep", "..x...."),
-        ("fmi2CancelStep", "......."),
-        ("fmi2GetStatus", "..xxx.."),
-        ("fmi2GetRealStatus", "..xxx.."),
-        ("fmi2GetIntegerStatus", "..xxx.."),
-        ("fmi2GetBooleanStatus", "..xxx.."),
-        ("fmi2GetStringStatus", "..xxx.."),
+        ("fmi2SetDebugLogging", "xxxxxx.xx"),
+        ("fmi2FreeInstance", "xxxxxxxxx"),
+        ("fmi2SetupExperiment", "x........"),
+        ("fmi2EnterInitializationMode", "x........"),
+        ("fmi2ExitInitializationMode", ".x......."),
+        ("fmi2Terminate", "..xx...xx"),
+        ("fmi2Reset", "xxxxxx.xx"),
+        ("fmi2GetReal", ".xxxxx.xx"),
+        ("fmi2GetInteger", ".xxxxx.xx"),
+        ("fmi2GetBoolean", ".xxxxx.xx"),
+        ("fmi2GetString", ".xxxxx.xx"),
+        ("fmi2SetReal", "xxx....xx"),
+        ("fmi2SetInteger", "xxx....xx"),
+        ("fmi2SetBoolean", "xxx....xx"),
+        ("fmi2SetString", "xxx....xx"),
+        ("fmi2GetFMUstate", "xxxxxx.xx"),
+        ("fmi2SetFMUstate", "xxxxxx.xx"),
+        ("fmi2FreeFMUstate", "xxxxxx.xx"),
+        ("fmi2SerializedFMUstateSize", "xxxxxx.xx"),
+        ("fmi2SerializeFMUstate", "xxxxxx.xx"),
+        ("fmi2DeSerializeFMUstate", "xxxxxx.xx"),
+        ("fmi2GetDirectionalDerivative", ".xxxxx.xx"),
+        ("fmi2SetRealInputDerivatives", "xxx....xx"),
+        ("fmi2GetRealOutputDerivatives", "..xxxx..."),
+        ("fmi2DoStep", "..x......"),
+        ("fmi2CancelStep", "........."),
+        ("fmi2GetStatus", "..xxx...."),
+        ("fmi2GetRealStatus", "..xxx...."),
+        ("fmi2GetIntegerStatus", "..xxx...."),
+        ("fmi2GetBooleanStatus", "..xxx...."),
+        ("fmi2GetStringStatus", "..xxx...."),
+        ("fmi2EnterEventMode", "........x"),
+        ("fmi2NewDiscreteStates", ".......x."),
+        ("fmi2EnterContinuousTimeMode", ".......x."),
+        ("fmi2CompletedIntegratorStep", "........x"),
+        ("fmi2SetTime", ".......xx"),
+        ("fmi2SetContinuousStates", "........x"),
+        ("fmi2GetDerivatives", "....xx.xx"),
+        ("fmi2GetEventIndicators", "....xx.xx"),
+        ("fmi2GetContinuousStates", "....xx.xx"),
+        ("fmi2GetNominalsOfContinuousStates", "....xx.xx"),
     ];
 
     #[test]
@@ -278,6 +325,6 @@ mod tests {
         for s in Phase::ALL {
             assert_eq!(Phase::from_code(s.code()), Some(s));
         }
-        assert_eq!(Phase::from_code(7), None);
+        assert_eq!(Phase::from_code(9), None);
     }
 }

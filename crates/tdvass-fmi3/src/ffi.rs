@@ -169,7 +169,7 @@ fn call(
 fn not_applicable(instance: fmi3Instance, function: &str, reason: &str) -> fmi3Status {
     let message = || {
         format!(
-            "{function}: {reason}; this FMU implements Co-Simulation only, without event mode or clocks"
+            "{function}: {reason}; this FMU implements Co-Simulation and Model Exchange, without clocks"
         )
     };
     // SAFETY: module contract.
@@ -222,20 +222,46 @@ fn refuse_instantiation(
 
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3InstantiateModelExchange(
-    _instanceName: fmi3String,
-    _instantiationToken: fmi3String,
-    _resourcePath: fmi3String,
+    instanceName: fmi3String,
+    instantiationToken: fmi3String,
+    resourcePath: fmi3String,
     _visible: fmi3Boolean,
-    _loggingOn: fmi3Boolean,
+    loggingOn: fmi3Boolean,
     instanceEnvironment: fmi3InstanceEnvironment,
     logMessage: fmi3LogMessageCallback,
 ) -> fmi3Instance {
-    refuse_instantiation(
-        logMessage,
-        instanceEnvironment,
-        "fmi3InstantiateModelExchange",
-        "Model Exchange is not supported: this FMU implements Co-Simulation only",
-    )
+    let made = catch_unwind(AssertUnwindSafe(|| {
+        let sink = c_logger(logMessage, instanceEnvironment);
+        // SAFETY: by contract NULL or a NUL-terminated string; copied.
+        let name = unsafe { copy_str(instanceName) };
+        // SAFETY: as above.
+        let token = unsafe { copy_str(instantiationToken) };
+        // SAFETY: as above.
+        let resources = unsafe { copy_str(resourcePath) };
+        let request = InstantiateRequest {
+            instance_name: name.as_deref(),
+            instantiation_token: token.as_deref(),
+            resource_path: resources.as_deref(),
+            logging_on: loggingOn != FMI3_FALSE,
+            event_mode_used: false,
+            early_return_allowed: false,
+            required_intermediate_variables: &[],
+            intermediate_update: false,
+            model_exchange: true,
+        };
+        match Instance::instantiate(request, sink) {
+            Some(instance) => pointers::into_raw(
+                HANDLE_MAGIC,
+                Component {
+                    instance,
+                    environment: instanceEnvironment,
+                    intermediate_update: None,
+                },
+            ),
+            None => std::ptr::null_mut(),
+        }
+    }));
+    made.unwrap_or(std::ptr::null_mut())
 }
 
 #[unsafe(no_mangle)]
@@ -309,6 +335,7 @@ pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
             early_return_allowed: earlyReturnAllowed != FMI3_FALSE,
             required_intermediate_variables: required,
             intermediate_update: intermediateUpdate.is_some(),
+            model_exchange: false,
         };
         match Instance::instantiate(request, sink) {
             Some(instance) => pointers::into_raw(
@@ -360,7 +387,9 @@ pub unsafe extern "C" fn fmi3ExitInitializationMode(instance: fmi3Instance) -> f
 
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn fmi3EnterEventMode(instance: fmi3Instance) -> fmi3Status {
-    not_applicable(instance, "fmi3EnterEventMode", "this FMU has no event mode")
+    call(instance, Function::EnterEventMode, |i| {
+        i.slave_mut().enter_event_mode()
+    })
 }
 
 #[unsafe(no_mangle)]
@@ -1032,9 +1061,9 @@ pub unsafe extern "C" fn fmi3ActivateModelPartition(
     )
 }
 
-// ---------------------------------- clocks, event mode and Model Exchange
+// ------------------------------------------ clocks and discrete evaluation
 
-/// The functions of clocks, event mode and Model Exchange: refused with
+/// The functions of clocks and of discrete-state evaluation: refused with
 /// the reason logged.
 macro_rules! refused {
     ($name:ident ( $($arg:ident : $t:ty),* ), $reason:expr) => {
@@ -1048,7 +1077,6 @@ macro_rules! refused {
 
 const NO_CLOCKS: &str = "this FMU has no clocks";
 const NO_EVENT_MODE: &str = "this FMU has no event mode";
-const MODEL_EXCHANGE: &str = "Model Exchange function";
 
 refused!(fmi3GetIntervalDecimal(vrs: *const fmi3ValueReference, n: size_t, intervals: *mut fmi3Float64, qualifiers: *mut fmi3IntervalQualifier), NO_CLOCKS);
 refused!(fmi3GetIntervalFraction(vrs: *const fmi3ValueReference, n: size_t, counters: *mut fmi3UInt64, resolutions: *mut fmi3UInt64, qualifiers: *mut fmi3IntervalQualifier), NO_CLOCKS);
@@ -1059,17 +1087,179 @@ refused!(fmi3SetIntervalFraction(vrs: *const fmi3ValueReference, n: size_t, coun
 refused!(fmi3SetShiftDecimal(vrs: *const fmi3ValueReference, n: size_t, shifts: *const fmi3Float64), NO_CLOCKS);
 refused!(fmi3SetShiftFraction(vrs: *const fmi3ValueReference, n: size_t, counters: *const fmi3UInt64, resolutions: *const fmi3UInt64), NO_CLOCKS);
 refused!(fmi3EvaluateDiscreteStates(), NO_EVENT_MODE);
-refused!(fmi3UpdateDiscreteStates(discrete_states_need_update: *mut fmi3Boolean, terminate_simulation: *mut fmi3Boolean, nominals_changed: *mut fmi3Boolean, values_changed: *mut fmi3Boolean, next_event_time_defined: *mut fmi3Boolean, next_event_time: *mut fmi3Float64), NO_EVENT_MODE);
-refused!(fmi3EnterContinuousTimeMode(), MODEL_EXCHANGE);
-refused!(fmi3CompletedIntegratorStep(no_set_prior: fmi3Boolean, enter_event_mode: *mut fmi3Boolean, terminate_simulation: *mut fmi3Boolean), MODEL_EXCHANGE);
-refused!(fmi3SetTime(time: fmi3Float64), MODEL_EXCHANGE);
-refused!(fmi3SetContinuousStates(states: *const fmi3Float64, n: size_t), MODEL_EXCHANGE);
-refused!(fmi3GetContinuousStateDerivatives(derivatives: *mut fmi3Float64, n: size_t), MODEL_EXCHANGE);
-refused!(fmi3GetEventIndicators(indicators: *mut fmi3Float64, n: size_t), MODEL_EXCHANGE);
-refused!(fmi3GetContinuousStates(states: *mut fmi3Float64, n: size_t), MODEL_EXCHANGE);
-refused!(fmi3GetNominalsOfContinuousStates(nominals: *mut fmi3Float64, n: size_t), MODEL_EXCHANGE);
-refused!(fmi3GetNumberOfEventIndicators(n: *mut size_t), MODEL_EXCHANGE);
-refused!(fmi3GetNumberOfContinuousStates(n: *mut size_t), MODEL_EXCHANGE);
+
+// ---------------------------------------------------------- Model Exchange
+
+/// Writes an `fmi3Boolean` out-argument.
+fn set_flag(target: &mut fmi3Boolean, value: bool) {
+    *target = if value { FMI3_TRUE } else { FMI3_FALSE };
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi3UpdateDiscreteStates(
+    instance: fmi3Instance,
+    discreteStatesNeedUpdate: *mut fmi3Boolean,
+    terminateSimulation: *mut fmi3Boolean,
+    nominalsOfContinuousStatesChanged: *mut fmi3Boolean,
+    valuesOfContinuousStatesChanged: *mut fmi3Boolean,
+    nextEventTimeDefined: *mut fmi3Boolean,
+    nextEventTime: *mut fmi3Float64,
+) -> fmi3Status {
+    call(instance, Function::UpdateDiscreteStates, |i| {
+        // SAFETY: module contract: each points to one value of its type.
+        let (again, terminate, nominals, values, defined, next) = unsafe {
+            (
+                out_value(discreteStatesNeedUpdate, "discreteStatesNeedUpdate")?,
+                out_value(terminateSimulation, "terminateSimulation")?,
+                out_value(
+                    nominalsOfContinuousStatesChanged,
+                    "nominalsOfContinuousStatesChanged",
+                )?,
+                out_value(
+                    valuesOfContinuousStatesChanged,
+                    "valuesOfContinuousStatesChanged",
+                )?,
+                out_value(nextEventTimeDefined, "nextEventTimeDefined")?,
+                out_value(nextEventTime, "nextEventTime")?,
+            )
+        };
+        let update = i.slave_mut().update_discrete_states()?;
+        set_flag(again, false);
+        set_flag(terminate, update.terminate_simulation);
+        set_flag(nominals, false);
+        set_flag(values, update.values_of_continuous_states_changed);
+        set_flag(defined, update.next_event_time.is_some());
+        *next = update.next_event_time.unwrap_or(0.0);
+        Ok(Status::Ok)
+    })
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi3EnterContinuousTimeMode(instance: fmi3Instance) -> fmi3Status {
+    call(instance, Function::EnterContinuousTimeMode, |i| {
+        i.slave_mut().enter_continuous_time_mode()
+    })
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi3CompletedIntegratorStep(
+    instance: fmi3Instance,
+    _noSetFMUStatePriorToCurrentPoint: fmi3Boolean,
+    enterEventMode: *mut fmi3Boolean,
+    terminateSimulation: *mut fmi3Boolean,
+) -> fmi3Status {
+    call(instance, Function::CompletedIntegratorStep, |i| {
+        // SAFETY: module contract: both point to an fmi3Boolean.
+        let (enter, terminate) = unsafe {
+            (
+                out_value(enterEventMode, "enterEventMode")?,
+                out_value(terminateSimulation, "terminateSimulation")?,
+            )
+        };
+        let completion = i.slave_mut().completed_integrator_step()?;
+        set_flag(enter, completion.enter_event_mode);
+        set_flag(terminate, completion.terminate_simulation);
+        Ok(Status::Ok)
+    })
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi3SetTime(instance: fmi3Instance, time: fmi3Float64) -> fmi3Status {
+    call(instance, Function::SetTime, |i| {
+        i.slave_mut().set_time(time)
+    })
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi3SetContinuousStates(
+    instance: fmi3Instance,
+    continuousStates: *const fmi3Float64,
+    nContinuousStates: size_t,
+) -> fmi3Status {
+    call(instance, Function::SetContinuousStates, |i| {
+        // SAFETY: module contract (an array of nContinuousStates elements).
+        let states = unsafe { input(continuousStates, nContinuousStates, "continuousStates") }?;
+        i.slave_mut().set_continuous_states(states)
+    })
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi3GetContinuousStateDerivatives(
+    instance: fmi3Instance,
+    derivatives: *mut fmi3Float64,
+    nContinuousStates: size_t,
+) -> fmi3Status {
+    call(instance, Function::GetContinuousStateDerivatives, |i| {
+        // SAFETY: module contract (an array of nContinuousStates elements).
+        let out = unsafe { output(derivatives, nContinuousStates, "derivatives") }?;
+        i.slave_mut().get_derivatives(out)
+    })
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi3GetEventIndicators(
+    instance: fmi3Instance,
+    eventIndicators: *mut fmi3Float64,
+    nEventIndicators: size_t,
+) -> fmi3Status {
+    call(instance, Function::GetEventIndicators, |i| {
+        // SAFETY: module contract (an array of nEventIndicators elements).
+        let out = unsafe { output(eventIndicators, nEventIndicators, "eventIndicators") }?;
+        i.slave_mut().get_event_indicators(out)
+    })
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi3GetContinuousStates(
+    instance: fmi3Instance,
+    continuousStates: *mut fmi3Float64,
+    nContinuousStates: size_t,
+) -> fmi3Status {
+    call(instance, Function::GetContinuousStates, |i| {
+        // SAFETY: module contract (an array of nContinuousStates elements).
+        let out = unsafe { output(continuousStates, nContinuousStates, "continuousStates") }?;
+        i.slave_mut().get_continuous_states(out)
+    })
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi3GetNominalsOfContinuousStates(
+    instance: fmi3Instance,
+    nominals: *mut fmi3Float64,
+    nContinuousStates: size_t,
+) -> fmi3Status {
+    call(instance, Function::GetNominalsOfContinuousStates, |i| {
+        // SAFETY: module contract (an array of nContinuousStates elements).
+        let out = unsafe { output(nominals, nContinuousStates, "nominals") }?;
+        i.slave_mut().get_nominals(out)
+    })
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi3GetNumberOfEventIndicators(
+    instance: fmi3Instance,
+    nEventIndicators: *mut size_t,
+) -> fmi3Status {
+    call(instance, Function::GetNumberOfEventIndicators, |_| {
+        // SAFETY: module contract: points to a size_t.
+        *unsafe { out_value(nEventIndicators, "nEventIndicators") }? =
+            tdvass::exchange::EVENT_INDICATORS;
+        Ok(Status::Ok)
+    })
+}
+
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn fmi3GetNumberOfContinuousStates(
+    instance: fmi3Instance,
+    nContinuousStates: *mut size_t,
+) -> fmi3Status {
+    call(instance, Function::GetNumberOfContinuousStates, |_| {
+        // SAFETY: module contract: points to a size_t.
+        *unsafe { out_value(nContinuousStates, "nContinuousStates") }? =
+            tdvass::solver::CONTINUOUS_STATES;
+        Ok(Status::Ok)
+    })
+}
 
 #[cfg(test)]
 mod tests;

@@ -50,6 +50,8 @@ pub struct InstantiateRequest<'a> {
     pub required_intermediate_variables: &'a [u32],
     /// The master passed an `intermediateUpdate` callback.
     pub intermediate_update: bool,
+    /// `fmi3InstantiateModelExchange` (else Co-Simulation).
+    pub model_exchange: bool,
 }
 
 /// What the master may do inside the current intermediate update.
@@ -156,13 +158,21 @@ impl Instance {
                 "not allowed"
             },
         );
-        let slave = instantiation.slave(
+        let details = if request.model_exchange {
+            ", Model Exchange".to_string()
+        } else {
+            details
+        };
+        let mut slave = instantiation.slave(
             &name,
             expected,
             request.logging_on,
             resource_path.as_deref(),
             &details,
         );
+        if request.model_exchange {
+            slave.use_model_exchange();
+        }
         Some(Instance {
             name,
             resource_path,
@@ -206,6 +216,8 @@ impl Instance {
             Phase::Terminated => Fmi3Phase::Terminated,
             Phase::Error => Fmi3Phase::Error,
             Phase::Fatal => Fmi3Phase::Fatal,
+            Phase::EventMode => Fmi3Phase::EventMode,
+            Phase::ContinuousTimeMode => Fmi3Phase::ContinuousTimeMode,
         }
     }
 

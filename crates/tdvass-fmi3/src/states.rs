@@ -3,9 +3,10 @@
 //! standard's state, [`Fmi3Phase`]), checked by one function ([`check`]).
 //!
 //! The table follows the state machine of the FMI 3.0 standard (section
-//! 4.2) for an FMU without event mode, clocks or tunable structural
-//! parameters, so Event Mode, Reconfiguration Mode and Clock Activation
-//! Mode never occur. Two refinements:
+//! 4.2) for an FMU without clocks or tunable structural parameters, so
+//! Reconfiguration Mode and Clock Activation Mode never occur; Event Mode
+//! and Continuous-Time Mode are those of Model Exchange instances (a
+//! Co-Simulation instance never enters them). Two refinements:
 //! - Step Mode after a discarded step ([`Fmi3Phase::StepDiscarded`]): the
 //!   master may read values, restore an FMU state, reset or terminate, but
 //!   not step on.
@@ -15,9 +16,9 @@
 //!   instance from its own callback is refused.
 //!
 //! `fmi3FreeInstance` is also allowed in `Fatal`, so that a master can
-//! always release the memory. Functions of Model Exchange, Scheduled
-//! Execution, event mode and clocks are not in the table: they are refused
-//! in every state, with the reason logged.
+//! always release the memory. Functions of Scheduled Execution and clocks
+//! are not in the table: they are refused in every state, with the reason
+//! logged.
 
 use crate::FmiError;
 use crate::types::ValueType;
@@ -36,11 +37,15 @@ pub enum Fmi3Phase {
     Terminated,
     Error,
     Fatal,
+    /// Model Exchange: Event Mode.
+    EventMode,
+    /// Model Exchange: Continuous-Time Mode.
+    ContinuousTimeMode,
 }
 
 impl Fmi3Phase {
     /// Every phase.
-    pub const ALL: [Fmi3Phase; 9] = [
+    pub const ALL: [Fmi3Phase; 11] = [
         Fmi3Phase::Instantiated,
         Fmi3Phase::ConfigurationMode,
         Fmi3Phase::InitializationMode,
@@ -50,6 +55,8 @@ impl Fmi3Phase {
         Fmi3Phase::Terminated,
         Fmi3Phase::Error,
         Fmi3Phase::Fatal,
+        Fmi3Phase::EventMode,
+        Fmi3Phase::ContinuousTimeMode,
     ];
 
     /// The standard's name of the state.
@@ -64,6 +71,8 @@ impl Fmi3Phase {
             Fmi3Phase::Terminated => "Terminated",
             Fmi3Phase::Error => "Error",
             Fmi3Phase::Fatal => "Fatal",
+            Fmi3Phase::EventMode => "Event Mode",
+            Fmi3Phase::ContinuousTimeMode => "Continuous-Time Mode",
         }
     }
 
@@ -119,6 +128,18 @@ pub enum Function {
     ExitConfigurationMode,
     GetOutputDerivatives,
     DoStep,
+    EnterEventMode,
+    UpdateDiscreteStates,
+    EnterContinuousTimeMode,
+    CompletedIntegratorStep,
+    SetTime,
+    SetContinuousStates,
+    GetContinuousStateDerivatives,
+    GetEventIndicators,
+    GetContinuousStates,
+    GetNominalsOfContinuousStates,
+    GetNumberOfEventIndicators,
+    GetNumberOfContinuousStates,
 }
 
 impl Function {
@@ -148,6 +169,18 @@ impl Function {
             ExitConfigurationMode => "fmi3ExitConfigurationMode",
             GetOutputDerivatives => "fmi3GetOutputDerivatives",
             DoStep => "fmi3DoStep",
+            EnterEventMode => "fmi3EnterEventMode",
+            UpdateDiscreteStates => "fmi3UpdateDiscreteStates",
+            EnterContinuousTimeMode => "fmi3EnterContinuousTimeMode",
+            CompletedIntegratorStep => "fmi3CompletedIntegratorStep",
+            SetTime => "fmi3SetTime",
+            SetContinuousStates => "fmi3SetContinuousStates",
+            GetContinuousStateDerivatives => "fmi3GetContinuousStateDerivatives",
+            GetEventIndicators => "fmi3GetEventIndicators",
+            GetContinuousStates => "fmi3GetContinuousStates",
+            GetNominalsOfContinuousStates => "fmi3GetNominalsOfContinuousStates",
+            GetNumberOfEventIndicators => "fmi3GetNumberOfEventIndicators",
+            GetNumberOfContinuousStates => "fmi3GetNumberOfContinuousStates",
         }
     }
 
@@ -167,22 +200,26 @@ impl Function {
 }
 
 use Fmi3Phase::{
-    ConfigurationMode as Conf, Error as Err_, Fatal, InitializationMode as Init,
-    Instantiated as Inst, IntermediateUpdate as Inter, StepDiscarded as Disc, StepMode as Step,
-    Terminated as Term,
+    ConfigurationMode as Conf, ContinuousTimeMode as Cont, Error as Err_, EventMode as Event,
+    Fatal, InitializationMode as Init, Instantiated as Inst, IntermediateUpdate as Inter,
+    StepDiscarded as Disc, StepMode as Step, Terminated as Term,
 };
 
 /// Every phase but `Fatal` and the intermediate update.
-const NOT_FATAL: PhaseSet = PhaseSet::of(&[Inst, Conf, Init, Step, Disc, Term, Err_]);
+const NOT_FATAL: PhaseSet = PhaseSet::of(&[Inst, Conf, Init, Step, Disc, Term, Err_, Event, Cont]);
 /// Where values can be read (inside an intermediate update: the
 /// intermediate variables only; in Configuration Mode: structural
 /// parameters only).
-const READABLE: PhaseSet = PhaseSet::of(&[Conf, Init, Step, Disc, Inter, Term, Err_]);
+const READABLE: PhaseSet = PhaseSet::of(&[Conf, Init, Step, Disc, Inter, Term, Err_, Event, Cont]);
 /// Where values can be set (which ones depends on causality, variability
 /// and, inside an intermediate update, on the variable's flag).
-const SETTABLE: PhaseSet = PhaseSet::of(&[Inst, Conf, Init, Step, Inter]);
+const SETTABLE: PhaseSet = PhaseSet::of(&[Inst, Conf, Init, Step, Inter, Event, Cont]);
 /// Where the model's partial derivatives can be evaluated.
 const LINEARIZABLE: PhaseSet = PhaseSet::of(&[Init, Step, Disc, Term, Err_]);
+/// Model Exchange: where states, derivatives and indicators can be read.
+const MODEL_READABLE: PhaseSet = PhaseSet::of(&[Event, Cont, Term, Err_]);
+/// Model Exchange: where the model's sizes can be asked.
+const SIZES: PhaseSet = PhaseSet::of(&[Conf, Init, Event, Cont, Term, Err_]);
 
 /// The state table: which function is allowed in which phase. Getters and
 /// setters of every type share one row each.
@@ -192,11 +229,11 @@ pub const ALLOWED: &[(Function, PhaseSet)] = {
         (SetDebugLogging, NOT_FATAL),
         (
             FreeInstance,
-            PhaseSet::of(&[Inst, Conf, Init, Step, Disc, Term, Err_, Fatal]),
+            PhaseSet::of(&[Inst, Conf, Init, Step, Disc, Term, Err_, Fatal, Event, Cont]),
         ),
         (EnterInitializationMode, PhaseSet::of(&[Inst])),
         (ExitInitializationMode, PhaseSet::of(&[Init])),
-        (Terminate, PhaseSet::of(&[Step, Disc])),
+        (Terminate, PhaseSet::of(&[Step, Disc, Event, Cont])),
         (Reset, NOT_FATAL),
         (Get(ValueType::Float64), READABLE),
         (Set(ValueType::Float64), SETTABLE),
@@ -217,6 +254,18 @@ pub const ALLOWED: &[(Function, PhaseSet)] = {
             PhaseSet::of(&[Step, Disc, Term, Err_]),
         ),
         (DoStep, PhaseSet::of(&[Step])),
+        (EnterEventMode, PhaseSet::of(&[Cont])),
+        (UpdateDiscreteStates, PhaseSet::of(&[Event])),
+        (EnterContinuousTimeMode, PhaseSet::of(&[Event])),
+        (CompletedIntegratorStep, PhaseSet::of(&[Cont])),
+        (SetTime, PhaseSet::of(&[Event, Cont])),
+        (SetContinuousStates, PhaseSet::of(&[Cont])),
+        (GetContinuousStateDerivatives, MODEL_READABLE),
+        (GetEventIndicators, MODEL_READABLE),
+        (GetContinuousStates, MODEL_READABLE),
+        (GetNominalsOfContinuousStates, MODEL_READABLE),
+        (GetNumberOfEventIndicators, SIZES),
+        (GetNumberOfContinuousStates, SIZES),
     ]
 };
 
@@ -259,7 +308,19 @@ mod tests {
         ("fmi3EnterConfigurationMode", "x........"),
         ("fmi3ExitConfigurationMode", ".x......."),
         ("fmi3GetOutputDerivatives", "...xx.xx."),
-        ("fmi3DoStep", "...x....."),
+        ("fmi3DoStep", "...x......."),
+        ("fmi3EnterEventMode", "..........x"),
+        ("fmi3UpdateDiscreteStates", ".........x."),
+        ("fmi3EnterContinuousTimeMode", ".........x."),
+        ("fmi3CompletedIntegratorStep", "..........x"),
+        ("fmi3SetTime", ".........xx"),
+        ("fmi3SetContinuousStates", "..........x"),
+        ("fmi3GetContinuousStateDerivatives", "......xx.xx"),
+        ("fmi3GetEventIndicators", "......xx.xx"),
+        ("fmi3GetContinuousStates", "......xx.xx"),
+        ("fmi3GetNominalsOfContinuousStates", "......xx.xx"),
+        ("fmi3GetNumberOfEventIndicators", ".xx...xx.xx"),
+        ("fmi3GetNumberOfContinuousStates", ".xx...xx.xx"),
     ];
 
     fn by_name(name: &str) -> Function {
@@ -285,6 +346,18 @@ mod tests {
             ExitConfigurationMode,
             GetOutputDerivatives,
             DoStep,
+            EnterEventMode,
+            UpdateDiscreteStates,
+            EnterContinuousTimeMode,
+            CompletedIntegratorStep,
+            SetTime,
+            SetContinuousStates,
+            GetContinuousStateDerivatives,
+            GetEventIndicators,
+            GetContinuousStates,
+            GetNominalsOfContinuousStates,
+            GetNumberOfEventIndicators,
+            GetNumberOfContinuousStates,
         ];
         for t in ValueType::ALL {
             all.push(Get(t));

@@ -1,11 +1,13 @@
 //! The phase of a slave: where it is in its life cycle.
 
-/// The phase of a co-simulation slave. The FMI standards call it the state
+/// The phase of a slave (co-simulation or Model Exchange). The FMI standards call it the state
 /// of the instance: FMI 2.0's states are these phases, with these names;
 /// the FMI 3.0 front-end refines them (its `Fmi3Phase` adds Configuration
 /// Mode and the intermediate update; its Step Mode is
 /// [`Phase::StepComplete`], and [`Phase::StepFailed`] after a discarded
-/// step). The codes are stored in serialized FMU states.
+/// step). Model Exchange instances go from initialization to
+/// [`Phase::EventMode`] and [`Phase::ContinuousTimeMode`] instead of the
+/// step phases. The codes are stored in serialized FMU states.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Phase {
     Instantiated,
@@ -15,11 +17,15 @@ pub enum Phase {
     Terminated,
     Error,
     Fatal,
+    /// Model Exchange: Event Mode.
+    EventMode,
+    /// Model Exchange: Continuous-Time Mode.
+    ContinuousTimeMode,
 }
 
 impl Phase {
     /// Every phase.
-    pub const ALL: [Phase; 7] = [
+    pub const ALL: [Phase; 9] = [
         Phase::Instantiated,
         Phase::InitializationMode,
         Phase::StepComplete,
@@ -27,6 +33,8 @@ impl Phase {
         Phase::Terminated,
         Phase::Error,
         Phase::Fatal,
+        Phase::EventMode,
+        Phase::ContinuousTimeMode,
     ];
 
     /// The name FMI 2.0 gives the phase, its state (`stepComplete`, ...).
@@ -39,6 +47,8 @@ impl Phase {
             Phase::Terminated => "terminated",
             Phase::Error => "error",
             Phase::Fatal => "fatal",
+            Phase::EventMode => "eventMode",
+            Phase::ContinuousTimeMode => "continuousTimeMode",
         }
     }
 
@@ -58,7 +68,7 @@ impl Phase {
     }
 
     /// The bit of the phase in a set of phases.
-    pub const fn bit(self) -> u8 {
-        1 << self as u8
+    pub const fn bit(self) -> u16 {
+        1 << self as u16
     }
 }

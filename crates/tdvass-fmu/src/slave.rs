@@ -12,15 +12,18 @@ use crate::variables::FmiVersion;
 use crate::{FmiError, Status};
 use std::collections::HashMap;
 use std::fmt;
+use tdvass::exchange::ModelExchange;
 use tdvass::model::Params;
 use tdvass::solver::{DelayGrid, Simulator};
 
+mod exchange;
 mod fmu_states;
 mod logger;
 mod partials;
 mod stepping;
 mod values;
 
+pub use exchange::{EventUpdate, StepCompletion};
 pub use logger::{LogSink, Logger};
 pub use stepping::extrapolation_slope;
 
@@ -95,8 +98,10 @@ pub struct SlaveState {
     pub last_successful_time: f64,
     /// The FMU asks the master to terminate (after a divergence).
     pub terminate_requested: bool,
-    /// The simulation, from `the end of initialization` on.
+    /// The simulation, from `the end of initialization` on (co-simulation).
     pub sim: Option<Simulator>,
+    /// The model, from the end of initialization on (Model Exchange).
+    pub exchange: Option<ModelExchange>,
 }
 
 impl SlaveState {
@@ -117,6 +122,7 @@ impl SlaveState {
             last_successful_time: crate::DEFAULT_START_TIME,
             terminate_requested: false,
             sim: None,
+            exchange: None,
         }
     }
 }
@@ -146,6 +152,8 @@ pub struct Slave {
     spectrum: Option<SpectrumCache>,
     /// The value references of the last `GetReal`, looked up.
     read_plan: values::ReadPlan,
+    /// Made for Model Exchange (else co-simulation).
+    model_exchange: bool,
 }
 
 /// The C name of a function (`fmi2DoStep`, ...): its dialect's prefix and
@@ -174,6 +182,7 @@ impl Slave {
             fmu_states: HashMap::new(),
             spectrum: None,
             read_plan: values::ReadPlan::default(),
+            model_exchange: false,
         }
     }
 
@@ -347,6 +356,9 @@ impl Slave {
     /// stays in initialization mode), starts the simulation and checks
     /// stability (an unstable (g, tau) gives `Warning`).
     pub fn exit_initialization_mode(&mut self) -> Result<Status, FmiError> {
+        if self.model_exchange {
+            return self.exit_initialization_to_event_mode();
+        }
         let sim = self.build_simulator()?;
         let grid = sim.grid();
         self.state.sim = Some(sim);
@@ -426,6 +438,9 @@ impl Slave {
 
     /// Current time: the simulator's, or the start time before initialization.
     pub fn time(&self) -> f64 {
+        if let Some(model) = &self.state.exchange {
+            return model.time();
+        }
         self.state
             .sim
             .as_ref()

@@ -3,7 +3,7 @@
 //! ```text
 //! offset  size  content
 //! 0       8     magic "TDVASSFS"
-//! 8       4     format version (u32 LE), currently 5
+//! 8       4     format version (u32 LE), currently 6
 //! 12      4     GUID length n (u32 LE)
 //! 16      n     GUID of the FMU that wrote the state (ASCII)
 //! 16+n    8     payload length (u64 LE)
@@ -15,7 +15,8 @@
 //! setting (by value reference, so the layout follows the variable table),
 //! input slope and its origin, the last two input values (for
 //! `input_extrapolation`), the hold-warning and contact-loss flags, start and stop time, the tolerance, last successful time, the terminate
-//! flag, then [`Simulator::to_bytes`] (time, solver state, the delay
+//! flag, the Model Exchange model if any ([`ModelExchange::to_bytes`],
+//! after a flag and its length), then [`Simulator::to_bytes`] (time, solver state, the delay
 //! history, the road generator, the RMS accumulators, the configuration).
 //! All numbers are little-endian; floats are stored as their bit patterns,
 //! so a restored state continues bit-identically.
@@ -31,6 +32,7 @@ use crate::settings::Settings;
 use crate::slave::SlaveState;
 use crate::variables::{Access, FMI3_VARIABLES, FmiVersion, by_vr};
 use tdvass::bytes::{ByteReader, ByteWriter};
+use tdvass::exchange::ModelExchange;
 use tdvass::solver::Simulator;
 
 /// First bytes of every serialized state.
@@ -42,10 +44,12 @@ pub const MAGIC: &[u8; 8] = b"TDVASSFS";
 /// comfort, road-holding and working-space accumulators; older states are
 /// refused; version 4 the experiment's tolerance (after the stop time) and
 /// the simulator's step bound; version 5 the setting `tire_contact` and the
-/// simulator's contact mode. Both FMI versions write the
+/// simulator's contact mode; version 6 the Model Exchange model (its own
+/// versioned bytes: time, states, contact mode, delay history), before the
+/// simulator. Both FMI versions write the
 /// same format; the header's token (the FMI 2.0 GUID or the FMI 3.0
 /// instantiation token) keeps a state of one from being read by the other.
-pub const FORMAT_VERSION: u32 = 5;
+pub const FORMAT_VERSION: u32 = 6;
 /// Longest GUID accepted in a header.
 const MAX_GUID_LEN: usize = 64;
 /// Most internal steps between the start and a restored state (2^52: node
@@ -173,6 +177,15 @@ fn encode_payload(model: &SlaveState) -> Vec<u8> {
     w.f64(model.settings.tolerance);
     w.f64(model.last_successful_time);
     w.u8(model.terminate_requested as u8);
+    match &model.exchange {
+        Some(exchange) => {
+            let bytes = exchange.to_bytes();
+            w.u8(1);
+            w.u64(bytes.len() as u64);
+            w.raw(&bytes);
+        }
+        None => w.u8(0),
+    }
     match &model.sim {
         Some(sim) => {
             let bytes = sim.to_bytes();
@@ -279,6 +292,22 @@ fn decode_payload(bytes: &[u8]) -> Result<SlaveState, FmiError> {
     settings.tolerance = tolerance;
     let last_successful_time = r.finite("the last successful time")?;
     let terminate_requested = r.flag("terminate requested")?;
+    let exchange = if r.flag("Model Exchange model present")? {
+        let len = r.u64("the Model Exchange model length")?;
+        let len = usize::try_from(len)
+            .map_err(|_| invalid(format_args!("a Model Exchange model of {len} bytes")))?;
+        let bytes = r.take(len, "the Model Exchange model")?;
+        crate::guards::check_rates(&settings).map_err(|e| invalid(e.message))?;
+        let config = settings.to_config(start_time).map_err(invalid)?;
+        let mut model = ModelExchange::new(config).map_err(invalid)?;
+        if settings.road_is_input() {
+            model.set_road_input(settings.x_g).map_err(invalid)?;
+        }
+        model.restore(bytes).map_err(invalid)?;
+        Some(model)
+    } else {
+        None
+    };
     let mut sim = if r.flag("simulator present")? {
         let len = r.u64("the simulator length")?;
         let bytes = r.rest();
@@ -295,11 +324,21 @@ fn decode_payload(bytes: &[u8]) -> Result<SlaveState, FmiError> {
     if !r.rest().is_empty() {
         return Err(invalid("trailing bytes"));
     }
-    if phase.is_simulating() != sim.is_some() {
+    let model_exchange_phase = matches!(phase, Phase::EventMode | Phase::ContinuousTimeMode);
+    if exchange.is_some() && sim.is_some() {
+        return Err(invalid("both a simulator and a Model Exchange model"));
+    }
+    if phase.is_simulating() != (sim.is_some() || exchange.is_some())
+        || (model_exchange_phase && exchange.is_none())
+    {
         return Err(invalid(format_args!(
             "state {} {} a simulator",
             phase.name(),
-            if sim.is_some() { "with" } else { "without" }
+            if sim.is_some() || exchange.is_some() {
+                "with"
+            } else {
+                "without"
+            }
         )));
     }
     if let Some(sim) = &mut sim {
@@ -337,6 +376,7 @@ fn decode_payload(bytes: &[u8]) -> Result<SlaveState, FmiError> {
         last_successful_time,
         terminate_requested,
         sim,
+        exchange,
     })
 }
 
@@ -513,7 +553,7 @@ mod tests {
                 "{cut}: {e}"
             );
         }
-        for version in [1, 2, 3, 4, 6] {
+        for version in [1, 2, 3, 4, 5, 7] {
             let mut other = bytes.clone();
             other[8] = version;
             assert!(err(&other).contains(&format!("format version {version}")));

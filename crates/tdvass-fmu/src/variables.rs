@@ -34,6 +34,9 @@ pub enum Causality {
     CalculatedParameter,
     Input,
     Output,
+    /// A continuous state or derivative of Model Exchange that is not an
+    /// output (readable in both interfaces).
+    Local,
     /// FMI 3.0 only: the independent variable `time`.
     Independent,
 }
@@ -47,6 +50,7 @@ impl Causality {
             Causality::CalculatedParameter => "calculatedParameter",
             Causality::Input => "input",
             Causality::Output => "output",
+            Causality::Local => "local",
             Causality::Independent => "independent",
         }
     }
@@ -452,6 +456,14 @@ pub enum Access {
     Calculated(Calculated),
     /// The independent variable: the slave's time.
     Time,
+    /// Component i of the continuous states
+    /// ([`tdvass::solver::CONTINUOUS_STATES`]) that is not an output.
+    ContinuousState(usize),
+    /// The time derivative of component i of the continuous states.
+    StateDerivative(usize),
+    /// Event indicator i of Model Exchange
+    /// ([`tdvass::exchange::EVENT_INDICATORS`]).
+    EventIndicator(usize),
 }
 
 /// One FMU variable.
@@ -493,7 +505,12 @@ impl Variable {
     /// The FMI base type.
     pub fn var_type(&self) -> VarType {
         match self.access {
-            Access::Real { .. } | Access::Output(_) | Access::Time => VarType::Real,
+            Access::Real { .. }
+            | Access::Output(_)
+            | Access::Time
+            | Access::ContinuousState(_)
+            | Access::StateDerivative(_)
+            | Access::EventIndicator(_) => VarType::Real,
             Access::Integer { .. } | Access::IntegerOutput(_) => VarType::Integer,
             Access::Calculated(Calculated::SpectralAbscissa | Calculated::RightmostRoots) => {
                 VarType::Real
@@ -506,8 +523,22 @@ impl Variable {
     pub fn initial(&self) -> Option<Initial> {
         match self.causality {
             Causality::Parameter | Causality::StructuralParameter => Some(Initial::Exact),
-            Causality::CalculatedParameter | Causality::Output => Some(Initial::Calculated),
+            Causality::CalculatedParameter | Causality::Output | Causality::Local => {
+                Some(Initial::Calculated)
+            }
             Causality::Input | Causality::Independent => None,
+        }
+    }
+
+    /// Model Exchange: the index of the continuous state this variable is
+    /// ([`tdvass::solver::CONTINUOUS_STATES`]), `None` for the others.
+    pub fn state_index(&self) -> Option<usize> {
+        match self.access {
+            Access::Output(OutputId::State(i)) | Access::ContinuousState(i) => Some(i),
+            Access::Output(OutputId::ContactLossTime) => {
+                Some(tdvass::solver::CONTINUOUS_STATES - 1)
+            }
+            _ => None,
         }
     }
 
@@ -668,6 +699,49 @@ const fn output(
         intermediate_update: true,
         fmi3_only: false,
         bound: None,
+    }
+}
+
+/// A continuous state of Model Exchange that is not an output.
+const fn local_state(
+    name: &'static str,
+    vr: u32,
+    index: usize,
+    quantity: Quantity,
+    description: &'static str,
+) -> Variable {
+    Variable {
+        name,
+        vr,
+        causality: Causality::Local,
+        variability: Variability::Continuous,
+        quantity,
+        display_unit: None,
+        start: None,
+        range: Range::Computed,
+        access: Access::ContinuousState(index),
+        description,
+        feedthrough: &[],
+        initial_dependencies: &[],
+        enumeration: None,
+        dimensions: &[],
+        intermediate_update: false,
+        fmi3_only: false,
+        bound: None,
+    }
+}
+
+/// The derivative `der(state)` of continuous state `index`.
+const fn derivative(
+    name: &'static str,
+    vr: u32,
+    index: usize,
+    quantity: Quantity,
+    description: &'static str,
+) -> Variable {
+    Variable {
+        access: Access::StateDerivative(index),
+        ..local_state(name, vr, index, quantity, description)
     }
 }
 
@@ -1209,7 +1283,7 @@ const TABLE: &[Variable] = &[
         42,
         Q::Acceleration,
         OutputId::RmsBodyAcceleration,
-        "Running RMS of BA from the start time t0 to now, the time average sqrt(integral of BA^2 dt / (t - t0)): 0 at t0, continuous in t, independent of the internal grid",
+        "Running RMS of BA from the start time t0 to now, the time average sqrt(integral of BA^2 dt / (t - t0)): 0 at t0, continuous in t, independent of the internal grid. Model Exchange: from the integral state the master integrates",
         &[],
         &[],
     ),
@@ -1218,7 +1292,7 @@ const TABLE: &[Variable] = &[
         43,
         Q::Length,
         OutputId::RmsSuspensionDeflection,
-        "Running RMS of SDD from the start time t0 to now, the time average sqrt(integral of SDD^2 dt / (t - t0)): 0 at t0, continuous in t, independent of the internal grid",
+        "Running RMS of SDD from the start time t0 to now, the time average sqrt(integral of SDD^2 dt / (t - t0)): 0 at t0, continuous in t, independent of the internal grid. Model Exchange: from the integral state the master integrates",
         &[],
         &[],
     ),
@@ -1227,7 +1301,7 @@ const TABLE: &[Variable] = &[
         44,
         Q::Length,
         OutputId::RmsTireDeflection,
-        "Running RMS of TDD from the start time t0 to now, the time average sqrt(integral of TDD^2 dt / (t - t0)): 0 at t0, continuous in t, independent of the internal grid",
+        "Running RMS of TDD from the start time t0 to now, the time average sqrt(integral of TDD^2 dt / (t - t0)): 0 at t0, continuous in t, independent of the internal grid. Model Exchange: from the integral state the master integrates",
         &[],
         &[],
     )
@@ -1237,7 +1311,7 @@ const TABLE: &[Variable] = &[
         45,
         Q::Dimensionless,
         OutputId::Objective,
-        "Objective J = w_ba RMS(BA) + w_sdd RMS(SDD) + w_tdd RMS(TDD) (Eq. 6, TDD in m) from the running RMS values",
+        "Objective J = w_ba RMS(BA) + w_sdd RMS(SDD) + w_tdd RMS(TDD) (Eq. 6, TDD in m) from the running RMS values (Model Exchange: from the integral states)",
         &[],
         &[],
     ),
@@ -1269,7 +1343,7 @@ const TABLE: &[Variable] = &[
         54,
         Q::Acceleration,
         OutputId::RmsWeightedBodyAcceleration,
-        "Running RMS of a_w, the time average sqrt(integral of a_w^2 dt / (t - t0)): ISO 2631-1's a_w; below 0.315 m/s2 not uncomfortable, 0.315-0.63 a little uncomfortable, 0.5-1 fairly uncomfortable, 0.8-1.6 uncomfortable, 1.25-2.5 very uncomfortable, above 2 extremely uncomfortable",
+        "Running RMS of a_w, the time average sqrt(integral of a_w^2 dt / (t - t0)): ISO 2631-1's a_w; below 0.315 m/s2 not uncomfortable, 0.315-0.63 a little uncomfortable, 0.5-1 fairly uncomfortable, 0.8-1.6 uncomfortable, 1.25-2.5 very uncomfortable, above 2 extremely uncomfortable. Model Exchange: from the integral state",
         &[],
         &[],
     ),
@@ -1278,7 +1352,7 @@ const TABLE: &[Variable] = &[
         55,
         Q::VibrationDose,
         OutputId::VibrationDoseValue,
-        "ISO 2631-1 vibration dose value VDV = (integral of a_w^4 dt from t0)^(1/4)",
+        "ISO 2631-1 vibration dose value VDV = (integral of a_w^4 dt from t0)^(1/4). Model Exchange: from the integral state",
         &[],
         &[],
     ),
@@ -1297,7 +1371,7 @@ const TABLE: &[Variable] = &[
         57,
         Q::Dimensionless,
         OutputId::RmsDynamicTireLoadRatio,
-        "Running RMS of the dynamic tire load over the static load (m_s + m_h + m_t) g0, CS (m_s + m_t) g0, g0 = 9.80665 m/s2; at most 1/3 keeps the contact with 3-sigma confidence",
+        "Running RMS of the dynamic tire load over the static load (m_s + m_h + m_t) g0, CS (m_s + m_t) g0, g0 = 9.80665 m/s2; at most 1/3 keeps the contact with 3-sigma confidence. Model Exchange: from the integral state of TDD^2",
         &[],
         &[],
     ),
@@ -1306,7 +1380,7 @@ const TABLE: &[Variable] = &[
         58,
         Q::Time,
         OutputId::ContactLossTime,
-        "Accumulated time with the dynamic tire load below minus the static load, crossings located inside the internal steps. tire_contact = 0: the tire would leave the road and the linear model no longer holds there; the first crossing is logged as a warning. tire_contact = 1: the flight time (the load is then minus the static load)",
+        "Accumulated time with the dynamic tire load below minus the static load, crossings located inside the internal steps. tire_contact = 0: the tire would leave the road and the linear model no longer holds there; the first crossing is logged as a warning. tire_contact = 1: the flight time (the load is then minus the static load). Model Exchange: a continuous state, switched at the events",
         &[],
         &[],
     ),
@@ -1320,7 +1394,7 @@ const TABLE: &[Variable] = &[
         start: None,
         range: Range::Computed,
         access: Access::IntegerOutput(IntegerOutputId::LiftOffCount),
-        description: "Number of lift-offs since the start time (a start without contact counts one): tire_contact = 1, the switches from contact to flight; tire_contact = 0, the times the dynamic tire load went below minus the static load",
+        description: "Number of lift-offs since the start time (a start without contact counts one): tire_contact = 1, the switches from contact to flight; tire_contact = 0, the times the dynamic tire load went below minus the static load. Model Exchange: counted at the events of the indicator contact_indicator",
         feedthrough: &[],
         initial_dependencies: TIRE_LOAD_DEPENDENCIES,
         enumeration: None,
@@ -1335,11 +1409,255 @@ const TABLE: &[Variable] = &[
         59,
         Q::Length,
         OutputId::MaxSuspensionDeflection,
-        "Running maximum of |SDD| (suspension working space used), located inside the internal steps from the dense output (within the tolerance)",
+        "Running maximum of |SDD| (suspension working space used), located inside the internal steps from the dense output (within the tolerance). Model Exchange: the largest at completed integrator steps and events, and now",
         &[],
         &["x_s_start", "x_t_start"],
     )
     .display("mm"),
+    // Model Exchange: the continuous states that are not outputs, then
+    // the derivatives of all of them (x_s ... v_t and contact_loss_time
+    // are outputs and states).
+    local_state(
+        "wk_filter_1",
+        120,
+        6,
+        Q::Acceleration,
+        "State 1 of the 8 of the ISO 2631-1 W_k filter of BA (a_w = c_w w); a continuous state of Model Exchange",
+    ),
+    local_state(
+        "wk_filter_2",
+        121,
+        7,
+        Q::Acceleration,
+        "State 2 of the 8 of the ISO 2631-1 W_k filter of BA (a_w = c_w w); a continuous state of Model Exchange",
+    ),
+    local_state(
+        "wk_filter_3",
+        122,
+        8,
+        Q::Acceleration,
+        "State 3 of the 8 of the ISO 2631-1 W_k filter of BA (a_w = c_w w); a continuous state of Model Exchange",
+    ),
+    local_state(
+        "wk_filter_4",
+        123,
+        9,
+        Q::Acceleration,
+        "State 4 of the 8 of the ISO 2631-1 W_k filter of BA (a_w = c_w w); a continuous state of Model Exchange",
+    ),
+    local_state(
+        "wk_filter_5",
+        124,
+        10,
+        Q::Acceleration,
+        "State 5 of the 8 of the ISO 2631-1 W_k filter of BA (a_w = c_w w); a continuous state of Model Exchange",
+    ),
+    local_state(
+        "wk_filter_6",
+        125,
+        11,
+        Q::Acceleration,
+        "State 6 of the 8 of the ISO 2631-1 W_k filter of BA (a_w = c_w w); a continuous state of Model Exchange",
+    ),
+    local_state(
+        "wk_filter_7",
+        126,
+        12,
+        Q::Acceleration,
+        "State 7 of the 8 of the ISO 2631-1 W_k filter of BA (a_w = c_w w); a continuous state of Model Exchange",
+    ),
+    local_state(
+        "wk_filter_8",
+        127,
+        13,
+        Q::Acceleration,
+        "State 8 of the 8 of the ISO 2631-1 W_k filter of BA (a_w = c_w w); a continuous state of Model Exchange",
+    ),
+    local_state(
+        "integral_body_acceleration_squared",
+        128,
+        14,
+        Q::Dimensionless,
+        "Integral of BA^2 from the start time (m2/s3); a continuous state of Model Exchange, behind rms_body_acceleration",
+    ),
+    local_state(
+        "integral_suspension_deflection_squared",
+        129,
+        15,
+        Q::Dimensionless,
+        "Integral of SDD^2 from the start time (m2.s); a continuous state of Model Exchange, behind rms_suspension_deflection",
+    ),
+    local_state(
+        "integral_tire_deflection_squared",
+        130,
+        16,
+        Q::Dimensionless,
+        "Integral of TDD^2 from the start time (m2.s); a continuous state of Model Exchange, behind rms_tire_deflection and rms_dynamic_tire_load_ratio",
+    ),
+    local_state(
+        "integral_weighted_acceleration_squared",
+        131,
+        17,
+        Q::Dimensionless,
+        "Integral of a_w^2 from the start time (m2/s3); a continuous state of Model Exchange, behind rms_weighted_body_acceleration",
+    ),
+    local_state(
+        "integral_weighted_acceleration_fourth",
+        132,
+        18,
+        Q::Dimensionless,
+        "Integral of a_w^4 from the start time (m4/s7); a continuous state of Model Exchange, behind vibration_dose_value",
+    ),
+    derivative(
+        "der(x_s)",
+        100,
+        0,
+        Q::Velocity,
+        "Time derivative of x_s (m/s); Model Exchange",
+    ),
+    derivative(
+        "der(v_s)",
+        101,
+        1,
+        Q::Acceleration,
+        "Time derivative of v_s (m/s2); Model Exchange",
+    ),
+    derivative(
+        "der(x_h)",
+        102,
+        2,
+        Q::Velocity,
+        "Time derivative of x_h (m/s); Model Exchange",
+    ),
+    derivative(
+        "der(v_h)",
+        103,
+        3,
+        Q::Acceleration,
+        "Time derivative of v_h (m/s2); Model Exchange",
+    ),
+    derivative(
+        "der(x_t)",
+        104,
+        4,
+        Q::Velocity,
+        "Time derivative of x_t (m/s); Model Exchange",
+    ),
+    derivative(
+        "der(v_t)",
+        105,
+        5,
+        Q::Acceleration,
+        "Time derivative of v_t (m/s2); Model Exchange",
+    ),
+    derivative(
+        "der(wk_filter_1)",
+        106,
+        6,
+        Q::Dimensionless,
+        "Time derivative of wk_filter_1 (m/s3); Model Exchange",
+    ),
+    derivative(
+        "der(wk_filter_2)",
+        107,
+        7,
+        Q::Dimensionless,
+        "Time derivative of wk_filter_2 (m/s3); Model Exchange",
+    ),
+    derivative(
+        "der(wk_filter_3)",
+        108,
+        8,
+        Q::Dimensionless,
+        "Time derivative of wk_filter_3 (m/s3); Model Exchange",
+    ),
+    derivative(
+        "der(wk_filter_4)",
+        109,
+        9,
+        Q::Dimensionless,
+        "Time derivative of wk_filter_4 (m/s3); Model Exchange",
+    ),
+    derivative(
+        "der(wk_filter_5)",
+        110,
+        10,
+        Q::Dimensionless,
+        "Time derivative of wk_filter_5 (m/s3); Model Exchange",
+    ),
+    derivative(
+        "der(wk_filter_6)",
+        111,
+        11,
+        Q::Dimensionless,
+        "Time derivative of wk_filter_6 (m/s3); Model Exchange",
+    ),
+    derivative(
+        "der(wk_filter_7)",
+        112,
+        12,
+        Q::Dimensionless,
+        "Time derivative of wk_filter_7 (m/s3); Model Exchange",
+    ),
+    derivative(
+        "der(wk_filter_8)",
+        113,
+        13,
+        Q::Dimensionless,
+        "Time derivative of wk_filter_8 (m/s3); Model Exchange",
+    ),
+    derivative(
+        "der(integral_body_acceleration_squared)",
+        114,
+        14,
+        Q::Dimensionless,
+        "Time derivative of integral_body_acceleration_squared; Model Exchange",
+    ),
+    derivative(
+        "der(integral_suspension_deflection_squared)",
+        115,
+        15,
+        Q::Dimensionless,
+        "Time derivative of integral_suspension_deflection_squared; Model Exchange",
+    ),
+    derivative(
+        "der(integral_tire_deflection_squared)",
+        116,
+        16,
+        Q::Dimensionless,
+        "Time derivative of integral_tire_deflection_squared; Model Exchange",
+    ),
+    derivative(
+        "der(integral_weighted_acceleration_squared)",
+        117,
+        17,
+        Q::Dimensionless,
+        "Time derivative of integral_weighted_acceleration_squared; Model Exchange",
+    ),
+    derivative(
+        "der(integral_weighted_acceleration_fourth)",
+        118,
+        18,
+        Q::Dimensionless,
+        "Time derivative of integral_weighted_acceleration_fourth; Model Exchange",
+    ),
+    derivative(
+        "der(contact_loss_time)",
+        119,
+        19,
+        Q::Dimensionless,
+        "Time derivative of contact_loss_time; Model Exchange",
+    ),
+    Variable {
+        access: Access::EventIndicator(0),
+        ..local_state(
+            "contact_indicator",
+            133,
+            0,
+            Q::Length,
+            "The event indicator of Model Exchange: the margin W/k_t - TDD to the loss of tire contact (m), moved off zero by a hysteresis of 1e-12 W/k_t after each event (positive in contact); it changes sign at every lift-off and touch-down",
+        )
+    },
     // FMI 3.0 only, from here to the end.
     Variable {
         fmi3_only: true,

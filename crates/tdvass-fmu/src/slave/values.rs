@@ -99,9 +99,10 @@ impl Slave {
     /// A non-finite output is never handed out (a last line of defence:
     /// the states are bounded at every step).
     fn outputs(&mut self) -> Result<Outputs, FmiError> {
-        let outputs = match self.state.sim.as_mut() {
-            Some(sim) => sim.outputs(),
-            None => self.build_simulator()?.outputs(),
+        let outputs = match (self.state.exchange.as_mut(), self.state.sim.as_mut()) {
+            (Some(model), _) => model.outputs(),
+            (None, Some(sim)) => sim.outputs(),
+            (None, None) => self.build_simulator()?.outputs(),
         };
         match guards::non_finite_output(&outputs) {
             None => Ok(outputs),
@@ -115,6 +116,9 @@ impl Slave {
     /// The time averages among the outputs now ([`Self::outputs`] has
     /// them too, at more cost).
     fn time_averages(&mut self) -> Result<TimeAverages, FmiError> {
+        if self.state.exchange.is_some() {
+            return Ok(self.outputs()?.time_averages());
+        }
         Ok(match self.state.sim.as_mut() {
             Some(sim) => sim.time_averages(),
             None => self.build_simulator()?.time_averages(),
@@ -124,6 +128,17 @@ impl Slave {
     /// The instantaneous outputs now ([`Self::outputs`] has them too, at
     /// more cost).
     fn instantaneous(&mut self) -> Result<Instantaneous, FmiError> {
+        if self.state.exchange.is_some() {
+            let o = self.outputs()?;
+            return Ok(Instantaneous {
+                time: o.time,
+                state: o.state,
+                performance: o.performance,
+                road_displacement: o.road_displacement,
+                control_force: o.control_force,
+                dynamic_tire_load: o.dynamic_tire_load,
+            });
+        }
         Ok(match self.state.sim.as_mut() {
             Some(sim) => sim.instantaneous(),
             None => self.build_simulator()?.instantaneous(),
@@ -261,6 +276,9 @@ impl Slave {
                 Access::Real { get, .. } => slots[0] = get(&self.state.settings),
                 Access::Time => slots[0] = self.time(),
                 Access::Output(id) => slots[0] = self.output_value(id, &mut read)?,
+                Access::ContinuousState(i) => slots[0] = self.continuous_states()?[i],
+                Access::StateDerivative(i) => slots[0] = self.state_derivatives()?[i],
+                Access::EventIndicator(i) => slots[0] = self.event_indicator_values()?[i],
                 Access::Calculated(Calculated::SpectralAbscissa) => {
                     slots[0] = self.spectral_abscissa()?
                 }
@@ -342,6 +360,10 @@ impl Slave {
                 "`{}` is an output and cannot be set (value {value} refused)",
                 var.name
             ))),
+            (Causality::Local, _) => Err(FmiError::error(format!(
+                "`{}` is a continuous state or derivative: a Model Exchange master sets the states with SetContinuousStates (value {value} refused)",
+                var.name
+            ))),
             (Causality::CalculatedParameter, _) => Err(FmiError::error(format!(
                 "`{}` is a calculated parameter and cannot be set (value {value} refused)",
                 var.name
@@ -389,6 +411,14 @@ impl Slave {
             }
             ("w_ba" | "w_sdd" | "w_tdd", Some(sim)) => sim.set_weights(weights),
             _ => {}
+        }
+        if let Some(model) = self.state.exchange.as_mut() {
+            match var.name {
+                "x_g" => model.set_road_input(value)?,
+                "g" => model.set_gain(value)?,
+                "w_ba" | "w_sdd" | "w_tdd" => model.set_weights(weights),
+                _ => {}
+            }
         }
         Ok(())
     }

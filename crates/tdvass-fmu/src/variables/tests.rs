@@ -176,6 +176,9 @@ fn every_variable_is_readable_and_settings_round_trip() {
             }
             Access::Calculated(_) => assert_eq!(v.causality, Causality::CalculatedParameter),
             Access::Time => assert_eq!(v.causality, Causality::Independent),
+            Access::ContinuousState(_) | Access::StateDerivative(_) | Access::EventIndicator(_) => {
+                assert_eq!(v.causality, Causality::Local)
+            }
         }
     }
     // Distinct fields: every value written is still there.
@@ -363,5 +366,28 @@ fn the_value_reference_table_finds_what_a_search_finds() {
                 "{version:?} {vr}"
             );
         }
+    }
+}
+
+#[test]
+fn every_continuous_state_has_one_variable_and_one_derivative() {
+    use tdvass::solver::CONTINUOUS_STATES;
+    for i in 0..CONTINUOUS_STATES {
+        let states: Vec<_> = COMMON_VARIABLES
+            .iter()
+            .filter(|v| v.state_index() == Some(i))
+            .collect();
+        assert_eq!(states.len(), 1, "state {i}");
+        let derivatives: Vec<_> = COMMON_VARIABLES
+            .iter()
+            .filter(|v| matches!(v.access, Access::StateDerivative(j) if j == i))
+            .collect();
+        assert_eq!(derivatives.len(), 1, "derivative of state {i}");
+        assert_eq!(derivatives[0].name, format!("der({})", states[0].name));
+        assert_eq!(
+            states[0].name,
+            tdvass::exchange::state_names()[i],
+            "the library's name of state {i}"
+        );
     }
 }

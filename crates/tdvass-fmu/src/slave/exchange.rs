@@ -1,0 +1,246 @@
+//! Model Exchange: the slave's calls for a master whose own solver
+//! integrates the model ([`tdvass::exchange::ModelExchange`]): time and
+//! continuous states in, derivatives and event indicators out, the event
+//! updates, and completed integrator steps. The front-ends' state tables
+//! decide where each may be called; here each checks its arguments and
+//! names what it refuses.
+
+use super::Slave;
+use crate::guards;
+use crate::phase::Phase;
+use crate::{FmiError, Status};
+use tdvass::exchange::{ContactEvent, EVENT_INDICATORS, ModelExchange, nominals};
+use tdvass::solver::CONTINUOUS_STATES;
+
+/// What an event update tells the master (FMI 2.0 `fmi2EventInfo`, the
+/// out-arguments of FMI 3.0 `fmi3UpdateDiscreteStates`).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct EventUpdate {
+    /// The FMU asks the master to stop (after a divergence).
+    pub terminate_simulation: bool,
+    /// The continuous states changed (never: the contact switches keep them).
+    pub values_of_continuous_states_changed: bool,
+    /// The next time event, if any (none: see docs/fmu.md).
+    pub next_event_time: Option<f64>,
+}
+
+/// What `CompletedIntegratorStep` tells the master.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct StepCompletion {
+    /// Event Mode must be entered (never: every event is state or time).
+    pub enter_event_mode: bool,
+    /// The FMU asks the master to stop (after a divergence).
+    pub terminate_simulation: bool,
+}
+
+impl Slave {
+    /// Whether the instance was made for Model Exchange.
+    pub fn is_model_exchange(&self) -> bool {
+        self.model_exchange
+    }
+
+    /// Makes the instance a Model Exchange instance (at instantiation).
+    pub fn use_model_exchange(&mut self) {
+        self.model_exchange = true;
+    }
+
+    /// The model of the current settings at the start time (checked as
+    /// initialization checks it), with the input applied.
+    pub(super) fn build_exchange(&self) -> Result<ModelExchange, FmiError> {
+        let m = &self.state;
+        guards::check_rates(&m.settings)?;
+        let config = m.settings.to_config(m.start_time)?;
+        let mut model = ModelExchange::new(config)?;
+        if m.settings.road_is_input() {
+            model.set_road_input(m.settings.x_g)?;
+        }
+        Ok(model)
+    }
+
+    /// The running model: Model Exchange after initialization.
+    fn exchange(&mut self) -> Result<&mut ModelExchange, FmiError> {
+        self.state.exchange.as_mut().ok_or_else(|| {
+            FmiError::error("no Model Exchange model: the instance is not initialized")
+        })
+    }
+
+    /// `ExitInitializationMode` of a Model Exchange instance: the model
+    /// starts at the start time, in Event Mode.
+    pub(super) fn exit_initialization_to_event_mode(&mut self) -> Result<Status, FmiError> {
+        let model = self.build_exchange()?;
+        self.state.exchange = Some(model);
+        self.state.phase = Phase::EventMode;
+        self.state.terminate_requested = false;
+        let s = &self.state.settings;
+        self.event(format_args!(
+            "{}: Model Exchange, variant {}, road {}, tire_contact {}, start {} s, {} continuous states, {} event indicator",
+            self.call("ExitInitializationMode"),
+            s.variant,
+            s.road,
+            s.tire_contact,
+            self.state.start_time,
+            CONTINUOUS_STATES,
+            EVENT_INDICATORS,
+        ));
+        Ok(self.stability_check(self.call("ExitInitializationMode")))
+    }
+
+    /// `EnterEventMode`.
+    pub fn enter_event_mode(&mut self) -> Result<Status, FmiError> {
+        self.exchange()?;
+        self.state.phase = Phase::EventMode;
+        Ok(Status::Ok)
+    }
+
+    /// `EnterContinuousTimeMode`.
+    pub fn enter_continuous_time_mode(&mut self) -> Result<Status, FmiError> {
+        self.exchange()?;
+        self.state.phase = Phase::ContinuousTimeMode;
+        Ok(Status::Ok)
+    }
+
+    /// `NewDiscreteStates` / `UpdateDiscreteStates`: the contact mode
+    /// follows the margin; a lift-off is logged as an event.
+    pub fn update_discrete_states(&mut self) -> Result<EventUpdate, FmiError> {
+        let event = self.exchange()?.update_discrete_states();
+        match event {
+            Some(ContactEvent::LiftOff {
+                time,
+                tire_deflection,
+            }) => self.event(format_args!(
+                "{}: lift-off at t = {time} s (TDD = {tire_deflection} m)",
+                self.call("EventMode")
+            )),
+            Some(ContactEvent::TouchDown { time }) => self.event(format_args!(
+                "{}: touch-down at t = {time} s",
+                self.call("EventMode")
+            )),
+            None => {}
+        }
+        Ok(EventUpdate {
+            terminate_simulation: self.divergence_warning()?,
+            ..EventUpdate::default()
+        })
+    }
+
+    /// Logs a diverged plant state once and asks the master to stop.
+    fn divergence_warning(&mut self) -> Result<bool, FmiError> {
+        let Some((name, value)) = self.exchange()?.diverged() else {
+            return Ok(false);
+        };
+        if !self.state.terminate_requested {
+            self.state.terminate_requested = true;
+            self.logger.log(
+                Status::Warning,
+                &format!(
+                    "{}: the state diverged: `{name}` = {value} at t = {} s is beyond the divergence bound; terminate the simulation",
+                    self.call("CompletedIntegratorStep"),
+                    self.time()
+                ),
+            );
+        }
+        Ok(true)
+    }
+
+    /// `CompletedIntegratorStep`: the current point is accepted (delay
+    /// history, the largest |SDD|).
+    pub fn completed_integrator_step(&mut self) -> Result<StepCompletion, FmiError> {
+        self.exchange()?.complete_step();
+        Ok(StepCompletion {
+            enter_event_mode: false,
+            terminate_simulation: self.divergence_warning()?,
+        })
+    }
+
+    /// `SetTime`: finite and not before the last completed step or event.
+    pub fn set_time(&mut self, time: f64) -> Result<Status, FmiError> {
+        self.exchange()?.set_time(time)?;
+        Ok(Status::Ok)
+    }
+
+    /// `SetContinuousStates`.
+    pub fn set_continuous_states(&mut self, states: &[f64]) -> Result<Status, FmiError> {
+        self.exchange()?.set_states(states)?;
+        Ok(Status::Ok)
+    }
+
+    /// Checks that an array argument holds exactly the model's count.
+    fn check_count(what: &str, given: usize, expected: usize) -> Result<(), FmiError> {
+        if given == expected {
+            Ok(())
+        } else {
+            Err(FmiError::error(format!(
+                "{given} {what} asked for, the model has {expected}"
+            )))
+        }
+    }
+
+    /// `GetDerivatives`: the point becomes a trial point of the delay
+    /// history.
+    pub fn get_derivatives(&mut self, out: &mut [f64]) -> Result<Status, FmiError> {
+        Self::check_count("derivatives", out.len(), CONTINUOUS_STATES)?;
+        out.copy_from_slice(&self.exchange()?.derivatives()?);
+        Ok(Status::Ok)
+    }
+
+    /// `GetEventIndicators`.
+    pub fn get_event_indicators(&mut self, out: &mut [f64]) -> Result<Status, FmiError> {
+        Self::check_count("event indicators", out.len(), EVENT_INDICATORS)?;
+        out.copy_from_slice(&self.exchange()?.event_indicators());
+        Ok(Status::Ok)
+    }
+
+    /// `GetContinuousStates`.
+    pub fn get_continuous_states(&mut self, out: &mut [f64]) -> Result<Status, FmiError> {
+        Self::check_count("continuous states", out.len(), CONTINUOUS_STATES)?;
+        out.copy_from_slice(self.exchange()?.states());
+        Ok(Status::Ok)
+    }
+
+    /// `GetNominalsOfContinuousStates` (fixed, from the parameters'
+    /// scales; see [`nominals`]).
+    pub fn get_nominals(&mut self, out: &mut [f64]) -> Result<Status, FmiError> {
+        Self::check_count("nominals", out.len(), CONTINUOUS_STATES)?;
+        out.copy_from_slice(&nominals());
+        Ok(Status::Ok)
+    }
+
+    /// The continuous states for a getter: Model Exchange's, the
+    /// co-simulation's, or during initialization those of the start.
+    pub(super) fn continuous_states(&mut self) -> Result<[f64; CONTINUOUS_STATES], FmiError> {
+        if let Some(model) = &self.state.exchange {
+            return Ok(*model.states());
+        }
+        match self.state.sim.as_mut() {
+            Some(sim) => Ok(sim.continuous_states()),
+            None => Ok(*self.build_exchange()?.states()),
+        }
+    }
+
+    /// The derivatives of [`Self::continuous_states`].
+    pub(super) fn state_derivatives(&mut self) -> Result<[f64; CONTINUOUS_STATES], FmiError> {
+        if let Some(model) = self.state.exchange.as_mut() {
+            return Ok(model.derivatives()?);
+        }
+        match self.state.sim.as_mut() {
+            Some(sim) => Ok(sim.continuous_state_derivatives()),
+            None => Ok(self.build_exchange()?.derivatives()?),
+        }
+    }
+
+    /// The event indicators for a getter (the co-simulation: the margin
+    /// without hysteresis).
+    pub(super) fn event_indicator_values(&mut self) -> Result<[f64; EVENT_INDICATORS], FmiError> {
+        if let Some(model) = self.state.exchange.as_mut() {
+            return Ok(model.event_indicators());
+        }
+        match self.state.sim.as_mut() {
+            Some(sim) => {
+                let o = sim.outputs();
+                let limit = sim.static_load() / sim.config().params.k_t;
+                Ok([limit - o.performance.tire_deflection])
+            }
+            None => Ok(self.build_exchange()?.event_indicators()),
+        }
+    }
+}
