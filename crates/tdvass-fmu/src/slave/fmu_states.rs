@@ -2,6 +2,7 @@
 //! owned by the slave, and their serialized bytes.
 
 use super::{Slave, SlaveState};
+use crate::phase::Phase;
 use crate::snapshot;
 use crate::{FmiError, Status};
 
@@ -84,6 +85,22 @@ impl Slave {
             self.owned(handle)?;
         }
         let model = snapshot::deserialize(bytes, &self.token)?;
+        let model_exchange_state = model.exchange.is_some()
+            || matches!(model.phase, Phase::EventMode | Phase::ContinuousTimeMode);
+        if model_exchange_state != self.model_exchange && model.phase.is_simulating() {
+            let kind = |me: bool| {
+                if me {
+                    "Model Exchange"
+                } else {
+                    "Co-Simulation"
+                }
+            };
+            return Err(FmiError::error(format!(
+                "a {} state cannot be restored into a {} instance",
+                kind(model_exchange_state),
+                kind(self.model_exchange)
+            )));
+        }
         let handle = self.store(model, reuse)?;
         self.event(format_args!(
             "{}: {} bytes into state {handle:#x}",

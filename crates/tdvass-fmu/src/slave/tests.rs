@@ -621,3 +621,112 @@ fn getter_lists_give_the_same_values_and_errors_whatever_was_read_before() {
         assert!(message.contains("1 values given"), "{message}");
     }
 }
+
+// ---------------------------------------------------------- Model Exchange
+
+/// A Model Exchange slave in Continuous-Time Mode at t = 0.
+fn model_exchange(logging_on: bool) -> (Slave, Log) {
+    let (mut s, log) = new_slave(logging_on);
+    s.use_model_exchange();
+    s.setup_experiment(None, 0.0, Some(15.0)).unwrap();
+    start(&mut s);
+    assert_eq!(s.phase(), Phase::EventMode);
+    s.update_discrete_states().unwrap();
+    s.enter_continuous_time_mode().unwrap();
+    (s, log)
+}
+
+#[test]
+fn model_exchange_derivatives_match_the_cosimulation_at_the_start() {
+    let (mut me, _) = model_exchange(false);
+    let (mut cs, _) = initialized();
+    let mut derivatives = [0.0; tdvass::solver::CONTINUOUS_STATES];
+    me.get_derivatives(&mut derivatives).unwrap();
+    let through_getter: Vec<f64> = COMMON_VARIABLES
+        .iter()
+        .filter_map(|v| match v.access {
+            Access::StateDerivative(_) => {
+                let mut value = [0.0];
+                cs.get_real(&[v.vr], &mut value).unwrap();
+                Some(value[0])
+            }
+            _ => None,
+        })
+        .collect();
+    assert_eq!(derivatives.to_vec(), through_getter);
+}
+
+#[test]
+fn model_exchange_refuses_bad_counts_states_and_times_naming_them() {
+    let (mut s, _) = model_exchange(false);
+    let n = tdvass::solver::CONTINUOUS_STATES;
+    let mut states = vec![0.0; n];
+    s.get_continuous_states(&mut states).unwrap();
+    let e = s.get_derivatives(&mut vec![0.0; n - 1]).unwrap_err();
+    assert_eq!(e.message, "19 derivatives asked for, the model has 20");
+    let e = s.set_continuous_states(&states[..3]).unwrap_err();
+    assert!(
+        e.message.contains("3 continuous states given"),
+        "{}",
+        e.message
+    );
+    states[4] = f64::NAN;
+    let e = s.set_continuous_states(&states).unwrap_err();
+    assert!(
+        e.message.contains("continuous state 4 (`x_t`) = NaN"),
+        "{}",
+        e.message
+    );
+    s.set_time(0.5).unwrap();
+    s.completed_integrator_step().unwrap();
+    let e = s.set_time(0.25).unwrap_err();
+    assert!(e.message.contains("0.25 s is before"), "{}", e.message);
+    assert_eq!(e.status, Status::Error);
+    // Still usable.
+    s.set_time(0.75).unwrap();
+    s.get_derivatives(&mut vec![0.0; n]).unwrap();
+}
+
+#[test]
+fn a_diverged_model_exchange_state_asks_to_terminate_naming_it() {
+    let (mut s, log) = model_exchange(true);
+    let mut states = vec![0.0; tdvass::solver::CONTINUOUS_STATES];
+    states[0] = 1e9;
+    s.set_continuous_states(&states).unwrap();
+    assert!(s.completed_integrator_step().unwrap().terminate_simulation);
+    let logged = log.borrow();
+    assert!(
+        logged
+            .iter()
+            .any(|(status, _, m)| *status == Status::Warning && m.contains("`x_s` = 1000000000")),
+        "{logged:?}"
+    );
+}
+
+#[test]
+fn a_parameter_is_tuned_in_event_mode_only() {
+    let (mut s, _) = model_exchange(false);
+    let e = s.set_real(&[vr("g")], &[1000.0]).unwrap_err();
+    assert!(e.message.contains("Event Mode only"), "{}", e.message);
+    s.enter_event_mode().unwrap();
+    s.set_real(&[vr("g")], &[1000.0]).unwrap();
+}
+
+#[test]
+fn a_model_exchange_state_round_trips_and_stays_with_its_interface() {
+    let (mut s, _) = model_exchange(false);
+    s.set_time(0.1).unwrap();
+    let mut derivatives = vec![0.0; tdvass::solver::CONTINUOUS_STATES];
+    s.get_derivatives(&mut derivatives).unwrap();
+    let handle = s.get_fmu_state(None).unwrap();
+    let bytes = s.serialize_fmu_state(handle).unwrap();
+    let restored = s.deserialize_fmu_state(&bytes, None).unwrap();
+    s.set_fmu_state(restored).unwrap();
+    assert_eq!(s.time(), 0.1);
+    let (mut cs, _) = initialized();
+    let e = cs.deserialize_fmu_state(&bytes, None).unwrap_err();
+    assert!(
+        e.message
+            .contains("a Model Exchange state cannot be restored into a Co-Simulation instance")
+    );
+}

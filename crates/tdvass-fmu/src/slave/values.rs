@@ -372,6 +372,12 @@ impl Slave {
                 "`{}` is the independent variable and cannot be set (value {value} refused)",
                 var.name
             ))),
+            (Causality::Parameter, _) if self.state.phase == Phase::ContinuousTimeMode => {
+                Err(FmiError::error(format!(
+                    "`{}` is a parameter: in Model Exchange it can be changed in Event Mode only, not in Continuous-Time Mode (value {value} refused)",
+                    var.name
+                )))
+            }
             (Causality::StructuralParameter, _) if self.state.phase != Phase::Instantiated => {
                 Err(FmiError::error(format!(
                     "`{}` is a structural parameter: it can be set only before initialization (value {value} refused; reset the instance to change it)",
