@@ -5,12 +5,14 @@
 
 use crate::markup::{
     DescriptionFrame, MODEL_DESCRIPTION, REFERENCE_RESULTS, TIRE_CONTACT, XmlResult, XmlWriter,
-    diagram, html_page, list, model_description, number, paragraph, text_element, unit_text,
-    variable_table,
+    diagram, html_page, list, model_description, model_exchange_text, number, paragraph,
+    text_element, unit_text, variable_table,
 };
 use quick_xml::events::{BytesText, Event};
+use tdvass::exchange::EVENT_INDICATORS;
+use tdvass::solver::CONTINUOUS_STATES;
 use tdvass_fmi2::FMI_VERSION;
-use tdvass_fmu::variables::{COMMON_VARIABLES, Causality, Quantity, VarType, Variable};
+use tdvass_fmu::variables::{Access, COMMON_VARIABLES, Causality, Quantity, VarType, Variable};
 use tdvass_fmu::{
     DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, MODEL_IDENTIFIER, MODEL_NAME, guid,
 };
@@ -80,6 +82,9 @@ fn write_variable(w: &mut XmlWriter, v: &Variable) -> XmlResult {
         if let Some(start) = start_text(v) {
             attributes.push(("start", start));
         }
+        if let Access::StateDerivative(i) = v.access {
+            attributes.push(("derivative", state_index(i).to_string()));
+        }
         w.create_element(v.var_type().as_str())
             .with_attributes(attributes.iter().map(|(k, v)| (*k, v.as_str())))
             .write_empty()?;
@@ -95,6 +100,17 @@ fn index_of(name: &str) -> Option<usize> {
         .iter()
         .position(|v| v.name == name)
         .map(|i| i + 1)
+}
+
+/// The 1-based index of continuous state `i`'s variable: a local
+/// ([`Access::ContinuousState`]) or an output (`x_s` .. `v_t`,
+/// `contact_loss_time`); the `derivative` attribute of `der(...)`.
+fn state_index(i: usize) -> usize {
+    COMMON_VARIABLES
+        .iter()
+        .position(|v| v.state_index() == Some(i))
+        .map(|p| p + 1)
+        .unwrap_or_else(|| panic!("no variable of continuous state {i}"))
 }
 
 fn indices(names: &[&str]) -> String {
@@ -131,22 +147,48 @@ fn write_model_structure(w: &mut XmlWriter) -> XmlResult {
                 }
                 Ok(())
             })?;
+            // In the order of the continuous states (FMI 2.0: the order of
+            // the Unknowns is that of fmi2GetContinuousStates); each depends
+            // on every known (no `dependencies`).
+            w.create_element("Derivatives").write_inner_content(|w| {
+                for i in 0..CONTINUOUS_STATES {
+                    let index = COMMON_VARIABLES
+                        .iter()
+                        .position(|v| matches!(v.access, Access::StateDerivative(j) if j == i))
+                        .expect("every state has a derivative")
+                        + 1;
+                    w.create_element("Unknown")
+                        .with_attribute(("index", index.to_string().as_str()))
+                        .write_empty()?;
+                }
+                Ok(())
+            })?;
             w.create_element("InitialUnknowns")
                 .write_inner_content(|w| {
                     for (i, v) in COMMON_VARIABLES.iter().enumerate() {
-                        if !matches!(
-                            v.causality,
-                            Causality::Output | Causality::CalculatedParameter
-                        ) {
-                            continue;
+                        let unknown = w
+                            .create_element("Unknown")
+                            .with_attribute(("index", (i + 1).to_string().as_str()));
+                        match v.access {
+                            // The local states and the derivatives depend on
+                            // every known of initialization (no `dependencies`).
+                            Access::ContinuousState(_) | Access::StateDerivative(_) => {
+                                unknown.write_empty()?;
+                            }
+                            _ if matches!(
+                                v.causality,
+                                Causality::Output | Causality::CalculatedParameter
+                            ) =>
+                            {
+                                unknown
+                                    .with_attribute((
+                                        "dependencies",
+                                        indices(v.initial_dependencies).as_str(),
+                                    ))
+                                    .write_empty()?;
+                            }
+                            _ => {}
                         }
-                        w.create_element("Unknown")
-                            .with_attribute(("index", (i + 1).to_string().as_str()))
-                            .with_attribute((
-                                "dependencies",
-                                indices(v.initial_dependencies).as_str(),
-                            ))
-                            .write_empty()?;
                     }
                     Ok(())
                 })?;
@@ -154,6 +196,20 @@ fn write_model_structure(w: &mut XmlWriter) -> XmlResult {
         })?;
     Ok(())
 }
+
+/// The attributes of the `ModelExchange` element after `modelIdentifier`,
+/// in the order written: the results do not depend on
+/// `fmi2CompletedIntegratorStep` (docs/fmu.md, "Model Exchange"); no
+/// directional derivatives in Model Exchange.
+pub const MODEL_EXCHANGE_CAPABILITIES: [(&str, &str); 7] = [
+    ("needsExecutionTool", "false"),
+    ("completedIntegratorStepNotNeeded", "true"),
+    ("canBeInstantiatedOnlyOncePerProcess", "false"),
+    ("canNotUseMemoryManagementFunctions", "true"),
+    ("canGetAndSetFMUstate", "true"),
+    ("canSerializeFMUstate", "true"),
+    ("providesDirectionalDerivative", "false"),
+];
 
 /// The attributes of the `CoSimulation` element after `modelIdentifier`,
 /// in the order written: the capabilities the C interface provides.
@@ -172,10 +228,13 @@ pub const CO_SIMULATION_CAPABILITIES: [(&str, &str); 9] = [
 /// The complete `modelDescription.xml`.
 pub fn model_description_xml() -> String {
     let guid = guid();
+    let event_indicators = EVENT_INDICATORS.to_string();
     let frame = DescriptionFrame {
         fmi_version: FMI_VERSION,
         token: ("guid", &guid),
         co_simulation: &CO_SIMULATION_CAPABILITIES,
+        model_exchange: &MODEL_EXCHANGE_CAPABILITIES,
+        root: &[("numberOfEventIndicators", &event_indicators)],
     };
     model_description(frame, write_type_definitions, |w| {
         w.create_element("ModelVariables")
@@ -216,7 +275,11 @@ pub fn documentation_html() -> String {
 }
 
 fn write_body(w: &mut XmlWriter) -> XmlResult {
-    text_element(w, "h1", &format!("{MODEL_NAME}: FMI 2.0 Co-Simulation FMU"))?;
+    text_element(
+        w,
+        "h1",
+        &format!("{MODEL_NAME}: FMI 2.0 FMU (Co-Simulation and Model Exchange)"),
+    )?;
     paragraph(w, MODEL_DESCRIPTION)?;
     paragraph(
         w,
@@ -291,6 +354,23 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
             "fmi2GetRealOutputDerivatives: exact first derivatives (order 1); the running RMS values and J are piecewise constant in time (derivative 0).",
             "Logging categories: logEvents, logStatusWarning, logStatusDiscard, logStatusError, logStatusFatal, logAll. Discards, errors and fatal errors are always reported; warnings unless switched off.",
         ],
+    )?;
+
+    text_element(w, "h2", "Model Exchange")?;
+    paragraph(
+        w,
+        &model_exchange_text("fmi2Instantiate with fmi2ModelExchange", COMMON_VARIABLES),
+    )?;
+    let capabilities: Vec<String> = MODEL_EXCHANGE_CAPABILITIES
+        .iter()
+        .map(|(name, value)| format!("{name} = {value}"))
+        .collect();
+    paragraph(
+        w,
+        &format!(
+            "numberOfEventIndicators = {EVENT_INDICATORS}; ModelExchange: {}. fmi2GetDirectionalDerivative is a capability of Co-Simulation only.",
+            capabilities.join(", ")
+        ),
     )?;
 
     text_element(w, "h2", "References")?;
@@ -369,23 +449,52 @@ mod tests {
     }
 
     #[test]
-    fn model_structure_lists_outputs_and_initial_unknowns() {
+    fn model_structure_lists_outputs_derivatives_and_initial_unknowns() {
         let xml = model_description_xml();
         let els = elements(&xml);
-        let outputs_at = els.iter().position(|e| e.name == "Outputs").unwrap();
-        let initial_at = els
-            .iter()
-            .position(|e| e.name == "InitialUnknowns")
-            .unwrap();
-        let outputs: Vec<_> = els[outputs_at + 1..initial_at].iter().collect();
+        let at = |name: &str| els.iter().position(|e| e.name == name).unwrap();
+        let (outputs_at, derivatives_at, initial_at) =
+            (at("Outputs"), at("Derivatives"), at("InitialUnknowns"));
+        let outputs: Vec<_> = els[outputs_at + 1..derivatives_at].iter().collect();
+        let derivatives: Vec<_> = els[derivatives_at + 1..initial_at].iter().collect();
         let initial: Vec<_> = els[initial_at + 1..].iter().collect();
         let count = |c: Causality| COMMON_VARIABLES.iter().filter(|v| v.causality == c).count();
+        // The locals are not outputs.
         assert_eq!(outputs.len(), count(Causality::Output));
         assert_eq!(outputs.len(), 23);
+        let local_states = COMMON_VARIABLES
+            .iter()
+            .filter(|v| matches!(v.access, Access::ContinuousState(_)))
+            .count();
+        assert_eq!(local_states, 13);
+        // FMI 2.0: the outputs and calculated parameters (all calculated),
+        // the states with initial = calculated (the outputs among them
+        // once) and every derivative; not the event indicator.
         assert_eq!(
             initial.len(),
-            count(Causality::Output) + count(Causality::CalculatedParameter)
+            count(Causality::Output)
+                + count(Causality::CalculatedParameter)
+                + local_states
+                + CONTINUOUS_STATES
         );
+        assert_eq!(initial.len(), 25 + 13 + 20);
+        let initial_indices: Vec<usize> = initial
+            .iter()
+            .map(|e| e.attr("index").parse().unwrap())
+            .collect();
+        assert!(initial_indices.windows(2).all(|w| w[0] < w[1]), "ascending");
+        for (i, v) in COMMON_VARIABLES.iter().enumerate() {
+            let listed = initial_indices.contains(&(i + 1));
+            let expected = matches!(
+                v.causality,
+                Causality::Output | Causality::CalculatedParameter
+            ) || matches!(
+                v.access,
+                Access::ContinuousState(_) | Access::StateDerivative(_)
+            );
+            assert_eq!(listed, expected, "{}", v.name);
+        }
+        // The outputs depend directly on the input x_g only.
         let x_g = index_of("x_g").unwrap().to_string();
         let tdd = index_of("tire_deflection").unwrap().to_string();
         let o = outputs.iter().find(|e| e.attr("index") == tdd).unwrap();
@@ -394,6 +503,92 @@ mod tests {
         let x_s = index_of("x_s").unwrap().to_string();
         let o = outputs.iter().find(|e| e.attr("index") == x_s).unwrap();
         assert_eq!(o.attr("dependencies"), "");
+
+        // One derivative per state, in state order, each without
+        // dependencies (on every known), its `derivative` the state's index.
+        assert_eq!(derivatives.len(), CONTINUOUS_STATES);
+        assert_eq!(derivatives.len(), 20);
+        let vars: Vec<_> = els.iter().filter(|e| e.name == "ScalarVariable").collect();
+        // The type element (`Real`) of the variable of a 1-based index.
+        let typed = |index: usize| {
+            let at = els
+                .iter()
+                .position(|e| std::ptr::eq(e, vars[index - 1]))
+                .unwrap();
+            &els[at + 1]
+        };
+        for (i, d) in derivatives.iter().enumerate() {
+            assert_eq!(d.get("dependencies"), None);
+            let index: usize = d.attr("index").parse().unwrap();
+            let der = &COMMON_VARIABLES[index - 1];
+            assert!(
+                matches!(der.access, Access::StateDerivative(j) if j == i),
+                "{}",
+                der.name
+            );
+            let state: usize = typed(index).attr("derivative").parse().unwrap();
+            let state = &COMMON_VARIABLES[state - 1];
+            assert_eq!(state.state_index(), Some(i));
+            assert_eq!(der.name, format!("der({})", state.name));
+            assert_eq!(state.variability.as_str(), "continuous");
+        }
+        let named = |name: &str| typed(index_of(name).unwrap());
+        assert_eq!(
+            named("der(x_s)").attr("derivative"),
+            index_of("x_s").unwrap().to_string()
+        );
+        assert_eq!(
+            named("der(wk_filter_1)").attr("derivative"),
+            index_of("wk_filter_1").unwrap().to_string()
+        );
+        assert_eq!(
+            named("der(contact_loss_time)").attr("derivative"),
+            index_of("contact_loss_time").unwrap().to_string()
+        );
+        // Only the derivatives have the attribute.
+        let with_derivative = (1..=vars.len())
+            .filter(|&index| typed(index).get("derivative").is_some())
+            .count();
+        assert_eq!(with_derivative, CONTINUOUS_STATES);
+    }
+
+    #[test]
+    fn model_exchange_beside_co_simulation() {
+        let xml = model_description_xml();
+        let els = elements(&xml);
+        let root = &els[0];
+        assert_eq!(root.attr("numberOfEventIndicators"), "1");
+        let top: Vec<&str> = els
+            .iter()
+            .filter(|e| e.parent == Some(0))
+            .map(|e| e.name.as_str())
+            .collect();
+        assert_eq!(
+            &top[..3],
+            ["ModelExchange", "CoSimulation", "UnitDefinitions"]
+        );
+        let me = els.iter().find(|e| e.name == "ModelExchange").unwrap();
+        assert_eq!(me.attr("modelIdentifier"), "tdvass");
+        for (flag, value) in [
+            ("canGetAndSetFMUstate", "true"),
+            ("canSerializeFMUstate", "true"),
+            ("completedIntegratorStepNotNeeded", "true"),
+            ("canNotUseMemoryManagementFunctions", "true"),
+            ("providesDirectionalDerivative", "false"),
+            ("needsExecutionTool", "false"),
+            ("canBeInstantiatedOnlyOncePerProcess", "false"),
+        ] {
+            assert_eq!(me.attr(flag), value, "{flag}");
+        }
+        assert_eq!(me.attributes.len(), 1 + MODEL_EXCHANGE_CAPABILITIES.len());
+        // The locals are continuous with initial = calculated.
+        for v in els
+            .iter()
+            .filter(|e| e.name == "ScalarVariable" && e.attr("causality") == "local")
+        {
+            assert_eq!(v.attr("variability"), "continuous", "{}", v.attr("name"));
+            assert_eq!(v.attr("initial"), "calculated", "{}", v.attr("name"));
+        }
     }
 
     #[test]
@@ -406,6 +601,11 @@ mod tests {
         }
         assert!(html.contains("1 - g/k_h"));
         assert!(html.contains("0.3068"));
+        assert!(html.contains("FMI 2.0 FMU (Co-Simulation and Model Exchange)"));
+        assert!(html.contains("<td>local, continuous</td>"));
+        assert!(html.contains("x_s, v_s, x_h, v_h, x_t, v_t, wk_filter_1"));
+        assert!(html.contains("integral_weighted_acceleration_fourth, contact_loss_time."));
+        assert!(html.contains("The event indicator contact_indicator"));
     }
 
     #[test]

@@ -4,16 +4,53 @@
 //! deterministic: no timestamps.
 //!
 //! Every variable, the independent variable `time` included, comes from
-//! the table; beyond it, the description declares the Co-Simulation
-//! capability flags ([`CO_SIMULATION_CAPABILITIES`]), which the C interface
-//! implements.
+//! the table; beyond it, the description declares the capability flags of
+//! Co-Simulation ([`CO_SIMULATION_CAPABILITIES`]) and Model Exchange
+//! ([`MODEL_EXCHANGE_CAPABILITIES`]), which the C interface implements.
+//! Model Exchange's continuous states, their derivatives and the event
+//! indicator are variables of the table too ([`Access::ContinuousState`],
+//! [`Access::StateDerivative`], [`Access::EventIndicator`]).
 
 use crate::markup::{DescriptionFrame, XmlResult, XmlWriter, model_description, number};
+use tdvass::solver::CONTINUOUS_STATES;
 use tdvass_fmi3::types::{Fmi3Type, fmi3_type};
 use tdvass_fmi3::{FMI_VERSION, instantiation_token};
 use tdvass_fmu::variables::{
-    Causality, Dimension, Enumeration, FMI3_VARIABLES, FmiVersion, Quantity, Variable, by_name,
+    Access, Causality, Dimension, Enumeration, FMI3_VARIABLES, FmiVersion, Quantity, Variable,
+    by_name,
 };
+
+/// The attributes of the `ModelExchange` element after `modelIdentifier`:
+/// the results do not depend on `fmi3CompletedIntegratorStep` (docs/fmu.md,
+/// "Model Exchange"); no partial derivatives in Model Exchange.
+pub const MODEL_EXCHANGE_CAPABILITIES: [(&str, &str); 8] = [
+    ("needsExecutionTool", "false"),
+    ("canBeInstantiatedOnlyOncePerProcess", "false"),
+    ("canGetAndSetFMUState", "true"),
+    ("canSerializeFMUState", "true"),
+    ("providesDirectionalDerivatives", "false"),
+    ("providesAdjointDerivatives", "false"),
+    ("needsCompletedIntegratorStep", "false"),
+    ("providesEvaluateDiscreteStates", "false"),
+];
+
+/// The value reference of continuous state `i`'s variable.
+pub fn state_vr(i: usize) -> u32 {
+    FMI3_VARIABLES
+        .iter()
+        .find(|v| v.state_index() == Some(i))
+        .map(|v| v.vr)
+        .unwrap_or_else(|| panic!("no variable of continuous state {i}"))
+}
+
+/// The value reference of the derivative of continuous state `i`.
+pub fn derivative_vr(i: usize) -> u32 {
+    FMI3_VARIABLES
+        .iter()
+        .find(|v| matches!(v.access, Access::StateDerivative(j) if j == i))
+        .map(|v| v.vr)
+        .unwrap_or_else(|| panic!("no derivative of continuous state {i}"))
+}
 
 /// The attributes of the `CoSimulation` element after `modelIdentifier`,
 /// in the order written: the capabilities the C interface provides.
@@ -77,8 +114,9 @@ fn dimension_attribute(dimension: &Dimension) -> (&'static str, String) {
     }
 }
 
-/// The value references an output depends on directly at communication
-/// points (its feedthrough inputs), ascending.
+/// The value references an output depends on directly (its feedthrough
+/// inputs), ascending: what `fmi3GetVariableDependencies` returns. The
+/// continuous states are knowns of Model Exchange too, but not listed.
 pub fn output_dependencies(v: &Variable) -> Vec<u32> {
     sorted_vrs(v.feedthrough.iter().copied())
 }
@@ -105,12 +143,16 @@ fn vr_list(vrs: &[u32]) -> String {
     vrs.iter().map(u32::to_string).collect::<Vec<_>>().join(" ")
 }
 
-/// Whether `v` is an `InitialUnknown`: outputs (all calculated) and
-/// calculated parameters.
+/// Whether `v` is an `InitialUnknown`: outputs (all calculated, the states
+/// among them), calculated parameters, the local continuous states and the
+/// derivatives (all calculated); not the event indicator.
 fn is_initial_unknown(v: &Variable) -> bool {
     matches!(
         v.causality,
         Causality::Output | Causality::CalculatedParameter
+    ) || matches!(
+        v.access,
+        Access::ContinuousState(_) | Access::StateDerivative(_)
     )
 }
 
@@ -185,6 +227,9 @@ fn variable_attributes(v: &Variable) -> Vec<(&'static str, String)> {
     if v.intermediate_update {
         attributes.push(("intermediateUpdate", "true".into()));
     }
+    if let Access::StateDerivative(i) = v.access {
+        attributes.push(("derivative", state_vr(i).to_string()));
+    }
     attributes
 }
 
@@ -229,10 +274,40 @@ fn write_model_structure(w: &mut XmlWriter) -> XmlResult {
                 }
                 unknown.write_empty()?;
             }
+            // In the order of the continuous states (that of
+            // fmi3GetContinuousStates); each depends on every known (no
+            // `dependencies`).
+            for i in 0..CONTINUOUS_STATES {
+                w.create_element("ContinuousStateDerivative")
+                    .with_attribute(("valueReference", derivative_vr(i).to_string().as_str()))
+                    .write_empty()?;
+            }
             for v in FMI3_VARIABLES.iter().filter(|v| is_initial_unknown(v)) {
-                w.create_element("InitialUnknown")
+                let unknown = w
+                    .create_element("InitialUnknown")
+                    .with_attribute(("valueReference", v.vr.to_string().as_str()));
+                match v.access {
+                    // On every known of initialization (no `dependencies`).
+                    Access::ContinuousState(_) | Access::StateDerivative(_) => {
+                        unknown.write_empty()?;
+                    }
+                    _ => {
+                        unknown
+                            .with_attribute((
+                                "dependencies",
+                                vr_list(&initial_dependencies(v)).as_str(),
+                            ))
+                            .write_empty()?;
+                    }
+                }
+            }
+            // Continuous Float64 variables, never InitialUnknowns.
+            for v in FMI3_VARIABLES
+                .iter()
+                .filter(|v| matches!(v.access, Access::EventIndicator(_)))
+            {
+                w.create_element("EventIndicator")
                     .with_attribute(("valueReference", v.vr.to_string().as_str()))
-                    .with_attribute(("dependencies", vr_list(&initial_dependencies(v)).as_str()))
                     .write_empty()?;
             }
             Ok(())
@@ -247,6 +322,8 @@ pub fn model_description_xml() -> String {
         fmi_version: FMI_VERSION,
         token: ("instantiationToken", &token),
         co_simulation: &CO_SIMULATION_CAPABILITIES,
+        model_exchange: &MODEL_EXCHANGE_CAPABILITIES,
+        root: &[],
     };
     model_description(frame, write_type_definitions, |w| {
         w.create_element("ModelVariables")

@@ -76,6 +76,18 @@ mod tests {
                 v.name
             );
         }
+        // Model Exchange's local states, derivatives and event indicator.
+        for v in FMI3_VARIABLES
+            .iter()
+            .filter(|v| v.causality == Causality::Local)
+        {
+            assert!(
+                table.contains(&format!("| `{}` | {} | local | Real |", v.name, v.vr)),
+                "{}",
+                v.name
+            );
+        }
+        assert!(table.contains("| `der(x_s)` | 100 | local | Real |"));
         let document = format!("intro\n{BEGIN_MARKER}\nSTALE ROW\n{END_MARKER}\nrest\n");
         let once = splice_into(&document).unwrap();
         assert!(!once.contains("STALE ROW") && once.ends_with(&format!("{END_MARKER}\nrest\n")));

@@ -1,7 +1,8 @@
 //! What the generated model descriptions and documentation pages of every
 //! FMI version write alike: the frame of a model description (its root
-//! element, `CoSimulation`, the unit definitions, the log categories and
-//! the default experiment), the one-line model description, numbers,
+//! element, `ModelExchange`, `CoSimulation`, the unit definitions, the log
+//! categories and the default experiment), the one-line model description,
+//! what the pages say of Model Exchange, numbers,
 //! elements with text, paragraphs, lists, tables, the model's diagram with
 //! the legend of its symbols, and the HTML page around a body (quick-xml,
 //! never written by hand).
@@ -9,8 +10,9 @@
 use quick_xml::Writer;
 use quick_xml::events::{BytesDecl, BytesText, Event};
 use std::io::Cursor;
+use tdvass::solver::CONTINUOUS_STATES;
 use tdvass::solver::DEFAULT_TOLERANCE;
-use tdvass_fmu::variables::{Causality, FmiVersion, UNITS, Variable, by_name};
+use tdvass_fmu::variables::{Access, Causality, FmiVersion, UNITS, Variable, by_name};
 use tdvass_fmu::{
     DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, LOG_CATEGORIES, MODEL_IDENTIFIER,
     MODEL_NAME,
@@ -94,10 +96,16 @@ pub struct DescriptionFrame<'a> {
     /// The attributes of the `CoSimulation` element after
     /// `modelIdentifier`, in the order written.
     pub co_simulation: &'a [(&'a str, &'a str)],
+    /// The attributes of the `ModelExchange` element after
+    /// `modelIdentifier`, in the order written.
+    pub model_exchange: &'a [(&'a str, &'a str)],
+    /// Attributes of the root element after `variableNamingConvention`
+    /// (FMI 2.0: `numberOfEventIndicators`).
+    pub root: &'a [(&'a str, &'a str)],
 }
 
 /// A complete `modelDescription.xml`: the XML declaration, the root
-/// element, `CoSimulation`, `UnitDefinitions`, then the version's
+/// element, `ModelExchange`, `CoSimulation`, `UnitDefinitions`, then the version's
 /// `TypeDefinitions` (`write_type_definitions`), `LogCategories`,
 /// `DefaultExperiment`, then the version's `ModelVariables` and
 /// `ModelStructure` (`write_model`).
@@ -119,7 +127,12 @@ pub fn model_description(
             .with_attribute(("license", "MIT"))
             .with_attribute(("generationTool", tool.as_str()))
             .with_attribute(("variableNamingConvention", "flat"))
+            .with_attributes(frame.root.iter().copied())
             .write_inner_content(|w| {
+                w.create_element("ModelExchange")
+                    .with_attribute(("modelIdentifier", MODEL_IDENTIFIER))
+                    .with_attributes(frame.model_exchange.iter().copied())
+                    .write_empty()?;
                 w.create_element("CoSimulation")
                     .with_attribute(("modelIdentifier", MODEL_IDENTIFIER))
                     .with_attributes(frame.co_simulation.iter().copied())
@@ -175,6 +188,30 @@ fn write_unit_definitions(w: &mut XmlWriter) -> XmlResult {
             Ok(())
         })?;
     Ok(())
+}
+
+/// What the documentation pages say of Model Exchange: `instantiate` is
+/// the call that starts it, `variables` the version's variables (the
+/// continuous states are named in their order, from the table).
+pub fn model_exchange_text(instantiate: &str, variables: &[Variable]) -> String {
+    let state = |i: usize| {
+        variables
+            .iter()
+            .find(|v| v.state_index() == Some(i))
+            .unwrap_or_else(|| panic!("no variable of continuous state {i}"))
+            .name
+    };
+    let states: Vec<&str> = (0..CONTINUOUS_STATES).map(state).collect();
+    let indicators: Vec<&str> = variables
+        .iter()
+        .filter(|v| matches!(v.access, Access::EventIndicator(_)))
+        .map(|v| v.name)
+        .collect();
+    format!(
+        "The same library also serves Model Exchange ({instantiate}): the importer's solver integrates the {CONTINUOUS_STATES} continuous states, in this order: {}. Their derivatives are the local variables der(...), each with the derivative attribute of its state; the states that are not outputs are local variables. The event indicator {} is the margin W/k_t - TDD to the loss of tire contact (positive in contact); lift-offs and touch-downs are its events. The running RMS values, J, the RMS of a_w, the VDV and the tire-load ratio come from the integral states; the accuracy is the importer's solver's. Results do not depend on whether the importer calls CompletedIntegratorStep.",
+        states.join(", "),
+        indicators.join(", ")
+    )
 }
 
 /// What the documentation of every version says of the tire.

@@ -1,10 +1,10 @@
 //! `documentation/index.html` of the FMI 3.0 FMU, generated from the one
 //! variable table and the declarations of the model description.
 
-use super::{CO_SIMULATION_CAPABILITIES, enumerations, value_text};
+use super::{CO_SIMULATION_CAPABILITIES, MODEL_EXCHANGE_CAPABILITIES, enumerations, value_text};
 use crate::markup::{
     MODEL_DESCRIPTION, REFERENCE_RESULTS, TIRE_CONTACT, XmlResult, XmlWriter, diagram, html_page,
-    list, paragraph, table, text_element, unit_text, variable_table,
+    list, model_exchange_text, paragraph, table, text_element, unit_text, variable_table,
 };
 use tdvass_fmi3::instantiation_token;
 use tdvass_fmi3::types::{Fmi3Type, fmi3_type};
@@ -75,12 +75,17 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
     write_model(w)?;
     write_variables(w)?;
     write_co_simulation(w)?;
+    write_model_exchange(w)?;
     write_experiment_and_references(w)
 }
 
 /// The title, the identity of the FMU and how it relates to the FMI 2.0 one.
 fn write_introduction(w: &mut XmlWriter) -> XmlResult {
-    text_element(w, "h1", &format!("{MODEL_NAME}: FMI 3.0 Co-Simulation FMU"))?;
+    text_element(
+        w,
+        "h1",
+        &format!("{MODEL_NAME}: FMI 3.0 FMU (Co-Simulation and Model Exchange)"),
+    )?;
     paragraph(w, MODEL_DESCRIPTION)?;
     paragraph(
         w,
@@ -199,6 +204,28 @@ fn write_co_simulation(w: &mut XmlWriter) -> XmlResult {
         w,
         "Dependencies are value references. Only tire_deflection and road_displacement depend directly on the input x_g at communication points (with a factor fixed by road); the initial values of the outputs and calculated parameters depend on the parameters named in ModelStructure, and rightmost_roots also on root_count.",
     )?;
+
+    Ok(())
+}
+
+/// Model Exchange: the states, derivatives and event indicator, and the
+/// capabilities.
+fn write_model_exchange(w: &mut XmlWriter) -> XmlResult {
+    text_element(w, "h2", "Model Exchange")?;
+    paragraph(
+        w,
+        &model_exchange_text("fmi3InstantiateModelExchange", FMI3_VARIABLES),
+    )?;
+    paragraph(
+        w,
+        "ModelStructure lists the derivatives as ContinuousStateDerivative elements (in the order of the states) and the event indicator as EventIndicator; the local states and the derivatives are InitialUnknowns that depend on every known of initialization. The dependencies of the outputs are those of Co-Simulation (the input x_g only, as fmi3GetVariableDependencies returns them).",
+    )?;
+    text_element(w, "h3", "Model Exchange capabilities")?;
+    let rows: Vec<Vec<String>> = MODEL_EXCHANGE_CAPABILITIES
+        .iter()
+        .map(|(name, value)| vec![name.to_string(), value.to_string()])
+        .collect();
+    table(w, &["attribute", "value"], &rows)?;
 
     Ok(())
 }

@@ -35,6 +35,7 @@ fn root_co_simulation_and_experiment() {
     assert_eq!(
         top,
         [
+            "ModelExchange",
             "CoSimulation",
             "UnitDefinitions",
             "TypeDefinitions",
@@ -63,6 +64,23 @@ fn root_co_simulation_and_experiment() {
     }
     assert_eq!(cs.attr("maxOutputDerivativeOrder"), "1");
     assert_eq!(cs.attr("hasEventMode"), "false");
+    let me = els.iter().find(|e| e.name == "ModelExchange").unwrap();
+    assert_eq!(me.attr("modelIdentifier"), "tdvass");
+    assert_eq!(me.attributes.len(), 1 + MODEL_EXCHANGE_CAPABILITIES.len());
+    for (flag, value) in [
+        ("canGetAndSetFMUState", "true"),
+        ("canSerializeFMUState", "true"),
+        ("needsCompletedIntegratorStep", "false"),
+        ("providesDirectionalDerivatives", "false"),
+        ("providesAdjointDerivatives", "false"),
+        ("providesEvaluateDiscreteStates", "false"),
+        ("needsExecutionTool", "false"),
+        ("canBeInstantiatedOnlyOncePerProcess", "false"),
+    ] {
+        assert_eq!(me.attr(flag), value, "{flag}");
+    }
+    // FMI 3.0 has no numberOfEventIndicators: the EventIndicator elements say it.
+    assert!(root.get("numberOfEventIndicators").is_none());
     let experiment = els.iter().find(|e| e.name == "DefaultExperiment").unwrap();
     assert_eq!(experiment.attr("startTime"), "0");
     assert_eq!(experiment.attr("stopTime"), "15");
@@ -308,7 +326,86 @@ fn model_structure_lists_outputs_and_initial_unknowns_by_value_reference() {
         .copied()
         .filter(|e| e.name == "InitialUnknown")
         .collect();
-    assert_eq!(outputs.len() + initial.len(), structure.len());
+    let derivatives: Vec<&Element> = structure
+        .iter()
+        .copied()
+        .filter(|e| e.name == "ContinuousStateDerivative")
+        .collect();
+    let indicators: Vec<&Element> = structure
+        .iter()
+        .copied()
+        .filter(|e| e.name == "EventIndicator")
+        .collect();
+    assert_eq!(
+        outputs.len() + derivatives.len() + initial.len() + indicators.len(),
+        structure.len()
+    );
+    // The schema's order: Output, ContinuousStateDerivative, InitialUnknown, EventIndicator.
+    let order: Vec<&str> = structure.iter().map(|e| e.name.as_str()).collect();
+    let rank = |name: &str| {
+        [
+            "Output",
+            "ContinuousStateDerivative",
+            "InitialUnknown",
+            "EventIndicator",
+        ]
+        .iter()
+        .position(|n| *n == name)
+        .unwrap()
+    };
+    assert!(order.windows(2).all(|w| rank(w[0]) <= rank(w[1])));
+    assert_eq!(derivatives.len(), tdvass::solver::CONTINUOUS_STATES);
+    assert_eq!(derivatives.len(), 20);
+    for (i, d) in derivatives.iter().enumerate() {
+        assert_eq!(d.get("dependencies"), None);
+        let der = by_vr_any(d.attr("valueReference"));
+        assert!(
+            matches!(der.access, Access::StateDerivative(j) if j == i),
+            "{}",
+            der.name
+        );
+        let element = els
+            .iter()
+            .find(|e| e.name == "Float64" && e.get("name") == Some(der.name))
+            .unwrap();
+        let state = by_vr_any(element.attr("derivative"));
+        assert_eq!(state.state_index(), Some(i));
+        assert_eq!(state_vr(i), state.vr);
+        assert_eq!(der.name, format!("der({})", state.name));
+        assert_eq!(state.variability.as_str(), "continuous");
+    }
+    // Only the derivatives have the attribute.
+    let with_derivative = els
+        .iter()
+        .filter(|e| e.name == "Float64" && e.get("derivative").is_some())
+        .count();
+    assert_eq!(with_derivative, tdvass::solver::CONTINUOUS_STATES);
+    let derivative_of = |name: &str| {
+        els.iter()
+            .find(|e| e.name == "Float64" && e.get("name") == Some(name))
+            .unwrap()
+            .attr("derivative")
+    };
+    assert_eq!(derivative_of("der(x_s)"), vr_of("x_s").to_string());
+    assert_eq!(
+        derivative_of("der(wk_filter_1)"),
+        vr_of("wk_filter_1").to_string()
+    );
+    assert_eq!(
+        derivative_of("der(contact_loss_time)"),
+        vr_of("contact_loss_time").to_string()
+    );
+    // One continuous Float64 variable per event indicator.
+    assert_eq!(indicators.len(), tdvass::exchange::EVENT_INDICATORS);
+    let indicator = by_vr_any(indicators[0].attr("valueReference"));
+    assert_eq!(indicator.name, "contact_indicator");
+    assert!(matches!(indicator.access, Access::EventIndicator(0)));
+    let element = els
+        .iter()
+        .find(|e| e.get("name") == Some(indicator.name))
+        .unwrap();
+    assert_eq!(element.name, "Float64");
+    assert_eq!(element.attr("variability"), "continuous");
     // Outputs first, in ModelVariables order.
     assert!(
         structure[..outputs.len()]
@@ -330,13 +427,46 @@ fn model_structure_lists_outputs_and_initial_unknowns_by_value_reference() {
         .collect();
     let listed: Vec<&str> = initial.iter().map(|e| e.attr("valueReference")).collect();
     assert_eq!(listed, expected_initial);
-    assert_eq!(initial.len(), 26);
+    // Outputs (the 7 states among them) and calculated parameters, the 13
+    // local states and the 20 derivatives; not the event indicator.
+    assert_eq!(initial.len(), 26 + 13 + tdvass::solver::CONTINUOUS_STATES);
+    let local_states = FMI3_VARIABLES
+        .iter()
+        .filter(|v| matches!(v.access, Access::ContinuousState(_)))
+        .count();
+    assert_eq!(local_states, 13);
+    for v in FMI3_VARIABLES {
+        let listed = expected_initial.contains(&v.vr.to_string());
+        let state_or_derivative =
+            v.state_index().is_some() || matches!(v.access, Access::StateDerivative(_));
+        if state_or_derivative {
+            assert!(listed, "{}", v.name);
+        }
+        if matches!(v.access, Access::EventIndicator(_)) {
+            assert!(!listed, "{}", v.name);
+        }
+    }
+    // The local states and derivatives depend on every known.
+    for u in &initial {
+        let v = by_vr_any(u.attr("valueReference"));
+        let on_every_known = matches!(
+            v.access,
+            Access::ContinuousState(_) | Access::StateDerivative(_)
+        );
+        assert_eq!(
+            u.get("dependencies").is_none(),
+            on_every_known,
+            "{}",
+            v.name
+        );
+    }
 
     let by_vr = |vr: u32| FMI3_VARIABLES.iter().find(|v| v.vr == vr).unwrap();
     let x_g = by_name(FmiVersion::Fmi3, "x_g").unwrap().vr;
     for o in &outputs {
         let deps = vr_list_of(o.attr("dependencies"));
-        // At communication points outputs depend directly on the input only.
+        // Outputs depend directly on the input only (what
+        // fmi3GetVariableDependencies returns).
         assert!(deps.iter().all(|&d| d == x_g), "{:?}", o.attributes);
         let kinds = o.get("dependenciesKind").unwrap_or("");
         assert_eq!(kinds.split_whitespace().count(), deps.len());
@@ -366,7 +496,7 @@ fn model_structure_lists_outputs_and_initial_unknowns_by_value_reference() {
 
     // Initial dependencies are knowns of initialization mode: inputs and
     // variables with initial = exact; ascending, each once.
-    for u in &initial {
+    for u in initial.iter().filter(|u| u.get("dependencies").is_some()) {
         let deps = vr_list_of(u.attr("dependencies"));
         assert!(deps.windows(2).all(|w| w[0] < w[1]), "{deps:?}");
         for d in &deps {
@@ -401,7 +531,12 @@ fn documentation_describes_every_variable_and_capability() {
     let html = documentation_html();
     assert!(html.starts_with("<!DOCTYPE html>"));
     elements(html.trim_start_matches("<!DOCTYPE html>"));
-    assert!(html.contains("FMI 3.0 Co-Simulation FMU"));
+    assert!(html.contains("FMI 3.0 FMU (Co-Simulation and Model Exchange)"));
+    assert!(html.contains("fmi3InstantiateModelExchange"));
+    assert!(html.contains("<td>local, continuous</td>"));
+    for (flag, _) in MODEL_EXCHANGE_CAPABILITIES {
+        assert!(html.contains(&format!("<td>{flag}</td>")), "{flag}");
+    }
     assert!(html.contains(&instantiation_token()));
     assert!(html.contains("<td>time</td>"));
     for v in FMI3_VARIABLES {
@@ -427,4 +562,10 @@ fn documentation_describes_every_variable_and_capability() {
 fn output_is_deterministic() {
     assert_eq!(model_description_xml(), model_description_xml());
     assert_eq!(documentation_html(), documentation_html());
+}
+
+/// The variable of a value reference given as text.
+fn by_vr_any(vr: &str) -> &'static Variable {
+    let vr: u32 = vr.parse().unwrap();
+    FMI3_VARIABLES.iter().find(|v| v.vr == vr).unwrap()
 }
