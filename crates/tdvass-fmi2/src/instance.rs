@@ -43,6 +43,7 @@ pub const FMI2_DIALECT: Dialect = Dialect {
     deserialize_state: "DeSerializeFMUstate",
     input_slope_remedy: "call fmi2SetRealInputDerivatives",
     instantiate: "Instantiate",
+    update_discrete_states: "NewDiscreteStates",
     token_argument: "fmuGUID",
     given_token: "GUID",
     own_token: "GUID",

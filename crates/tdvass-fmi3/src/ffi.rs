@@ -281,7 +281,7 @@ pub unsafe extern "C" fn fmi3InstantiateScheduledExecution(
         logMessage,
         instanceEnvironment,
         "fmi3InstantiateScheduledExecution",
-        "Scheduled Execution is not supported: this FMU implements Co-Simulation only",
+        "Scheduled Execution is not supported: this FMU implements Co-Simulation and Model Exchange",
     )
 }
 

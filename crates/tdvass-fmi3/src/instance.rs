@@ -33,6 +33,7 @@ pub const FMI3_DIALECT: Dialect = Dialect {
     deserialize_state: "DeserializeFMUState",
     input_slope_remedy: "set x_g in intermediate updates",
     instantiate: "InstantiateCoSimulation",
+    update_discrete_states: "UpdateDiscreteStates",
     token_argument: "instantiationToken",
     given_token: "instantiationToken",
     own_token: "token",
@@ -114,7 +115,15 @@ impl Instance {
     /// `fmi3InstantiateCoSimulation`: checks the request and creates the
     /// instance. A refusal is logged through `logger` and returns `None`.
     pub fn instantiate(request: InstantiateRequest<'_>, logger: LogSink) -> Option<Instance> {
-        let instantiation = Instantiation::new(FMI3_DIALECT, logger);
+        let dialect = if request.model_exchange {
+            Dialect {
+                instantiate: "InstantiateModelExchange",
+                ..FMI3_DIALECT
+            }
+        } else {
+            FMI3_DIALECT
+        };
+        let instantiation = Instantiation::new(dialect, logger);
         let refuse = |message: String| instantiation.refuse(&message);
         let expected = crate::instantiation_token();
         let name = instantiation.instance_name(request.instance_name)?;

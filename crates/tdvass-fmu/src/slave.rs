@@ -51,6 +51,8 @@ pub struct Dialect {
     pub input_slope_remedy: &'static str,
     /// The instantiation function, without the prefix.
     pub instantiate: &'static str,
+    /// Model Exchange's event update, without the prefix.
+    pub update_discrete_states: &'static str,
     /// The instantiation's argument that carries the token (`fmuGUID`).
     pub token_argument: &'static str,
     /// How a refused instantiation names the token the master passed.

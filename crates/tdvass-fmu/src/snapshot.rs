@@ -328,17 +328,19 @@ fn decode_payload(bytes: &[u8]) -> Result<SlaveState, FmiError> {
     if exchange.is_some() && sim.is_some() {
         return Err(invalid("both a simulator and a Model Exchange model"));
     }
+    let stepping_phase = matches!(phase, Phase::StepComplete | Phase::StepFailed);
     if phase.is_simulating() != (sim.is_some() || exchange.is_some())
         || (model_exchange_phase && exchange.is_none())
+        || (stepping_phase && sim.is_none())
     {
+        let holding = match (&sim, &exchange) {
+            (Some(_), _) => "a simulator",
+            (None, Some(_)) => "a Model Exchange model",
+            (None, None) => "neither a simulator nor a Model Exchange model",
+        };
         return Err(invalid(format_args!(
-            "state {} {} a simulator",
-            phase.name(),
-            if sim.is_some() || exchange.is_some() {
-                "with"
-            } else {
-                "without"
-            }
+            "state {} with {holding}",
+            phase.name()
         )));
     }
     if let Some(sim) = &mut sim {

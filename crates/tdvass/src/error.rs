@@ -76,6 +76,11 @@ pub enum Error {
         rate: f64,
         limit: f64,
     },
+    /// A call's argument that the running model refuses (Model Exchange:
+    /// a time before the last accepted point, a state that is not finite,
+    /// a wrong count); the message names the argument and its value.
+    #[error("{0}")]
+    Refused(String),
     /// A saved simulator state could not be restored.
     #[error("invalid saved state: {0}")]
     InvalidState(String),

@@ -109,22 +109,23 @@ impl Slave {
                 tire_deflection,
             }) => self.event(format_args!(
                 "{}: lift-off at t = {time} s (TDD = {tire_deflection} m)",
-                self.call("EventMode")
+                self.call(self.dialect.update_discrete_states)
             )),
             Some(ContactEvent::TouchDown { time }) => self.event(format_args!(
                 "{}: touch-down at t = {time} s",
-                self.call("EventMode")
+                self.call(self.dialect.update_discrete_states)
             )),
             None => {}
         }
         Ok(EventUpdate {
-            terminate_simulation: self.divergence_warning()?,
+            terminate_simulation: self.divergence_warning(self.dialect.update_discrete_states)?,
             ..EventUpdate::default()
         })
     }
 
-    /// Logs a diverged plant state once and asks the master to stop.
-    fn divergence_warning(&mut self) -> Result<bool, FmiError> {
+    /// Logs a diverged plant state once, naming the `function` that saw
+    /// it, and asks the master to stop.
+    fn divergence_warning(&mut self, function: &'static str) -> Result<bool, FmiError> {
         let Some((name, value)) = self.exchange()?.diverged() else {
             return Ok(false);
         };
@@ -134,7 +135,7 @@ impl Slave {
                 Status::Warning,
                 &format!(
                     "{}: the state diverged: `{name}` = {value} at t = {} s is beyond the divergence bound; terminate the simulation",
-                    self.call("CompletedIntegratorStep"),
+                    self.call(function),
                     self.time()
                 ),
             );
@@ -148,7 +149,7 @@ impl Slave {
         self.exchange()?.complete_step();
         Ok(StepCompletion {
             enter_event_mode: false,
-            terminate_simulation: self.divergence_warning()?,
+            terminate_simulation: self.divergence_warning("CompletedIntegratorStep")?,
         })
     }
 

@@ -76,7 +76,7 @@ impl Slave {
             )));
         }
         let Some(sim) = self.state.sim.as_ref() else {
-            unreachable!("stepComplete has a simulator")
+            return Err(no_simulator());
         };
         let (settings, step) = (&self.state.settings, sim.grid().step);
         // The function's name is formatted only for the message.
@@ -115,7 +115,7 @@ impl Slave {
             0.0
         };
         let Some(sim) = self.state.sim.as_mut() else {
-            unreachable!("stepComplete has a simulator")
+            return Err(no_simulator());
         };
         if pending && settings.road_is_input() {
             sim.set_road_input(settings.x_g, slope)?;
@@ -128,7 +128,7 @@ impl Slave {
         // outcome.
         self.log_lift_offs();
         let Some(sim) = self.state.sim.as_mut() else {
-            unreachable!("stepComplete has a simulator")
+            return Err(no_simulator());
         };
         match advanced {
             // `advance_to` bounds every state (its divergence check, or
@@ -335,7 +335,7 @@ impl Slave {
         values: &mut [f64],
     ) -> Result<Status, FmiError> {
         let Some(sim) = self.state.sim.as_mut() else {
-            unreachable!("allowed only with a simulation")
+            return Err(no_simulator());
         };
         let derivatives = sim.output_derivatives();
         for ((&vr, &order), value) in vrs.iter().zip(orders).zip(values.iter_mut()) {
@@ -373,4 +373,12 @@ impl Slave {
         }
         Ok(Status::Ok)
     }
+}
+
+/// The refusal of a co-simulation call without a simulator: a Model
+/// Exchange instance (whose master integrates), or one not initialized.
+fn no_simulator() -> FmiError {
+    FmiError::error(
+        "no co-simulation: the instance is a Model Exchange instance (or not initialized); this call is a Co-Simulation capability",
+    )
 }

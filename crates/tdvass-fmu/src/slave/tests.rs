@@ -27,6 +27,7 @@ pub(crate) const TEST_DIALECT: Dialect = Dialect {
     deserialize_state: "DeSerializeFMUstate",
     input_slope_remedy: "call testSetRealInputDerivatives",
     instantiate: "Instantiate",
+    update_discrete_states: "NewDiscreteStates",
     token_argument: "testToken",
     given_token: "token",
     own_token: "token",

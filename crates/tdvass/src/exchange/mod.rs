@@ -246,7 +246,7 @@ impl ModelExchange {
     pub fn set_time(&mut self, time: f64) -> Result<()> {
         let accepted = self.accepted_time();
         if !(time.is_finite() && time >= accepted) {
-            return Err(Error::InvalidState(format!(
+            return Err(Error::Refused(format!(
                 "time {time} s is before the last completed integrator step or event at {accepted} s (or not finite)"
             )));
         }
@@ -258,13 +258,13 @@ impl ModelExchange {
     /// values (the error names the first that is not).
     pub fn set_states(&mut self, values: &[f64]) -> Result<()> {
         if values.len() != CONTINUOUS_STATES {
-            return Err(Error::InvalidState(format!(
+            return Err(Error::Refused(format!(
                 "{} continuous states given, the model has {CONTINUOUS_STATES}",
                 values.len()
             )));
         }
         if let Some(i) = values.iter().position(|v| !v.is_finite()) {
-            return Err(Error::InvalidState(format!(
+            return Err(Error::Refused(format!(
                 "continuous state {i} (`{}`) = {} is not finite",
                 state_names()[i],
                 values[i]
@@ -332,7 +332,7 @@ impl ModelExchange {
         }
         let rates = self.rates(delayed);
         if let Some(i) = rates.iter().position(|v| !v.is_finite()) {
-            return Err(Error::InvalidState(format!(
+            return Err(Error::Refused(format!(
                 "the derivative of `{}` is {} at t = {} s",
                 state_names()[i],
                 rates[i],
