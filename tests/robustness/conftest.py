@@ -105,3 +105,30 @@ def initialized3(make3):
         return inst
 
     return new
+
+
+# ----------------------------------------------------------- Model Exchange
+
+
+@pytest.fixture
+def model_exchange(make):
+    """An FMI 2.0 Model Exchange instance in eventMode at t = 0 (stop 15 s)."""
+
+    def new(stop=15.0, **values):
+        inst = make(fmu_type=fmi2.MODEL_EXCHANGE)
+        inst.initialize_model_exchange(stop=stop, **values)
+        return inst
+
+    return new
+
+
+@pytest.fixture
+def model_exchange3(make3):
+    """An FMI 3.0 Model Exchange instance in Event Mode at t = 0 (stop 15 s)."""
+
+    def new(stop=15.0, **values):
+        inst = make3(model_exchange=True)
+        inst.initialize_model_exchange(stop=stop, **values)
+        return inst
+
+    return new

@@ -43,6 +43,13 @@ REPO_ROOT = Path(__file__).resolve().parents[2]
 OK, WARNING, DISCARD, ERROR, FATAL, PENDING = range(6)
 STATUS_NAMES = ["fmi2OK", "fmi2Warning", "fmi2Discard", "fmi2Error", "fmi2Fatal", "fmi2Pending"]
 MODEL_EXCHANGE, CO_SIMULATION = 0, 1
+# Model Exchange: continuous states (in this order) and event indicators.
+# (crates/tdvass/src/exchange/mod.rs, state_names).
+STATE_NAMES = ["x_s", "v_s", "x_h", "v_h", "x_t", "v_t", *[f"wk_filter_{k}" for k in range(1, 9)],
+               "integral_body_acceleration_squared", "integral_suspension_deflection_squared",
+               "integral_tire_deflection_squared", "integral_weighted_acceleration_squared",
+               "integral_weighted_acceleration_fourth", "contact_loss_time"]
+NX, NZ = 20, 1
 DO_STEP_STATUS, PENDING_STATUS, LAST_SUCCESSFUL_TIME, TERMINATED = range(4)
 
 fmi2Component = c_void_p
@@ -58,6 +65,23 @@ LOGGER = CFUNCTYPE(None, c_void_p, c_char_p, c_int, c_char_p, c_char_p)
 ALLOCATE = CFUNCTYPE(c_void_p, c_size_t, c_size_t)
 FREE = CFUNCTYPE(None, c_void_p)
 STEP_FINISHED = CFUNCTYPE(None, c_void_p, c_int)
+
+
+class EventInfo(Structure):
+    """``fmi2EventInfo``, filled with sentinels (-1, NaN) so that a test sees
+    what the FMU wrote."""
+
+    _fields_ = [
+        ("newDiscreteStatesNeeded", fmi2Boolean),
+        ("terminateSimulation", fmi2Boolean),
+        ("nominalsOfContinuousStatesChanged", fmi2Boolean),
+        ("valuesOfContinuousStatesChanged", fmi2Boolean),
+        ("nextEventTimeDefined", fmi2Boolean),
+        ("nextEventTime", fmi2Real),
+    ]
+
+    def __init__(self):
+        super().__init__(-1, -1, -1, -1, -1, float("nan"))
 
 
 class CallbackFunctions(Structure):
@@ -174,7 +198,8 @@ _SIGNATURES = {
     "fmi2GetIntegerStatus": (fmi2Status, [fmi2Component, c_int, c_void_p]),
     "fmi2GetBooleanStatus": (fmi2Status, [fmi2Component, c_int, c_void_p]),
     "fmi2GetStringStatus": (fmi2Status, [fmi2Component, c_int, c_void_p]),
-    # Model Exchange: exported as stubs that refuse.
+    # Model Exchange (the pointers stay c_void_p, so that the tests can pass
+    # NULL, arrays of any length and `byref` of an EventInfo or c_int).
     "fmi2EnterEventMode": (fmi2Status, [fmi2Component]),
     "fmi2NewDiscreteStates": (fmi2Status, [fmi2Component, c_void_p]),
     "fmi2EnterContinuousTimeMode": (fmi2Status, [fmi2Component]),
@@ -342,6 +367,69 @@ class Instance:
         status = self.lib.fmi2GetBooleanStatus(self.c, kind, byref(out))
         return status, out.value
 
+    # ---------------------------------------------------------- Model Exchange
+
+    def initialize_model_exchange(self, start=0.0, stop=None, **values):
+        """An instance made with fmu_type=MODEL_EXCHANGE, initialized: in
+        eventMode at `start`."""
+        status = self.initialize(start, stop, **values)
+        assert self.machine_state() == "eventMode"
+        return status
+
+    def enter_event_mode(self):
+        return self.lib.fmi2EnterEventMode(self.c)
+
+    def enter_continuous_time_mode(self):
+        return self.lib.fmi2EnterContinuousTimeMode(self.c)
+
+    def new_discrete_states(self):
+        """fmi2NewDiscreteStates: (status, EventInfo)."""
+        info = EventInfo()
+        status = self.lib.fmi2NewDiscreteStates(self.c, byref(info))
+        return status, info
+
+    def completed_integrator_step(self, no_set_prior=1):
+        """fmi2CompletedIntegratorStep: (status, enterEventMode, terminateSimulation)."""
+        enter, terminate = c_int(-1), c_int(-1)
+        status = self.lib.fmi2CompletedIntegratorStep(self.c, no_set_prior, byref(enter), byref(terminate))
+        return status, enter.value, terminate.value
+
+    def set_time(self, t):
+        return self.lib.fmi2SetTime(self.c, t)
+
+    def set_continuous_states(self, values):
+        values = list(values)
+        return self.lib.fmi2SetContinuousStates(self.c, array(c_double, values), len(values))
+
+    def _vector(self, function, n):
+        out = (c_double * max(n, 1))(*([float("nan")] * max(n, 1)))
+        status = getattr(self.lib, function)(self.c, out, n)
+        return status, list(out[:n])
+
+    def continuous_states(self, n=NX):
+        return self._vector("fmi2GetContinuousStates", n)
+
+    def derivatives(self, n=NX):
+        return self._vector("fmi2GetDerivatives", n)
+
+    def event_indicators(self, n=NZ):
+        return self._vector("fmi2GetEventIndicators", n)
+
+    def nominals(self, n=NX):
+        return self._vector("fmi2GetNominalsOfContinuousStates", n)
+
+    def euler_step(self, h):
+        """One explicit Euler step of size h in continuousTimeMode, completed:
+        the status of fmi2CompletedIntegratorStep's call, its two flags."""
+        status, x = self.continuous_states()
+        assert status == OK, self.log.last()
+        status, dx = self.derivatives()
+        assert status == OK, self.log.last()
+        assert self.set_time(self.time + h) == OK, self.log.last()
+        self.time += h
+        assert self.set_continuous_states([a + h * b for a, b in zip(x, dx)]) == OK, self.log.last()
+        return self.completed_integrator_step()
+
     # -------------------------------------------------------------- FMU states
 
     def get_state(self):
@@ -361,6 +449,15 @@ class Instance:
         buf = (c_char * max(len(data), 1)).from_buffer_copy(data or b"\0")
         status = self.lib.fmi2DeSerializeFMUstate(self.c, buf, len(data), byref(s))
         return status, s
+
+    def snapshot(self) -> bytes:
+        """The serialized bytes of the current state (everything an FMU state
+        holds), without leaving an FMU state behind."""
+        status, state = self.get_state()
+        assert status == OK, self.log.last()
+        data = self.serialize(state)
+        assert self.lib.fmi2FreeFMUstate(self.c, byref(state)) == OK
+        return data
 
     def machine_state(self) -> str:
         """The machine state, read without changing anything: fmi2CancelStep

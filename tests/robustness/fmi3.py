@@ -42,7 +42,7 @@ from ctypes import (
 )
 from pathlib import Path
 
-from fmi2 import REPO_ROOT, array, target_dir
+from fmi2 import NX, NZ, REPO_ROOT, STATE_NAMES, array, target_dir  # noqa: F401 (re-exported)
 
 OK, WARNING, DISCARD, ERROR, FATAL = range(5)
 STATUS_NAMES = ["fmi3OK", "fmi3Warning", "fmi3Discard", "fmi3Error", "fmi3Fatal"]
@@ -251,7 +251,9 @@ DEFAULT = object()
 
 
 class Instance:
-    """One Co-Simulation instance: thin methods that return the raw fmi3Status.
+    """One Co-Simulation instance (``model_exchange=True``: a Model Exchange
+    instance, made by fmi3InstantiateModelExchange), with thin methods that
+    return the raw fmi3Status.
 
     ``intermediate``: a Python function ``f(inst, time, can_return_early)``
     called from the FMU's intermediateUpdate callback; it returns whether to
@@ -263,7 +265,7 @@ class Instance:
 
     def __init__(self, lib, name: bytes | None = b"robust", token=DEFAULT, resources: bytes | None = None,
                  logging_on=False, early_return=False, intermediate=None, required=(), event_mode=False,
-                 log: Log | None = None):
+                 log: Log | None = None, model_exchange=False):
         self.lib = lib
         self.log = log or Log()
         self.vars = variables()
@@ -275,11 +277,15 @@ class Instance:
         t = instantiation_token().encode() if token is DEFAULT else token
         self._callback = INTERMEDIATE_UPDATE(Instance._intermediate) if intermediate else None
         required = list(required)
-        self.c = lib.fmi3InstantiateCoSimulation(
-            name, t, resources, False, logging_on, event_mode, early_return,
-            array(c_uint32, required) if required else None, len(required),
-            self.log.key, LOGGER, self._callback,
-        )
+        self.model_exchange = model_exchange
+        if model_exchange:
+            self.c = lib.fmi3InstantiateModelExchange(name, t, resources, False, logging_on, self.log.key, LOGGER)
+        else:
+            self.c = lib.fmi3InstantiateCoSimulation(
+                name, t, resources, False, logging_on, event_mode, early_return,
+                array(c_uint32, required) if required else None, len(required),
+                self.log.key, LOGGER, self._callback,
+            )
         self.time = 0.0
 
     @staticmethod
@@ -377,6 +383,80 @@ class Instance:
         status, values = self.get_float64([self.vr[n] for n in names])
         assert status == OK, self.log.last()
         return values
+
+    # ---------------------------------------------------------- Model Exchange
+
+    def initialize_model_exchange(self, start=0.0, stop=None, **values):
+        """A Model Exchange instance, initialized: in Event Mode at `start`."""
+        status = self.initialize(start, stop, **values)
+        assert self.machine_state() == "Event Mode"
+        return status
+
+    def enter_event_mode(self):
+        return self.lib.fmi3EnterEventMode(self.c)
+
+    def enter_continuous_time_mode(self):
+        return self.lib.fmi3EnterContinuousTimeMode(self.c)
+
+    def update_discrete_states(self):
+        """fmi3UpdateDiscreteStates: (status, discreteStatesNeedUpdate,
+        terminateSimulation, nominalsOfContinuousStatesChanged,
+        valuesOfContinuousStatesChanged, nextEventTimeDefined, nextEventTime);
+        the flags read as bytes (the FMU must write 0 or 1)."""
+        flags = [c_uint8(0xAA) for _ in range(5)]
+        next_time = c_double(float("nan"))
+        status = self.lib.fmi3UpdateDiscreteStates(self.c, *[byref(f) for f in flags], byref(next_time))
+        return (status, *(f.value for f in flags), next_time.value)
+
+    def completed_integrator_step(self, no_set_prior=True):
+        """fmi3CompletedIntegratorStep: (status, enterEventMode,
+        terminateSimulation), the flags read as bytes."""
+        enter, terminate = c_uint8(0xAA), c_uint8(0xAA)
+        status = self.lib.fmi3CompletedIntegratorStep(self.c, no_set_prior, byref(enter), byref(terminate))
+        return status, enter.value, terminate.value
+
+    def set_time(self, t):
+        return self.lib.fmi3SetTime(self.c, t)
+
+    def set_continuous_states(self, values):
+        values = list(values)
+        return self.lib.fmi3SetContinuousStates(self.c, array(c_double, values), len(values))
+
+    def _vector(self, function, n):
+        out = (c_double * max(n, 1))(*([float("nan")] * max(n, 1)))
+        status = getattr(self.lib, function)(self.c, out, n)
+        return status, list(out[:n])
+
+    def continuous_states(self, n=NX):
+        return self._vector("fmi3GetContinuousStates", n)
+
+    def derivatives(self, n=NX):
+        return self._vector("fmi3GetContinuousStateDerivatives", n)
+
+    def event_indicators(self, n=NZ):
+        return self._vector("fmi3GetEventIndicators", n)
+
+    def nominals(self, n=NX):
+        return self._vector("fmi3GetNominalsOfContinuousStates", n)
+
+    def number_of(self, what):
+        """fmi3GetNumberOf{what} (ContinuousStates, EventIndicators): (status, n)."""
+        n = c_size_t(12345)
+        status = getattr(self.lib, f"fmi3GetNumberOf{what}")(self.c, byref(n))
+        return status, n.value
+
+    def euler_step(self, h):
+        """One explicit Euler step of size h in Continuous-Time Mode,
+        completed: (status, enterEventMode, terminateSimulation) of
+        fmi3CompletedIntegratorStep."""
+        status, x = self.continuous_states()
+        assert status == OK, self.log.last()
+        status, dx = self.derivatives()
+        assert status == OK, self.log.last()
+        assert self.set_time(self.time + h) == OK, self.log.last()
+        self.time += h
+        assert self.set_continuous_states([a + h * b for a, b in zip(x, dx)]) == OK, self.log.last()
+        return self.completed_integrator_step()
 
     # -------------------------------------------------------------- FMU states
 

@@ -5,7 +5,10 @@
  *
  *   harness LIB GUID cycles N     N instantiate / initialize / step /
  *                                 get-set-serialize-deserialize state /
- *                                 refused calls / terminate / free cycles
+ *                                 refused calls / terminate / free cycles,
+ *                                 each followed by a Model Exchange cycle
+ *                                 (Event and Continuous-Time Mode, Euler
+ *                                 steps, refused calls, FMU states)
  *   harness LIB GUID threads T    T threads, each with its own instances,
  *                                 stepping concurrently; compares every
  *                                 output bit for bit with a single-threaded
@@ -31,6 +34,16 @@ typedef char fmi2Byte;
 typedef const char *fmi2String;
 typedef int fmi2Status;
 enum { fmi2OK, fmi2Warning, fmi2Discard, fmi2Error, fmi2Fatal };
+enum { fmi2ModelExchange, fmi2CoSimulation };
+
+typedef struct {
+    fmi2Boolean newDiscreteStatesNeeded;
+    fmi2Boolean terminateSimulation;
+    fmi2Boolean nominalsOfContinuousStatesChanged;
+    fmi2Boolean valuesOfContinuousStatesChanged;
+    fmi2Boolean nextEventTimeDefined;
+    fmi2Real nextEventTime;
+} fmi2EventInfo;
 
 typedef struct {
     void (*logger)(void *, fmi2String, fmi2Status, fmi2String, fmi2String, ...);
@@ -60,6 +73,16 @@ static struct {
     fmi2Status (*SerializeFMUstate)(fmi2Component, fmi2FMUstate, fmi2Byte *, size_t);
     fmi2Status (*DeSerializeFMUstate)(fmi2Component, const fmi2Byte *, size_t, fmi2FMUstate *);
     fmi2Status (*DoStep)(fmi2Component, fmi2Real, fmi2Real, fmi2Boolean);
+    fmi2Status (*EnterEventMode)(fmi2Component);
+    fmi2Status (*NewDiscreteStates)(fmi2Component, fmi2EventInfo *);
+    fmi2Status (*EnterContinuousTimeMode)(fmi2Component);
+    fmi2Status (*CompletedIntegratorStep)(fmi2Component, fmi2Boolean, fmi2Boolean *, fmi2Boolean *);
+    fmi2Status (*SetTime)(fmi2Component, fmi2Real);
+    fmi2Status (*SetContinuousStates)(fmi2Component, const fmi2Real *, size_t);
+    fmi2Status (*GetDerivatives)(fmi2Component, fmi2Real *, size_t);
+    fmi2Status (*GetEventIndicators)(fmi2Component, fmi2Real *, size_t);
+    fmi2Status (*GetContinuousStates)(fmi2Component, fmi2Real *, size_t);
+    fmi2Status (*GetNominalsOfContinuousStates)(fmi2Component, fmi2Real *, size_t);
 } fmi;
 
 static const char *guid;
@@ -117,6 +140,16 @@ static void load(const char *path) {
     SYM(SerializeFMUstate, "fmi2SerializeFMUstate");
     SYM(DeSerializeFMUstate, "fmi2DeSerializeFMUstate");
     SYM(DoStep, "fmi2DoStep");
+    SYM(EnterEventMode, "fmi2EnterEventMode");
+    SYM(NewDiscreteStates, "fmi2NewDiscreteStates");
+    SYM(EnterContinuousTimeMode, "fmi2EnterContinuousTimeMode");
+    SYM(CompletedIntegratorStep, "fmi2CompletedIntegratorStep");
+    SYM(SetTime, "fmi2SetTime");
+    SYM(SetContinuousStates, "fmi2SetContinuousStates");
+    SYM(GetDerivatives, "fmi2GetDerivatives");
+    SYM(GetEventIndicators, "fmi2GetEventIndicators");
+    SYM(GetContinuousStates, "fmi2GetContinuousStates");
+    SYM(GetNominalsOfContinuousStates, "fmi2GetNominalsOfContinuousStates");
     /* The library stays loaded until exit (as in a simulation tool). */
 }
 
@@ -132,8 +165,98 @@ enum {
     VR_FIRST_OUTPUT = 31,
     N_OUTPUTS = 15 /* x_s .. objective */
 };
+enum { NX = 20, NZ = 1 }; /* Model Exchange: continuous states, event indicators */
 
 /* ------------------------------------------------------------------ cycles */
+
+/* One explicit Euler step of h in Continuous-Time Mode, completed. */
+static void euler_step(fmi2Component c, fmi2Real *t, fmi2Real h) {
+    fmi2Real x[NX], dx[NX], z[NZ];
+    fmi2Boolean enter = -1, terminate = -1;
+    CHECK(fmi.GetContinuousStates(c, x, NX), fmi2OK);
+    CHECK(fmi.GetDerivatives(c, dx, NX), fmi2OK);
+    for (int i = 0; i < NX; i++) x[i] += h * dx[i];
+    *t += h;
+    CHECK(fmi.SetTime(c, *t), fmi2OK);
+    CHECK(fmi.SetContinuousStates(c, x, NX), fmi2OK);
+    CHECK(fmi.GetEventIndicators(c, z, NZ), fmi2OK);
+    CHECK(fmi.CompletedIntegratorStep(c, 1, &enter, &terminate), fmi2OK);
+    if (enter != 0 || terminate != 0) {
+        fprintf(stderr, "CompletedIntegratorStep: enterEventMode %d, terminateSimulation %d\n",
+                enter, terminate);
+        exit(1);
+    }
+}
+
+/* A Model Exchange life cycle: Event Mode, Continuous-Time Mode with Euler
+ * steps, refused calls, FMU states (own and deserialized), terminate, free. */
+static void model_exchange_cycle(int k) {
+    fmi2Component c = fmi.Instantiate("me", fmi2ModelExchange, guid, NULL, &callbacks, 0,
+                                      k % 7 == 0);
+    if (!c) {
+        fprintf(stderr, "Model Exchange instantiate failed in cycle %d\n", k);
+        exit(1);
+    }
+    fmi2Real x[NX], nominal[NX];
+    CHECK(fmi.GetDerivatives(c, x, NX), fmi2Error); /* not initialized */
+    /* TDVASS (the delay history) every other cycle, else PVASS. */
+    fmi2ValueReference vrs[] = {VR_VARIANT, VR_ROAD};
+    fmi2Integer ints[] = {k % 2 ? 2 : 3, (k % 3) + 1};
+    CHECK(fmi.SetInteger(c, vrs, 2, ints), fmi2OK);
+    CHECK(fmi.SetupExperiment(c, 0, 0.0, 0.0, 1, 1.0), fmi2OK);
+    CHECK(fmi.EnterInitializationMode(c), fmi2OK);
+    CHECK(fmi.ExitInitializationMode(c), fmi2OK);
+    fmi2EventInfo info;
+    CHECK(fmi.NewDiscreteStates(c, &info), fmi2OK);
+    CHECK(fmi.NewDiscreteStates(c, NULL), fmi2Error);
+    CHECK(fmi.GetNominalsOfContinuousStates(c, nominal, NX), fmi2OK);
+    CHECK(fmi.SetContinuousStates(c, nominal, NX), fmi2Error); /* Event Mode */
+    CHECK(fmi.DoStep(c, 0.0, 0.001, 1), fmi2Error);
+    CHECK(fmi.EnterContinuousTimeMode(c), fmi2OK);
+    fmi2Real t = 0.0;
+    for (int i = 0; i < 5; i++) euler_step(c, &t, 1e-4);
+    /* Refused: wrong counts, a NaN state, time before the completed step. */
+    CHECK(fmi.GetContinuousStates(c, x, NX), fmi2OK);
+    CHECK(fmi.SetContinuousStates(c, x, NX - 1), fmi2Error);
+    CHECK(fmi.GetDerivatives(c, nominal, NX + 1), fmi2Error);
+    fmi2Real saved = x[k % NX];
+    x[k % NX] = strtod("nan", NULL);
+    CHECK(fmi.SetContinuousStates(c, x, NX), fmi2Error);
+    x[k % NX] = saved;
+    CHECK(fmi.SetTime(c, t - 1e-4), fmi2Error);
+    /* FMU states: own, and through bytes every 10th cycle. */
+    fmi2FMUstate state = NULL;
+    CHECK(fmi.GetFMUstate(c, &state), fmi2OK);
+    euler_step(c, &t, 1e-4);
+    size_t size = 0;
+    CHECK(fmi.SerializedFMUstateSize(c, state, &size), fmi2OK);
+    fmi2Byte *bytes = malloc(size);
+    CHECK(fmi.SerializeFMUstate(c, state, bytes, size), fmi2OK);
+    fmi2FMUstate copy = NULL;
+    if (k % 10 == 0) CHECK(fmi.DeSerializeFMUstate(c, bytes, size, &copy), fmi2OK);
+    bytes[size / 2] ^= 0x10;
+    fmi2FMUstate refused = NULL;
+    CHECK(fmi.DeSerializeFMUstate(c, bytes, size, &refused), fmi2Error);
+    free(bytes);
+    CHECK(fmi.SetFMUstate(c, copy ? copy : state), fmi2OK);
+    t -= 1e-4;
+    euler_step(c, &t, 1e-4);
+    if (copy) CHECK(fmi.FreeFMUstate(c, &copy), fmi2OK);
+    if (k % 2) CHECK(fmi.FreeFMUstate(c, &state), fmi2OK);
+    CHECK(fmi.EnterEventMode(c), fmi2OK);
+    CHECK(fmi.NewDiscreteStates(c, &info), fmi2OK);
+    if (info.newDiscreteStatesNeeded || info.terminateSimulation) {
+        fprintf(stderr, "NewDiscreteStates: %d %d\n", info.newDiscreteStatesNeeded,
+                info.terminateSimulation);
+        exit(1);
+    }
+    fmi2Real out[N_OUTPUTS];
+    fmi2ValueReference out_vrs[N_OUTPUTS];
+    for (int i = 0; i < N_OUTPUTS; i++) out_vrs[i] = VR_FIRST_OUTPUT + i;
+    CHECK(fmi.GetReal(c, out_vrs, N_OUTPUTS, out), fmi2OK);
+    CHECK(fmi.Terminate(c), fmi2OK);
+    fmi.FreeInstance(c);
+}
 
 static void one_cycle(int k) {
     fmi2Component c = fmi.Instantiate("cycle", 1, guid, "file:///tmp/resources", &callbacks, 0,
@@ -198,13 +321,14 @@ static void one_cycle(int k) {
     /* Refused instantiations log and allocate nothing that survives. */
     if (k % 10 == 0) {
         if (fmi.Instantiate("x", 1, "{wrong}", NULL, &callbacks, 0, 0) ||
-            fmi.Instantiate("x", 0, guid, NULL, &callbacks, 0, 0) ||
+            fmi.Instantiate("x", 7, guid, NULL, &callbacks, 0, 0) ||
             fmi.Instantiate("x", 1, guid, "http://host/r", &callbacks, 0, 0)) {
             fprintf(stderr, "a refused instantiation succeeded\n");
             exit(1);
         }
     }
     fmi.FreeInstance(NULL);
+    model_exchange_cycle(k);
 }
 
 /* ----------------------------------------------------------------- threads */

@@ -9,7 +9,9 @@
  * reads the outputs, sets x_g and asks for an early return) / refused calls /
  * Configuration Mode / initialize / step / read the rightmost_roots array /
  * get-set-serialize-deserialize state / terminate / free, and refused
- * instantiations. The value references come as NAME=VR arguments (from
+ * instantiations; then a Model Exchange cycle (Event and Continuous-Time
+ * Mode, Euler steps, refused calls, FMU states). The value references come
+ * as NAME=VR arguments (from
  * modelDescription.xml): variant, road, root_count, rightmost_roots,
  * max_internal_step, intermediate_update_interval, x_g, m_s, x_s, objective.
  *
@@ -72,7 +74,21 @@ static struct {
     fmi3Status (*DoStep)(fmi3Instance, fmi3Float64, fmi3Float64, fmi3Boolean, fmi3Boolean *,
                          fmi3Boolean *, fmi3Boolean *, fmi3Float64 *);
     fmi3Status (*EnterEventMode)(fmi3Instance);
+    fmi3Status (*UpdateDiscreteStates)(fmi3Instance, fmi3Boolean *, fmi3Boolean *, fmi3Boolean *,
+                                       fmi3Boolean *, fmi3Boolean *, fmi3Float64 *);
+    fmi3Status (*EnterContinuousTimeMode)(fmi3Instance);
+    fmi3Status (*CompletedIntegratorStep)(fmi3Instance, fmi3Boolean, fmi3Boolean *, fmi3Boolean *);
+    fmi3Status (*SetTime)(fmi3Instance, fmi3Float64);
+    fmi3Status (*SetContinuousStates)(fmi3Instance, const fmi3Float64 *, size_t);
+    fmi3Status (*GetContinuousStateDerivatives)(fmi3Instance, fmi3Float64 *, size_t);
+    fmi3Status (*GetEventIndicators)(fmi3Instance, fmi3Float64 *, size_t);
+    fmi3Status (*GetContinuousStates)(fmi3Instance, fmi3Float64 *, size_t);
+    fmi3Status (*GetNominalsOfContinuousStates)(fmi3Instance, fmi3Float64 *, size_t);
+    fmi3Status (*GetNumberOfContinuousStates)(fmi3Instance, size_t *);
+    fmi3Status (*GetNumberOfEventIndicators)(fmi3Instance, size_t *);
 } fmi;
+
+enum { NX = 20, NZ = 1 }; /* Model Exchange: continuous states, event indicators */
 
 static const char *token;
 static int logger_calls;
@@ -165,12 +181,121 @@ static void load(const char *path) {
     SYM(DeserializeFMUState, "fmi3DeserializeFMUState");
     SYM(DoStep, "fmi3DoStep");
     SYM(EnterEventMode, "fmi3EnterEventMode");
+    SYM(UpdateDiscreteStates, "fmi3UpdateDiscreteStates");
+    SYM(EnterContinuousTimeMode, "fmi3EnterContinuousTimeMode");
+    SYM(CompletedIntegratorStep, "fmi3CompletedIntegratorStep");
+    SYM(SetTime, "fmi3SetTime");
+    SYM(SetContinuousStates, "fmi3SetContinuousStates");
+    SYM(GetContinuousStateDerivatives, "fmi3GetContinuousStateDerivatives");
+    SYM(GetEventIndicators, "fmi3GetEventIndicators");
+    SYM(GetContinuousStates, "fmi3GetContinuousStates");
+    SYM(GetNominalsOfContinuousStates, "fmi3GetNominalsOfContinuousStates");
+    SYM(GetNumberOfContinuousStates, "fmi3GetNumberOfContinuousStates");
+    SYM(GetNumberOfEventIndicators, "fmi3GetNumberOfEventIndicators");
     /* The library stays loaded until exit (as in a simulation tool). */
 }
 
 static fmi3Status step(fmi3Instance c, double t, double h, fmi3Boolean *early, double *last) {
     fmi3Boolean event, terminate;
     return fmi.DoStep(c, t, h, false, &event, &terminate, early, last);
+}
+
+/* One explicit Euler step of h in Continuous-Time Mode, completed. */
+static void euler_step(fmi3Instance c, fmi3Float64 *t, fmi3Float64 h) {
+    fmi3Float64 x[NX], dx[NX], z[NZ];
+    fmi3Boolean enter = true, terminate = true;
+    CHECK(fmi.GetContinuousStates(c, x, NX), fmi3OK);
+    CHECK(fmi.GetContinuousStateDerivatives(c, dx, NX), fmi3OK);
+    for (int i = 0; i < NX; i++) x[i] += h * dx[i];
+    *t += h;
+    CHECK(fmi.SetTime(c, *t), fmi3OK);
+    CHECK(fmi.SetContinuousStates(c, x, NX), fmi3OK);
+    CHECK(fmi.GetEventIndicators(c, z, NZ), fmi3OK);
+    CHECK(fmi.CompletedIntegratorStep(c, true, &enter, &terminate), fmi3OK);
+    if (enter || terminate) {
+        fprintf(stderr, "CompletedIntegratorStep: enterEventMode %d, terminateSimulation %d\n",
+                enter, terminate);
+        exit(1);
+    }
+}
+
+/* An update of the discrete states in Event Mode: nothing more to do. */
+static void update_discrete_states(fmi3Instance c) {
+    fmi3Boolean again = true, terminate = true, nominals = true, values = true, defined = true;
+    fmi3Float64 next = -1.0;
+    CHECK(fmi.UpdateDiscreteStates(c, &again, &terminate, &nominals, &values, &defined, &next),
+          fmi3OK);
+    if (again || terminate || nominals || values || defined) {
+        fprintf(stderr, "UpdateDiscreteStates: %d %d %d %d %d\n", again, terminate, nominals,
+                values, defined);
+        exit(1);
+    }
+}
+
+/* A Model Exchange life cycle: Event Mode, Continuous-Time Mode with Euler
+ * steps, refused calls, FMU states (own and deserialized), terminate, free. */
+static void model_exchange_cycle(int k) {
+    fmi3Instance c = fmi.InstantiateModelExchange("me", token, NULL, false, k % 7 == 0, NULL,
+                                                  logger);
+    if (!c) {
+        fprintf(stderr, "Model Exchange instantiate failed in cycle %d\n", k);
+        exit(1);
+    }
+    fmi3Float64 x[NX], nominal[NX];
+    size_t n = 0;
+    CHECK(fmi.GetContinuousStateDerivatives(c, x, NX), fmi3Error); /* not initialized */
+    CHECK(fmi.GetNumberOfContinuousStates(c, &n), fmi3Error);
+    /* TDVASS (the delay history) every other cycle, else PVASS. */
+    fmi3ValueReference enums[] = {vr.variant, vr.road};
+    fmi3Int64 codes[] = {k % 2 ? 2 : 3, (k % 3) + 1};
+    CHECK(fmi.SetInt64(c, enums, 2, codes, 2), fmi3OK);
+    CHECK(fmi.EnterInitializationMode(c, false, 0.0, 0.0, true, 1.0), fmi3OK);
+    CHECK(fmi.GetNumberOfContinuousStates(c, &n), fmi3OK);
+    CHECK(fmi.GetNumberOfEventIndicators(c, &n), fmi3OK);
+    CHECK(fmi.ExitInitializationMode(c), fmi3OK);
+    update_discrete_states(c);
+    CHECK(fmi.UpdateDiscreteStates(c, NULL, NULL, NULL, NULL, NULL, NULL), fmi3Error);
+    CHECK(fmi.GetNominalsOfContinuousStates(c, nominal, NX), fmi3OK);
+    CHECK(fmi.SetContinuousStates(c, nominal, NX), fmi3Error); /* Event Mode */
+    CHECK(step(c, 0.0, 0.001, &(fmi3Boolean){0}, &x[0]), fmi3Error);
+    CHECK(fmi.EnterContinuousTimeMode(c), fmi3OK);
+    fmi3Float64 t = 0.0;
+    for (int i = 0; i < 5; i++) euler_step(c, &t, 1e-4);
+    /* Refused: wrong counts, a NaN state, time before the completed step. */
+    CHECK(fmi.GetContinuousStates(c, x, NX), fmi3OK);
+    CHECK(fmi.SetContinuousStates(c, x, NX - 1), fmi3Error);
+    CHECK(fmi.GetContinuousStateDerivatives(c, nominal, NX + 1), fmi3Error);
+    fmi3Float64 saved = x[k % NX];
+    x[k % NX] = strtod("nan", NULL);
+    CHECK(fmi.SetContinuousStates(c, x, NX), fmi3Error);
+    x[k % NX] = saved;
+    CHECK(fmi.SetTime(c, t - 1e-4), fmi3Error);
+    /* FMU states: own, and through bytes every 10th cycle. */
+    fmi3FMUState state = NULL;
+    CHECK(fmi.GetFMUState(c, &state), fmi3OK);
+    euler_step(c, &t, 1e-4);
+    size_t size = 0;
+    CHECK(fmi.SerializedFMUStateSize(c, state, &size), fmi3OK);
+    fmi3Byte *bytes = malloc(size);
+    CHECK(fmi.SerializeFMUState(c, state, bytes, size), fmi3OK);
+    fmi3FMUState copy = NULL;
+    if (k % 10 == 0) CHECK(fmi.DeserializeFMUState(c, bytes, size, &copy), fmi3OK);
+    bytes[size / 2] ^= 0x10;
+    fmi3FMUState refused = NULL;
+    CHECK(fmi.DeserializeFMUState(c, bytes, size, &refused), fmi3Error);
+    free(bytes);
+    CHECK(fmi.SetFMUState(c, copy ? copy : state), fmi3OK);
+    t -= 1e-4;
+    euler_step(c, &t, 1e-4);
+    if (copy) CHECK(fmi.FreeFMUState(c, &copy), fmi3OK);
+    if (k % 2) CHECK(fmi.FreeFMUState(c, &state), fmi3OK);
+    CHECK(fmi.EnterEventMode(c), fmi3OK);
+    update_discrete_states(c);
+    fmi3ValueReference outs[] = {vr.x_s, vr.objective};
+    fmi3Float64 out[2];
+    CHECK(fmi.GetFloat64(c, outs, 2, out, 2), fmi3OK);
+    CHECK(fmi.Terminate(c), fmi3OK);
+    fmi.FreeInstance(c);
 }
 
 static void one_cycle(int k) {
@@ -254,12 +379,13 @@ static void one_cycle(int k) {
                                         NULL, logger, NULL) ||
             fmi.InstantiateCoSimulation("x", token, NULL, false, false, false, false,
                                         &not_intermediate, 1, NULL, logger, NULL) ||
-            fmi.InstantiateModelExchange("x", token, NULL, false, false, NULL, logger)) {
+            fmi.InstantiateModelExchange("x", "{wrong}", NULL, false, false, NULL, logger)) {
             fprintf(stderr, "a refused instantiation succeeded\n");
             exit(1);
         }
     }
     fmi.FreeInstance(NULL);
+    model_exchange_cycle(k);
 }
 
 static fmi3ValueReference value_reference(int argc, char **argv, const char *name) {

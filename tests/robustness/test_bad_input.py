@@ -116,8 +116,13 @@ def test_null_guid(lib):
     refused_instantiation(lib, "fmuGUID is NULL", guid_=None)
 
 
-def test_model_exchange_type(lib):
-    refused_instantiation(lib, "fmi2ModelExchange is not supported", fmu_type=fmi2.MODEL_EXCHANGE)
+def test_model_exchange_type_is_accepted(make):
+    """fmi2ModelExchange makes an instance (since Model Exchange was added),
+    without an error logged."""
+    inst = make(fmu_type=fmi2.MODEL_EXCHANGE)
+    assert inst.ok
+    assert not [m for m in inst.log.messages if m[0] != OK], inst.log.messages
+    assert inst.machine_state() == "instantiated"
 
 
 def test_unknown_fmu_type(lib):
@@ -163,13 +168,37 @@ def test_null_callbacks_and_null_logger(lib):
     assert not lib.fmi2Instantiate(b"a", 1, g, None, byref(callbacks), 0, 0)
 
 
-def test_model_exchange_functions_on_a_cs_instance(make):
+_nx = (c_double * fmi2.NX)()
+_ni = (c_double * fmi2.NZ)()
+_event_info = fmi2.EventInfo()
+# Each Model Exchange function with valid arguments but the instance.
+MODEL_EXCHANGE_CALLS = {
+    "fmi2EnterEventMode": (),
+    "fmi2NewDiscreteStates": (byref(_event_info),),
+    "fmi2EnterContinuousTimeMode": (),
+    "fmi2CompletedIntegratorStep": (1, byref(c_int()), byref(c_int())),
+    "fmi2SetTime": (0.0,),
+    "fmi2SetContinuousStates": (_nx, fmi2.NX),
+    "fmi2GetDerivatives": (_nx, fmi2.NX),
+    "fmi2GetEventIndicators": (_ni, fmi2.NZ),
+    "fmi2GetContinuousStates": (_nx, fmi2.NX),
+    "fmi2GetNominalsOfContinuousStates": (_nx, fmi2.NX),
+}
+
+
+@pytest.mark.parametrize("state", ["instantiated", "stepComplete"])
+def test_model_exchange_functions_on_a_cs_instance(make, state):
+    """The state table refuses every Model Exchange function in the states
+    of a Co-Simulation instance, naming the state; nothing changes."""
     inst = make()
-    for function, args in NULL_INSTANCE_CALLS.items():
-        if function in ("fmi2EnterEventMode", "fmi2SetTime", "fmi2GetDerivatives", "fmi2NewDiscreteStates"):
-            assert getattr(inst.lib, function)(inst.c, *args) == ERROR
-            assert last_error(inst) == f"{function}: Model Exchange function; this FMU implements Co-Simulation only"
-    assert inst.machine_state() == "instantiated"
+    if state == "stepComplete":
+        inst.initialize(stop=15.0)
+    for function, args in MODEL_EXCHANGE_CALLS.items():
+        assert getattr(inst.lib, function)(inst.c, *args) == ERROR
+        assert last_error(inst) == f"{function}: not allowed in state {state}"
+        assert inst.machine_state() == state
+    if state == "stepComplete":
+        assert inst.step(0.01) == OK
 
 
 # ---------------------------------------------------------- arrays and NULL
@@ -544,11 +573,11 @@ def test_deserialize_bit_flipped(serialized, position):
     refused_state(inst, bytes(flipped), "")
 
 
-@pytest.mark.parametrize("version", [1, 2, 3, 4, 6])
+@pytest.mark.parametrize("version", [1, 2, 3, 4, 5, 7])
 def test_deserialize_wrong_version(serialized, version):
     # States of the earlier versions (before the RMS time integral, the FMI
-    # 3.0 settings and the metrics, the tolerance, the tire's contact law)
-    # and an unknown version.
+    # 3.0 settings and the metrics, the tolerance, the tire's contact law,
+    # the Model Exchange model) and an unknown version.
     inst, data = serialized
     refused_state(inst, data[:8] + version.to_bytes(4, "little") + data[12:], f"format version {version} is not supported")
 

@@ -198,30 +198,84 @@ def test_required_intermediate_variables_null_with_a_length(lib3):
                                                       "is NULL while its length is 3")]
 
 
-@pytest.mark.parametrize("function, kind", [("fmi3InstantiateModelExchange", "Model Exchange"),
-                                            ("fmi3InstantiateScheduledExecution", "Scheduled Execution")])
-def test_model_exchange_and_scheduled_execution_are_refused(lib3, function, kind):
+def test_model_exchange_instantiation_makes_an_instance(make3):
+    """fmi3InstantiateModelExchange makes an instance (since Model Exchange
+    was added), without an error logged."""
+    inst = make3(model_exchange=True)
+    assert inst.ok
+    assert not [m for m in inst.log.messages if m[0] != OK], inst.log.messages
+    assert inst.machine_state() == "Instantiated"
+
+
+@pytest.mark.parametrize("token, expected", [(b"{00000000-0000-0000-0000-000000000000}", "does not match"),
+                                             (None, "instantiationToken is NULL")])
+def test_model_exchange_instantiation_checks_the_token(lib3, token, expected):
+    log = fmi3.Log()
+    inst = fmi3.Instance(lib3, log=log, token=token, model_exchange=True)
+    assert not inst.ok
+    assert len(log.messages) == 1, log.messages
+    status, category, message = log.messages[0]
+    assert status == ERROR and category == "logStatusError"
+    assert message.startswith("fmi3InstantiateModelExchange: ") and expected in message, message
+
+
+def test_scheduled_execution_is_refused(lib3):
     log = fmi3.Log()
     token = fmi3.instantiation_token().encode()
-    extra = (None, None, None) if "Scheduled" in function else ()
-    instance = getattr(lib3, function)(b"a", token, None, False, True, log.key, fmi3.LOGGER, *extra)
+    instance = lib3.fmi3InstantiateScheduledExecution(b"a", token, None, False, True, log.key, fmi3.LOGGER, None,
+                                                      None, None)
     assert not instance
-    assert log.messages == [(ERROR, "logStatusError",
-                             f"{function}: {kind} is not supported: this FMU implements Co-Simulation only")]
+    assert len(log.messages) == 1, log.messages
+    status, category, message = log.messages[0]
+    assert (status, category) == (ERROR, "logStatusError")
+    assert message.startswith("fmi3InstantiateScheduledExecution: Scheduled Execution is not supported"), message
+    # The FMU implements Model Exchange too: the reason must not deny it.
+    assert "Co-Simulation only" not in message, message
 
 
-@pytest.mark.parametrize("function", ["fmi3EnterEventMode", "fmi3SetTime", "fmi3GetContinuousStates",
-                                      "fmi3UpdateDiscreteStates", "fmi3GetClock", "fmi3SetIntervalDecimal",
-                                      "fmi3EnterStepMode", "fmi3ActivateModelPartition",
-                                      "fmi3GetNumberOfContinuousStates", "fmi3EvaluateDiscreteStates"])
-def test_functions_that_do_not_apply_are_refused_with_the_reason(initialized3, function):
+MODEL_EXCHANGE_FUNCTIONS = ["fmi3EnterEventMode", "fmi3SetTime", "fmi3GetContinuousStates",
+                            "fmi3UpdateDiscreteStates", "fmi3EnterContinuousTimeMode",
+                            "fmi3CompletedIntegratorStep", "fmi3SetContinuousStates",
+                            "fmi3GetContinuousStateDerivatives", "fmi3GetEventIndicators",
+                            "fmi3GetNominalsOfContinuousStates", "fmi3GetNumberOfContinuousStates",
+                            "fmi3GetNumberOfEventIndicators"]
+
+
+@pytest.mark.parametrize("function", MODEL_EXCHANGE_FUNCTIONS)
+def test_model_exchange_functions_in_step_mode_are_refused_by_the_state_table(initialized3, function):
+    """A Co-Simulation instance in Step Mode refuses every Model Exchange
+    function, naming the state; nothing changes."""
     inst = initialized3()
+    before = inst.snapshot()
+    args = NULL_INSTANCE_CALLS[function]
+    if function in ("fmi3SetContinuousStates", "fmi3GetContinuousStates", "fmi3GetContinuousStateDerivatives",
+                    "fmi3GetNominalsOfContinuousStates"):
+        args = ((c_double * fmi3.NX)(), fmi3.NX)
+    assert getattr(inst.lib, function)(inst.c, *args) == ERROR
+    assert last_error(inst) == f"{function}: not allowed in state Step Mode"
+    assert inst.machine_state() == "Step Mode"
+    assert inst.snapshot() == before
+
+
+NOT_APPLICABLE = ["fmi3GetClock", "fmi3SetIntervalDecimal", "fmi3EnterStepMode", "fmi3ActivateModelPartition",
+                  "fmi3EvaluateDiscreteStates"]
+
+
+@pytest.mark.parametrize("model_exchange", [False, True], ids=["cs", "me"])
+@pytest.mark.parametrize("function", NOT_APPLICABLE)
+def test_functions_that_do_not_apply_are_refused_with_the_reason(make3, function, model_exchange):
+    """Clocks, Scheduled Execution, Step Mode after Event Mode: refused in
+    Step Mode (Co-Simulation) and in Event Mode (Model Exchange) alike."""
+    inst = make3(model_exchange=model_exchange)
+    inst.initialize(stop=15.0)
+    state = inst.machine_state()
+    assert state == ("Event Mode" if model_exchange else "Step Mode")
     before = inst.snapshot()
     assert getattr(inst.lib, function)(inst.c, *NULL_INSTANCE_CALLS[function]) == ERROR
     message = last_error(inst)
     assert message.startswith(f"{function}: "), message
-    assert message.endswith("; this FMU implements Co-Simulation only, without event mode or clocks"), message
-    assert inst.machine_state() == "Step Mode"
+    assert message.endswith("; this FMU implements Co-Simulation and Model Exchange, without clocks"), message
+    assert inst.machine_state() == state
     assert inst.snapshot() == before
 
 
@@ -756,7 +810,7 @@ def test_deserialize_trailing_bytes(serialized):
     refused_state(inst, data + b"\0", "")
 
 
-@pytest.mark.parametrize("version", [1, 2, 3, 4, 6])
+@pytest.mark.parametrize("version", [1, 2, 3, 4, 5, 7])
 def test_deserialize_wrong_version(serialized, version):
     inst, data = serialized
     refused_state(inst, data[:8] + version.to_bytes(4, "little") + data[12:],

@@ -1,0 +1,597 @@
+"""Model Exchange through the real shared libraries, FMI 2.0 and FMI 3.0
+alike (each test runs on both): the life cycle through Event Mode and
+Continuous-Time Mode, then bad input to every Model Exchange function:
+NULL pointers, wrong numbers of states and indicators, NaN and infinite
+states, time set back before a completed integrator step or event or not
+finite, calls in the wrong state. Every refusal must return the Error
+status, log one line naming the function and the argument or value, change
+nothing (the serialized state is bit-identical before and after) and leave
+the instance usable. A diverging state asks the master to terminate.
+"""
+
+import math
+from ctypes import byref, c_bool, c_double, c_int, c_size_t, c_uint8
+
+import pytest
+from conftest import rust
+
+import fmi2
+import fmi3
+from fmi2 import NX, NZ, STATE_NAMES, array
+
+OK, WARNING, ERROR, FATAL = 0, 1, 3, 4  # the same codes in both versions
+NAN, INF = float("nan"), float("inf")
+
+FUNCTIONS = {
+    "fmi2": {
+        "set_time": "fmi2SetTime", "set_states": "fmi2SetContinuousStates", "derivatives": "fmi2GetDerivatives",
+        "indicators": "fmi2GetEventIndicators", "states": "fmi2GetContinuousStates",
+        "nominals": "fmi2GetNominalsOfContinuousStates", "event": "fmi2EnterEventMode",
+        "continuous": "fmi2EnterContinuousTimeMode", "completed": "fmi2CompletedIntegratorStep",
+        "discrete": "fmi2NewDiscreteStates", "do_step": "fmi2DoStep", "terminate": "fmi2Terminate",
+        "deserialize": "fmi2DeSerializeFMUstate",
+    },
+    "fmi3": {
+        "set_time": "fmi3SetTime", "set_states": "fmi3SetContinuousStates",
+        "derivatives": "fmi3GetContinuousStateDerivatives", "indicators": "fmi3GetEventIndicators",
+        "states": "fmi3GetContinuousStates", "nominals": "fmi3GetNominalsOfContinuousStates",
+        "event": "fmi3EnterEventMode", "continuous": "fmi3EnterContinuousTimeMode",
+        "completed": "fmi3CompletedIntegratorStep", "discrete": "fmi3UpdateDiscreteStates", "do_step": "fmi3DoStep",
+        "terminate": "fmi3Terminate", "deserialize": "fmi3DeserializeFMUState",
+    },
+}
+# The names of the array arguments (as the refusals name them).
+ARRAYS = {
+    "fmi2": {"set_states": "x", "derivatives": "derivatives", "indicators": "eventIndicators", "states": "x",
+             "nominals": "x_nominal"},
+    "fmi3": {"set_states": "continuousStates", "derivatives": "derivatives", "indicators": "eventIndicators",
+             "states": "continuousStates", "nominals": "nominals"},
+}
+STATES = {
+    "fmi2": {"instantiated": "instantiated", "initialization": "initializationMode", "event": "eventMode",
+             "continuous": "continuousTimeMode", "terminated": "terminated"},
+    "fmi3": {"instantiated": "Instantiated", "initialization": "Initialization Mode", "event": "Event Mode",
+             "continuous": "Continuous-Time Mode", "terminated": "Terminated"},
+}
+# What a wrong count is called in the refusal, and the right count.
+COUNTS = {"derivatives": ("derivatives", NX), "states": ("continuous states", NX), "nominals": ("nominals", NX),
+          "indicators": ("event indicators", NZ)}
+
+
+class ModelExchange:
+    """One FMI version's Model Exchange, spelled alike for the tests."""
+
+    def __init__(self, version, make):
+        self.version = version
+        self.make = make
+        self.fn = FUNCTIONS[version]
+        self.array_name = ARRAYS[version]
+        self.state_name = STATES[version]
+
+    def __repr__(self):
+        return self.version
+
+    def instance(self, **kwargs):
+        if self.version == "fmi2":
+            return self.make(fmu_type=fmi2.MODEL_EXCHANGE, **kwargs)
+        return self.make(model_exchange=True, **kwargs)
+
+    def initialization_mode(self, inst):
+        if self.version == "fmi2":
+            assert inst.setup(0.0, 15.0) == OK and inst.enter() == OK
+        else:
+            assert inst.enter(0.0, 15.0) == OK
+        assert inst.machine_state() == self.state_name["initialization"]
+
+    def event_mode(self, stop=15.0, **values):
+        """An instance in Event Mode at t = 0."""
+        inst = self.instance()
+        assert inst.initialize_model_exchange(stop=stop, **values) == OK
+        return inst
+
+    def continuous_time_mode(self, steps=0, h=1e-4, **values):
+        """An instance in Continuous-Time Mode after `steps` completed Euler
+        steps of h from t = 0."""
+        inst = self.event_mode(**values)
+        assert self.discrete(inst)[0] == OK
+        assert inst.enter_continuous_time_mode() == OK
+        for _ in range(steps):
+            assert inst.euler_step(h) == (OK, 0, 0), inst.log.last()
+        return inst
+
+    def call(self, inst, key, *args):
+        return getattr(inst.lib, self.fn[key])(inst.c, *args)
+
+    def discrete(self, inst):
+        """The event update: (status, terminateSimulation, every flag and the
+        next event time as the FMU wrote them)."""
+        if self.version == "fmi2":
+            status, info = inst.new_discrete_states()
+            flags = (info.newDiscreteStatesNeeded, info.terminateSimulation, info.nominalsOfContinuousStatesChanged,
+                     info.valuesOfContinuousStatesChanged, info.nextEventTimeDefined, info.nextEventTime)
+            return status, info.terminateSimulation, flags
+        status, *flags = inst.update_discrete_states()
+        return status, flags[1], tuple(flags)
+
+    def do_step(self, inst, t, h):
+        if self.version == "fmi2":
+            return inst.lib.fmi2DoStep(inst.c, t, h, 1)
+        return inst.do_step(t, h)[0]
+
+
+@pytest.fixture(params=["fmi2", "fmi3"])
+def me(request):
+    """The Model Exchange of one FMI version (fixtures make/make3: every
+    instance is freed after the test, and the library must still answer)."""
+    make = request.getfixturevalue("make" if request.param == "fmi2" else "make3")
+    return ModelExchange(request.param, make)
+
+
+def last_error(inst):
+    status, category, message = inst.log.last()
+    assert status == ERROR and category == "logStatusError", inst.log.last()
+    return message
+
+
+def refused(me, inst, key, args, expected, state):
+    """`key` called with `args` is refused: fmi2Error/fmi3Error, exactly one
+    log line `<function>: <expected>`, the instance unchanged and still in
+    `state`."""
+    before = inst.snapshot()
+    count = len(inst.log.messages)
+    assert me.call(inst, key, *args) == ERROR
+    assert inst.log.since(count) == [(ERROR, "logStatusError", f"{me.fn[key]}: {expected}")], inst.log.since(count)
+    assert inst.machine_state() == me.state_name[state]
+    assert inst.snapshot() == before
+
+
+def vector(n, value=NAN):
+    return (c_double * max(n, 1))(*([value] * max(n, 1)))
+
+
+# --------------------------------------------------------------- life cycle
+
+
+def test_life_cycle_through_event_and_continuous_time_mode(me):
+    inst = me.instance()
+    assert inst.ok
+    assert inst.machine_state() == me.state_name["instantiated"]
+    me.initialization_mode(inst)
+    assert inst.exit() == OK, inst.log.last()
+    assert inst.machine_state() == me.state_name["event"]
+    # The event update at the start: nothing pending, no time event.
+    status, terminate, flags = me.discrete(inst)
+    assert status == OK and terminate == 0
+    assert flags[:5] == (0, 0, 0, 0, 0) and flags[5] == 0.0, flags
+    assert inst.enter_continuous_time_mode() == OK
+    assert inst.machine_state() == me.state_name["continuous"]
+    status, x = inst.continuous_states()
+    assert status == OK and x == [0.0] * NX  # the default start values
+    status, nominals = inst.nominals()
+    assert status == OK and all(0 < v < math.inf for v in nominals), nominals
+    status, z = inst.event_indicators()
+    assert status == OK and z[0] > 0  # the tire in contact: a positive margin
+    for _ in range(20):
+        assert inst.euler_step(1e-4) == (OK, 0, 0), inst.log.last()
+    status, x = inst.continuous_states()
+    assert status == OK and any(x) and all(math.isfinite(v) for v in x)
+    status, dx = inst.derivatives()
+    assert status == OK and all(math.isfinite(v) for v in dx)
+    assert inst.enter_event_mode() == OK
+    assert inst.machine_state() == me.state_name["event"]
+    assert me.discrete(inst)[:2] == (OK, 0)
+    assert inst.enter_continuous_time_mode() == OK
+    assert inst.euler_step(1e-4) == (OK, 0, 0)
+    assert me.call(inst, "terminate") == OK
+    assert inst.machine_state() == me.state_name["terminated"]
+    # The model can still be read after terminating.
+    assert inst.continuous_states()[0] == OK and inst.derivatives()[0] == OK
+    # Nothing but the probes of machine_state() was refused.
+    assert not [m for m in inst.log.messages if m[0] != OK and "CancelStep" not in m[2]
+                and "ExitConfigurationMode" not in m[2]], inst.log.messages
+
+
+def test_sizes_of_the_model_fmi3(make3):
+    inst = make3(model_exchange=True)
+    assert inst.number_of("ContinuousStates")[0] == ERROR
+    assert last_error(inst) == "fmi3GetNumberOfContinuousStates: not allowed in state Instantiated"
+    assert inst.enter(0.0, 15.0) == OK
+    assert inst.number_of("ContinuousStates") == (OK, NX)
+    assert inst.number_of("EventIndicators") == (OK, NZ)
+    assert inst.lib.fmi3GetNumberOfContinuousStates(inst.c, None) == ERROR
+    assert last_error(inst) == "fmi3GetNumberOfContinuousStates: nContinuousStates is NULL while its length is 1"
+    assert inst.lib.fmi3GetNumberOfEventIndicators(inst.c, None) == ERROR
+    assert last_error(inst) == "fmi3GetNumberOfEventIndicators: nEventIndicators is NULL while its length is 1"
+
+
+# ------------------------------------------------------------ NULL pointers
+
+
+@pytest.mark.parametrize("key", ["set_states", "derivatives", "indicators", "states", "nominals"])
+def test_null_array_with_a_length(me, key):
+    inst = me.continuous_time_mode(steps=2)
+    n = NZ if key == "indicators" else NX
+    refused(me, inst, key, (None, n), f"{me.array_name[key]} is NULL while its length is {n}", "continuous")
+    assert inst.euler_step(1e-4) == (OK, 0, 0)  # still usable
+
+
+def test_null_event_info_fmi2(model_exchange):
+    me = ModelExchange("fmi2", None)
+    inst = model_exchange()
+    refused(me, inst, "discrete", (None,), "eventInfo is NULL while its length is 1", "event")
+    assert me.discrete(inst)[:2] == (OK, 0)
+
+
+UPDATE_FLAGS = ["discreteStatesNeedUpdate", "terminateSimulation", "nominalsOfContinuousStatesChanged",
+                "valuesOfContinuousStatesChanged", "nextEventTimeDefined", "nextEventTime"]
+
+
+@pytest.mark.parametrize("position", range(6), ids=UPDATE_FLAGS)
+def test_null_out_pointers_of_update_discrete_states_fmi3(model_exchange3, position):
+    me = ModelExchange("fmi3", None)
+    inst = model_exchange3()
+    outs = [c_uint8(0xAA) for _ in range(5)] + [c_double(-1.0)]
+    args = [None if k == position else byref(out) for k, out in enumerate(outs)]
+    refused(me, inst, "discrete", args, f"{UPDATE_FLAGS[position]} is NULL while its length is 1", "event")
+    assert [o.value for o in outs] == [0xAA] * 5 + [-1.0]  # nothing written
+    assert me.discrete(inst)[:2] == (OK, 0)
+
+
+@pytest.mark.parametrize("position", [0, 1], ids=["enterEventMode", "terminateSimulation"])
+def test_null_out_pointers_of_completed_integrator_step(me, position):
+    inst = me.continuous_time_mode(steps=1)
+    assert inst.set_time(2e-4) == OK
+    flag = c_int(7) if me.version == "fmi2" else c_bool(True)
+    args = [1, None, byref(flag)] if position == 0 else [1, byref(flag), None]
+    name = ["enterEventMode", "terminateSimulation"][position]
+    refused(me, inst, "completed", args, f"{name} is NULL while its length is 1", "continuous")
+    # Not completed: the time can still go back to the last completed step.
+    assert inst.set_time(1e-4) == OK
+    assert inst.completed_integrator_step() == (OK, 0, 0)
+
+
+# ------------------------------------------------------------ wrong counts
+
+
+@pytest.mark.parametrize("n", [NX - 1, NX + 1, 0])
+def test_wrong_number_of_continuous_states_given(me, n):
+    inst = me.continuous_time_mode(steps=2)
+    status, x = inst.continuous_states()
+    values = array(c_double, (x + [0.0])[:n]) if n else None
+    refused(me, inst, "set_states", (values, n), f"{n} continuous states given, the model has {NX}", "continuous")
+    assert inst.continuous_states() == (OK, x)
+
+
+@pytest.mark.parametrize("n", [NX - 1, NX + 1, 0])
+@pytest.mark.parametrize("key", ["derivatives", "states", "nominals"])
+def test_wrong_number_of_values_asked_for(me, key, n):
+    inst = me.continuous_time_mode(steps=2)
+    out = vector(n) if n else None
+    what, expected = COUNTS[key]
+    refused(me, inst, key, (out, n), f"{n} {what} asked for, the model has {expected}", "continuous")
+    if n:
+        assert all(math.isnan(v) for v in out), list(out)  # nothing written
+    assert getattr(inst, {"derivatives": "derivatives", "states": "continuous_states",
+                          "nominals": "nominals"}[key])()[0] == OK
+
+
+@pytest.mark.parametrize("n", [0, 2])
+def test_wrong_number_of_event_indicators_asked_for(me, n):
+    inst = me.continuous_time_mode(steps=2)
+    out = vector(n) if n else None
+    refused(me, inst, "indicators", (out, n), f"{n} event indicators asked for, the model has {NZ}", "continuous")
+    assert inst.event_indicators()[0] == OK
+
+
+# ------------------------------------------------------- non-finite states
+
+
+@pytest.mark.parametrize("index, value", [(0, NAN), (3, INF), (NX - 1, -INF)],
+                         ids=["x_s-nan", "v_h-inf", "last-minus-inf"])
+def test_non_finite_state_is_refused_naming_it(me, index, value):
+    inst = me.continuous_time_mode(steps=2)
+    status, x = inst.continuous_states()
+    bad = list(x)
+    bad[index] = value
+    refused(me, inst, "set_states", (array(c_double, bad), NX),
+            f"continuous state {index} (`{STATE_NAMES[index]}`) = {rust(value)} is not finite", "continuous")
+    assert inst.continuous_states() == (OK, x)
+    assert inst.euler_step(1e-4) == (OK, 0, 0)
+
+
+def test_huge_finite_states_give_finite_derivatives_or_a_refusal(me):
+    """States at the limit of a double: the derivatives are finite, or
+    refused naming the derivative that is not; never a panic or a NaN."""
+    inst = me.continuous_time_mode()
+    assert inst.set_continuous_states([1e300] * NX) == OK
+    count = len(inst.log.messages)
+    status, dx = inst.derivatives()
+    assert status in (OK, ERROR), inst.log.since(count)
+    if status == OK:
+        assert all(math.isfinite(v) for v in dx), dx
+    else:
+        message = last_error(inst)
+        assert message.startswith(f"{me.fn['derivatives']}: the derivative of `"), message
+
+
+# -------------------------------------------------------------------- time
+
+
+def test_time_before_the_last_completed_step_is_refused_naming_both_times(me):
+    inst = me.continuous_time_mode()
+    assert inst.set_time(1e-3) == OK
+    assert inst.completed_integrator_step() == (OK, 0, 0)
+    refused(me, inst, "set_time", (5e-4,),
+            "time 0.0005 s is before the last completed integrator step or event at 0.001 s (or not finite)",
+            "continuous")
+    # The completed time itself and later times are fine.
+    assert inst.set_time(1e-3) == OK and inst.set_time(2e-3) == OK
+
+
+@pytest.mark.parametrize("value", [NAN, INF, -INF])
+def test_non_finite_time_is_refused(me, value):
+    inst = me.continuous_time_mode(steps=3)
+    refused(me, inst, "set_time", (value,),
+            f"time {rust(value)} s is before the last completed integrator step or event at {rust(inst.time)} s "
+            "(or not finite)", "continuous")
+
+
+def test_a_trial_time_can_be_taken_back_until_the_step_is_completed(me):
+    """An integrator that rejects a step sets an earlier time again: allowed
+    back to the last completed step, not before."""
+    inst = me.continuous_time_mode(steps=1)
+    assert inst.set_time(5e-4) == OK and inst.derivatives()[0] == OK
+    assert inst.set_time(2e-4) == OK and inst.derivatives()[0] == OK
+    assert inst.set_time(1e-4) == OK
+    refused(me, inst, "set_time", (0.5e-4,),
+            "time 0.00005 s is before the last completed integrator step or event at 0.0001 s (or not finite)",
+            "continuous")
+
+
+def test_time_before_an_event_is_refused_in_event_mode(me):
+    inst = me.continuous_time_mode()
+    assert inst.set_time(1e-3) == OK
+    assert inst.enter_event_mode() == OK
+    assert me.discrete(inst)[:2] == (OK, 0)
+    refused(me, inst, "set_time", (5e-4,),
+            "time 0.0005 s is before the last completed integrator step or event at 0.001 s (or not finite)",
+            "event")
+    assert inst.enter_continuous_time_mode() == OK
+    assert inst.set_time(1.5e-3) == OK
+
+
+# ------------------------------------------------------------ wrong states
+
+
+def _zeros():
+    return (array(c_double, [0.0] * NX), NX)
+
+
+WRONG_STATE = [
+    # (key, arguments, the state it is called in)
+    ("derivatives", lambda: (vector(NX), NX), "instantiated"),
+    ("derivatives", lambda: (vector(NX), NX), "initialization"),
+    ("states", lambda: (vector(NX), NX), "initialization"),
+    ("set_time", lambda: (0.0,), "instantiated"),
+    ("set_time", lambda: (0.0,), "initialization"),
+    ("set_states", _zeros, "event"),
+    ("completed", lambda: (1, byref(c_int()), byref(c_int())), "event"),
+    ("event", lambda: (), "event"),
+    ("continuous", lambda: (), "continuous"),
+    ("discrete", None, "continuous"),
+    ("set_states", _zeros, "terminated"),
+    ("set_time", lambda: (0.0,), "terminated"),
+]
+
+
+def bring_to(me, state):
+    if state == "instantiated":
+        return me.instance()
+    if state == "initialization":
+        inst = me.instance()
+        me.initialization_mode(inst)
+        return inst
+    if state == "event":
+        return me.event_mode()
+    inst = me.continuous_time_mode(steps=2)
+    if state == "terminated":
+        assert me.call(inst, "terminate") == OK
+    return inst
+
+
+@pytest.mark.parametrize("key, args, state", WRONG_STATE, ids=[f"{k}-in-{s}" for k, _, s in WRONG_STATE])
+def test_call_in_the_wrong_state(me, key, args, state):
+    inst = bring_to(me, state)
+    if key == "discrete":
+        arguments = ((byref(fmi2.EventInfo()),) if me.version == "fmi2" else
+                     (*[byref(c_uint8()) for _ in range(5)], byref(c_double())))
+    elif key == "completed" and me.version == "fmi3":
+        arguments = (True, byref(c_bool()), byref(c_bool()))
+    else:
+        arguments = args()
+    refused(me, inst, key, arguments, f"not allowed in state {me.state_name[state]}", state)
+
+
+@pytest.mark.parametrize("state", ["event", "continuous"])
+def test_do_step_on_a_model_exchange_instance(me, state):
+    inst = bring_to(me, state)
+    before = inst.snapshot()
+    assert me.do_step(inst, 0.0, 1e-3) == ERROR
+    assert last_error(inst) == f"{me.fn['do_step']}: not allowed in state {me.state_name[state]}"
+    assert inst.snapshot() == before
+
+
+def test_a_parameter_is_tuned_in_event_mode_only(me):
+    inst = me.continuous_time_mode(steps=2)
+    status, dx = inst.derivatives()
+    assert inst.set(g=1000.0) == ERROR
+    setter = "fmi2SetReal" if me.version == "fmi2" else "fmi3SetFloat64"
+    assert last_error(inst) == (f"{setter}: `g` is a parameter: in Model Exchange it can be changed in Event Mode "
+                                "only, not in Continuous-Time Mode (value 1000 refused)")
+    assert inst.derivatives() == (OK, dx)
+    assert inst.enter_event_mode() == OK
+    assert inst.set(g=1000.0) == OK
+    assert inst.get("g") == [1000.0]
+
+
+def test_a_refusal_leaves_the_run_bit_identical(me):
+    """A Model Exchange run sprinkled with every kind of refused call gives
+    the same states, bit for bit, as a clean run."""
+    clean, noisy = me.continuous_time_mode(), me.continuous_time_mode()
+    for k in range(30):
+        _, x = noisy.continuous_states()
+        bad = list(x)
+        bad[k % NX] = NAN
+        for call in (lambda: noisy.set_continuous_states(bad), lambda: noisy.set_continuous_states(x[:-1]),
+                     lambda: noisy.set_time(noisy.time - 1e-4 if k else -1.0), lambda: noisy.set_time(NAN),
+                     lambda: me.call(noisy, "derivatives", vector(NX + 1), NX + 1),
+                     lambda: me.call(noisy, "indicators", None, NZ), lambda: me.do_step(noisy, noisy.time, 1e-3),
+                     lambda: noisy.enter_continuous_time_mode(), lambda: noisy.deserialize(b"garbage")[0]):
+            assert call() == ERROR
+        for inst in (clean, noisy):
+            assert inst.euler_step(1e-4) == (OK, 0, 0)
+    assert clean.continuous_states() == noisy.continuous_states()
+    assert clean.derivatives() == noisy.derivatives()
+    assert clean.event_indicators() == noisy.event_indicators()
+
+
+# ------------------------------------------------------------- divergence
+
+
+def test_a_diverging_state_asks_to_terminate(me):
+    inst = me.continuous_time_mode(steps=2)
+    status, x = inst.continuous_states()
+    x[0] = 1e9
+    assert inst.set_time(3e-4) == OK
+    assert inst.set_continuous_states(x) == OK
+    count = len(inst.log.messages)
+    status, enter, terminate = inst.completed_integrator_step()
+    assert status in (OK, WARNING) and enter == 0 and terminate == 1
+    warnings = [m for m in inst.log.since(count) if m[0] == WARNING]
+    assert len(warnings) == 1, inst.log.since(count)
+    assert warnings[0][1] == "logStatusWarning"
+    assert warnings[0][2].startswith(f"{me.fn['completed']}: the state diverged: `x_s` = 1000000000 at t = "
+                                     "0.0003 s"), warnings[0]
+    # Asked again, not logged again.
+    count = len(inst.log.messages)
+    assert inst.completed_integrator_step()[2] == 1
+    assert not [m for m in inst.log.since(count) if m[0] == WARNING]
+    assert inst.enter_event_mode() == OK
+    status, terminate, _ = me.discrete(inst)
+    assert status == OK and terminate == 1
+    assert me.call(inst, "terminate") == OK
+    assert inst.machine_state() == me.state_name["terminated"]
+
+
+def test_a_divergence_seen_first_in_event_mode_is_logged_by_the_event_update(me):
+    """Diverged states set and Event Mode entered without a completed step:
+    the event update asks to terminate, and its warning names it (the call
+    that found the divergence), not fmi2/fmi3CompletedIntegratorStep."""
+    inst = me.continuous_time_mode(steps=1)
+    status, x = inst.continuous_states()
+    x[0] = 1e9
+    assert inst.set_continuous_states(x) == OK
+    assert inst.enter_event_mode() == OK
+    count = len(inst.log.messages)
+    status, terminate, _ = me.discrete(inst)
+    assert status in (OK, WARNING) and terminate == 1
+    warnings = [m for m in inst.log.since(count) if m[0] == WARNING]
+    assert len(warnings) == 1, inst.log.since(count)
+    assert warnings[0][2].startswith(f"{me.fn['discrete']}: the state diverged: `x_s` = 1000000000"), warnings[0]
+
+
+def test_a_lift_off_is_logged_by_the_event_update(me):
+    """With the unilateral tire, the wheel lifted off the road makes the
+    event indicator negative; the event update logs the lift-off under
+    logEvents, naming the function called."""
+    inst = me.instance(logging_on=True)
+    assert inst.initialize_model_exchange(stop=15.0, tire_contact=1) == OK
+    assert me.discrete(inst)[:2] == (OK, 0)
+    assert inst.enter_continuous_time_mode() == OK
+    status, x = inst.continuous_states()
+    x[4] = 0.05  # x_t: the wheel 5 cm up
+    assert inst.set_time(1e-3) == OK and inst.set_continuous_states(x) == OK
+    status, z = inst.event_indicators()
+    assert status == OK and z[0] < 0
+    assert inst.completed_integrator_step() == (OK, 0, 0)
+    assert inst.enter_event_mode() == OK
+    count = len(inst.log.messages)
+    assert me.discrete(inst)[:2] == (OK, 0)
+    events = [m for m in inst.log.since(count) if m[1] == "logEvents"]
+    assert len(events) == 1, inst.log.since(count)
+    assert events[0][2].startswith(f"{me.fn['discrete']}: lift-off at t = 0.001 s (TDD = "), events[0]
+
+
+# ------------------------------------------------------------- FMU states
+
+
+def test_fmu_state_round_trip_in_continuous_time_mode(me):
+    inst = me.continuous_time_mode(steps=5)
+    status, state = inst.get_state()
+    assert status == OK
+    saved, then = inst.continuous_states(), inst.time
+    for _ in range(5):
+        assert inst.euler_step(1e-4) == (OK, 0, 0)
+    after = inst.continuous_states()
+    # Restored: the states of then, and the time of then (1e-4 s past it is
+    # not before the restored completed step).
+    setter = inst.lib.fmi2SetFMUstate if me.version == "fmi2" else inst.lib.fmi3SetFMUState
+    assert setter(inst.c, state) == OK
+    assert inst.continuous_states() == saved
+    inst.time = then
+    for _ in range(5):
+        assert inst.euler_step(1e-4) == (OK, 0, 0)
+    assert inst.continuous_states() == after
+    # Through bytes, into a fresh Model Exchange instance: the same run.
+    data = inst.serialize(state)
+    other = me.instance()
+    status, moved = other.deserialize(data)
+    assert status == OK, other.log.last()
+    other_setter = other.lib.fmi2SetFMUstate if me.version == "fmi2" else other.lib.fmi3SetFMUState
+    assert other_setter(other.c, moved) == OK
+    assert other.machine_state() == me.state_name["continuous"]
+    other.time = then
+    for _ in range(5):
+        assert other.euler_step(1e-4) == (OK, 0, 0)
+    assert other.continuous_states() == after
+
+
+def test_restoring_an_event_mode_state_goes_back_to_event_mode(me):
+    inst = me.event_mode()
+    status, state = inst.get_state()
+    assert status == OK
+    assert me.discrete(inst)[0] == OK and inst.enter_continuous_time_mode() == OK
+    assert inst.euler_step(1e-4) == (OK, 0, 0)
+    setter = inst.lib.fmi2SetFMUstate if me.version == "fmi2" else inst.lib.fmi3SetFMUState
+    assert setter(inst.c, state) == OK
+    assert inst.machine_state() == me.state_name["event"]
+    # Back at t = 0: the completed step at 1e-4 s is undone.
+    assert inst.set_time(0.0) == OK
+
+
+@pytest.mark.parametrize("from_state", ["event", "continuous"])
+def test_a_model_exchange_state_is_refused_by_a_co_simulation_instance(me, from_state):
+    inst = bring_to(me, from_state)
+    data = inst.snapshot()
+    cs = me.make() if me.version == "fmi3" else me.make(fmu_type=fmi2.CO_SIMULATION)
+    status, handle = cs.deserialize(data)
+    assert status == ERROR and not handle.value
+    assert last_error(cs) == (f"{me.fn['deserialize']}: a Model Exchange state cannot be restored into a "
+                              "Co-Simulation instance")
+
+
+# ------------------------------------------------------------ no panic
+
+
+def test_no_call_sequence_of_this_file_made_an_instance_fatal(me):
+    """The Model Exchange functions with every bad argument at once, in
+    every state: refused or done, never fmi2Fatal/fmi3Fatal."""
+    for state in ["instantiated", "initialization", "event", "continuous", "terminated"]:
+        inst = bring_to(me, state)
+        for key in ["set_states", "derivatives", "indicators", "states", "nominals"]:
+            for n in (0, 1, NX - 1, NX, NX + 1):
+                for values in (None, vector(NX + 1, NAN), vector(NX + 1, 1e308)):
+                    assert me.call(inst, key, values, n) in (OK, ERROR), inst.log.last()
+        for t in (NAN, -INF, INF, -1.0, 0.0, 1e300):
+            assert me.call(inst, "set_time", t) in (OK, ERROR), inst.log.last()
+        assert not [m for m in inst.log.messages if m[0] == FATAL], inst.log.messages
