@@ -329,4 +329,4 @@ def pytest_terminal_summary(terminalreporter):
     for platform, files in sorted(OBSERVED.items()):
         for file, (difference, count) in sorted(files.items()):
             verdict = "bit-identical" if difference == 0.0 else f"max {difference:.3g}"
-            terminalreporter.write_line(f"{platform:8} {file:14} {int(count):>8} values  {verdict}")
+            terminalreporter.write_line(f"{platform:8} {file:18} {int(count):>8} values  {verdict}")

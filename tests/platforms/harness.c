@@ -26,6 +26,11 @@
  *   state.bin         the serialized state at 5 s of that run
  *   restored.csv      STATE_IN deserialized into a new instance, continued
  *                     from 5 s to 15 s
+ *   model_exchange.csv  the default experiment as Model Exchange: explicit
+ *                     Euler steps of ME_STEP from 0 to ME_END (the master's
+ *                     own integrator), a row every ME_ROW_EVERY steps with
+ *                     time, the 20 continuous states, their derivatives, the
+ *                     event indicator and the outputs
  *   bad_input.csv     case,result,message: each refused call, its status
  *                     (0 OK .. 4 Fatal, or NULL/instance for fmi2Instantiate)
  *                     and the last message logged for it
@@ -59,6 +64,15 @@ enum { fmi2OK, fmi2Warning, fmi2Discard, fmi2Error, fmi2Fatal };
 enum { fmi2ModelExchange, fmi2CoSimulation };
 
 typedef struct {
+    fmi2Boolean newDiscreteStatesNeeded;
+    fmi2Boolean terminateSimulation;
+    fmi2Boolean nominalsOfContinuousStatesChanged;
+    fmi2Boolean valuesOfContinuousStatesChanged;
+    fmi2Boolean nextEventTimeDefined;
+    fmi2Real nextEventTime;
+} fmi2EventInfo;
+
+typedef struct {
     void (*logger)(void *, fmi2String, fmi2Status, fmi2String, fmi2String, ...);
     void *(*allocateMemory)(size_t, size_t);
     void (*freeMemory)(void *);
@@ -86,6 +100,15 @@ static struct {
     fmi2Status (*SerializeFMUstate)(fmi2Component, fmi2FMUstate, fmi2Byte *, size_t);
     fmi2Status (*DeSerializeFMUstate)(fmi2Component, const fmi2Byte *, size_t, fmi2FMUstate *);
     fmi2Status (*DoStep)(fmi2Component, fmi2Real, fmi2Real, fmi2Boolean);
+    fmi2Status (*EnterEventMode)(fmi2Component);
+    fmi2Status (*NewDiscreteStates)(fmi2Component, fmi2EventInfo *);
+    fmi2Status (*EnterContinuousTimeMode)(fmi2Component);
+    fmi2Status (*CompletedIntegratorStep)(fmi2Component, fmi2Boolean, fmi2Boolean *, fmi2Boolean *);
+    fmi2Status (*SetTime)(fmi2Component, fmi2Real);
+    fmi2Status (*SetContinuousStates)(fmi2Component, const fmi2Real *, size_t);
+    fmi2Status (*GetDerivatives)(fmi2Component, fmi2Real *, size_t);
+    fmi2Status (*GetEventIndicators)(fmi2Component, fmi2Real *, size_t);
+    fmi2Status (*GetContinuousStates)(fmi2Component, fmi2Real *, size_t);
 } fmi;
 
 /* Value references of the inputs the harness sets (modelDescription.xml;
@@ -106,6 +129,11 @@ enum { VARIANT_CS = 1, ROAD_ISO8608 = 2, ROAD_CLASS_C = 3 };
 #define STEPS 15000        /* 15 s, the DefaultExperiment */
 #define SAVE_AT_STEP 5000  /* the state is saved at 5 s */
 #define MAX_OUTPUTS 64
+#define NX 20               /* Model Exchange: continuous states */
+#define NZ 1                /* and event indicators */
+#define ME_STEP 1e-4        /* the Euler step of the Model Exchange run, s */
+#define ME_STEPS 10000      /* 1 s */
+#define ME_ROW_EVERY 10     /* a row every 1 ms */
 
 static const char *guid;
 static fmi2ValueReference outputs[MAX_OUTPUTS];
@@ -183,6 +211,15 @@ static void load(const char *path) {
     SYM(SerializeFMUstate, "fmi2SerializeFMUstate");
     SYM(DeSerializeFMUstate, "fmi2DeSerializeFMUstate");
     SYM(DoStep, "fmi2DoStep");
+    SYM(EnterEventMode, "fmi2EnterEventMode");
+    SYM(NewDiscreteStates, "fmi2NewDiscreteStates");
+    SYM(EnterContinuousTimeMode, "fmi2EnterContinuousTimeMode");
+    SYM(CompletedIntegratorStep, "fmi2CompletedIntegratorStep");
+    SYM(SetTime, "fmi2SetTime");
+    SYM(SetContinuousStates, "fmi2SetContinuousStates");
+    SYM(GetDerivatives, "fmi2GetDerivatives");
+    SYM(GetEventIndicators, "fmi2GetEventIndicators");
+    SYM(GetContinuousStates, "fmi2GetContinuousStates");
 #undef SYM
 }
 
@@ -286,6 +323,93 @@ static fmi2Byte *saved_state(size_t *size) {
     return bytes;
 }
 
+/* ------------------------------------------------------- Model Exchange */
+
+/* A Model Exchange instance of the default experiment, in Event Mode. */
+static fmi2Component model_exchange_instance(const char *name) {
+    fmi2Component c = fmi.Instantiate(name, fmi2ModelExchange, guid, NULL, &callbacks, 0, 0);
+    if (!c) fail("fmi2Instantiate(fmi2ModelExchange) returned NULL", __LINE__);
+    REQUIRE_OK(fmi.SetupExperiment(c, 0, 0.0, 0.0, 1, STEPS * STEP));
+    REQUIRE_OK(fmi.EnterInitializationMode(c));
+    REQUIRE_OK(fmi.ExitInitializationMode(c));
+    return c;
+}
+
+/* Event iteration: new discrete states until none are needed. */
+static void event_iteration(fmi2Component c) {
+    fmi2EventInfo info;
+    int k = 0;
+    do {
+        REQUIRE_OK(fmi.NewDiscreteStates(c, &info));
+        if (info.terminateSimulation) fail("fmi2NewDiscreteStates: terminateSimulation", __LINE__);
+        if (++k > 10) fail("the event iteration does not end", __LINE__);
+    } while (info.newDiscreteStatesNeeded);
+}
+
+/* One explicit Euler step from `t` (Continuous-Time Mode); the
+ * derivatives at the start of the step in `dx`; an event (the indicator
+ * changes sign) is handled in Event Mode. Returns the new time. */
+static double euler_step(fmi2Component c, double t, fmi2Real dx[NX], fmi2Real *z_before) {
+    fmi2Real x[NX], z[NZ];
+    REQUIRE_OK(fmi.GetContinuousStates(c, x, NX));
+    REQUIRE_OK(fmi.GetDerivatives(c, dx, NX));
+    for (int i = 0; i < NX; i++) x[i] += ME_STEP * dx[i];
+    t += ME_STEP;
+    REQUIRE_OK(fmi.SetTime(c, t));
+    REQUIRE_OK(fmi.SetContinuousStates(c, x, NX));
+    REQUIRE_OK(fmi.GetEventIndicators(c, z, NZ));
+    fmi2Boolean enter = 1, terminate = 1;
+    REQUIRE_OK(fmi.CompletedIntegratorStep(c, 1, &enter, &terminate));
+    if (terminate) fail("fmi2CompletedIntegratorStep: terminateSimulation", __LINE__);
+    if (enter || (z[0] > 0) != (*z_before > 0)) {
+        REQUIRE_OK(fmi.EnterEventMode(c));
+        event_iteration(c);
+        REQUIRE_OK(fmi.EnterContinuousTimeMode(c));
+        REQUIRE_OK(fmi.GetEventIndicators(c, z, NZ));
+    }
+    *z_before = z[0];
+    return t;
+}
+
+static void model_exchange_row(FILE *csv, fmi2Component c, double t, const fmi2Real dx[NX]) {
+    fmi2Real x[NX], z[NZ], values[MAX_OUTPUTS];
+    REQUIRE_OK(fmi.GetContinuousStates(c, x, NX));
+    REQUIRE_OK(fmi.GetEventIndicators(c, z, NZ));
+    REQUIRE_OK(fmi.GetReal(c, outputs, n_outputs, values));
+    fprintf(csv, "%.17g", t);
+    for (int i = 0; i < NX; i++) fprintf(csv, ",%.17g", x[i]);
+    for (int i = 0; i < NX; i++) fprintf(csv, ",%.17g", dx[i]);
+    fprintf(csv, ",%.17g", z[0]);
+    for (size_t i = 0; i < n_outputs; i++) fprintf(csv, ",%.17g", values[i]);
+    fprintf(csv, "\n");
+}
+
+static void model_exchange(const char *dir) {
+    FILE *csv = open_file(dir, "model_exchange.csv", "wb");
+    fprintf(csv, "time");
+    for (int i = 0; i < NX; i++) fprintf(csv, ",x%d", i);
+    for (int i = 0; i < NX; i++) fprintf(csv, ",der_x%d", i);
+    fprintf(csv, ",z0");
+    for (size_t i = 0; i < n_outputs; i++) fprintf(csv, ",%u", outputs[i]);
+    fprintf(csv, "\n");
+    fmi2Component c = model_exchange_instance("model_exchange");
+    event_iteration(c);
+    REQUIRE_OK(fmi.EnterContinuousTimeMode(c));
+    fmi2Real dx[NX], z[NZ];
+    REQUIRE_OK(fmi.GetDerivatives(c, dx, NX));
+    REQUIRE_OK(fmi.GetEventIndicators(c, z, NZ));
+    double t = 0.0;
+    model_exchange_row(csv, c, t, dx);
+    for (int k = 1; k <= ME_STEPS; k++) {
+        t = euler_step(c, t, dx, &z[0]);
+        if (k % ME_ROW_EVERY == 0) model_exchange_row(csv, c, t, dx);
+    }
+    REQUIRE_OK(fmi.EnterEventMode(c));
+    event_iteration(c);
+    finish(c);
+    fclose(csv);
+}
+
 static fmi2Byte *read_file(const char *path, size_t *size) {
     FILE *file = fopen(path, "rb");
     if (!file) {
@@ -346,6 +470,7 @@ static void bad_input(const char *dir, const fmi2Byte *state, size_t state_size)
                                     0, 0));
     record_instance("model_exchange",
                     fmi.Instantiate("bad", fmi2ModelExchange, guid, NULL, &callbacks, 0, 0));
+    record_instance("unknown_fmu_type", fmi.Instantiate("bad", 7, guid, NULL, &callbacks, 0, 0));
 
     fmi2Component c = fmi.Instantiate("bad", fmi2CoSimulation, guid, NULL, &callbacks, 0, 0);
     if (!c) fail("fmi2Instantiate returned NULL", __LINE__);
@@ -390,6 +515,55 @@ static void bad_input(const char *dir, const fmi2Byte *state, size_t state_size)
     if (status == fmi2OK) status = fmi.GetReal(c, &vr_x_s, 1, &value);
     if (status == fmi2OK && !(value == value)) status = fmi2Error; /* a NaN output */
     record_status("simulates_after_refusals", status);
+
+    /* Model Exchange: refusals by the state table and of bad arguments. */
+    fmi2Component me = fmi.Instantiate("bad", fmi2ModelExchange, guid, NULL, &callbacks, 0, 0);
+    if (!me) fail("fmi2Instantiate(fmi2ModelExchange) returned NULL", __LINE__);
+    fmi2Real x[NX + 1], dx[NX];
+    record_status("me_get_derivatives_before_initialization", fmi.GetDerivatives(me, dx, NX));
+    fmi.FreeInstance(me);
+    me = model_exchange_instance("bad");
+    REQUIRE_OK(fmi.GetContinuousStates(me, x, NX));
+    record_status("me_set_continuous_states_in_event_mode", fmi.SetContinuousStates(me, x, NX));
+    record_status("me_null_event_info", fmi.NewDiscreteStates(me, NULL));
+    event_iteration(me);
+    REQUIRE_OK(fmi.EnterContinuousTimeMode(me));
+    record_status("me_do_step", fmi.DoStep(me, 0.0, STEP, 1));
+    record_status("me_too_few_states", fmi.SetContinuousStates(me, x, NX - 1));
+    x[NX] = 0.0;
+    record_status("me_too_many_derivatives", fmi.GetDerivatives(me, x, NX + 1));
+    REQUIRE_OK(fmi.GetContinuousStates(me, x, NX));
+    fmi2Real saved = x[3];
+    x[3] = strtod("nan", NULL);
+    record_status("me_nan_state", fmi.SetContinuousStates(me, x, NX));
+    x[3] = saved;
+    REQUIRE_OK(fmi.SetTime(me, 1e-3));
+    fmi2Boolean enter = 1, terminate = 1;
+    REQUIRE_OK(fmi.CompletedIntegratorStep(me, 1, &enter, &terminate));
+    record_status("me_time_before_completed_step", fmi.SetTime(me, 5e-4));
+    record_status("me_null_flags", fmi.CompletedIntegratorStep(me, 1, NULL, &terminate));
+    fmi2FMUstate me_state = NULL;
+    REQUIRE_OK(fmi.GetFMUstate(me, &me_state));
+    size_t me_size = 0;
+    REQUIRE_OK(fmi.SerializedFMUstateSize(me, me_state, &me_size));
+    fmi2Byte *me_bytes = malloc(me_size);
+    if (!me_bytes) fail("out of memory", __LINE__);
+    REQUIRE_OK(fmi.SerializeFMUstate(me, me_state, me_bytes, me_size));
+    REQUIRE_OK(fmi.FreeFMUstate(me, &me_state));
+    fmi2FMUstate into_cs = NULL;
+    record_status("me_state_into_cs_instance", fmi.DeSerializeFMUstate(c, me_bytes, me_size, &into_cs));
+    free(me_bytes);
+    if (into_cs) fail("a refused state was returned", __LINE__);
+    /* After the refusals the Model Exchange instance still integrates. */
+    status = fmi.SetTime(me, 2e-3);
+    if (status == fmi2OK) status = fmi.SetContinuousStates(me, x, NX);
+    if (status == fmi2OK) status = fmi.GetDerivatives(me, dx, NX);
+    if (status == fmi2OK) status = fmi.CompletedIntegratorStep(me, 1, &enter, &terminate);
+    if (status == fmi2OK && (enter || terminate)) status = fmi2Error;
+    for (int i = 0; status == fmi2OK && i < NX; i++)
+        if (!(dx[i] == dx[i])) status = fmi2Error; /* a NaN derivative */
+    record_status("me_integrates_after_refusals", status);
+    finish(me);
     finish(c);
     fclose(bad_csv);
 }
@@ -442,6 +616,7 @@ int main(int argc, char **argv) {
     continue_from(dir, "restored.csv", foreign, foreign_size);
     free(foreign);
 
+    model_exchange(dir);
     bad_input(dir, state, size);
     free(state);
     printf("harness: %zu outputs x %d steps, state of %zu bytes, results in %s\n", n_outputs,

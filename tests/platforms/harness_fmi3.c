@@ -29,6 +29,10 @@
  *                     steps with an intermediate-update callback that reads
  *                     every output at every internal node it is called at:
  *                     time,<outputs> per call
+ *   model_exchange.csv  the default experiment as Model Exchange
+ *                     (fmi3InstantiateModelExchange): explicit Euler steps
+ *                     of ME_STEP to ME_END, rows as harness.c's file of
+ *                     the same name (the same run through FMI 3.0)
  *
  * Exit code 0 when every file was written; 1 (message on stderr) when a call
  * did not return fmi3OK or fmi3DoStep did not reach the end of its step.
@@ -45,6 +49,29 @@
 #endif
 
 #include "fmi3_types.h"
+
+/* Model Exchange (not in fmi3_types.h). */
+typedef fmi3Instance (*fmi3InstantiateModelExchangeTYPE)(fmi3String instanceName,
+                                                         fmi3String instantiationToken,
+                                                         fmi3String resourcePath,
+                                                         fmi3Boolean visible, fmi3Boolean loggingOn,
+                                                         fmi3InstanceEnvironment instanceEnvironment,
+                                                         fmi3LogMessageCallback logMessage);
+typedef fmi3Status (*fmi3EnterEventModeTYPE)(fmi3Instance);
+typedef fmi3Status (*fmi3UpdateDiscreteStatesTYPE)(fmi3Instance, fmi3Boolean *discreteStatesNeedUpdate,
+                                                   fmi3Boolean *terminateSimulation,
+                                                   fmi3Boolean *nominalsOfContinuousStatesChanged,
+                                                   fmi3Boolean *valuesOfContinuousStatesChanged,
+                                                   fmi3Boolean *nextEventTimeDefined,
+                                                   fmi3Float64 *nextEventTime);
+typedef fmi3Status (*fmi3EnterContinuousTimeModeTYPE)(fmi3Instance);
+typedef fmi3Status (*fmi3CompletedIntegratorStepTYPE)(fmi3Instance,
+                                                      fmi3Boolean noSetFMUStatePriorToCurrentPoint,
+                                                      fmi3Boolean *enterEventMode,
+                                                      fmi3Boolean *terminateSimulation);
+typedef fmi3Status (*fmi3SetTimeTYPE)(fmi3Instance, fmi3Float64);
+typedef fmi3Status (*fmi3SetContinuousStatesTYPE)(fmi3Instance, const fmi3Float64[], size_t);
+typedef fmi3Status (*fmi3GetFloat64VectorTYPE)(fmi3Instance, fmi3Float64[], size_t);
 
 static struct {
     fmi3InstantiateCoSimulationTYPE InstantiateCoSimulation;
@@ -63,6 +90,16 @@ static struct {
     fmi3SerializeFMUStateTYPE SerializeFMUState;
     fmi3DeserializeFMUStateTYPE DeserializeFMUState;
     fmi3DoStepTYPE DoStep;
+    fmi3InstantiateModelExchangeTYPE InstantiateModelExchange;
+    fmi3EnterEventModeTYPE EnterEventMode;
+    fmi3UpdateDiscreteStatesTYPE UpdateDiscreteStates;
+    fmi3EnterContinuousTimeModeTYPE EnterContinuousTimeMode;
+    fmi3CompletedIntegratorStepTYPE CompletedIntegratorStep;
+    fmi3SetTimeTYPE SetTime;
+    fmi3SetContinuousStatesTYPE SetContinuousStates;
+    fmi3GetFloat64VectorTYPE GetContinuousStateDerivatives;
+    fmi3GetFloat64VectorTYPE GetEventIndicators;
+    fmi3GetFloat64VectorTYPE GetContinuousStates;
 } fmi;
 
 /* Value references of the parameters the harness sets (the tests check
@@ -75,6 +112,11 @@ enum { VARIANT_CS = 1, ROAD_ISO8608 = 2, ROAD_CLASS_C = 3 };
 #define SAVE_AT_STEP 5000       /* the state is saved at 5 s */
 #define INTERMEDIATE_STEPS 100  /* steps run with the intermediate-update callback */
 #define MAX_OUTPUTS 64
+#define NX 20               /* Model Exchange: continuous states */
+#define NZ 1                /* and event indicators */
+#define ME_STEP 1e-4        /* the Euler step of the Model Exchange run, s */
+#define ME_STEPS 10000      /* 1 s */
+#define ME_ROW_EVERY 10     /* a row every 1 ms */
 
 static const char *token;
 static fmi3ValueReference outputs[MAX_OUTPUTS];
@@ -143,6 +185,16 @@ static void load(const char *path) {
     SYM(SerializeFMUState, "fmi3SerializeFMUState");
     SYM(DeserializeFMUState, "fmi3DeserializeFMUState");
     SYM(DoStep, "fmi3DoStep");
+    SYM(InstantiateModelExchange, "fmi3InstantiateModelExchange");
+    SYM(EnterEventMode, "fmi3EnterEventMode");
+    SYM(UpdateDiscreteStates, "fmi3UpdateDiscreteStates");
+    SYM(EnterContinuousTimeMode, "fmi3EnterContinuousTimeMode");
+    SYM(CompletedIntegratorStep, "fmi3CompletedIntegratorStep");
+    SYM(SetTime, "fmi3SetTime");
+    SYM(SetContinuousStates, "fmi3SetContinuousStates");
+    SYM(GetContinuousStateDerivatives, "fmi3GetContinuousStateDerivatives");
+    SYM(GetEventIndicators, "fmi3GetEventIndicators");
+    SYM(GetContinuousStates, "fmi3GetContinuousStates");
 #undef SYM
 }
 
@@ -322,6 +374,89 @@ static long intermediate(const char *dir) {
     return env.calls;
 }
 
+/* ------------------------------------------------------- Model Exchange */
+
+/* Event iteration: discrete-state updates until none is needed. */
+static void event_iteration(fmi3Instance c) {
+    int k = 0;
+    fmi3Boolean again;
+    do {
+        fmi3Boolean terminate = true, nominals = true, values = true, defined = true;
+        fmi3Float64 next = -1.0;
+        again = true;
+        REQUIRE_OK(fmi.UpdateDiscreteStates(c, &again, &terminate, &nominals, &values, &defined, &next));
+        if (terminate) fail("fmi3UpdateDiscreteStates: terminateSimulation", __LINE__);
+        if (++k > 10) fail("the event iteration does not end", __LINE__);
+    } while (again);
+}
+
+/* One explicit Euler step from `t` (Continuous-Time Mode); the
+ * derivatives at the start of the step in `dx`; an event (the indicator
+ * changes sign) is handled in Event Mode. Returns the new time. */
+static double euler_step(fmi3Instance c, double t, fmi3Float64 dx[NX], fmi3Float64 *z_before) {
+    fmi3Float64 x[NX], z[NZ];
+    REQUIRE_OK(fmi.GetContinuousStates(c, x, NX));
+    REQUIRE_OK(fmi.GetContinuousStateDerivatives(c, dx, NX));
+    for (int i = 0; i < NX; i++) x[i] += ME_STEP * dx[i];
+    t += ME_STEP;
+    REQUIRE_OK(fmi.SetTime(c, t));
+    REQUIRE_OK(fmi.SetContinuousStates(c, x, NX));
+    REQUIRE_OK(fmi.GetEventIndicators(c, z, NZ));
+    fmi3Boolean enter = true, terminate = true;
+    REQUIRE_OK(fmi.CompletedIntegratorStep(c, true, &enter, &terminate));
+    if (terminate) fail("fmi3CompletedIntegratorStep: terminateSimulation", __LINE__);
+    if (enter || (z[0] > 0) != (*z_before > 0)) {
+        REQUIRE_OK(fmi.EnterEventMode(c));
+        event_iteration(c);
+        REQUIRE_OK(fmi.EnterContinuousTimeMode(c));
+        REQUIRE_OK(fmi.GetEventIndicators(c, z, NZ));
+    }
+    *z_before = z[0];
+    return t;
+}
+
+static void model_exchange_row(FILE *csv, fmi3Instance c, double t, const fmi3Float64 dx[NX]) {
+    fmi3Float64 x[NX], z[NZ], values[MAX_OUTPUTS];
+    REQUIRE_OK(fmi.GetContinuousStates(c, x, NX));
+    REQUIRE_OK(fmi.GetEventIndicators(c, z, NZ));
+    REQUIRE_OK(fmi.GetFloat64(c, outputs, n_outputs, values, n_outputs));
+    fprintf(csv, "%.17g", t);
+    for (int i = 0; i < NX; i++) fprintf(csv, ",%.17g", x[i]);
+    for (int i = 0; i < NX; i++) fprintf(csv, ",%.17g", dx[i]);
+    fprintf(csv, ",%.17g", z[0]);
+    for (size_t i = 0; i < n_outputs; i++) fprintf(csv, ",%.17g", values[i]);
+    fprintf(csv, "\n");
+}
+
+static void model_exchange(const char *dir) {
+    FILE *csv = open_file(dir, "model_exchange.csv", "wb");
+    fprintf(csv, "time");
+    for (int i = 0; i < NX; i++) fprintf(csv, ",x%d", i);
+    for (int i = 0; i < NX; i++) fprintf(csv, ",der_x%d", i);
+    fprintf(csv, ",z0");
+    for (size_t i = 0; i < n_outputs; i++) fprintf(csv, ",%u", (unsigned)outputs[i]);
+    fprintf(csv, "\n");
+    fmi3Instance c = fmi.InstantiateModelExchange("model_exchange", token, NULL, false, false, NULL, logger);
+    if (!c) fail("fmi3InstantiateModelExchange returned NULL", __LINE__);
+    REQUIRE_OK(fmi.EnterInitializationMode(c, false, 0.0, 0.0, true, STEPS * STEP));
+    REQUIRE_OK(fmi.ExitInitializationMode(c));
+    event_iteration(c);
+    REQUIRE_OK(fmi.EnterContinuousTimeMode(c));
+    fmi3Float64 dx[NX], z[NZ];
+    REQUIRE_OK(fmi.GetContinuousStateDerivatives(c, dx, NX));
+    REQUIRE_OK(fmi.GetEventIndicators(c, z, NZ));
+    double t = 0.0;
+    model_exchange_row(csv, c, t, dx);
+    for (int k = 1; k <= ME_STEPS; k++) {
+        t = euler_step(c, t, dx, &z[0]);
+        if (k % ME_ROW_EVERY == 0) model_exchange_row(csv, c, t, dx);
+    }
+    REQUIRE_OK(fmi.EnterEventMode(c));
+    event_iteration(c);
+    finish(c);
+    fclose(csv);
+}
+
 /* ------------------------------------------------------------------- main */
 
 static void parse_outputs(const char *list) {
@@ -371,6 +506,7 @@ int main(int argc, char **argv) {
     free(foreign);
 
     long calls = intermediate(dir);
+    model_exchange(dir);
     printf("harness_fmi3: %zu outputs x %d steps, state of %zu bytes, %ld intermediate updates, results in %s\n",
            n_outputs, STEPS, size, calls, dir);
     return 0;

@@ -100,7 +100,8 @@ BAD_INPUT = {
     "null_instance_do_step": (ERROR, ""),
     "null_instance_get_real": (ERROR, ""),
     "wrong_guid": ("NULL", "fmi2Instantiate: GUID {00000000-0000-0000-0000-000000000000} does not match"),
-    "model_exchange": ("NULL", "fmi2ModelExchange is not supported"),
+    "model_exchange": ("instance", ""),
+    "unknown_fmu_type": ("NULL", "fmi2Instantiate: unknown fmuType 7"),
     "do_step_before_initialization": (ERROR, "fmi2DoStep: not allowed in state instantiated"),
     "unknown_value_reference_get": (ERROR, "fmi2GetReal: unknown value reference 9999 (for a Real)"),
     "unknown_value_reference_set": (ERROR, "fmi2SetReal: unknown value reference 9999 (for a Real)"),
@@ -114,6 +115,20 @@ BAD_INPUT = {
     "bit_flipped_state": (ERROR, "fmi2DeSerializeFMUstate: invalid serialized FMU state: checksum mismatch"),
     "serialize_buffer_too_small": (ERROR, "fmi2SerializeFMUstate: the buffer has 8 bytes, the state needs"),
     "simulates_after_refusals": (OK, ""),
+    # Model Exchange (the exact messages: tests/robustness/test_model_exchange_bad_input.py).
+    "me_get_derivatives_before_initialization": (ERROR, "fmi2GetDerivatives: not allowed in state instantiated"),
+    "me_set_continuous_states_in_event_mode": (ERROR, "fmi2SetContinuousStates: not allowed in state eventMode"),
+    "me_null_event_info": (ERROR, "fmi2NewDiscreteStates: eventInfo is NULL"),
+    "me_do_step": (ERROR, "fmi2DoStep: not allowed in state continuousTimeMode"),
+    "me_too_few_states": (ERROR, "19 continuous states given, the model has 20"),
+    "me_too_many_derivatives": (ERROR, "fmi2GetDerivatives: 21 derivatives asked for, the model has 20"),
+    "me_nan_state": (ERROR, "continuous state 3 (`v_h`) = NaN is not finite"),
+    "me_time_before_completed_step": (ERROR, "time 0.0005 s is before the last completed integrator step or event "
+                                             "at 0.001 s"),
+    "me_null_flags": (ERROR, "fmi2CompletedIntegratorStep: enterEventMode is NULL"),
+    "me_state_into_cs_instance": (ERROR, "fmi2DeSerializeFMUstate: a Model Exchange state cannot be restored into a "
+                                         "Co-Simulation instance"),
+    "me_integrates_after_refusals": (OK, ""),
 }
 
 
@@ -130,3 +145,36 @@ def test_bad_input_is_refused_with_the_documented_status(results, platform):
 @pytest.mark.parametrize("platform", OTHER_PLATFORMS)
 def test_bad_input_messages_are_the_same_as_on_linux64(results, platform):
     assert results(platform).bad_input() == results("linux64").bad_input()
+
+
+# ------------------------------------------------------------ Model Exchange
+
+ME_ROWS = 1001  # harness.c: 1 s of Euler steps of 0.1 ms, a row every 1 ms (and t = 0)
+
+
+@pytest.mark.parametrize("platform", OTHER_PLATFORMS)
+def test_model_exchange_run_agrees_with_linux64(results, platform):
+    """States, derivatives, event indicator and outputs of the Model
+    Exchange run (a master's Euler integration) are the same bits
+    everywhere."""
+    compare(platform, "model_exchange.csv", results("linux64").table("model_exchange.csv"),
+            results(platform).table("model_exchange.csv"))
+
+
+def test_model_exchange_run_follows_the_co_simulation(results):
+    """The Euler run through Model Exchange tracks the co-simulation of the
+    same experiment (the FMU's own solver): the body displacement x_s within
+    1 % of its range over the first second, row by row (same 1 ms grid)."""
+    header, rows = results("linux64").table("model_exchange.csv")
+    cs_header, cs_rows = results("linux64").table("default.csv")
+    assert len(rows) == ME_ROWS
+    assert header[1:21] == [f"x{i}" for i in range(20)] and header[41] == "z0"
+    x_s, cs_x_s = header.index("31"), cs_header.index("31")
+    assert [row[x_s] for row in rows] == [row[1] for row in rows]  # x_s is the first state
+    me = [row[x_s] for row in rows]
+    cs = [row[cs_x_s] for row in cs_rows[:ME_ROWS]]
+    scale = max(abs(v) for v in cs)
+    assert scale > 1e-3
+    worst = max(abs(a - b) for a, b in zip(me, cs))
+    assert worst <= 0.01 * scale, f"largest difference {worst} m of a range of {scale} m"
+    assert all(row[41] > 0 for row in rows)  # the tire keeps contact on the default road

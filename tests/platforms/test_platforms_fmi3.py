@@ -13,15 +13,16 @@ STEP = 1e-3
 
 
 @pytest.mark.parametrize("platform", OTHER_PLATFORMS)
-@pytest.mark.parametrize("file", ["default.csv", "iso_c_cs.csv", "intermediate.csv"])
+@pytest.mark.parametrize("file", ["default.csv", "iso_c_cs.csv", "intermediate.csv", "model_exchange.csv"])
 def test_fmi3_results_agree_with_linux64(results3, platform, file):
     compare(f"fmi3 {platform}", file, results3("linux64").table(file), results3(platform).table(file))
 
 
 def test_fmi3_experiments_equal_the_fmi2_library(results, results3):
     """The FMI 3.0 and FMI 2.0 libraries come from one core: the same
-    experiments give the same outputs (header: the same value references)."""
-    for file in ["default.csv", "iso_c_cs.csv"]:
+    experiments (and the Model Exchange run) give the same outputs (header: the
+    same value references)."""
+    for file in ["default.csv", "iso_c_cs.csv", "model_exchange.csv"]:
         compare("fmi3 vs fmi2", file, results("linux64").table(file), results3("linux64").table(file))
 
 
