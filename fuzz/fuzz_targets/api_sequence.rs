@@ -1,12 +1,19 @@
 //! Fuzzes sequences of FMI calls with random arguments on up to two
-//! instances and their FMU states: wrong states, NULL arrays, unknown value
-//! references, NaN/Inf/huge values, bad steps, foreign and freed FMU
-//! states, corrupted serializations, Model Exchange calls.
+//! instances (Co-Simulation or Model Exchange, as the input chooses) and
+//! their FMU states: wrong states, NULL arrays, unknown value references,
+//! NaN/Inf/huge values, bad steps, foreign and freed FMU states (also
+//! between the two kinds), corrupted serializations, and Model Exchange:
+//! time, continuous states with fuzzed values and counts, derivatives,
+//! event indicators, nominals, completed integrator steps (also whole
+//! Euler steps), Event Mode with its event updates and Continuous-Time
+//! Mode.
 //!
 //! Invariants: no call returns fmi2Fatal (a panic inside the library) or an
 //! unknown status; a successful fmi2GetReal or fmi2DoStep never leaves a
-//! non-finite output; every call returns (libFuzzer's -timeout catches a
-//! hang).
+//! non-finite output; successful Model Exchange getters give finite values
+//! (nominals > 0) and the flags they write are fmi2True or fmi2False (and
+//! no event is asked for: the model has state events only); every call
+//! returns (libFuzzer's -timeout catches a hang).
 #![no_main]
 
 #[path = "common.rs"]
@@ -74,6 +81,35 @@ fn maybe_null_mut<T>(b: &mut Bytes, v: &mut [T]) -> *mut T {
     }
 }
 
+/// Model Exchange: continuous states and event indicators.
+const NX: usize = 20;
+const NZ: usize = 1;
+
+/// A count near `n`: the right one most of the time.
+fn count_near(b: &mut Bytes, n: usize) -> usize {
+    match b.u8() % 8 {
+        0 => n + 1,
+        1 => n.saturating_sub(1),
+        2 => b.u8() as usize % 24,
+        _ => n,
+    }
+}
+
+/// A time step of a master's integrator (or a fuzzed value).
+fn time_step(b: &mut Bytes) -> f64 {
+    if b.u8().is_multiple_of(8) {
+        real(b)
+    } else {
+        b.pick(&[1e-5, 1e-4, 1e-4, 1e-3, 0.01, 0.0, -1e-4, 0.5])
+    }
+}
+
+/// A flag written by the FMU: fmi2True or fmi2False.
+#[track_caller]
+fn flag(value: fmi2Boolean) {
+    assert!(value == 0 || value == 1, "an fmi2Boolean of {value}");
+}
+
 fuzz_target!(|data: &[u8]| {
     let callbacks = callbacks();
     let guid = guid();
@@ -83,7 +119,7 @@ fuzz_target!(|data: &[u8]| {
     let mut calls = 0;
     while !b.is_empty() && calls < 64 {
         calls += 1;
-        let op = b.u8() % 22;
+        let op = b.u8() % 30;
         let i = slot_of(&mut b);
         if trace() {
             eprintln!("call {calls}: op {op} on slot {i}");
@@ -91,7 +127,8 @@ fuzz_target!(|data: &[u8]| {
         if op == 0 {
             if slots[i].is_none() {
                 let name = b.pick(&[c"a".as_ptr(), c"".as_ptr(), null()]);
-                let kind = b.pick(&[1, 1, 1, 0, 7]);
+                // fmi2CoSimulation, fmi2ModelExchange, or an unknown type.
+                let kind = b.pick(&[1, 1, 0, 0, 7]);
                 let g = b.pick(&[guid.as_ptr(), guid.as_ptr(), c"{x}".as_ptr(), null()]);
                 let uri = b.pick(&[
                     null(),
@@ -412,6 +449,187 @@ fuzz_target!(|data: &[u8]| {
                     check(fmi2CancelStep(c));
                     check(fmi2SetTime(c, real(&mut b)));
                     check(fmi2EnterEventMode(c));
+                }
+                22 => {
+                    // Model Exchange: the time, forward from where the
+                    // master believes the instance is (or anywhere).
+                    let slot_time = slots[i].as_ref().map_or(0.0, |s| s.time);
+                    let t = slot_time + time_step(&mut b);
+                    if trace() {
+                        eprintln!("  fmi2SetTime({t:e})");
+                    }
+                    if check(fmi2SetTime(c, t)) == OK
+                        && let Some(slot) = slots[i].as_mut()
+                    {
+                        slot.time = t;
+                    }
+                }
+                23 => {
+                    // Continuous states: the current ones perturbed, or
+                    // fuzzed values; a count near 20, sometimes NULL.
+                    let mut x = [0.0; NX + 4];
+                    if check(fmi2GetContinuousStates(c, x.as_mut_ptr(), NX)) != OK {
+                        x = [0.0; NX + 4];
+                    }
+                    for _ in 0..b.u8() % 4 {
+                        let k = b.u8() as usize % x.len();
+                        x[k] = match b.u8() % 3 {
+                            0 => real(&mut b),
+                            1 => x[k] * b.pick(&[1.0001, -1.0, 1e3, 1e9]),
+                            _ => x[k] + b.pick(&[1e-3, -1e-2, 0.1, 1e9]),
+                        };
+                    }
+                    let n = count_near(&mut b, NX).min(x.len());
+                    if trace() {
+                        eprintln!("  fmi2SetContinuousStates({:?}, {n})", &x[..n]);
+                    }
+                    check(fmi2SetContinuousStates(c, maybe_null(&mut b, &x), n));
+                }
+                24 => {
+                    let n = count_near(&mut b, NX);
+                    let mut dx = vec![f64::NAN; n.max(1)];
+                    if check(fmi2GetDerivatives(c, maybe_null_mut(&mut b, &mut dx), n)) == OK {
+                        assert_eq!(n, NX);
+                        assert!(
+                            dx.iter().all(|v| v.is_finite()),
+                            "fmi2GetDerivatives gave {dx:?}"
+                        );
+                    }
+                }
+                25 => {
+                    let n = count_near(&mut b, NZ);
+                    let mut z = vec![f64::NAN; n.max(1)];
+                    if check(fmi2GetEventIndicators(c, maybe_null_mut(&mut b, &mut z), n)) == OK {
+                        assert_eq!(n, NZ);
+                        assert!(z[0].is_finite(), "fmi2GetEventIndicators gave {z:?}");
+                    }
+                }
+                26 => {
+                    let (mut enter, mut terminate) = (7, 7);
+                    let nulls = b.u8();
+                    let e = if nulls % 8 == 1 {
+                        null_mut()
+                    } else {
+                        &mut enter as *mut _
+                    };
+                    let t = if nulls % 8 == 2 {
+                        null_mut()
+                    } else {
+                        &mut terminate as *mut _
+                    };
+                    if check(fmi2CompletedIntegratorStep(
+                        c,
+                        (nulls >> 4) as i32 % 2,
+                        e,
+                        t,
+                    )) == OK
+                    {
+                        assert_eq!(enter, 0, "enterEventMode: the model has state events only");
+                        flag(terminate);
+                    }
+                }
+                27 => {
+                    // Event Mode: enter it, event updates, back to
+                    // Continuous-Time Mode, in an order the input picks.
+                    for _ in 0..1 + b.u8() % 4 {
+                        match b.u8() % 3 {
+                            0 => {
+                                check(fmi2EnterEventMode(c));
+                            }
+                            1 => {
+                                let mut info = fmi2EventInfo {
+                                    newDiscreteStatesNeeded: 7,
+                                    terminateSimulation: 7,
+                                    nominalsOfContinuousStatesChanged: 7,
+                                    valuesOfContinuousStatesChanged: 7,
+                                    nextEventTimeDefined: 7,
+                                    nextEventTime: f64::NAN,
+                                };
+                                let p = if b.u8().is_multiple_of(16) {
+                                    null_mut()
+                                } else {
+                                    &mut info as *mut _
+                                };
+                                if check(fmi2NewDiscreteStates(c, p)) == OK {
+                                    assert_eq!(info.newDiscreteStatesNeeded, 0);
+                                    flag(info.terminateSimulation);
+                                    flag(info.nominalsOfContinuousStatesChanged);
+                                    flag(info.valuesOfContinuousStatesChanged);
+                                    flag(info.nextEventTimeDefined);
+                                    assert!(info.nextEventTime.is_finite());
+                                }
+                            }
+                            _ => {
+                                check(fmi2EnterContinuousTimeMode(c));
+                            }
+                        }
+                    }
+                }
+                28 => {
+                    let n = count_near(&mut b, NX);
+                    let mut x = vec![f64::NAN; n.max(1)];
+                    if check(fmi2GetContinuousStates(
+                        c,
+                        maybe_null_mut(&mut b, &mut x),
+                        n,
+                    )) == OK
+                    {
+                        assert!(x[..n].iter().all(|v| v.is_finite()), "states {x:?}");
+                    }
+                    let n = count_near(&mut b, NX);
+                    let mut nominal = vec![f64::NAN; n.max(1)];
+                    if check(fmi2GetNominalsOfContinuousStates(
+                        c,
+                        maybe_null_mut(&mut b, &mut nominal),
+                        n,
+                    )) == OK
+                    {
+                        assert!(
+                            nominal[..n].iter().all(|v| v.is_finite() && *v > 0.0),
+                            "nominals {nominal:?}"
+                        );
+                    }
+                }
+                29 => {
+                    // Explicit Euler steps of the master's integrator, as a
+                    // master makes them (the way deep into a run).
+                    let h = b.pick(&[1e-5, 1e-4, 1e-4, 1e-3, 0.01]);
+                    for _ in 0..1 + b.u8() % 8 {
+                        let mut x = [0.0; NX];
+                        let mut dx = [0.0; NX];
+                        if check(fmi2GetContinuousStates(c, x.as_mut_ptr(), NX)) != OK
+                            || check(fmi2GetDerivatives(c, dx.as_mut_ptr(), NX)) != OK
+                        {
+                            break;
+                        }
+                        let t = slots[i].as_ref().map_or(0.0, |s| s.time) + h;
+                        if check(fmi2SetTime(c, t)) != OK {
+                            break;
+                        }
+                        if let Some(slot) = slots[i].as_mut() {
+                            slot.time = t;
+                        }
+                        for (v, d) in x.iter_mut().zip(dx) {
+                            *v += h * d;
+                        }
+                        let (mut enter, mut terminate) = (7, 7);
+                        if check(fmi2SetContinuousStates(c, x.as_ptr(), NX)) != OK
+                            || check(fmi2CompletedIntegratorStep(
+                                c,
+                                1,
+                                &mut enter,
+                                &mut terminate,
+                            )) != OK
+                        {
+                            break;
+                        }
+                        assert_eq!(enter, 0);
+                        flag(terminate);
+                        if terminate == 1 {
+                            break;
+                        }
+                    }
+                    assert_outputs_finite(c);
                 }
                 _ => {
                     // Tunable and input values while simulating.

@@ -1,18 +1,26 @@
 //! Fuzzes sequences of FMI 3.0 calls with random arguments on up to two
-//! instances and their FMU states: wrong states, Configuration Mode and
-//! structural parameters, NULL arrays and out-pointers, unknown value
-//! references and wrong types, array lengths, NaN/Inf/huge values, bad
-//! steps, foreign and freed FMU states, corrupted serializations (also
-//! under the FMI 2.0 GUID), the functions that do not apply, and
+//! instances (Co-Simulation or Model Exchange, as the input chooses) and
+//! their FMU states: wrong states, Configuration Mode and structural
+//! parameters, NULL arrays and out-pointers, unknown value references and
+//! wrong types, array lengths, NaN/Inf/huge values, bad steps, foreign and
+//! freed FMU states (also between the two kinds), corrupted serializations
+//! (also under the FMI 2.0 GUID), the functions that do not apply,
 //! intermediate updates: a callback that reads and sets variables, calls
-//! what is not allowed there and asks for an early return.
+//! what is not allowed there and asks for an early return; and Model
+//! Exchange: time, continuous states with fuzzed values and counts,
+//! derivatives, event indicators, nominals, the model's sizes, completed
+//! integrator steps (also whole Euler steps), Event Mode with its discrete
+//! updates and Continuous-Time Mode.
 //!
 //! Invariants: no call returns fmi3Fatal (a panic inside the library) or an
 //! unknown status; a successful getter or fmi3DoStep never leaves a
 //! non-finite Float64; inside an intermediate update every function but the
 //! getters and setters is refused; an early return happens only when the
-//! master allowed and asked for it, at a time inside the step; every call
-//! returns (libFuzzer's -timeout catches a hang).
+//! master allowed and asked for it, at a time inside the step; successful
+//! Model Exchange getters give finite values (nominals > 0), the sizes are
+//! 20 and 1, the flags written are 0 or 1 (and no event is asked for: the
+//! model has state events only); every call returns (libFuzzer's -timeout
+//! catches a hang).
 #![no_main]
 
 #[path = "common.rs"]
@@ -65,6 +73,25 @@ fn count_near(b: &mut Bytes, n: usize) -> usize {
         2 => b.u8() as usize % 16,
         _ => n,
     }
+}
+
+/// Model Exchange: continuous states and event indicators.
+const NX: usize = 20;
+const NZ: usize = 1;
+
+/// A time step of a master's integrator (or a fuzzed value).
+fn time_step(b: &mut Bytes) -> f64 {
+    if b.u8().is_multiple_of(8) {
+        real(b)
+    } else {
+        b.pick(&[1e-5, 1e-4, 1e-4, 1e-3, 0.01, 0.0, -1e-4, 0.5])
+    }
+}
+
+/// A flag written by the FMU: 0 or 1.
+#[track_caller]
+fn flag(value: u8) {
+    assert!(value <= 1, "an fmi3Boolean of {value}");
 }
 
 /// A status must be one of fmi3OK .. fmi3Error: fmi3Fatal means a panic
@@ -378,7 +405,7 @@ fuzz_target!(|data: &[u8]| {
     let mut calls = 0;
     while !b.is_empty() && calls < 48 {
         calls += 1;
-        let op = b.u8() % 24;
+        let op = b.u8() % 32;
         let i = slot_of(&mut b);
         if trace() {
             eprintln!("call {calls}: op {op} on slot {i}");
@@ -394,6 +421,8 @@ fuzz_target!(|data: &[u8]| {
                     null(),
                 ]);
                 let flags = b.u8();
+                // Model Exchange (fmi3InstantiateModelExchange) for 1 in 4.
+                let model_exchange = flags & 0xc0 == 0xc0;
                 let early = flags & 1 != 0;
                 let with_callback = flags & 2 != 0;
                 let event_mode = flags & 0x1c == 0x1c;
@@ -413,23 +442,37 @@ fuzz_target!(|data: &[u8]| {
                 }));
                 let callback: fmi3IntermediateUpdateCallback =
                     if with_callback { Some(on_update) } else { None };
+                let resources = b.pick(&[null(), c"file:///tmp/r".as_ptr(), c"".as_ptr()]);
+                let logging = b.u8() % 2;
                 // SAFETY: valid or NULL strings, a logger and a callback
                 // whose environment outlives the instance.
                 let c = unsafe {
-                    fmi3InstantiateCoSimulation(
-                        name,
-                        t,
-                        b.pick(&[null(), c"file:///tmp/r".as_ptr(), c"".as_ptr()]),
-                        0,
-                        b.u8() % 2,
-                        event_mode as u8,
-                        early as u8,
-                        required.as_ptr(),
-                        required.len(),
-                        master.cast(),
-                        Some(logger),
-                        callback,
-                    )
+                    if model_exchange {
+                        fmi3InstantiateModelExchange(
+                            name,
+                            t,
+                            resources,
+                            0,
+                            logging,
+                            master.cast(),
+                            Some(logger),
+                        )
+                    } else {
+                        fmi3InstantiateCoSimulation(
+                            name,
+                            t,
+                            resources,
+                            0,
+                            logging,
+                            event_mode as u8,
+                            early as u8,
+                            required.as_ptr(),
+                            required.len(),
+                            master.cast(),
+                            Some(logger),
+                            callback,
+                        )
+                    }
                 };
                 if c.is_null() {
                     // SAFETY: made above, never reached by the library.
@@ -821,20 +864,222 @@ fuzz_target!(|data: &[u8]| {
                 21 => {
                     // The functions that do not apply: refused in every state.
                     let mut flag = 0u8;
-                    let mut size = 0usize;
-                    let mut x = [0.0f64; 2];
                     let statuses = [
-                        fmi3EnterEventMode(c),
                         fmi3EnterStepMode(c),
-                        fmi3SetTime(c, real(&mut b)),
-                        fmi3GetNumberOfContinuousStates(c, &mut size),
-                        fmi3GetContinuousStates(c, x.as_mut_ptr(), 2),
-                        fmi3CompletedIntegratorStep(c, 1, &mut flag, &mut flag),
                         fmi3GetClock(c, [1u32].as_ptr(), 1, &mut flag),
                         fmi3ActivateModelPartition(c, 1, 0.0),
                         fmi3EvaluateDiscreteStates(c),
                     ];
                     assert!(statuses.iter().all(|&s| s == ERROR), "{statuses:?}");
+                    // Model Exchange functions with wrong lengths, anywhere.
+                    let mut x = [0.0f64; 2];
+                    check(fmi3SetTime(c, real(&mut b)));
+                    check(fmi3GetContinuousStates(c, x.as_mut_ptr(), 2));
+                    check(fmi3CompletedIntegratorStep(c, 1, &mut flag, &mut flag));
+                }
+                24 => {
+                    // Model Exchange: the time, forward from where the
+                    // master believes the instance is (or anywhere).
+                    let slot_time = slots[i].as_ref().map_or(0.0, |s| s.time);
+                    let t = slot_time + time_step(&mut b);
+                    if trace() {
+                        eprintln!("  fmi3SetTime({t:e})");
+                    }
+                    if check(fmi3SetTime(c, t)) == OK
+                        && let Some(slot) = slots[i].as_mut()
+                    {
+                        slot.time = t;
+                    }
+                }
+                25 => {
+                    // Continuous states: the current ones perturbed, or
+                    // fuzzed values; a count near 20, sometimes NULL.
+                    let mut x = [0.0; NX + 4];
+                    if check(fmi3GetContinuousStates(c, x.as_mut_ptr(), NX)) != OK {
+                        x = [0.0; NX + 4];
+                    }
+                    for _ in 0..b.u8() % 4 {
+                        let k = b.u8() as usize % x.len();
+                        x[k] = match b.u8() % 3 {
+                            0 => real(&mut b),
+                            1 => x[k] * b.pick(&[1.0001, -1.0, 1e3, 1e9]),
+                            _ => x[k] + b.pick(&[1e-3, -1e-2, 0.1, 1e9]),
+                        };
+                    }
+                    let n = count_near(&mut b, NX).min(x.len());
+                    if trace() {
+                        eprintln!("  fmi3SetContinuousStates({:?}, {n})", &x[..n]);
+                    }
+                    check(fmi3SetContinuousStates(c, maybe_null(&mut b, &x), n));
+                }
+                26 => {
+                    let n = count_near(&mut b, NX);
+                    let mut dx = vec![f64::NAN; n.max(1)];
+                    if check(fmi3GetContinuousStateDerivatives(
+                        c,
+                        maybe_null_mut(&mut b, &mut dx),
+                        n,
+                    )) == OK
+                    {
+                        assert_eq!(n, NX);
+                        assert!(dx.iter().all(|v| v.is_finite()), "derivatives {dx:?}");
+                    }
+                    let n = count_near(&mut b, NZ);
+                    let mut z = vec![f64::NAN; n.max(1)];
+                    if check(fmi3GetEventIndicators(c, maybe_null_mut(&mut b, &mut z), n)) == OK {
+                        assert_eq!(n, NZ);
+                        assert!(z[0].is_finite(), "event indicators {z:?}");
+                    }
+                }
+                27 => {
+                    let (mut enter, mut terminate) = (7u8, 7u8);
+                    let nulls = b.u8();
+                    let e = if nulls % 8 == 1 {
+                        null_mut()
+                    } else {
+                        &mut enter as *mut u8
+                    };
+                    let t = if nulls % 8 == 2 {
+                        null_mut()
+                    } else {
+                        &mut terminate as *mut u8
+                    };
+                    if check(fmi3CompletedIntegratorStep(c, (nulls >> 4) % 2, e, t)) == OK {
+                        assert_eq!(enter, 0, "enterEventMode: the model has state events only");
+                        flag(terminate);
+                    }
+                }
+                28 => {
+                    // Event Mode: enter it, discrete updates, back to
+                    // Continuous-Time Mode, in an order the input picks.
+                    for _ in 0..1 + b.u8() % 4 {
+                        match b.u8() % 3 {
+                            0 => {
+                                check(fmi3EnterEventMode(c));
+                            }
+                            1 => {
+                                let mut flags = [7u8; 5];
+                                let mut next = f64::NAN;
+                                let nulls = b.u8();
+                                let out = |k: usize, p: *mut u8| {
+                                    if nulls > 0xf0 && nulls % 6 == k as u8 {
+                                        null_mut()
+                                    } else {
+                                        p
+                                    }
+                                };
+                                let [f0, f1, f2, f3, f4] = &mut flags;
+                                let s = check(fmi3UpdateDiscreteStates(
+                                    c,
+                                    out(0, f0),
+                                    out(1, f1),
+                                    out(2, f2),
+                                    out(3, f3),
+                                    out(4, f4),
+                                    if nulls > 0xf0 && nulls % 6 == 5 {
+                                        null_mut()
+                                    } else {
+                                        &mut next as *mut f64
+                                    },
+                                ));
+                                if s == OK {
+                                    assert_eq!(flags[0], 0, "discreteStatesNeedUpdate");
+                                    flags.iter().for_each(|&f| flag(f));
+                                    assert!(next.is_finite());
+                                }
+                            }
+                            _ => {
+                                check(fmi3EnterContinuousTimeMode(c));
+                            }
+                        }
+                    }
+                }
+                29 => {
+                    let n = count_near(&mut b, NX);
+                    let mut x = vec![f64::NAN; n.max(1)];
+                    if check(fmi3GetContinuousStates(
+                        c,
+                        maybe_null_mut(&mut b, &mut x),
+                        n,
+                    )) == OK
+                    {
+                        assert!(x[..n].iter().all(|v| v.is_finite()), "states {x:?}");
+                    }
+                    let n = count_near(&mut b, NX);
+                    let mut nominal = vec![f64::NAN; n.max(1)];
+                    if check(fmi3GetNominalsOfContinuousStates(
+                        c,
+                        maybe_null_mut(&mut b, &mut nominal),
+                        n,
+                    )) == OK
+                    {
+                        assert!(
+                            nominal[..n].iter().all(|v| v.is_finite() && *v > 0.0),
+                            "nominals {nominal:?}"
+                        );
+                    }
+                }
+                30 => {
+                    let mut n = 7usize;
+                    let p = if b.u8().is_multiple_of(16) {
+                        null_mut()
+                    } else {
+                        &mut n as *mut usize
+                    };
+                    if check(fmi3GetNumberOfContinuousStates(c, p)) == OK {
+                        assert_eq!(n, NX);
+                    }
+                    let mut n = 7usize;
+                    let p = if b.u8().is_multiple_of(16) {
+                        null_mut()
+                    } else {
+                        &mut n as *mut usize
+                    };
+                    if check(fmi3GetNumberOfEventIndicators(c, p)) == OK {
+                        assert_eq!(n, NZ);
+                    }
+                }
+                31 => {
+                    // Explicit Euler steps of the master's integrator, as a
+                    // master makes them (the way deep into a run).
+                    let h = b.pick(&[1e-5, 1e-4, 1e-4, 1e-3, 0.01]);
+                    for _ in 0..1 + b.u8() % 8 {
+                        let mut x = [0.0; NX];
+                        let mut dx = [0.0; NX];
+                        if check(fmi3GetContinuousStates(c, x.as_mut_ptr(), NX)) != OK
+                            || check(fmi3GetContinuousStateDerivatives(c, dx.as_mut_ptr(), NX))
+                                != OK
+                        {
+                            break;
+                        }
+                        let t = slots[i].as_ref().map_or(0.0, |s| s.time) + h;
+                        if check(fmi3SetTime(c, t)) != OK {
+                            break;
+                        }
+                        if let Some(slot) = slots[i].as_mut() {
+                            slot.time = t;
+                        }
+                        for (v, d) in x.iter_mut().zip(dx) {
+                            *v += h * d;
+                        }
+                        let (mut enter, mut terminate) = (7u8, 7u8);
+                        if check(fmi3SetContinuousStates(c, x.as_ptr(), NX)) != OK
+                            || check(fmi3CompletedIntegratorStep(
+                                c,
+                                1,
+                                &mut enter,
+                                &mut terminate,
+                            )) != OK
+                        {
+                            break;
+                        }
+                        assert_eq!(enter, 0);
+                        flag(terminate);
+                        if terminate == 1 {
+                            break;
+                        }
+                    }
+                    get_all(&mut b, c, &(31..=45).collect::<Vec<u32>>());
                 }
                 _ => {
                     // Tunable parameters and the input while simulating.

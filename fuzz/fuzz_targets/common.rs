@@ -71,6 +71,26 @@ pub fn instantiate(callbacks: &fmi2CallbackFunctions, logging: bool) -> fmi2Comp
     }
 }
 
+/// A Model Exchange instance (NULL if refused).
+pub fn instantiate_model_exchange(
+    callbacks: &fmi2CallbackFunctions,
+    logging: bool,
+) -> fmi2Component {
+    let guid = guid();
+    // SAFETY: valid strings and callbacks that outlive the instance.
+    unsafe {
+        fmi2Instantiate(
+            c"fuzz".as_ptr(),
+            0,
+            guid.as_ptr(),
+            c"file:///tmp/resources".as_ptr(),
+            callbacks,
+            0,
+            logging as c_int,
+        )
+    }
+}
+
 /// A status must be one of fmi2OK .. fmi2Error: fmi2Fatal means a panic
 /// inside the library (caught by the FFI layer), which is a bug.
 #[track_caller]

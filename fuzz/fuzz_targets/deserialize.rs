@@ -3,9 +3,12 @@
 //! The first byte chooses how the rest is used: as a whole serialized state
 //! (envelope included), or (most of the time) as a payload put behind a
 //! valid header with the right CRC, so that the fuzzer reaches the checks of
-//! the content. An accepted state must serialize again to bytes that are
-//! accepted and reproduce themselves; it is then set and stepped, and every
-//! output must stay finite. No call may return fmi2Fatal (a panic).
+//! the content; and (bit 0x20) whether a Co-Simulation or a Model Exchange
+//! instance reads it. An accepted state must serialize again to bytes that
+//! are accepted and reproduce themselves; it is then set and stepped
+//! (fmi2DoStep, or explicit Euler steps of a Model Exchange master, after
+//! whatever event handling its state allows), and every output must stay
+//! finite. No call may return fmi2Fatal (a panic).
 #![no_main]
 
 #[path = "common.rs"]
@@ -55,12 +58,62 @@ fn serialize(c: fmi2Component, state: fmi2FMUstate) -> Vec<u8> {
     }
 }
 
+/// Model Exchange: continuous states.
+const NX: usize = 20;
+
+/// A few explicit Euler steps of h from `t`, as a Model Exchange master
+/// makes them, with event handling before them (every call may be refused
+/// by the state the instance is in, none may panic). A successful getter
+/// gives finite values.
+fn model_exchange_steps(c: fmi2Component, mut t: f64, steps: u8) {
+    // SAFETY (every call): a live instance, arrays of NX values.
+    unsafe {
+        let mut info = std::mem::MaybeUninit::<fmi2EventInfo>::zeroed().assume_init();
+        check(fmi2NewDiscreteStates(c, &mut info));
+        check(fmi2EnterContinuousTimeMode(c));
+        let h = [1e-5, 1e-4, 1e-3, 0.01][steps as usize % 4];
+        for _ in 0..steps % 8 {
+            let (mut x, mut dx) = ([0.0; NX], [0.0; NX]);
+            if check(fmi2GetContinuousStates(c, x.as_mut_ptr(), NX)) != OK
+                || check(fmi2GetDerivatives(c, dx.as_mut_ptr(), NX)) != OK
+            {
+                break;
+            }
+            assert!(x.iter().chain(&dx).all(|v| v.is_finite()), "{x:?} {dx:?}");
+            t += h;
+            for (v, d) in x.iter_mut().zip(dx) {
+                *v += h * d;
+            }
+            let (mut enter, mut terminate) = (7, 7);
+            if check(fmi2SetTime(c, t)) != OK
+                || check(fmi2SetContinuousStates(c, x.as_ptr(), NX)) != OK
+                || check(fmi2CompletedIntegratorStep(
+                    c,
+                    1,
+                    &mut enter,
+                    &mut terminate,
+                )) != OK
+            {
+                break;
+            }
+            assert!(enter == 0 && terminate <= 1, "{enter} {terminate}");
+            assert_outputs_finite(c);
+        }
+        // What a Co-Simulation master would do next: refused, not a panic.
+        check(fmi2DoStep(c, t, 1e-3, 0));
+    }
+}
+
 fuzz_target!(|data: &[u8]| {
     let callbacks = callbacks();
-    let c = instantiate(&callbacks, false);
-    assert!(!c.is_null());
     let mut input = Bytes::new(data);
     let mode = input.u8();
+    let c = if mode & 0x20 != 0 {
+        instantiate_model_exchange(&callbacks, false)
+    } else {
+        instantiate(&callbacks, false)
+    };
+    assert!(!c.is_null());
     let steps = input.u8();
     let bytes = if mode.is_multiple_of(4) {
         input.rest().to_vec()
@@ -79,7 +132,10 @@ fuzz_target!(|data: &[u8]| {
             assert_eq!(check(fmi2SetFMUstate(c, state)), OK);
         }
         let model = snapshot::deserialize(&bytes, &tdvass_fmi2::guid()).expect("accepted above");
-        if let Some(sim) = &model.sim {
+        if let Some(exchange) = &model.exchange {
+            assert_outputs_finite(c);
+            model_exchange_steps(c, exchange.time(), steps);
+        } else if let Some(sim) = &model.sim {
             assert_outputs_finite(c);
             // A few short steps from where the state stands.
             let mut t = sim.time();
