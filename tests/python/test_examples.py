@@ -28,6 +28,7 @@ EXAMPLES = ROOT / "examples"
 # script -> the pictures it must write
 PICTURES = {
     "table2.py": ["table2.png"],
+    "table2_model_exchange.py": ["table2_model_exchange.png"],
     "table3.py": ["table3.png", "table3_road.png"],
     "stability_verification.py": ["stability_verification.png", "stability_verification_envelope.png"],
     "stability_map.py": ["stability_map.png"],
@@ -132,6 +133,11 @@ def _check_field_rows(rows: list[dict], variant_of) -> None:
         assert 0.0 < a_w < 1.06 * ba, r
         assert vdv > 0.0 and lost >= 0.0, r
         assert max_sdd >= sdd, r
+
+
+def _table2_model_exchange(out: Path, text: str) -> None:
+    m = re.search(r"largest relative difference Model Exchange / Co-Simulation at the end: ([\d.e+-]+)", text)
+    assert m and float(m.group(1)) < 1e-5, text
 
 
 def _table2(out: Path, text: str) -> None:
@@ -261,6 +267,7 @@ def _sweep_dask(out: Path, text: str) -> None:
 
 CHECKS = {
     "table2.py": _table2,
+    "table2_model_exchange.py": _table2_model_exchange,
     "table3.py": _table3,
     "stability_verification.py": _stability_verification,
     "stability_map.py": _stability_map,

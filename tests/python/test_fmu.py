@@ -454,7 +454,7 @@ def test_instantiate_refusals_and_resource_locations(unzipdir, model_description
         return fmu.fmi2Instantiate(name, kind, guid, resource, byref(callbacks) if callbacks else None, 0, 0)
 
     refused = [
-        (dict(kind=0), "fmi2ModelExchange"),
+        (dict(kind=7), "unknown fmuType 7"),
         (dict(name=b""), "instanceName is empty"),
         (dict(name=None), "instanceName is NULL"),
         (dict(guid=b"{x}"), "GUID {x} does not match"),
@@ -476,11 +476,15 @@ def test_instantiate_refusals_and_resource_locations(unzipdir, model_description
         assert component is not None, resource
         fmu.fmi2FreeInstance(component)
 
-    # Model Exchange functions are exported but refused.
+    # fmi2ModelExchange makes an instance; a Model Exchange function on a
+    # Co-Simulation instance is refused by the state table.
+    component = instantiate(kind=0)
+    assert component is not None
+    fmu.fmi2FreeInstance(component)
     component = instantiate()
     set_time = fmu.dll.fmi2SetTime
     set_time.argtypes, set_time.restype = [c_void_p, c_double], c_int
     assert set_time(component, 0.0) == FMI2_ERROR
-    assert log.last()[2] == "fmi2SetTime: Model Exchange function; this FMU implements Co-Simulation only"
+    assert log.last()[2] == "fmi2SetTime: not allowed in state instantiated"
     fmu.fmi2FreeInstance(component)
     fmu.freeLibrary()
