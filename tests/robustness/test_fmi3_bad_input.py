@@ -350,18 +350,23 @@ def test_dependencies_with_wrong_counts_and_null_arrays(initialized3):
     n = c_size_t(99)
     assert lib.fmi3GetNumberOfVariableDependencies(c, tdd, None) == ERROR
     assert last_error(inst) == "fmi3GetNumberOfVariableDependencies: nDependencies is NULL while its length is 1"
-    assert lib.fmi3GetNumberOfVariableDependencies(c, tdd, byref(n)) == OK and n.value == 1
+    # TDD depends on x_g and on the six plant states.
+    assert lib.fmi3GetNumberOfVariableDependencies(c, tdd, byref(n)) == OK and n.value == 7
     assert lib.fmi3GetNumberOfVariableDependencies(c, inst.vr["g"], byref(n)) == ERROR
     assert "`g` is not an output" in last_error(inst)
     assert lib.fmi3GetNumberOfVariableDependencies(c, 9999, byref(n)) == ERROR
     assert last_error(inst) == "fmi3GetNumberOfVariableDependencies: unknown value reference 9999"
-    arrays = [(c_size_t * 2)(), (c_uint32 * 2)(), (c_size_t * 2)(), (c_int * 2)()]
-    assert lib.fmi3GetVariableDependencies(c, tdd, *arrays, 2) == ERROR
-    assert "nDependencies = 2, but the variable has 1" in last_error(inst)
-    assert lib.fmi3GetVariableDependencies(c, tdd, arrays[0], None, arrays[2], arrays[3], 1) == ERROR
-    assert last_error(inst) == "fmi3GetVariableDependencies: independents is NULL while its length is 1"
-    assert lib.fmi3GetVariableDependencies(c, tdd, *arrays, 1) == OK
-    assert arrays[1][0] == x_g
+    arrays = [(c_size_t * 8)(), (c_uint32 * 8)(), (c_size_t * 8)(), (c_int * 8)()]
+    assert lib.fmi3GetVariableDependencies(c, tdd, *arrays, 8) == ERROR
+    assert "nDependencies = 8, but the variable has 7" in last_error(inst)
+    assert lib.fmi3GetVariableDependencies(c, tdd, arrays[0], None, arrays[2], arrays[3], 7) == ERROR
+    assert last_error(inst) == "fmi3GetVariableDependencies: independents is NULL while its length is 7"
+    assert lib.fmi3GetVariableDependencies(c, tdd, *arrays, 7) == OK
+    plant = [inst.vr[name] for name in ("x_s", "v_s", "x_h", "v_h", "x_t", "v_t")]
+    assert list(arrays[1][:7]) == sorted(plant + [x_g])
+    # fmi3Fixed (2) for the input's fixed factor, fmi3Dependent (5) for the states.
+    kinds = dict(zip(arrays[1][:7], arrays[3][:7]))
+    assert kinds == {vr: (2 if vr == x_g else 5) for vr in plant + [x_g]}
 
 
 # ------------------------------------------------------ value references, types

@@ -12,7 +12,9 @@ use quick_xml::events::{BytesText, Event};
 use tdvass::exchange::EVENT_INDICATORS;
 use tdvass::solver::CONTINUOUS_STATES;
 use tdvass_fmi2::FMI_VERSION;
-use tdvass_fmu::variables::{Access, COMMON_VARIABLES, Causality, Quantity, VarType, Variable};
+use tdvass_fmu::variables::{
+    Access, COMMON_VARIABLES, Causality, FmiVersion, Quantity, VarType, Variable,
+};
 use tdvass_fmu::{
     DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, MODEL_IDENTIFIER, MODEL_NAME, guid,
 };
@@ -113,6 +115,27 @@ fn state_index(i: usize) -> usize {
         .unwrap_or_else(|| panic!("no variable of continuous state {i}"))
 }
 
+/// An output's `dependencies` (1-based indices, ascending) and their
+/// `dependenciesKind`: the input `x_g` where it feeds through (`fixed`),
+/// the continuous states it is computed from (`dependent`).
+fn output_dependencies(v: &Variable) -> (String, String) {
+    let mut found: Vec<(usize, &str)> = v
+        .output_dependencies(FmiVersion::Fmi2)
+        .into_iter()
+        .map(|(known, kind)| {
+            let index = index_of(known.name)
+                .unwrap_or_else(|| panic!("unknown dependency `{}`", known.name));
+            (index, kind.name())
+        })
+        .collect();
+    found.sort_unstable();
+    let join = |parts: Vec<String>| parts.join(" ");
+    (
+        join(found.iter().map(|(i, _)| i.to_string()).collect()),
+        join(found.iter().map(|(_, k)| k.to_string()).collect()),
+    )
+}
+
 fn indices(names: &[&str]) -> String {
     let mut idx: Vec<usize> = names
         .iter()
@@ -133,13 +156,11 @@ fn write_model_structure(w: &mut XmlWriter) -> XmlResult {
                     if v.causality != Causality::Output {
                         continue;
                     }
-                    // The direct dependence on x_g is linear with a factor that
-                    // depends on the fixed parameter `road`.
-                    let kinds = vec!["fixed"; v.feedthrough.len()].join(" ");
+                    let (dependencies, kinds) = output_dependencies(v);
                     let mut unknown = w
                         .create_element("Unknown")
                         .with_attribute(("index", (i + 1).to_string().as_str()))
-                        .with_attribute(("dependencies", indices(v.feedthrough).as_str()));
+                        .with_attribute(("dependencies", dependencies.as_str()));
                     if !kinds.is_empty() {
                         unknown = unknown.with_attribute(("dependenciesKind", kinds.as_str()));
                     }
@@ -494,15 +515,56 @@ mod tests {
             );
             assert_eq!(listed, expected, "{}", v.name);
         }
-        // The outputs depend directly on the input x_g only.
-        let x_g = index_of("x_g").unwrap().to_string();
-        let tdd = index_of("tire_deflection").unwrap().to_string();
-        let o = outputs.iter().find(|e| e.attr("index") == tdd).unwrap();
-        assert_eq!(o.attr("dependencies"), x_g);
-        assert_eq!(o.attr("dependenciesKind"), "fixed");
+        // The outputs depend on the input x_g where it feeds through
+        // (fixed) and on the continuous states they are computed from.
+        let x_g = index_of("x_g").unwrap();
+        for o in &outputs {
+            let deps: Vec<usize> = o
+                .attr("dependencies")
+                .split_whitespace()
+                .map(|i| i.parse().unwrap())
+                .collect();
+            let kinds: Vec<&str> = o
+                .get("dependenciesKind")
+                .unwrap_or("")
+                .split_whitespace()
+                .collect();
+            assert_eq!(deps.len(), kinds.len(), "{:?}", o.attributes);
+            assert!(deps.windows(2).all(|w| w[0] < w[1]), "ascending");
+            for (&d, &kind) in deps.iter().zip(&kinds) {
+                let known = &COMMON_VARIABLES[d - 1];
+                if d == x_g {
+                    assert_eq!(kind, "fixed");
+                } else {
+                    assert!(known.state_index().is_some(), "{}", known.name);
+                    assert_eq!(kind, "dependent");
+                }
+            }
+        }
+        let output = |name: &str| {
+            let index = index_of(name).unwrap().to_string();
+            outputs.iter().find(|e| e.attr("index") == index).unwrap()
+        };
+        let plant: Vec<usize> = ["x_s", "v_s", "x_h", "v_h", "x_t", "v_t"]
+            .iter()
+            .map(|n| index_of(n).unwrap())
+            .collect();
+        let mut expected: Vec<usize> = plant.iter().copied().chain([x_g]).collect();
+        expected.sort_unstable();
+        let listed =
+            |s: &str| -> Vec<usize> { s.split_whitespace().map(|i| i.parse().unwrap()).collect() };
+        assert_eq!(
+            listed(output("tire_deflection").attr("dependencies")),
+            expected
+        );
         let x_s = index_of("x_s").unwrap().to_string();
-        let o = outputs.iter().find(|e| e.attr("index") == x_s).unwrap();
-        assert_eq!(o.attr("dependencies"), "");
+        assert_eq!(output("x_s").attr("dependencies"), x_s);
+        assert_eq!(
+            output("rms_tire_deflection").attr("dependencies"),
+            index_of("integral_tire_deflection_squared")
+                .unwrap()
+                .to_string()
+        );
 
         // One derivative per state, in state order, each without
         // dependencies (on every known), its `derivative` the state's index.

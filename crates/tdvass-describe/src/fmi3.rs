@@ -114,11 +114,18 @@ fn dimension_attribute(dimension: &Dimension) -> (&'static str, String) {
     }
 }
 
-/// The value references an output depends on directly (its feedthrough
-/// inputs), ascending: what `fmi3GetVariableDependencies` returns. The
-/// continuous states are knowns of Model Exchange too, but not listed.
-pub fn output_dependencies(v: &Variable) -> Vec<u32> {
-    sorted_vrs(v.feedthrough.iter().copied())
+/// The value references an output depends on (the input `x_g` where it
+/// feeds through, the continuous states it is computed from) with their
+/// `dependenciesKind`, by ascending value reference: what
+/// `fmi3GetVariableDependencies` returns.
+pub fn output_dependencies(v: &Variable) -> Vec<(u32, &'static str)> {
+    let mut found: Vec<(u32, &str)> = v
+        .output_dependencies(FmiVersion::Fmi3)
+        .into_iter()
+        .map(|(known, kind)| (known.vr, kind.name()))
+        .collect();
+    found.sort_unstable();
+    found
 }
 
 /// The value references an initial unknown depends on in initialization
@@ -261,10 +268,9 @@ fn write_model_structure(w: &mut XmlWriter) -> XmlResult {
                 .iter()
                 .filter(|v| v.causality == Causality::Output)
             {
-                let dependencies = output_dependencies(v);
-                // The direct dependence on x_g is linear with a factor that
-                // depends on the fixed parameter `road`.
-                let kinds = vec!["fixed"; dependencies.len()].join(" ");
+                let (dependencies, kinds): (Vec<u32>, Vec<&str>) =
+                    output_dependencies(v).into_iter().unzip();
+                let kinds = kinds.join(" ");
                 let mut unknown = w
                     .create_element("Output")
                     .with_attribute(("valueReference", v.vr.to_string().as_str()))

@@ -44,6 +44,7 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use tdvass_fmu::entry::{self, FrontEnd, fmu_state};
 use tdvass_fmu::pointers::{self, LogText, copy_str, input, out_value, output};
 use tdvass_fmu::slave::LogSink;
+use tdvass_fmu::variables::DependencyKind;
 
 pub type fmi3Instance = *mut c_void;
 pub type fmi3InstanceEnvironment = *mut c_void;
@@ -94,6 +95,8 @@ pub type fmi3PreemptionCallback = Option<unsafe extern "C" fn()>;
 
 const FMI3_TRUE: fmi3Boolean = 1;
 const FMI3_FALSE: fmi3Boolean = 0;
+/// `fmi3Fixed` of `fmi3DependencyKind`.
+const FMI3_FIXED: fmi3DependencyKind = 2;
 /// `fmi3Dependent` of `fmi3DependencyKind`.
 const FMI3_DEPENDENT: fmi3DependencyKind = 5;
 
@@ -679,11 +682,14 @@ pub unsafe extern "C" fn fmi3GetVariableDependencies(
                 output(dependencyKinds, nDependencies, "dependencyKinds")?,
             )
         };
-        for (k, vr) in found.into_iter().enumerate() {
+        for (k, (vr, kind)) in found.into_iter().enumerate() {
             element_of_dependent[k] = 0;
             vrs[k] = vr;
             element_of_independent[k] = 0;
-            kinds[k] = FMI3_DEPENDENT;
+            kinds[k] = match kind {
+                DependencyKind::Fixed => FMI3_FIXED,
+                DependencyKind::Dependent => FMI3_DEPENDENT,
+            };
         }
         Ok(Status::Ok)
     })

@@ -17,7 +17,7 @@ use tdvass_fmu::Phase;
 use tdvass_fmu::entry::FrontEnd;
 use tdvass_fmu::instantiation::Instantiation;
 use tdvass_fmu::slave::{Dialect, LogSink};
-use tdvass_fmu::variables::{Causality, FmiVersion, Variable, by_name, by_vr};
+use tdvass_fmu::variables::{Causality, DependencyKind, FmiVersion, Variable, by_vr};
 
 pub use tdvass_fmu::Slave;
 
@@ -459,15 +459,17 @@ impl Instance {
         Ok(Status::Ok)
     }
 
-    /// `fmi3GetNumberOfVariableDependencies`: the inputs an output depends
-    /// on directly (ModelStructure); other variables have none listed.
+    /// `fmi3GetNumberOfVariableDependencies`: the knowns an output depends
+    /// on (ModelStructure); other variables have none listed.
     pub fn number_of_dependencies(&self, vr: u32) -> Result<usize, FmiError> {
         Ok(self.dependencies(vr)?.len())
     }
 
-    /// `fmi3GetVariableDependencies`: value references of the inputs `vr`
-    /// depends on directly.
-    pub fn dependencies(&self, vr: u32) -> Result<Vec<u32>, FmiError> {
+    /// `fmi3GetVariableDependencies`: value references of the knowns `vr`
+    /// depends on and how, ascending, as ModelStructure lists them: the input
+    /// `x_g` where it feeds through, the continuous states it is computed
+    /// from ([`Variable::output_dependencies`]).
+    pub fn dependencies(&self, vr: u32) -> Result<Vec<(u32, DependencyKind)>, FmiError> {
         let var = by_vr(FmiVersion::Fmi3, vr)
             .ok_or_else(|| FmiError::error(format!("unknown value reference {vr}")))?;
         if var.causality != Causality::Output {
@@ -476,11 +478,13 @@ impl Instance {
                 var.name
             )));
         }
-        Ok(var
-            .feedthrough
-            .iter()
-            .filter_map(|name| by_name(FmiVersion::Fmi3, name).map(|v| v.vr))
-            .collect())
+        let mut found: Vec<(u32, DependencyKind)> = var
+            .output_dependencies(FmiVersion::Fmi3)
+            .into_iter()
+            .map(|(known, kind)| (known.vr, kind))
+            .collect();
+        found.sort_unstable_by_key(|&(vr, _)| vr);
+        Ok(found)
     }
 }
 

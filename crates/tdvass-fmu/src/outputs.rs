@@ -2,8 +2,22 @@
 //! time derivatives and exact partial derivatives with respect to the
 //! input and the states (Real outputs), and the counts (Integer outputs).
 
+use std::ops::Range;
 use tdvass::model::{V_H, V_T, X_H, X_S, X_T};
-use tdvass::solver::{Instantaneous, OutputDerivatives, Outputs, TimeAverages};
+use tdvass::solver::{
+    CONTINUOUS_STATES, INTEGRALS_AT, Instantaneous, OutputDerivatives, Outputs, TimeAverages,
+};
+
+/// The plant's states `[x_s, v_s, x_h, v_h, x_t, v_t]` among the continuous
+/// states.
+const PLANT: Range<usize> = 0..6;
+/// The plant and the W_k filter.
+const PLANT_AND_FILTER: Range<usize> = 0..INTEGRALS_AT;
+
+/// The integral state `k` of [`tdvass::solver::INTEGRAL_NAMES`].
+const fn integral(k: usize) -> Range<usize> {
+    INTEGRALS_AT + k..INTEGRALS_AT + k + 1
+}
 
 /// An output of the simulator.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -37,6 +51,14 @@ pub enum IntegerOutputId {
 }
 
 impl IntegerOutputId {
+    /// The continuous states the count depends on: the plant's, whose
+    /// contact margin decides each event.
+    pub fn state_dependencies(self) -> Range<usize> {
+        match self {
+            IntegerOutputId::LiftOffCount => PLANT,
+        }
+    }
+
     /// The value in `outputs`, saturated at `i32::MAX` (the Integer of
     /// FMI 2.0 has 32 bits); `None` when the simulator does not keep it.
     pub fn value(self, o: &Outputs) -> Option<i32> {
@@ -77,6 +99,33 @@ pub struct Linearization {
 }
 
 impl OutputId {
+    /// The continuous states (indices in Model Exchange's layout,
+    /// [`tdvass::solver::CONTINUOUS_STATES`]) the value is computed from at
+    /// an instant, besides the time, the input `x_g` and the delay
+    /// history: the dependencies on states in ModelStructure/Outputs. The
+    /// instantaneous outputs come from the plant (and a_w from the filter
+    /// too), the time averages from their integrals.
+    pub fn state_dependencies(self) -> Range<usize> {
+        match self {
+            OutputId::State(i) => i..i + 1,
+            OutputId::BodyAcceleration
+            | OutputId::SuspensionDeflection
+            | OutputId::TireDeflection
+            | OutputId::ControlForce
+            | OutputId::DynamicTireLoad
+            | OutputId::MaxSuspensionDeflection => PLANT,
+            OutputId::RoadDisplacement => 0..0,
+            OutputId::WeightedBodyAcceleration => PLANT_AND_FILTER,
+            OutputId::RmsBodyAcceleration => integral(0),
+            OutputId::RmsSuspensionDeflection => integral(1),
+            OutputId::RmsTireDeflection | OutputId::RmsDynamicTireLoadRatio => integral(2),
+            OutputId::Objective => INTEGRALS_AT..INTEGRALS_AT + 3,
+            OutputId::RmsWeightedBodyAcceleration => integral(3),
+            OutputId::VibrationDoseValue => integral(4),
+            OutputId::ContactLossTime => CONTINUOUS_STATES - 1..CONTINUOUS_STATES,
+        }
+    }
+
     /// The value in `outputs`.
     pub fn value(self, o: &Outputs) -> f64 {
         match self {

@@ -466,6 +466,26 @@ pub enum Access {
     EventIndicator(usize),
 }
 
+/// How an output depends on one of its knowns (ModelStructure's
+/// `dependenciesKind`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DependencyKind {
+    /// Linearly, with a factor fixed at initialization.
+    Fixed,
+    /// In any other way.
+    Dependent,
+}
+
+impl DependencyKind {
+    /// The XML attribute value.
+    pub fn name(self) -> &'static str {
+        match self {
+            DependencyKind::Fixed => "fixed",
+            DependencyKind::Dependent => "dependent",
+        }
+    }
+}
+
 /// One FMU variable.
 #[derive(Debug, Clone, Copy)]
 pub struct Variable {
@@ -540,6 +560,37 @@ impl Variable {
             }
             _ => None,
         }
+    }
+
+    /// Outputs: the knowns the value depends on in Continuous-Time and
+    /// Event Mode and at communication points (ModelStructure/Outputs,
+    /// `fmi3GetVariableDependencies`): the inputs it depends on directly
+    /// ([`Variable::feedthrough`], linear with a factor fixed by `road`),
+    /// then the variables of the continuous states it is computed from
+    /// (Model Exchange's knowns; [`OutputId::state_dependencies`]). Empty
+    /// for the other variables.
+    pub fn output_dependencies(
+        &self,
+        version: FmiVersion,
+    ) -> Vec<(&'static Variable, DependencyKind)> {
+        let states = match self.access {
+            Access::Output(id) => id.state_dependencies(),
+            Access::IntegerOutput(id) => id.state_dependencies(),
+            _ => return Vec::new(),
+        };
+        let inputs = self.feedthrough.iter().map(|name| {
+            let input = by_name(version, name)
+                .unwrap_or_else(|| panic!("unknown feedthrough input `{name}`"));
+            (input, DependencyKind::Fixed)
+        });
+        let states = states.map(|i| {
+            let state = variables_of(version)
+                .iter()
+                .find(|v| v.state_index() == Some(i))
+                .unwrap_or_else(|| panic!("no variable of continuous state {i}"));
+            (state, DependencyKind::Dependent)
+        });
+        inputs.chain(states).collect()
     }
 
     /// The unit, if any.

@@ -202,7 +202,7 @@ fn write_co_simulation(w: &mut XmlWriter) -> XmlResult {
     text_element(w, "h2", "Model structure")?;
     paragraph(
         w,
-        "Dependencies are value references. Only tire_deflection and road_displacement depend directly on the input x_g at communication points (with a factor fixed by road); the initial values of the outputs and calculated parameters depend on the parameters named in ModelStructure, and rightmost_roots also on root_count.",
+        "Dependencies are value references. The outputs list the knowns of both interfaces they depend on: the input x_g where it feeds through (tire_deflection and road_displacement, with a factor fixed by road) and the continuous states they are computed from (the plant states for the instantaneous outputs, also the W_k filter for a_w, the integral for each time average; a state output depends on itself); the initial values of the outputs and calculated parameters depend on the parameters named in ModelStructure, and rightmost_roots also on root_count.",
     )?;
 
     Ok(())
@@ -218,7 +218,7 @@ fn write_model_exchange(w: &mut XmlWriter) -> XmlResult {
     )?;
     paragraph(
         w,
-        "ModelStructure lists the derivatives as ContinuousStateDerivative elements (in the order of the states) and the event indicator as EventIndicator; the local states and the derivatives are InitialUnknowns that depend on every known of initialization. The dependencies of the outputs are those of Co-Simulation (the input x_g only, as fmi3GetVariableDependencies returns them).",
+        "ModelStructure lists the derivatives as ContinuousStateDerivative elements (in the order of the states) and the event indicator as EventIndicator; the local states and the derivatives are InitialUnknowns that depend on every known of initialization. fmi3GetVariableDependencies returns the dependencies of the outputs as listed here.",
     )?;
     text_element(w, "h3", "Model Exchange capabilities")?;
     let rows: Vec<Vec<String>> = MODEL_EXCHANGE_CAPABILITIES

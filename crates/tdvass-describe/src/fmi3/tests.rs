@@ -465,14 +465,40 @@ fn model_structure_lists_outputs_and_initial_unknowns_by_value_reference() {
     let x_g = by_name(FmiVersion::Fmi3, "x_g").unwrap().vr;
     for o in &outputs {
         let deps = vr_list_of(o.attr("dependencies"));
-        // Outputs depend directly on the input only (what
-        // fmi3GetVariableDependencies returns).
-        assert!(deps.iter().all(|&d| d == x_g), "{:?}", o.attributes);
-        let kinds = o.get("dependenciesKind").unwrap_or("");
-        assert_eq!(kinds.split_whitespace().count(), deps.len());
+        let kinds: Vec<&str> = o
+            .get("dependenciesKind")
+            .unwrap_or("")
+            .split_whitespace()
+            .collect();
+        assert_eq!(kinds.len(), deps.len(), "{:?}", o.attributes);
+        // Outputs depend on the knowns of both interfaces: the input x_g
+        // (a factor fixed by `road`) and the continuous states.
+        for (&d, &kind) in deps.iter().zip(&kinds) {
+            if d == x_g {
+                assert_eq!(kind, "fixed");
+            } else {
+                assert!(by_vr(d).state_index().is_some(), "{:?}", o.attributes);
+                assert_eq!(kind, "dependent");
+            }
+        }
+        assert!(deps.windows(2).all(|w| w[0] < w[1]), "ascending");
         let v = by_vr(o.attr("valueReference").parse().unwrap());
-        assert_eq!(deps, output_dependencies(v));
+        let listed: Vec<(u32, &str)> = deps.iter().copied().zip(kinds).collect();
+        assert_eq!(listed, output_dependencies(v));
     }
+    let vr_of = |name: &str| by_name(FmiVersion::Fmi3, name).unwrap().vr;
+    let output = |name: &str| {
+        outputs
+            .iter()
+            .find(|e| e.attr("valueReference") == vr_of(name).to_string())
+            .unwrap()
+    };
+    let rms = output("rms_body_acceleration");
+    assert_eq!(
+        rms.attr("dependencies"),
+        vr_of("integral_body_acceleration_squared").to_string()
+    );
+    assert_eq!(rms.attr("dependenciesKind"), "dependent");
     let tdd = outputs
         .iter()
         .find(|e| {
@@ -483,16 +509,17 @@ fn model_structure_lists_outputs_and_initial_unknowns_by_value_reference() {
                     .to_string()
         })
         .unwrap();
-    assert_eq!(tdd.attr("dependencies"), x_g.to_string());
-    assert_eq!(tdd.attr("dependenciesKind"), "fixed");
-    let x_s = outputs
+    let tdd_deps = vr_list_of(tdd.attr("dependencies"));
+    let mut plant_and_x_g: Vec<u32> = ["x_s", "v_s", "x_h", "v_h", "x_t", "v_t", "x_g"]
         .iter()
-        .find(|e| {
-            e.attr("valueReference") == by_name(FmiVersion::Fmi3, "x_s").unwrap().vr.to_string()
-        })
-        .unwrap();
-    assert_eq!(x_s.attr("dependencies"), "");
-    assert!(x_s.get("dependenciesKind").is_none());
+        .map(|n| vr_of(n))
+        .collect();
+    plant_and_x_g.sort_unstable();
+    assert_eq!(tdd_deps, plant_and_x_g);
+    // A state output depends on itself only.
+    let x_s = output("x_s");
+    assert_eq!(x_s.attr("dependencies"), vr_of("x_s").to_string());
+    assert_eq!(x_s.attr("dependenciesKind"), "dependent");
 
     // Initial dependencies are knowns of initialization mode: inputs and
     // variables with initial = exact; ascending, each once.
