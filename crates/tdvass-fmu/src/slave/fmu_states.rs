@@ -53,6 +53,9 @@ impl Slave {
         if let Some(sim) = self.state.sim.as_mut() {
             sim.reserve();
         }
+        if let Some(model) = self.state.exchange.as_mut() {
+            model.reserve();
+        }
         self.event(format_args!(
             "{}: state {handle:#x}, now at t = {} s in state {}",
             format_args!("{}Set{}", self.dialect.prefix, self.dialect.fmu_state),

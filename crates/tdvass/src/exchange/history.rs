@@ -38,6 +38,12 @@ pub const TRIAL_REACH: f64 = 0.1;
 /// Most points kept (32 MiB).
 pub const MAX_HISTORY_POINTS: usize = 1 << 20;
 
+/// Points room is made for at the start, and kept through copies and
+/// restored states: a master that completes its steps needs about
+/// tau / step + 2, one that never does about (tau + [`TRIAL_REACH`]) /
+/// step, so a real-time master's evaluations do not allocate.
+const INITIAL_CAPACITY: usize = 1024;
+
 /// One point of the history.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HistoryPoint {
@@ -52,7 +58,7 @@ pub struct HistoryPoint {
 }
 
 /// The history of `(x_t, v_t)`; see the module documentation.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, PartialEq)]
 pub struct DelayHistory {
     /// Increasing in time.
     points: VecDeque<HistoryPoint>,
@@ -62,6 +68,21 @@ pub struct DelayHistory {
     initial_position: f64,
     /// tau (s), > 0.
     tau: f64,
+}
+
+/// A copy keeps the room of the original (at least [`INITIAL_CAPACITY`]
+/// points), so a restored FMU state records points without allocating.
+impl Clone for DelayHistory {
+    fn clone(&self) -> DelayHistory {
+        let mut points = VecDeque::with_capacity(self.points.capacity().max(INITIAL_CAPACITY));
+        points.extend(self.points.iter().copied());
+        DelayHistory {
+            points,
+            start_time: self.start_time,
+            initial_position: self.initial_position,
+            tau: self.tau,
+        }
+    }
 }
 
 /// `p(s)` of the cubic through `(t0, x0, v0)` and `(t1, x1, v1)`, `t0 < t1`.
@@ -79,7 +100,7 @@ impl DelayHistory {
     /// A history with the accepted start point `(t_0, x_t, v_t)` and delay
     /// `tau` (s, > 0).
     pub fn new(start_time: f64, position: f64, velocity: f64, tau: f64) -> DelayHistory {
-        let mut points = VecDeque::with_capacity(1024);
+        let mut points = VecDeque::with_capacity(INITIAL_CAPACITY);
         points.push_back(HistoryPoint {
             time: start_time,
             position,
@@ -126,8 +147,10 @@ impl DelayHistory {
                 points.len()
             ));
         }
+        let mut deque = VecDeque::with_capacity(points.len().max(INITIAL_CAPACITY));
+        deque.extend(points);
         Ok(DelayHistory {
-            points: points.into(),
+            points: deque,
             start_time,
             initial_position,
             tau,

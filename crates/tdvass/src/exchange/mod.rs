@@ -217,7 +217,18 @@ impl ModelExchange {
         if !in_contact {
             model.discrete.first_contact_loss = Some((t0, k_t * (-margin - limit)));
         }
+        model.reserve();
         Ok(model)
+    }
+
+    /// Makes room for the random road's nodes a run keeps (from
+    /// [`TRIAL_REACH`] + tau before the last accepted point to a trial
+    /// point as far ahead), also after a copied or restored state, whose
+    /// nodes come without room, so that evaluating the derivatives
+    /// allocates nothing. The delay history keeps its room through copies.
+    pub fn reserve(&mut self) {
+        let tau = self.config.params.tau.max(0.0);
+        self.road.reserve_window(2.0 * TRIAL_REACH + tau);
     }
 
     /// The configuration.
@@ -330,6 +341,10 @@ impl ModelExchange {
         if let Delay::History(h) = &mut self.delay {
             h.record(now, false);
         }
+        // The road's nodes before any time a master may still go back to
+        // (the delay history's rule), also when it never completes a step.
+        self.road
+            .release_before(self.accepted.max(self.time - TRIAL_REACH));
         let rates = self.rates(delayed);
         if let Some(i) = rates.iter().position(|v| !v.is_finite()) {
             return Err(Error::Refused(format!(

@@ -8,7 +8,11 @@
 use super::{Delay, DelayHistory, HistoryPoint, ModelExchange};
 use crate::bytes::{ByteReader, ByteWriter};
 use crate::error::{Error, Result};
+use crate::road::RoadState;
 use crate::solver::CONTINUOUS_STATES;
+
+/// Most road nodes a state may carry (8 MB).
+const MAX_ROAD_NODES: u64 = 1 << 20;
 
 /// Version of the byte form; a saved state of another version is refused.
 pub const EXCHANGE_FORMAT_VERSION: u32 = 1;
@@ -53,6 +57,17 @@ impl ModelExchange {
                 }
             }
             _ => w.u64(0),
+        }
+        // A random road's generator and nodes: a restored model goes on
+        // from them instead of generating the road again from its start.
+        match self.road.node_state() {
+            Some(road) => {
+                w.u8(1);
+                w.u128(road.word_position);
+                w.u64(road.first_node);
+                w.f64s(&road.nodes);
+            }
+            None => w.u8(0),
         }
         w.bytes
     }
@@ -118,10 +133,30 @@ impl ModelExchange {
                 accepted: r.u8()? != 0,
             });
         }
+        let road = match r.u8()? {
+            0 => None,
+            _ => Some(RoadState {
+                word_position: r.u128()?,
+                first_node: r.u64()?,
+                nodes: r.f64s(MAX_ROAD_NODES)?,
+                input: None,
+            }),
+        };
         if !r.is_empty() {
             return Err(invalid(
                 "trailing bytes after the Model Exchange state".into(),
             ));
+        }
+        let mut restored_road = self.road.clone();
+        match (&road, self.road.node_state()) {
+            // The master goes back to the last accepted point at most: its
+            // node must be kept; no bound on the trial points ahead.
+            (Some(state), Some(_)) => {
+                restored_road.restore_dynamic_state(state, accepted, f64::INFINITY)?
+            }
+            (None, None) => {}
+            (Some(_), None) => return Err(invalid("road nodes for a road without them".into())),
+            (None, Some(_)) => return Err(invalid("a random road without its nodes".into())),
         }
         let delay = match &self.delay {
             Delay::History(h) => Delay::History(
@@ -136,6 +171,8 @@ impl ModelExchange {
         self.states.copy_from_slice(&states);
         self.discrete = discrete;
         self.delay = delay;
+        self.road = restored_road;
+        self.reserve();
         Ok(())
     }
 }

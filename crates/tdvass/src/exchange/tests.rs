@@ -234,6 +234,34 @@ fn a_saved_state_replays_exactly() {
 }
 
 #[test]
+fn a_saved_state_on_a_random_road_replays_exactly_from_its_nodes() {
+    let road = RoadSpec::Iso8608(RandomRoad {
+        class: RoadClass::D,
+        speed: 20.0,
+        ..RandomRoad::default()
+    });
+    let c = config(Variant::Tdvass, 0.011, 5386.0, road);
+    let mut model = ModelExchange::new(c.clone()).unwrap();
+    integrate(&mut model, 0.5, 1e-4, true);
+    let bytes = model.to_bytes();
+    let saved = model.road.node_state().unwrap();
+    let road_bytes = 1 + 16 + 8 + 8 + 8 * saved.nodes.len();
+    // Only the nodes of the last TRIAL_REACH + tau are kept and saved.
+    assert!(saved.nodes.len() < 200, "{} nodes", saved.nodes.len());
+    assert!(saved.first_node > 300, "first node {}", saved.first_node);
+    let mut copy = ModelExchange::new(c).unwrap();
+    copy.restore(&bytes).unwrap();
+    assert_eq!(copy.road.node_state(), Some(saved));
+    integrate(&mut model, 1.0, 1e-4, true);
+    integrate(&mut copy, 1.0, 1e-4, true);
+    assert_eq!(model.states(), copy.states());
+    // Without the road's nodes the state is refused.
+    let without = [&bytes[..bytes.len() - road_bytes], &[0u8][..]].concat();
+    let refused = copy.restore(&without).unwrap_err().to_string();
+    assert!(refused.contains("without its nodes"), "{refused}");
+}
+
+#[test]
 fn bad_states_and_times_are_refused_naming_them() {
     let c = config(Variant::Tdvass, 0.011, 5386.0, RoadSpec::paper_harmonic());
     let mut model = ModelExchange::new(c).unwrap();

@@ -744,6 +744,12 @@ impl Road {
         }
     }
 
+    /// The generated nodes of a random road (its [`Road::dynamic_state`]),
+    /// `None` for the other roads.
+    pub(crate) fn node_state(&self) -> Option<RoadState> {
+        matches!(self.kind, RoadKind::Nodes(_)).then(|| self.dynamic_state())
+    }
+
     /// Restores what [`Road::dynamic_state`] returned, for a simulator whose
     /// committed state is at `committed_time` and which will query the road
     /// up to `horizon` before committing again. Checked against these
