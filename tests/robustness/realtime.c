@@ -1,9 +1,11 @@
 /*
- * Real-time harness of the shipped Linux libraries (FMI 2.0 and FMI 3.0
- * Co-Simulation): heap allocations while stepping, and the worst call.
+ * Real-time harness of the shipped Linux libraries (FMI 2.0 and FMI 3.0,
+ * Co-Simulation and Model Exchange): heap allocations while stepping, and
+ * the worst call.
  *
  *   realtime list
  *   realtime count FMI LIB TOKEN CASE
+ *   realtime count-me FMI LIB TOKEN CASE
  *   realtime worst FMI LIB TOKEN CASE REPEATS SECONDS
  *
  *   FMI     2 or 3
@@ -38,7 +40,12 @@
  * lastSuccessfulTime.
  *
  * `count` prints "allocations N calls M (g value changes: 2 calls, G
- * allocations)" and exits 0 when N is 0, 1 otherwise. `worst` runs the case REPEATS times (the same calls, the same
+ * allocations)" and exits 0 when N is 0, 1 otherwise. `count-me` drives a
+ * Model Exchange instance instead, as a fixed-step real-time master does
+ * (run_model_exchange: Heun's method at the case's steps, trial points,
+ * events, CompletedIntegratorStep, the outputs read; the state restored
+ * from its serialized bytes in the middle, apart), and prints
+ * "allocations N steps M (restoring a serialized state: R allocations)". `worst` runs the case REPEATS times (the same calls, the same
  * results), takes each call's minimum time over the repetitions and prints
  * the median of these minima, the largest, the call it belongs to and their
  * ratio. Exit code 2: the library could not be loaded or a call failed.
@@ -69,9 +76,14 @@ static long allocations;
 static int counting_gain_change;
 static long gain_change_allocations;
 
+/* Allocations while restoring a serialized FMU state (not counted above). */
+static int counting_restore;
+static long restore_allocations;
+
 static void note_allocation(void) {
     if (counting) allocations++;
     if (counting_gain_change) gain_change_allocations++;
+    if (counting_restore) restore_allocations++;
 }
 
 /* Counts the allocations of a call that changes g's value apart. */
@@ -517,6 +529,338 @@ static long run_fmi3(void *library, const char *token, const Case *c, double sec
     return k;
 }
 
+/* ---- Model Exchange (both versions) ---- */
+
+/* The continuous states and event indicators of Model Exchange. */
+#define N_STATES 20
+#define N_INDICATORS 1
+
+/* The calls a Model Exchange master makes, for either FMI version; each
+ * returns nonzero on failure (a status above Warning). */
+typedef struct {
+    void *instance;
+    int (*set_time)(void *, double);
+    int (*set_states)(void *, const double *);
+    int (*get_derivatives)(void *, double *);
+    int (*get_indicators)(void *, double *);
+    int (*get_states)(void *, double *);
+    int (*enter_event_mode)(void *);
+    /* One event iteration: *again when another is needed. */
+    int (*update_discrete_states)(void *, int *again, int *terminate);
+    int (*enter_continuous_time_mode)(void *);
+    int (*completed_integrator_step)(void *, int *terminate);
+    int (*set_x_g)(void *, double);
+    int (*read_outputs)(void *, double *values, int *lift_offs);
+    /* Save, serialize, deserialize and restore the state (not counted). */
+    int (*restore_serialized_state)(void *);
+    void (*free_instance)(void *);
+} ModelExchangeMaster;
+
+/* Event Mode to Continuous-Time Mode: the event iteration, then the
+ * states and indicators as the event left them. */
+static void handle_event(const ModelExchangeMaster *m, double t, double *x, double *z) {
+    int again = 1, terminate = 0;
+    while (again)
+        if (m->update_discrete_states(m->instance, &again, &terminate) || terminate)
+            fail("the event update", t);
+    if (m->enter_continuous_time_mode(m->instance) || m->get_states(m->instance, x) ||
+        m->get_indicators(m->instance, z))
+        fail("entering Continuous-Time Mode", t);
+}
+
+/* A master integrating with Heun's method at the case's steps (each
+ * step a trial point at its end, then the accepted one), an event when
+ * the indicator changed sign over a step (at its end, not located),
+ * CompletedIntegratorStep after every step, and the outputs read: what a
+ * fixed-step real-time master does. The 10 ms pattern steps by 1 ms (the
+ * W_k filter's 100 Hz poles bound an explicit method's step). */
+static long run_model_exchange(const ModelExchangeMaster *m, const Case *c, double seconds) {
+    double x[N_STATES], start_rates[N_STATES], end_rates[N_STATES], trial[N_STATES];
+    double z[N_INDICATORS], z_end[N_INDICATORS], values[N_OUTPUTS];
+    int lift_offs = 0, terminate = 0;
+    void *fmu = m->instance;
+    if (c->road == ROAD_INPUT && m->set_x_g(fmu, road_input(0.0))) fail("setting x_g", 0.0);
+    handle_event(m, 0.0, x, z);
+    double t = 0.0;
+    long k = 0;
+    counting = 1;
+    while (t < seconds - 1e-9) {
+        double h = c->pattern == PATTERN_LONG ? 1e-3 : step_of(c, k);
+        double next = c->pattern == PATTERN_IN_STEP || c->pattern == PATTERN_VARYING
+                          ? t + h
+                          : (double)(k + 1) * h;
+        h = next - t;
+        if (restore_at == k) {
+            counting = 0;
+            counting_restore = 1;
+            if (m->restore_serialized_state(fmu)) fail("restoring a serialized FMU state", t);
+            counting_restore = 0;
+            counting = 1;
+        }
+        if (m->set_time(fmu, t) || (c->road == ROAD_INPUT && m->set_x_g(fmu, road_input(t))) ||
+            m->set_states(fmu, x) || m->get_derivatives(fmu, start_rates))
+            fail("the derivatives at the step's start", t);
+        for (int i = 0; i < N_STATES; i++) trial[i] = x[i] + h * start_rates[i];
+        if (m->set_time(fmu, next) ||
+            (c->road == ROAD_INPUT && m->set_x_g(fmu, road_input(next))) ||
+            m->set_states(fmu, trial) || m->get_derivatives(fmu, end_rates))
+            fail("the derivatives at the step's end", next);
+        for (int i = 0; i < N_STATES; i++) x[i] += 0.5 * h * (start_rates[i] + end_rates[i]);
+        if (m->set_states(fmu, x) || m->get_indicators(fmu, z_end)) fail("the event indicators", next);
+        if ((z[0] > 0.0) != (z_end[0] > 0.0)) {
+            if (m->enter_event_mode(fmu)) fail("entering Event Mode", next);
+            handle_event(m, next, x, z_end);
+        }
+        z[0] = z_end[0];
+        if (m->completed_integrator_step(fmu, &terminate) || terminate)
+            fail("the completed integrator step", next);
+        if (m->read_outputs(fmu, values, &lift_offs)) fail("reading the outputs", next);
+        t = next;
+        k++;
+    }
+    counting = 0;
+    m->free_instance(fmu);
+    return k;
+}
+
+/* FMI 2.0 Model Exchange. */
+typedef struct {
+    int newDiscreteStatesNeeded, terminateSimulation, nominalsOfContinuousStatesChanged,
+        valuesOfContinuousStatesChanged, nextEventTimeDefined;
+    double nextEventTime;
+} fmi2EventInfo;
+
+static struct {
+    fmi2Status (*set_time)(fmi2Component, double);
+    fmi2Status (*set_states)(fmi2Component, const double *, size_t);
+    fmi2Status (*get_derivatives)(fmi2Component, double *, size_t);
+    fmi2Status (*get_indicators)(fmi2Component, double *, size_t);
+    fmi2Status (*get_states)(fmi2Component, double *, size_t);
+    fmi2Status (*enter_event_mode)(fmi2Component);
+    fmi2Status (*new_discrete_states)(fmi2Component, fmi2EventInfo *);
+    fmi2Status (*enter_continuous_time_mode)(fmi2Component);
+    fmi2Status (*completed_integrator_step)(fmi2Component, int, int *, int *);
+    fmi2Status (*set_real)(fmi2Component, const unsigned *, size_t, const double *);
+    fmi2Status (*get_real)(fmi2Component, const unsigned *, size_t, double *);
+    fmi2Status (*get_integer)(fmi2Component, const unsigned *, size_t, int *);
+    fmi2Status (*get_state)(fmi2Component, void **);
+    fmi2Status (*set_state)(fmi2Component, void *);
+    fmi2Status (*free_state)(fmi2Component, void **);
+    fmi2Status (*state_size)(fmi2Component, void *, size_t *);
+    fmi2Status (*serialize)(fmi2Component, void *, char *, size_t);
+    fmi2Status (*deserialize)(fmi2Component, const char *, size_t, void **);
+    void (*free_instance)(fmi2Component);
+} me2;
+
+static int me2_set_time(void *i, double t) { return me2.set_time(i, t) > 1; }
+static int me2_set_states(void *i, const double *x) { return me2.set_states(i, x, N_STATES) > 1; }
+static int me2_get_derivatives(void *i, double *dx) { return me2.get_derivatives(i, dx, N_STATES) > 1; }
+static int me2_get_indicators(void *i, double *z) { return me2.get_indicators(i, z, N_INDICATORS) > 1; }
+static int me2_get_states(void *i, double *x) { return me2.get_states(i, x, N_STATES) > 1; }
+static int me2_enter_event_mode(void *i) { return me2.enter_event_mode(i) > 1; }
+static int me2_update(void *i, int *again, int *terminate) {
+    fmi2EventInfo info;
+    memset(&info, 0, sizeof info);
+    int failed = me2.new_discrete_states(i, &info) > 1;
+    *again = info.newDiscreteStatesNeeded;
+    *terminate = info.terminateSimulation;
+    return failed;
+}
+static int me2_enter_continuous(void *i) { return me2.enter_continuous_time_mode(i) > 1; }
+static int me2_completed(void *i, int *terminate) {
+    int enter = 0;
+    return me2.completed_integrator_step(i, 1, &enter, terminate) > 1 || enter;
+}
+static int me2_set_x_g(void *i, double x_g) {
+    const unsigned vr = VR_X_G;
+    return me2.set_real(i, &vr, 1, &x_g) > 1;
+}
+static int me2_read_outputs(void *i, double *values, int *lift_offs) {
+    const unsigned vr = VR_LIFT_OFF_COUNT;
+    return me2.get_real(i, OUTPUTS, N_OUTPUTS, values) > 1 || me2.get_integer(i, &vr, 1, lift_offs) > 1;
+}
+static int me2_restore(void *i) {
+    void *state = NULL, *restored = NULL;
+    size_t size = 0;
+    char *bytes = NULL;
+    int failed = me2.get_state(i, &state) || me2.state_size(i, state, &size) || !(bytes = malloc(size)) ||
+                 me2.serialize(i, state, bytes, size) || me2.deserialize(i, bytes, size, &restored) ||
+                 me2.set_state(i, restored) || me2.free_state(i, &state) || me2.free_state(i, &restored);
+    free(bytes);
+    return failed;
+}
+static void me2_free(void *i) { me2.free_instance(i); }
+
+static long run_model_exchange_fmi2(void *library, const char *token, const Case *c, double seconds) {
+    fmi2Component (*instantiate)(const char *, int, const char *, const char *,
+                                 const fmi2CallbackFunctions *, int, int);
+    fmi2Status (*setup)(fmi2Component, int, double, double, int, double);
+    fmi2Status (*enter_init)(fmi2Component);
+    fmi2Status (*exit_init)(fmi2Component);
+    fmi2Status (*set_integer)(fmi2Component, const unsigned *, size_t, const int *);
+    SYM(instantiate, library, "fmi2Instantiate");
+    SYM(setup, library, "fmi2SetupExperiment");
+    SYM(enter_init, library, "fmi2EnterInitializationMode");
+    SYM(exit_init, library, "fmi2ExitInitializationMode");
+    SYM(set_integer, library, "fmi2SetInteger");
+    SYM(me2.set_time, library, "fmi2SetTime");
+    SYM(me2.set_states, library, "fmi2SetContinuousStates");
+    SYM(me2.get_derivatives, library, "fmi2GetDerivatives");
+    SYM(me2.get_indicators, library, "fmi2GetEventIndicators");
+    SYM(me2.get_states, library, "fmi2GetContinuousStates");
+    SYM(me2.enter_event_mode, library, "fmi2EnterEventMode");
+    SYM(me2.new_discrete_states, library, "fmi2NewDiscreteStates");
+    SYM(me2.enter_continuous_time_mode, library, "fmi2EnterContinuousTimeMode");
+    SYM(me2.completed_integrator_step, library, "fmi2CompletedIntegratorStep");
+    SYM(me2.set_real, library, "fmi2SetReal");
+    SYM(me2.get_real, library, "fmi2GetReal");
+    SYM(me2.get_integer, library, "fmi2GetInteger");
+    SYM(me2.get_state, library, "fmi2GetFMUstate");
+    SYM(me2.set_state, library, "fmi2SetFMUstate");
+    SYM(me2.free_state, library, "fmi2FreeFMUstate");
+    SYM(me2.state_size, library, "fmi2SerializedFMUstateSize");
+    SYM(me2.serialize, library, "fmi2SerializeFMUstate");
+    SYM(me2.deserialize, library, "fmi2DeSerializeFMUstate");
+    SYM(me2.free_instance, library, "fmi2FreeInstance");
+
+    static const fmi2CallbackFunctions callbacks = {logger2, master_allocate, free, NULL, NULL};
+    fmi2Component instance = instantiate("realtime", 0, token, NULL, &callbacks, 0, 0);
+    if (!instance) fail("fmi2Instantiate (Model Exchange)", 0.0);
+    const unsigned integer_vrs[] = {VR_ROAD, VR_ROAD_CLASS, VR_TIRE_CONTACT};
+    const int integers[] = {c->road, c->road_class, c->tire};
+    const unsigned speed_vr = VR_VEHICLE_SPEED;
+    if (set_integer(instance, integer_vrs, 3, integers) || me2.set_real(instance, &speed_vr, 1, &c->speed))
+        fail("setting the parameters", 0.0);
+    if (setup(instance, 0, 0.0, 0.0, 0, 0.0) || enter_init(instance) || exit_init(instance))
+        fail("initialization", 0.0);
+    const ModelExchangeMaster master = {
+        instance, me2_set_time, me2_set_states, me2_get_derivatives, me2_get_indicators,
+        me2_get_states, me2_enter_event_mode, me2_update, me2_enter_continuous, me2_completed,
+        me2_set_x_g, me2_read_outputs, me2_restore, me2_free,
+    };
+    return run_model_exchange(&master, c, seconds);
+}
+
+/* FMI 3.0 Model Exchange. */
+static struct {
+    fmi3Status (*set_time)(fmi3Instance, fmi3Float64);
+    fmi3Status (*set_states)(fmi3Instance, const fmi3Float64 *, size_t);
+    fmi3Status (*get_derivatives)(fmi3Instance, fmi3Float64 *, size_t);
+    fmi3Status (*get_indicators)(fmi3Instance, fmi3Float64 *, size_t);
+    fmi3Status (*get_states)(fmi3Instance, fmi3Float64 *, size_t);
+    fmi3Status (*enter_event_mode)(fmi3Instance);
+    fmi3Status (*update_discrete_states)(fmi3Instance, fmi3Boolean *, fmi3Boolean *, fmi3Boolean *,
+                                         fmi3Boolean *, fmi3Boolean *, fmi3Float64 *);
+    fmi3Status (*enter_continuous_time_mode)(fmi3Instance);
+    fmi3Status (*completed_integrator_step)(fmi3Instance, fmi3Boolean, fmi3Boolean *, fmi3Boolean *);
+    fmi3SetFloat64TYPE set_float64;
+    fmi3Status (*get_int32)(fmi3Instance, const fmi3ValueReference[], size_t, fmi3Int32[], size_t);
+    fmi3GetFMUStateTYPE get_state;
+    fmi3SetFMUStateTYPE set_state;
+    fmi3FreeFMUStateTYPE free_state;
+    fmi3SerializedFMUStateSizeTYPE state_size;
+    fmi3SerializeFMUStateTYPE serialize;
+    fmi3DeserializeFMUStateTYPE deserialize;
+    fmi3FreeInstanceTYPE free_instance;
+} me3;
+
+static int me3_set_time(void *i, double t) { return me3.set_time(i, t) > fmi3Warning; }
+static int me3_set_states(void *i, const double *x) { return me3.set_states(i, x, N_STATES) > fmi3Warning; }
+static int me3_get_derivatives(void *i, double *dx) {
+    return me3.get_derivatives(i, dx, N_STATES) > fmi3Warning;
+}
+static int me3_get_indicators(void *i, double *z) {
+    return me3.get_indicators(i, z, N_INDICATORS) > fmi3Warning;
+}
+static int me3_get_states(void *i, double *x) { return me3.get_states(i, x, N_STATES) > fmi3Warning; }
+static int me3_enter_event_mode(void *i) { return me3.enter_event_mode(i) > fmi3Warning; }
+static int me3_update(void *i, int *again, int *terminate) {
+    fmi3Boolean needed = 0, stop = 0, nominals = 0, values = 0, defined = 0;
+    double next = 0.0;
+    int failed = me3.update_discrete_states(i, &needed, &stop, &nominals, &values, &defined, &next) >
+                 fmi3Warning;
+    *again = needed;
+    *terminate = stop;
+    return failed;
+}
+static int me3_enter_continuous(void *i) { return me3.enter_continuous_time_mode(i) > fmi3Warning; }
+static int me3_completed(void *i, int *terminate) {
+    fmi3Boolean enter = 0, stop = 0;
+    int failed = me3.completed_integrator_step(i, 1, &enter, &stop) > fmi3Warning || enter;
+    *terminate = stop;
+    return failed;
+}
+static int me3_set_x_g(void *i, double x_g) {
+    const fmi3ValueReference vr = VR_X_G;
+    return me3.set_float64(i, &vr, 1, &x_g, 1) > fmi3Warning;
+}
+static int me3_read_outputs(void *i, double *values, int *lift_offs) {
+    const fmi3ValueReference vr = VR_LIFT_OFF_COUNT;
+    fmi3Int32 count = 0;
+    int failed = get_float64(i, OUTPUTS, N_OUTPUTS, values, N_OUTPUTS) > fmi3Warning ||
+                 me3.get_int32(i, &vr, 1, &count, 1) > fmi3Warning;
+    *lift_offs = count;
+    return failed;
+}
+static int me3_restore(void *i) {
+    fmi3FMUState state = NULL, restored = NULL;
+    size_t size = 0;
+    fmi3Byte *bytes = NULL;
+    int failed = me3.get_state(i, &state) || me3.state_size(i, state, &size) || !(bytes = malloc(size)) ||
+                 me3.serialize(i, state, bytes, size) || me3.deserialize(i, bytes, size, &restored) ||
+                 me3.set_state(i, restored) || me3.free_state(i, &state) || me3.free_state(i, &restored);
+    free(bytes);
+    return failed;
+}
+static void me3_free(void *i) { me3.free_instance(i); }
+
+static long run_model_exchange_fmi3(void *library, const char *token, const Case *c, double seconds) {
+    fmi3Instance (*instantiate)(fmi3String, fmi3String, fmi3String, fmi3Boolean, fmi3Boolean,
+                                fmi3InstanceEnvironment, fmi3LogMessageCallback);
+    fmi3EnterInitializationModeTYPE enter_init;
+    fmi3ExitInitializationModeTYPE exit_init;
+    fmi3SetInt64TYPE set_int64;
+    SYM(instantiate, library, "fmi3InstantiateModelExchange");
+    SYM(enter_init, library, "fmi3EnterInitializationMode");
+    SYM(exit_init, library, "fmi3ExitInitializationMode");
+    SYM(set_int64, library, "fmi3SetInt64");
+    SYM(get_float64, library, "fmi3GetFloat64");
+    SYM(me3.set_time, library, "fmi3SetTime");
+    SYM(me3.set_states, library, "fmi3SetContinuousStates");
+    SYM(me3.get_derivatives, library, "fmi3GetContinuousStateDerivatives");
+    SYM(me3.get_indicators, library, "fmi3GetEventIndicators");
+    SYM(me3.get_states, library, "fmi3GetContinuousStates");
+    SYM(me3.enter_event_mode, library, "fmi3EnterEventMode");
+    SYM(me3.update_discrete_states, library, "fmi3UpdateDiscreteStates");
+    SYM(me3.enter_continuous_time_mode, library, "fmi3EnterContinuousTimeMode");
+    SYM(me3.completed_integrator_step, library, "fmi3CompletedIntegratorStep");
+    SYM(me3.set_float64, library, "fmi3SetFloat64");
+    SYM(me3.get_int32, library, "fmi3GetInt32");
+    SYM(me3.get_state, library, "fmi3GetFMUState");
+    SYM(me3.set_state, library, "fmi3SetFMUState");
+    SYM(me3.free_state, library, "fmi3FreeFMUState");
+    SYM(me3.state_size, library, "fmi3SerializedFMUStateSize");
+    SYM(me3.serialize, library, "fmi3SerializeFMUState");
+    SYM(me3.deserialize, library, "fmi3DeserializeFMUState");
+    SYM(me3.free_instance, library, "fmi3FreeInstance");
+
+    fmi3Instance instance = instantiate("realtime", token, NULL, 0, 0, NULL, logger3);
+    if (!instance) fail("fmi3InstantiateModelExchange", 0.0);
+    const fmi3ValueReference enum_vrs[] = {VR_ROAD, VR_ROAD_CLASS, VR_TIRE_CONTACT};
+    const fmi3Int64 enums[] = {c->road, c->road_class, c->tire};
+    const fmi3ValueReference speed_vr = VR_VEHICLE_SPEED;
+    if (set_int64(instance, enum_vrs, 3, enums, 3) ||
+        me3.set_float64(instance, &speed_vr, 1, &c->speed, 1))
+        fail("setting the parameters", 0.0);
+    if (enter_init(instance, 0, 0.0, 0.0, 0, 0.0) || exit_init(instance)) fail("initialization", 0.0);
+    const ModelExchangeMaster master = {
+        instance, me3_set_time, me3_set_states, me3_get_derivatives, me3_get_indicators,
+        me3_get_states, me3_enter_event_mode, me3_update, me3_enter_continuous, me3_completed,
+        me3_set_x_g, me3_read_outputs, me3_restore, me3_free,
+    };
+    return run_model_exchange(&master, c, seconds);
+}
+
 static long run(int fmi, void *library, const char *token, const Case *c, double seconds,
                 int change_g) {
     return fmi == 2 ? run_fmi2(library, token, c, seconds, change_g)
@@ -535,10 +879,12 @@ int main(int argc, char **argv) {
         return 0;
     }
     int count_mode = argc == 6 && !strcmp(argv[1], "count");
+    int model_exchange_mode = argc == 6 && !strcmp(argv[1], "count-me");
     int worst_mode = argc == 8 && !strcmp(argv[1], "worst");
-    if (!count_mode && !worst_mode) {
+    if (!count_mode && !model_exchange_mode && !worst_mode) {
         fprintf(stderr,
-                "usage: %s list | count FMI LIB TOKEN CASE | worst FMI LIB TOKEN CASE REPEATS SECONDS\n",
+                "usage: %s list | count FMI LIB TOKEN CASE | count-me FMI LIB TOKEN CASE | worst FMI LIB "
+                "TOKEN CASE REPEATS SECONDS\n",
                 argv[0]);
         return 2;
     }
@@ -550,6 +896,14 @@ int main(int argc, char **argv) {
     void *library = open_library(argv[3]);
     const char *token = argv[4];
     const Case *c = find_case(argv[5]);
+    if (model_exchange_mode) {
+        restore_at = 15000;
+        long steps = fmi == 2 ? run_model_exchange_fmi2(library, token, c, 30.0)
+                              : run_model_exchange_fmi3(library, token, c, 30.0);
+        printf("allocations %ld steps %ld (restoring a serialized state: %ld allocations)\n", allocations,
+               steps, restore_allocations);
+        return allocations == 0 ? 0 : 1;
+    }
     if (count_mode) {
         set_gain_every_call = 1;
         restore_at = c->pattern == PATTERN_LONG ? 1500 : 15000;

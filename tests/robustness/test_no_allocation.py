@@ -8,7 +8,13 @@ intermediate updates with early returns too), restores a serialized copy
 of its state in the middle of the run (the state functions themselves are
 not counted), and counts every allocation from the return of Exit
 Initialization Mode on. The calls that change g's
-value are counted apart (they rebuild the operators and check stability)."""
+value are counted apart (they rebuild the operators and check stability).
+
+Model Exchange (`count-me`): the same libraries instantiated for Model
+Exchange and driven as a fixed-step real-time master drives them (Heun's
+method at the case's steps, a trial point at each step's end, events,
+CompletedIntegratorStep, every output read), also after restoring a
+serialized state in the middle of the run, allocate nothing either."""
 
 import re
 import shutil
@@ -23,6 +29,7 @@ import fmi3
 HERE = Path(__file__).resolve().parent
 SOURCE = HERE / "realtime.c"
 COUNT = re.compile(r"allocations (\d+) calls (\d+) \(g value changes: 2 calls, (\d+) allocations\)")
+COUNT_MODEL_EXCHANGE = re.compile(r"allocations (\d+) steps (\d+) \(restoring a serialized state: (\d+) allocations\)")
 
 
 @pytest.fixture(scope="module")
@@ -93,4 +100,30 @@ def test_stepping_allocates_nothing(harness, version, case):
     # allocate (the stability check of the new gain).
     assert gain_changes > 0
     assert allocations == 0, f"{allocations} allocations in {calls} calls of {case} (FMI {version})"
+    assert run.returncode == 0
+
+
+def test_the_harness_state_counts_are_the_model_descriptions():
+    text = SOURCE.read_text()
+    description = (HERE.parent.parent / "modelDescription" / "modelDescription.xml").read_text()
+    states = int(re.search(r"#define N_STATES (\d+)", text).group(1))
+    indicators = int(re.search(r"#define N_INDICATORS (\d+)", text).group(1))
+    assert states == description.count('name="der(')
+    assert indicators == int(re.search(r'numberOfEventIndicators="(\d+)"', description).group(1))
+
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("case", cases())
+def test_model_exchange_allocates_nothing(harness, version, case):
+    lib, token = library(version)
+    run = subprocess.run([str(harness), "count-me", str(version), lib, token, case], capture_output=True,
+                         text=True, timeout=300)
+    found = COUNT_MODEL_EXCHANGE.search(run.stdout)
+    assert found, f"exit {run.returncode}: {run.stdout}{run.stderr}"
+    allocations, steps, restore = map(int, found.groups())
+    assert steps >= 15000
+    # The counter sees the library's allocations: restoring the
+    # serialized state allocates (the copies of the model).
+    assert restore > 0
+    assert allocations == 0, f"{allocations} allocations in {steps} steps of {case} (FMI {version})"
     assert run.returncode == 0
