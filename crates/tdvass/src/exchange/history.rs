@@ -70,7 +70,7 @@ pub struct DelayHistory {
     tau: f64,
 }
 
-/// A copy keeps the room of the original (at least [`INITIAL_CAPACITY`]
+/// A copy keeps the room of the original (at least `INITIAL_CAPACITY`
 /// points), so a restored FMU state records points without allocating.
 impl Clone for DelayHistory {
     fn clone(&self) -> DelayHistory {
