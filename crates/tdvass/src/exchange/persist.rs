@@ -149,13 +149,8 @@ impl ModelExchange {
         }
         let mut restored_road = self.road.clone();
         match (&road, self.road.node_state()) {
-            // The master goes back to the last accepted point at most: its
-            // node must be kept; no bound on the trial points ahead.
-            (Some(state), Some(_)) => {
-                restored_road.restore_dynamic_state(state, accepted, f64::INFINITY)?
-            }
+            (Some(state), _) => restored_road.restore_nodes(state)?,
             (None, None) => {}
-            (Some(_), None) => return Err(invalid("road nodes for a road without them".into())),
             (None, Some(_)) => return Err(invalid("a random road without its nodes".into())),
         }
         let delay = match &self.delay {

@@ -262,6 +262,26 @@ fn a_saved_state_on_a_random_road_replays_exactly_from_its_nodes() {
 }
 
 #[test]
+fn a_saved_state_on_a_random_road_replays_when_no_step_was_completed() {
+    // The nodes of the start are released as the derivatives move on:
+    // the restored model takes the window it was saved with.
+    let road = RoadSpec::Iso8608(RandomRoad {
+        class: RoadClass::C,
+        speed: 20.0,
+        ..RandomRoad::default()
+    });
+    let c = config(Variant::Tdvass, 0.011, 5386.0, road);
+    let mut model = ModelExchange::new(c.clone()).unwrap();
+    integrate(&mut model, 0.5, 1e-4, false);
+    assert!(model.road.node_state().unwrap().first_node > 300);
+    let mut copy = ModelExchange::new(c).unwrap();
+    copy.restore(&model.to_bytes()).unwrap();
+    integrate(&mut model, 1.0, 1e-4, false);
+    integrate(&mut copy, 1.0, 1e-4, false);
+    assert_eq!(model.states(), copy.states());
+}
+
+#[test]
 fn bad_states_and_times_are_refused_naming_them() {
     let c = config(Variant::Tdvass, 0.011, 5386.0, RoadSpec::paper_harmonic());
     let mut model = ModelExchange::new(c).unwrap();

@@ -540,6 +540,14 @@ impl NodeSequence {
         }
     }
 
+    /// Takes the generator's position and the nodes of `state`.
+    fn restore(&mut self, state: &RoadState) {
+        self.rng = ChaCha8Rng::seed_from_u64(self.seed);
+        self.rng.set_word_pos(state.word_position);
+        self.first = state.first_node;
+        self.nodes = state.nodes.iter().copied().collect();
+    }
+
     fn release_before(&mut self, t: f64) {
         while self.nodes.len() > 2 && self.node_time(self.first + 1) <= t {
             self.nodes.pop_front();
@@ -750,6 +758,28 @@ impl Road {
         matches!(self.kind, RoadKind::Nodes(_)).then(|| self.dynamic_state())
     }
 
+    /// Restores the generator and nodes of a random road that
+    /// [`Road::node_state`] returned, for a Model Exchange model: any window
+    /// of nodes is taken (the model keeps those of the times a master may
+    /// still go back to), up to node [`MAX_NODE`].
+    pub(crate) fn restore_nodes(&mut self, state: &RoadState) -> Result<()> {
+        let RoadKind::Nodes(n) = &mut self.kind else {
+            return Err(Error::InvalidState(
+                "road nodes for a road without them".into(),
+            ));
+        };
+        let count = state.nodes.len() as u64;
+        if count == 0 || state.first_node.saturating_add(count) > MAX_NODE {
+            return Err(Error::InvalidState(format!(
+                "road first_node {} with {count} nodes (at least one, up to node {MAX_NODE})",
+                state.first_node
+            )));
+        }
+        self.cache = None;
+        n.restore(state);
+        Ok(())
+    }
+
     /// Restores what [`Road::dynamic_state`] returned, for a simulator whose
     /// committed state is at `committed_time` and which will query the road
     /// up to `horizon` before committing again. Checked against these
@@ -787,10 +817,7 @@ impl Road {
                          two after the one holding {horizon} s"
                     )));
                 }
-                n.rng = ChaCha8Rng::seed_from_u64(n.seed);
-                n.rng.set_word_pos(state.word_position);
-                n.first = state.first_node;
-                n.nodes = state.nodes.iter().copied().collect();
+                n.restore(state);
                 Ok(())
             }
             RoadKind::Input(piece) => {
