@@ -284,6 +284,40 @@ static void logger2(void *env, const char *name, fmi2Status status, const char *
 
 static void *master_allocate(size_t count, size_t size) { return calloc(count, size); }
 
+/* The FMU-state functions of FMI 2.0 (both interfaces). */
+static struct {
+    fmi2Status (*get)(fmi2Component, void **);
+    fmi2Status (*set)(fmi2Component, void *);
+    fmi2Status (*free)(fmi2Component, void **);
+    fmi2Status (*size)(fmi2Component, void *, size_t *);
+    fmi2Status (*serialize)(fmi2Component, void *, char *, size_t);
+    fmi2Status (*deserialize)(fmi2Component, const char *, size_t, void **);
+} states2;
+
+static void bind_states2(void *library) {
+    SYM(states2.get, library, "fmi2GetFMUstate");
+    SYM(states2.set, library, "fmi2SetFMUstate");
+    SYM(states2.free, library, "fmi2FreeFMUstate");
+    SYM(states2.size, library, "fmi2SerializedFMUstateSize");
+    SYM(states2.serialize, library, "fmi2SerializeFMUstate");
+    SYM(states2.deserialize, library, "fmi2DeSerializeFMUstate");
+}
+
+/* Saves the state, serializes it, deserializes it and restores it (these
+ * may allocate; stepping on from the restored state must not); nonzero on
+ * failure. */
+static int restore_serialized2(void *instance) {
+    void *state = NULL, *restored = NULL;
+    size_t size = 0;
+    char *bytes = NULL;
+    int failed = states2.get(instance, &state) || states2.size(instance, state, &size) ||
+                 !(bytes = malloc(size)) || states2.serialize(instance, state, bytes, size) ||
+                 states2.deserialize(instance, bytes, size, &restored) || states2.set(instance, restored) ||
+                 states2.free(instance, &state) || states2.free(instance, &restored);
+    free(bytes);
+    return failed;
+}
+
 static long run_fmi2(void *library, const char *token, const Case *c, double seconds, int change_g) {
     fmi2Component (*instantiate)(const char *, int, const char *, const char *,
                                  const fmi2CallbackFunctions *, int, int);
@@ -312,18 +346,7 @@ static long run_fmi2(void *library, const char *token, const Case *c, double sec
     SYM(get_integer, library, "fmi2GetInteger");
     SYM(set_input_derivatives, library, "fmi2SetRealInputDerivatives");
     SYM(get_output_derivatives, library, "fmi2GetRealOutputDerivatives");
-    fmi2Status (*get_state)(fmi2Component, void **);
-    fmi2Status (*set_state)(fmi2Component, void *);
-    fmi2Status (*free_state)(fmi2Component, void **);
-    fmi2Status (*state_size)(fmi2Component, void *, size_t *);
-    fmi2Status (*serialize)(fmi2Component, void *, char *, size_t);
-    fmi2Status (*deserialize)(fmi2Component, const char *, size_t, void **);
-    SYM(get_state, library, "fmi2GetFMUstate");
-    SYM(set_state, library, "fmi2SetFMUstate");
-    SYM(free_state, library, "fmi2FreeFMUstate");
-    SYM(state_size, library, "fmi2SerializedFMUstateSize");
-    SYM(serialize, library, "fmi2SerializeFMUstate");
-    SYM(deserialize, library, "fmi2DeSerializeFMUstate");
+    bind_states2(library);
 
     static const fmi2CallbackFunctions callbacks = {logger2, master_allocate, free, NULL, NULL};
     fmi2Component instance = instantiate("realtime", 1, token, NULL, &callbacks, 0, 0);
@@ -366,18 +389,8 @@ static long run_fmi2(void *library, const char *token, const Case *c, double sec
                 fail("setting x_g", t);
         }
         if (restore_at == k) {
-            /* Save, serialize, deserialize and restore (these may
-             * allocate); stepping on from the restored state must not. */
             counting = 0;
-            void *state = NULL, *restored = NULL;
-            size_t size = 0;
-            char *bytes = NULL;
-            if (get_state(instance, &state) || state_size(instance, state, &size) ||
-                !(bytes = malloc(size)) || serialize(instance, state, bytes, size) ||
-                deserialize(instance, bytes, size, &restored) || set_state(instance, restored) ||
-                free_state(instance, &state) || free_state(instance, &restored))
-                fail("restoring a serialized FMU state", t);
-            free(bytes);
+            if (restore_serialized2(instance)) fail("restoring a serialized FMU state", t);
             counting = 1;
         }
         if (do_step(instance, t, step, 1)) fail("fmi2DoStep", t);
@@ -421,6 +434,38 @@ static void intermediate_update(fmi3InstanceEnvironment env, fmi3Float64 time,
     *early_return_time = time;
 }
 
+/* The FMU-state functions of FMI 3.0 (both interfaces). */
+static struct {
+    fmi3GetFMUStateTYPE get;
+    fmi3SetFMUStateTYPE set;
+    fmi3FreeFMUStateTYPE free;
+    fmi3SerializedFMUStateSizeTYPE size;
+    fmi3SerializeFMUStateTYPE serialize;
+    fmi3DeserializeFMUStateTYPE deserialize;
+} states3;
+
+static void bind_states3(void *library) {
+    SYM(states3.get, library, "fmi3GetFMUState");
+    SYM(states3.set, library, "fmi3SetFMUState");
+    SYM(states3.free, library, "fmi3FreeFMUState");
+    SYM(states3.size, library, "fmi3SerializedFMUStateSize");
+    SYM(states3.serialize, library, "fmi3SerializeFMUState");
+    SYM(states3.deserialize, library, "fmi3DeserializeFMUState");
+}
+
+/* restore_serialized2 for FMI 3.0. */
+static int restore_serialized3(void *instance) {
+    fmi3FMUState state = NULL, restored = NULL;
+    size_t size = 0;
+    fmi3Byte *bytes = NULL;
+    int failed = states3.get(instance, &state) || states3.size(instance, state, &size) ||
+                 !(bytes = malloc(size)) || states3.serialize(instance, state, bytes, size) ||
+                 states3.deserialize(instance, bytes, size, &restored) || states3.set(instance, restored) ||
+                 states3.free(instance, &state) || states3.free(instance, &restored);
+    free(bytes);
+    return failed;
+}
+
 static long run_fmi3(void *library, const char *token, const Case *c, double seconds, int change_g) {
     fmi3InstantiateCoSimulationTYPE instantiate;
     fmi3FreeInstanceTYPE free_instance;
@@ -442,18 +487,7 @@ static long run_fmi3(void *library, const char *token, const Case *c, double sec
     SYM(get_float64, library, "fmi3GetFloat64");
     SYM(get_int32, library, "fmi3GetInt32");
     SYM(get_output_derivatives, library, "fmi3GetOutputDerivatives");
-    fmi3GetFMUStateTYPE get_state;
-    fmi3SetFMUStateTYPE set_state;
-    fmi3FreeFMUStateTYPE free_state;
-    fmi3SerializedFMUStateSizeTYPE state_size;
-    fmi3SerializeFMUStateTYPE serialize;
-    fmi3DeserializeFMUStateTYPE deserialize;
-    SYM(get_state, library, "fmi3GetFMUState");
-    SYM(set_state, library, "fmi3SetFMUState");
-    SYM(free_state, library, "fmi3FreeFMUState");
-    SYM(state_size, library, "fmi3SerializedFMUStateSize");
-    SYM(serialize, library, "fmi3SerializeFMUState");
-    SYM(deserialize, library, "fmi3DeserializeFMUState");
+    bind_states3(library);
 
     instance3 = instantiate("realtime", token, NULL, 0, 0, 0, 1, NULL, 0, NULL, logger3,
                             intermediate_update);
@@ -497,15 +531,7 @@ static long run_fmi3(void *library, const char *token, const Case *c, double sec
         }
         if (restore_at == k) {
             counting = 0;
-            fmi3FMUState state = NULL, restored = NULL;
-            size_t size = 0;
-            fmi3Byte *bytes = NULL;
-            if (get_state(instance3, &state) || state_size(instance3, state, &size) ||
-                !(bytes = malloc(size)) || serialize(instance3, state, bytes, size) ||
-                deserialize(instance3, bytes, size, &restored) || set_state(instance3, restored) ||
-                free_state(instance3, &state) || free_state(instance3, &restored))
-                fail("restoring a serialized FMU state", t);
-            free(bytes);
+            if (restore_serialized3(instance3)) fail("restoring a serialized FMU state", t);
             counting = 1;
         }
         fmi3Boolean event_needed, terminate, early_return;
@@ -643,12 +669,6 @@ static struct {
     fmi2Status (*set_real)(fmi2Component, const unsigned *, size_t, const double *);
     fmi2Status (*get_real)(fmi2Component, const unsigned *, size_t, double *);
     fmi2Status (*get_integer)(fmi2Component, const unsigned *, size_t, int *);
-    fmi2Status (*get_state)(fmi2Component, void **);
-    fmi2Status (*set_state)(fmi2Component, void *);
-    fmi2Status (*free_state)(fmi2Component, void **);
-    fmi2Status (*state_size)(fmi2Component, void *, size_t *);
-    fmi2Status (*serialize)(fmi2Component, void *, char *, size_t);
-    fmi2Status (*deserialize)(fmi2Component, const char *, size_t, void **);
     void (*free_instance)(fmi2Component);
 } me2;
 
@@ -679,16 +699,6 @@ static int me2_read_outputs(void *i, double *values, int *lift_offs) {
     const unsigned vr = VR_LIFT_OFF_COUNT;
     return me2.get_real(i, OUTPUTS, N_OUTPUTS, values) > 1 || me2.get_integer(i, &vr, 1, lift_offs) > 1;
 }
-static int me2_restore(void *i) {
-    void *state = NULL, *restored = NULL;
-    size_t size = 0;
-    char *bytes = NULL;
-    int failed = me2.get_state(i, &state) || me2.state_size(i, state, &size) || !(bytes = malloc(size)) ||
-                 me2.serialize(i, state, bytes, size) || me2.deserialize(i, bytes, size, &restored) ||
-                 me2.set_state(i, restored) || me2.free_state(i, &state) || me2.free_state(i, &restored);
-    free(bytes);
-    return failed;
-}
 static void me2_free(void *i) { me2.free_instance(i); }
 
 static long run_model_exchange_fmi2(void *library, const char *token, const Case *c, double seconds) {
@@ -715,12 +725,7 @@ static long run_model_exchange_fmi2(void *library, const char *token, const Case
     SYM(me2.set_real, library, "fmi2SetReal");
     SYM(me2.get_real, library, "fmi2GetReal");
     SYM(me2.get_integer, library, "fmi2GetInteger");
-    SYM(me2.get_state, library, "fmi2GetFMUstate");
-    SYM(me2.set_state, library, "fmi2SetFMUstate");
-    SYM(me2.free_state, library, "fmi2FreeFMUstate");
-    SYM(me2.state_size, library, "fmi2SerializedFMUstateSize");
-    SYM(me2.serialize, library, "fmi2SerializeFMUstate");
-    SYM(me2.deserialize, library, "fmi2DeSerializeFMUstate");
+    bind_states2(library);
     SYM(me2.free_instance, library, "fmi2FreeInstance");
 
     static const fmi2CallbackFunctions callbacks = {logger2, master_allocate, free, NULL, NULL};
@@ -736,7 +741,7 @@ static long run_model_exchange_fmi2(void *library, const char *token, const Case
     const ModelExchangeMaster master = {
         instance, me2_set_time, me2_set_states, me2_get_derivatives, me2_get_indicators,
         me2_get_states, me2_enter_event_mode, me2_update, me2_enter_continuous, me2_completed,
-        me2_set_x_g, me2_read_outputs, me2_restore, me2_free,
+        me2_set_x_g, me2_read_outputs, restore_serialized2, me2_free,
     };
     return run_model_exchange(&master, c, seconds);
 }
@@ -755,12 +760,6 @@ static struct {
     fmi3Status (*completed_integrator_step)(fmi3Instance, fmi3Boolean, fmi3Boolean *, fmi3Boolean *);
     fmi3SetFloat64TYPE set_float64;
     fmi3Status (*get_int32)(fmi3Instance, const fmi3ValueReference[], size_t, fmi3Int32[], size_t);
-    fmi3GetFMUStateTYPE get_state;
-    fmi3SetFMUStateTYPE set_state;
-    fmi3FreeFMUStateTYPE free_state;
-    fmi3SerializedFMUStateSizeTYPE state_size;
-    fmi3SerializeFMUStateTYPE serialize;
-    fmi3DeserializeFMUStateTYPE deserialize;
     fmi3FreeInstanceTYPE free_instance;
 } me3;
 
@@ -802,16 +801,6 @@ static int me3_read_outputs(void *i, double *values, int *lift_offs) {
     *lift_offs = count;
     return failed;
 }
-static int me3_restore(void *i) {
-    fmi3FMUState state = NULL, restored = NULL;
-    size_t size = 0;
-    fmi3Byte *bytes = NULL;
-    int failed = me3.get_state(i, &state) || me3.state_size(i, state, &size) || !(bytes = malloc(size)) ||
-                 me3.serialize(i, state, bytes, size) || me3.deserialize(i, bytes, size, &restored) ||
-                 me3.set_state(i, restored) || me3.free_state(i, &state) || me3.free_state(i, &restored);
-    free(bytes);
-    return failed;
-}
 static void me3_free(void *i) { me3.free_instance(i); }
 
 static long run_model_exchange_fmi3(void *library, const char *token, const Case *c, double seconds) {
@@ -836,12 +825,7 @@ static long run_model_exchange_fmi3(void *library, const char *token, const Case
     SYM(me3.completed_integrator_step, library, "fmi3CompletedIntegratorStep");
     SYM(me3.set_float64, library, "fmi3SetFloat64");
     SYM(me3.get_int32, library, "fmi3GetInt32");
-    SYM(me3.get_state, library, "fmi3GetFMUState");
-    SYM(me3.set_state, library, "fmi3SetFMUState");
-    SYM(me3.free_state, library, "fmi3FreeFMUState");
-    SYM(me3.state_size, library, "fmi3SerializedFMUStateSize");
-    SYM(me3.serialize, library, "fmi3SerializeFMUState");
-    SYM(me3.deserialize, library, "fmi3DeserializeFMUState");
+    bind_states3(library);
     SYM(me3.free_instance, library, "fmi3FreeInstance");
 
     fmi3Instance instance = instantiate("realtime", token, NULL, 0, 0, NULL, logger3);
@@ -856,7 +840,7 @@ static long run_model_exchange_fmi3(void *library, const char *token, const Case
     const ModelExchangeMaster master = {
         instance, me3_set_time, me3_set_states, me3_get_derivatives, me3_get_indicators,
         me3_get_states, me3_enter_event_mode, me3_update, me3_enter_continuous, me3_completed,
-        me3_set_x_g, me3_read_outputs, me3_restore, me3_free,
+        me3_set_x_g, me3_read_outputs, restore_serialized3, me3_free,
     };
     return run_model_exchange(&master, c, seconds);
 }

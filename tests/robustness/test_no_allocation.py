@@ -86,21 +86,27 @@ def test_the_harness_value_references_are_the_model_descriptions(version):
     assert outputs == real_outputs
 
 
+def count(harness, mode, version, case, pattern):
+    """Runs the harness's `mode` (count, count-me) on `case`: the numbers
+    its line `pattern` reports, and its exit code."""
+    lib, token = library(version)
+    run = subprocess.run([str(harness), mode, str(version), lib, token, case], capture_output=True,
+                         text=True, timeout=300)
+    found = pattern.search(run.stdout)
+    assert found, f"exit {run.returncode}: {run.stdout}{run.stderr}"
+    return *map(int, found.groups()), run.returncode
+
+
 @pytest.mark.parametrize("version", [2, 3])
 @pytest.mark.parametrize("case", cases())
 def test_stepping_allocates_nothing(harness, version, case):
-    lib, token = library(version)
-    run = subprocess.run([str(harness), "count", str(version), lib, token, case], capture_output=True,
-                         text=True, timeout=300)
-    found = COUNT.search(run.stdout)
-    assert found, f"exit {run.returncode}: {run.stdout}{run.stderr}"
-    allocations, calls, gain_changes = map(int, found.groups())
+    allocations, calls, gain_changes, returncode = count(harness, "count", version, case, COUNT)
     assert calls >= 3000
     # The counter sees the library's allocations: the two changes of g
     # allocate (the stability check of the new gain).
     assert gain_changes > 0
     assert allocations == 0, f"{allocations} allocations in {calls} calls of {case} (FMI {version})"
-    assert run.returncode == 0
+    assert returncode == 0
 
 
 def test_the_harness_state_counts_are_the_model_descriptions():
@@ -115,15 +121,10 @@ def test_the_harness_state_counts_are_the_model_descriptions():
 @pytest.mark.parametrize("version", [2, 3])
 @pytest.mark.parametrize("case", cases())
 def test_model_exchange_allocates_nothing(harness, version, case):
-    lib, token = library(version)
-    run = subprocess.run([str(harness), "count-me", str(version), lib, token, case], capture_output=True,
-                         text=True, timeout=300)
-    found = COUNT_MODEL_EXCHANGE.search(run.stdout)
-    assert found, f"exit {run.returncode}: {run.stdout}{run.stderr}"
-    allocations, steps, restore = map(int, found.groups())
+    allocations, steps, restore, returncode = count(harness, "count-me", version, case, COUNT_MODEL_EXCHANGE)
     assert steps >= 15000
     # The counter sees the library's allocations: restoring the
     # serialized state allocates (the copies of the model).
     assert restore > 0
     assert allocations == 0, f"{allocations} allocations in {steps} steps of {case} (FMI {version})"
-    assert run.returncode == 0
+    assert returncode == 0
