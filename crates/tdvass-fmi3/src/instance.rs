@@ -1,4 +1,4 @@
-//! The FMI 3.0 instance: what `fmi3InstantiateCoSimulation` checks beyond
+//! The FMI 3.0 instance: what `fmi3InstantiateCoSimulation` (and Model Exchange) checks beyond
 //! what every version checks ([`tdvass_fmu::instantiation`]: event mode and
 //! the intermediate variables), the FMI 3.0 state table around every call, the FMI 3.0 types of the values,
 //! Configuration Mode and the intermediate updates, around a
@@ -112,8 +112,9 @@ impl FrontEnd for Instance {
 }
 
 impl Instance {
-    /// `fmi3InstantiateCoSimulation`: checks the request and creates the
-    /// instance. A refusal is logged through `logger` and returns `None`.
+    /// `fmi3InstantiateCoSimulation` and `fmi3InstantiateModelExchange`:
+    /// checks the request and creates the instance. A refusal is logged
+    /// through `logger` (naming the function called) and returns `None`.
     pub fn instantiate(request: InstantiateRequest<'_>, logger: LogSink) -> Option<Instance> {
         let dialect = if request.model_exchange {
             Dialect {
