@@ -77,6 +77,13 @@ pub const MAX_RATE: f64 = 1e12;
 /// Largest weight of the objective J.
 pub const MAX_WEIGHT: f64 = 1e12;
 
+/// Most internal steps plus road nodes one call may need (2^22): the
+/// work of one co-simulation step, and the road nodes one Model Exchange
+/// time may generate or keep. A call that would need more is refused, so
+/// that no call runs for more than a few seconds or holds more than
+/// 32 MiB of road nodes.
+pub const MAX_WORK_PER_CALL: f64 = 4_194_304.0;
+
 /// A kind of value whose magnitude has a numerical limit. Front-ends map
 /// their variables onto these (the FMU's table declares one per variable
 /// that has a limit); the names in messages are the caller's.

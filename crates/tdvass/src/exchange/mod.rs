@@ -20,9 +20,25 @@
 //! `VDV = (∫a_w⁴)^{1/4}`, the dynamic tire load ratio `k_t RMS(TDD)/W`.
 //!
 //! **The delayed input** `x_t(t − tau)` comes from a [`DelayHistory`] of
-//! the evaluated points (see there). Delays below
+//! the evaluated and accepted points (see there). Delays below
 //! [`MIN_RESOLVED_DELAY`] are folded as in the co-simulation:
 //! `x_t(t − tau) ≈ x_t − tau v_t`.
+//!
+//! **Going back.** [`ModelExchange::set_time`] takes any time from the
+//! floor ([`ModelExchange::earliest_time`]) on: the last accepted point
+//! (start, completed integrator step, event) or, while the master has never
+//! completed a step, [`TRIAL_REACH`] before the latest time it set,
+//! whichever is later. The history and the random road keep what the
+//! times from the floor on need (at most [`MAX_HISTORY_POINTS`] points and
+//! [`MAX_WORK_PER_CALL`] road nodes); an earlier time is refused with an
+//! error naming both times.
+//!
+//! **Bounded work.** A time whose random road would need more than
+//! [`MAX_WORK_PER_CALL`] nodes generated or kept is refused, and so is a
+//! time beyond `2^42` times the finest time the model resolves (the delay,
+//! the road's node interval, at most [`LARGEST_STEP`]), as the
+//! co-simulation refuses times its grid cannot resolve. No derivative or
+//! event indicator that is not finite is handed out.
 //!
 //! **Events.** One event indicator, the margin `W/k_t − (x_t − x_g)` (m)
 //! to the loss of tire contact, moved away from zero by a hysteresis after
@@ -41,20 +57,23 @@
 //! configuration and report types.
 
 mod history;
+mod jacobian;
 mod persist;
 
-pub use history::{DelayHistory, HistoryPoint, MAX_HISTORY_POINTS, TRIAL_REACH};
+pub use history::{DelayHistory, Delayed, HistoryPoint, MAX_HISTORY_POINTS, STAGE_POINTS};
+pub use jacobian::{Gradient, Jacobian, OutputPartials};
 pub use persist::EXCHANGE_FORMAT_VERSION;
 
 use crate::comfort::{WK_STATES, WkStateSpace, wk_state_space};
 use crate::error::{Error, Result};
-use crate::limits::{DIVERGENCE_BOUNDS, check_config};
+use crate::limits::{DIVERGENCE_BOUNDS, MAX_WORK_PER_CALL, check_config};
 use crate::metrics::RmsValues;
 use crate::model::{Performance, Plant, STATE_NAMES, State, V_H, V_T, Variant, X_H, X_S, X_T};
 use crate::road::Road;
+use crate::solver::accuracy::LARGEST_STEP;
 use crate::solver::{
     CONTINUOUS_STATES, ComfortValues, ContactLoss, FILTER_STATES_AT, INTEGRAL_NAMES, INTEGRALS_AT,
-    MIN_RESOLVED_DELAY, Metrics, Outputs, RoadHolding, SimulationConfig,
+    MIN_RESOLVED_DELAY, Metrics, Outputs, RoadHolding, SimulationConfig, Simulator,
 };
 use nalgebra::{Matrix6, SVector};
 
@@ -66,6 +85,10 @@ const CONTACT_LOSS_TIME: usize = CONTINUOUS_STATES - 1;
 
 /// The hysteresis of the event indicator, relative to W/k_t.
 const HYSTERESIS: f64 = 1e-12;
+
+/// How far back (s) a master that has never completed a step may set the
+/// time, from the latest time it set.
+pub const TRIAL_REACH: f64 = 1.0;
 
 /// How the delayed input is formed.
 #[derive(Debug, Clone, PartialEq)]
@@ -121,6 +144,16 @@ pub struct ModelExchange {
     discrete: Discrete,
     /// The time of the last accepted point (s).
     accepted: f64,
+    /// The earliest time [`Self::set_time`] takes (s): see the module
+    /// documentation. Never decreases.
+    floor: f64,
+    /// The latest time set (s).
+    latest: f64,
+    /// The master has called `CompletedIntegratorStep`: the floor is its
+    /// last accepted point.
+    completes: bool,
+    /// The largest |time| (s) the model resolves.
+    max_time: f64,
 }
 
 /// The names of the continuous states, in order.
@@ -166,6 +199,14 @@ impl ModelExchange {
             });
         }
         let plant = Plant::new(config.params, config.variant)?;
+        let max_time = Self::time_bound(&config);
+        if config.start_time.abs() > max_time {
+            return Err(Error::InvalidTime {
+                name: "start_time",
+                value: config.start_time,
+                reason: "|start_time| must be at most 2^42 times the finest time the model resolves (the delay, the road's node interval, 0.01 s)",
+            });
+        }
         let k_t = config.params.k_t;
         let mut flight_matrix = plant.a;
         flight_matrix[(V_T, X_T)] += plant.e[V_T];
@@ -201,6 +242,10 @@ impl ModelExchange {
             states,
             delay,
             accepted: t0,
+            floor: t0,
+            latest: t0,
+            completes: false,
+            max_time,
             discrete: Discrete {
                 in_contact,
                 hysteresis: 0.0,
@@ -221,14 +266,32 @@ impl ModelExchange {
         Ok(model)
     }
 
-    /// Makes room for the random road's nodes a run keeps (from
-    /// [`TRIAL_REACH`] + tau before the last accepted point to a trial
-    /// point as far ahead), also after a copied or restored state, whose
-    /// nodes come without room, so that evaluating the derivatives
-    /// allocates nothing. The delay history keeps its room through copies.
+    /// The largest |time| (s) the model of `config` resolves: `2^42` times
+    /// the finest time it resolves (the delay of the history, a random
+    /// road's node interval, at most [`LARGEST_STEP`]), so that the time
+    /// still resolves it to about 1e-3 of itself.
+    fn time_bound(config: &SimulationConfig) -> f64 {
+        let tau = config.params.tau;
+        let mut finest = LARGEST_STEP;
+        if config.variant.has_control() && tau >= MIN_RESOLVED_DELAY {
+            finest = finest.min(tau);
+        }
+        if let Ok(road) = Road::new(&config.road, 0.0)
+            && let Some(interval) = road.node_interval()
+        {
+            finest = finest.min(interval);
+        }
+        finest * Simulator::MAX_START_TIME_IN_STEPS
+    }
+
+    /// Makes room for the random road's nodes a run keeps (from the floor
+    /// to the latest time; [`TRIAL_REACH`] and a little more), also after a
+    /// copied or restored state, whose nodes come without room, so that
+    /// evaluating the derivatives allocates nothing. The delay history
+    /// keeps its room through copies.
     pub fn reserve(&mut self) {
         let tau = self.config.params.tau.max(0.0);
-        self.road.reserve_window(2.0 * TRIAL_REACH + tau);
+        self.road.reserve_window(1.1 * TRIAL_REACH + tau);
     }
 
     /// The configuration.
@@ -247,22 +310,96 @@ impl ModelExchange {
     }
 
     /// The time of the last accepted point (start, completed step,
-    /// event): the earliest time [`Self::set_time`] accepts.
+    /// event).
     pub fn accepted_time(&self) -> f64 {
         self.accepted
     }
 
-    /// Sets the time. It must be finite and not before the last accepted
-    /// point ([`Self::accepted_time`]).
+    /// The earliest time [`Self::set_time`] takes (module documentation).
+    pub fn earliest_time(&self) -> f64 {
+        self.floor
+    }
+
+    /// The largest |time| (s) [`Self::set_time`] takes.
+    pub fn time_limit(&self) -> f64 {
+        self.max_time
+    }
+
+    /// Sets the time: finite, resolved ([`Self::time_limit`]), not before
+    /// the floor ([`Self::earliest_time`]), and within the random road's
+    /// work per call (module documentation). A master that has never
+    /// completed a step moves the floor to [`TRIAL_REACH`] before the time.
     pub fn set_time(&mut self, time: f64) -> Result<()> {
-        let accepted = self.accepted_time();
-        if !(time.is_finite() && time >= accepted) {
+        if !(time.is_finite() && time.abs() <= self.max_time) {
             return Err(Error::Refused(format!(
-                "time {time} s is before the last completed integrator step or event at {accepted} s (or not finite)"
+                "time {time} s is not finite or beyond {:e} s, 2^42 times the finest time the model resolves (the delay, the road's node interval, 0.01 s)",
+                self.max_time
+            )));
+        }
+        if time < self.floor {
+            return Err(Error::Refused(self.before_floor_message(time)));
+        }
+        let floor = if self.completes {
+            self.floor
+        } else {
+            self.floor.max(time - TRIAL_REACH)
+        };
+        let (generated, kept) = self.road.node_work(floor, time);
+        if generated > MAX_WORK_PER_CALL || kept > MAX_WORK_PER_CALL {
+            return Err(Error::Refused(format!(
+                "time {time} s needs {:e} road nodes generated and {:e} kept (from {} s on), more than the limit of {MAX_WORK_PER_CALL} per call; move the time on in smaller steps{}",
+                generated,
+                kept,
+                floor.max(self.road.earliest_time()),
+                if self.completes {
+                    ""
+                } else {
+                    " or call CompletedIntegratorStep at the solver's accepted steps"
+                }
             )));
         }
         self.time = time;
+        self.latest = self.latest.max(time);
+        self.move_floor(floor);
         Ok(())
+    }
+
+    /// Why `time` is before the floor, and what to do.
+    fn before_floor_message(&self, time: f64) -> String {
+        let floor = self.floor;
+        if floor == self.accepted {
+            format!(
+                "time {time} s is before {floor} s, the last completed integrator step or event: no master goes back before it"
+            )
+        } else if !self.completes && floor >= self.latest - TRIAL_REACH {
+            format!(
+                "time {time} s is before {floor} s, the earliest time kept: a master that does not call CompletedIntegratorStep may go back at most {TRIAL_REACH} s from the latest time it set ({} s); call CompletedIntegratorStep at the solver's accepted steps, and go back no further than the last of them",
+                self.latest
+            )
+        } else {
+            format!(
+                "time {time} s is before {floor} s, the earliest time kept: the delay history holds at most {MAX_HISTORY_POINTS} points and the road {MAX_WORK_PER_CALL} nodes since the last completed integrator step or event ({} s); call CompletedIntegratorStep at the solver's accepted steps",
+                self.accepted
+            )
+        }
+    }
+
+    /// Moves the floor on to `floor` (s) and frees what no time from there
+    /// on needs.
+    fn move_floor(&mut self, floor: f64) {
+        self.floor = self.floor.max(floor);
+        if let Delay::History(h) = &mut self.delay {
+            h.trim(self.floor);
+        }
+        self.road.release_before(self.floor);
+    }
+
+    /// After the history gave its oldest points way to its bound: the
+    /// floor follows the earliest time it still determines.
+    fn follow_history_bound(&mut self) {
+        if let Delay::History(h) = &self.delay {
+            self.floor = self.floor.max(h.earliest_time());
+        }
     }
 
     /// Sets the continuous states: exactly [`CONTINUOUS_STATES`] finite
@@ -317,12 +454,21 @@ impl ModelExchange {
         SVector::from_column_slice(&self.states[FILTER_STATES_AT..INTEGRALS_AT])
     }
 
-    /// `x_t(t − tau)` now, without recording the point.
-    fn delayed_now(&self) -> f64 {
+    /// `x_t(t − tau)` now, with its partials with respect to the current
+    /// `x_t` and `v_t`, without recording the point.
+    fn delayed_now(&self) -> Delayed {
         let x = &self.states;
         match &self.delay {
-            Delay::None => 0.0,
-            Delay::Folded(tau) => x[X_T] - tau * x[V_T],
+            Delay::None => Delayed {
+                value: 0.0,
+                by_position: 0.0,
+                by_velocity: 0.0,
+            },
+            Delay::Folded(tau) => Delayed {
+                value: x[X_T] - tau * x[V_T],
+                by_position: 1.0,
+                by_velocity: -tau,
+            },
             Delay::History(h) => h.delayed((self.time, x[X_T], x[V_T])),
         }
     }
@@ -333,18 +479,26 @@ impl ModelExchange {
 
     /// The time derivatives of the continuous states at the current time
     /// and states. The point becomes a trial point of the delay history
-    /// (see [`DelayHistory`]). A derivative that is not finite is an error
+    /// (see [`DelayHistory`]). A derivative that is not finite, or a time
+    /// whose delayed value the history no longer holds, is an error
     /// naming it.
     pub fn derivatives(&mut self) -> Result<[f64; CONTINUOUS_STATES]> {
-        let delayed = self.delayed_now();
+        if let Delay::History(h) = &self.delay
+            && self.time < h.earliest_time()
+        {
+            return Err(Error::Refused(format!(
+                "t = {} s needs the delayed x_t at {} s, before the oldest of the {MAX_HISTORY_POINTS} points the delay history holds ({} s); call CompletedIntegratorStep at the solver's accepted steps, or take longer steps",
+                self.time,
+                self.time - h.tau(),
+                h.earliest_time() - h.tau()
+            )));
+        }
+        let delayed = self.delayed_now().value;
         let now = (self.time, self.states[X_T], self.states[V_T]);
         if let Delay::History(h) = &mut self.delay {
-            h.record(now, false);
+            h.record(now);
         }
-        // The road's nodes before any time a master may still go back to
-        // (the delay history's rule), also when it never completes a step.
-        self.road
-            .release_before(self.accepted.max(self.time - TRIAL_REACH));
+        self.follow_history_bound();
         let rates = self.rates(delayed);
         if let Some(i) = rates.iter().position(|v| !v.is_finite()) {
             return Err(Error::Refused(format!(
@@ -398,14 +552,22 @@ impl ModelExchange {
         self.limit - (self.states[X_T] - road)
     }
 
-    /// The event indicators (module documentation).
-    pub fn event_indicators(&mut self) -> [f64; EVENT_INDICATORS] {
+    /// The event indicators (module documentation); one that is not
+    /// finite is an error naming the time.
+    pub fn event_indicators(&mut self) -> Result<[f64; EVENT_INDICATORS]> {
         let margin = self.margin();
-        if self.discrete.in_contact {
-            [margin + self.discrete.hysteresis]
+        let z = if self.discrete.in_contact {
+            margin + self.discrete.hysteresis
         } else {
-            [margin - self.discrete.hysteresis]
+            margin - self.discrete.hysteresis
+        };
+        if !z.is_finite() {
+            return Err(Error::Refused(format!(
+                "the event indicator is {z} at t = {} s",
+                self.time
+            )));
         }
+        Ok([z])
     }
 
     /// ε for the mode `in_contact` at the margin `margin` (m): the base
@@ -415,26 +577,33 @@ impl ModelExchange {
         HYSTERESIS * self.limit + wrong_side.max(0.0)
     }
 
-    /// Accepts the current point (a completed integrator step): it joins
-    /// the delay history for good and updates the largest |SDD|.
+    /// Accepts the current point as a completed integrator step: it joins
+    /// the delay history for good ([`DelayHistory::accept`]), becomes the
+    /// floor, and updates the largest |SDD|.
     pub fn complete_step(&mut self) {
+        self.completes = true;
+        self.accept(true);
+    }
+
+    /// Accepts the current point: a completed integrator step when
+    /// `completed`, else an event.
+    fn accept(&mut self, completed: bool) {
         let x = &self.states;
         let now = (self.time, x[X_T], x[V_T]);
         let sdd = (x[X_S] - x[X_T]).abs();
         self.discrete.max_suspension_deflection = self.discrete.max_suspension_deflection.max(sdd);
         self.accepted = self.time;
-        let mut kept_from = self.time - TRIAL_REACH;
         if let Delay::History(h) = &mut self.delay {
-            h.record(now, true);
-            kept_from -= h.tau();
+            h.accept(now, completed);
         }
-        self.road.release_before(kept_from);
+        self.move_floor(self.time);
+        self.follow_history_bound();
     }
 
     /// Event Mode: accepts the current point and sets the contact mode from
     /// the sign of the margin; returns the switch, if any.
     pub fn update_discrete_states(&mut self) -> Option<ContactEvent> {
-        self.complete_step();
+        self.accept(false);
         let margin = self.margin();
         let time = self.time;
         let event = if self.discrete.in_contact && margin < 0.0 {
@@ -483,7 +652,7 @@ impl ModelExchange {
         let t = self.time;
         let x = self.plant_state();
         let road = self.road.value(t);
-        let delayed = self.delayed_now();
+        let delayed = self.delayed_now().value;
         let performance = Performance::at(&self.plant, &x, road);
         let duration = t - self.config.start_time;
         let integral = &self.states[INTEGRALS_AT..];

@@ -2,8 +2,10 @@
 //! continuous states, contact mode, counts, delay history), written with
 //! the crate's one codec ([`crate::bytes`]). The configuration is not in
 //! it: a state is restored into a model built from the same configuration
-//! ([`ModelExchange::restore`]). The road's random nodes are generated
-//! again from its seed.
+//! ([`ModelExchange::restore`]). A random road's generator and nodes are
+//! in it. Version 2 adds the floor, the latest time set and the master's
+//! completion habits; a state of version 1 still loads (its floor is the
+//! latest of its accepted time and what its history and road still hold).
 
 use super::{Delay, DelayHistory, HistoryPoint, ModelExchange};
 use crate::bytes::{ByteReader, ByteWriter};
@@ -11,11 +13,14 @@ use crate::error::{Error, Result};
 use crate::road::RoadState;
 use crate::solver::CONTINUOUS_STATES;
 
-/// Most road nodes a state may carry (8 MB).
-const MAX_ROAD_NODES: u64 = 1 << 20;
+/// Most road nodes a state may carry: as many as a model keeps (32 MiB).
+const MAX_ROAD_NODES: u64 = crate::limits::MAX_WORK_PER_CALL as u64;
 
-/// Version of the byte form; a saved state of another version is refused.
-pub const EXCHANGE_FORMAT_VERSION: u32 = 1;
+/// Version of the byte form; a saved state of a later version is refused.
+pub const EXCHANGE_FORMAT_VERSION: u32 = 2;
+
+/// The first version with the floor and the completion habits.
+const FLOOR_VERSION: u32 = 2;
 
 /// The byte form's first word.
 const MAGIC: u32 = 0x4d45_5856; // "VXEM"
@@ -32,6 +37,12 @@ impl ModelExchange {
         w.u32(EXCHANGE_FORMAT_VERSION);
         w.f64(self.time);
         w.f64(self.accepted);
+        w.f64(self.floor);
+        w.f64(self.latest);
+        w.u8(u8::from(self.completes));
+        w.u8(u8::from(
+            matches!(&self.delay, Delay::History(h) if h.completes_steps()),
+        ));
         w.f64s(&self.states);
         let d = &self.discrete;
         w.u8(u8::from(d.in_contact));
@@ -53,7 +64,8 @@ impl ModelExchange {
                     w.f64(p.time);
                     w.f64(p.position);
                     w.f64(p.velocity);
-                    w.u8(u8::from(p.accepted));
+                    w.u8(u8::from(p.accepted) | (u8::from(p.anchor) << 1));
+                    w.f64(p.superseded_by);
                 }
             }
             _ => w.u64(0),
@@ -82,17 +94,31 @@ impl ModelExchange {
             return Err(invalid("not a Model Exchange state".into()));
         }
         let version = r.u32()?;
-        if version != EXCHANGE_FORMAT_VERSION {
+        if !(1..=EXCHANGE_FORMAT_VERSION).contains(&version) {
             return Err(invalid(format!(
-                "Model Exchange state format version {version}, this FMU reads {EXCHANGE_FORMAT_VERSION}"
+                "Model Exchange state format version {version}, this FMU reads 1 to {EXCHANGE_FORMAT_VERSION}"
             )));
         }
         let start = self.config.start_time;
         let time = r.f64()?;
         let accepted = r.f64()?;
-        if !(time.is_finite() && accepted.is_finite() && start <= accepted && accepted <= time) {
+        let (floor, latest, completes, completes_steps) = if version >= FLOOR_VERSION {
+            (r.f64()?, r.f64()?, r.u8()? != 0, r.u8()? != 0)
+        } else {
+            (accepted, time, false, false)
+        };
+        if !([time, accepted, floor, latest]
+            .iter()
+            .all(|t| t.is_finite())
+            && start <= accepted
+            && accepted <= floor
+            && floor <= time
+            && time <= latest
+            && time.abs() <= self.max_time)
+        {
             return Err(invalid(format!(
-                "times {accepted} s (accepted) and {time} s (now) are not ordered after the start time {start} s"
+                "times {accepted} s (accepted), {floor} s (floor), {time} s (now) and {latest} s (latest) are not ordered after the start time {start} s within ±{:e} s",
+                self.max_time
             )));
         }
         let states = r.f64s(CONTINUOUS_STATES as u64)?;
@@ -126,11 +152,23 @@ impl ModelExchange {
         }
         let mut points = Vec::with_capacity(count as usize);
         for _ in 0..count {
+            let (time, position, velocity) = (r.f64()?, r.f64()?, r.f64()?);
+            let flags = r.u8()?;
+            let superseded_by = if version >= FLOOR_VERSION {
+                r.f64()?
+            } else {
+                f64::INFINITY
+            };
+            if flags > 3 || (version < FLOOR_VERSION && flags > 1) {
+                return Err(invalid(format!("delay history point flags {flags}")));
+            }
             points.push(HistoryPoint {
-                time: r.f64()?,
-                position: r.f64()?,
-                velocity: r.f64()?,
-                accepted: r.u8()? != 0,
+                time,
+                position,
+                velocity,
+                accepted: flags & 1 != 0,
+                anchor: flags & 2 != 0,
+                superseded_by,
             });
         }
         let road = match r.u8()? {
@@ -155,14 +193,43 @@ impl ModelExchange {
         }
         let delay = match &self.delay {
             Delay::History(h) => Delay::History(
-                DelayHistory::from_points(start, h.initial_position(), h.tau(), points)
-                    .map_err(invalid)?,
+                DelayHistory::from_points(
+                    start,
+                    h.initial_position(),
+                    h.tau(),
+                    points,
+                    completes_steps,
+                )
+                .map_err(invalid)?,
             ),
             other if count == 0 => other.clone(),
             _ => return Err(invalid("a delay history for a model without delay".into())),
         };
+        let held_from = match &delay {
+            Delay::History(h) => h.earliest_time(),
+            _ => f64::NEG_INFINITY,
+        }
+        .max(restored_road.earliest_time());
+        let floor = if version >= FLOOR_VERSION {
+            if held_from > floor {
+                return Err(invalid(format!(
+                    "the floor {floor} s is before {held_from} s, where the saved delay history and road nodes begin"
+                )));
+            }
+            floor
+        } else {
+            floor.max(held_from)
+        };
+        if floor > time {
+            return Err(invalid(format!(
+                "the saved delay history and road nodes begin at {floor} s, after the time {time} s"
+            )));
+        }
         self.time = time;
         self.accepted = accepted;
+        self.floor = floor;
+        self.latest = latest;
+        self.completes = completes;
         self.states.copy_from_slice(&states);
         self.discrete = discrete;
         self.delay = delay;

@@ -729,6 +729,41 @@ impl Road {
         }
     }
 
+    /// The interval (s) between a random road's nodes, `None` for the
+    /// other roads.
+    pub fn node_interval(&self) -> Option<f64> {
+        match &self.kind {
+            RoadKind::Nodes(nodes) => Some(nodes.interval),
+            _ => None,
+        }
+    }
+
+    /// The time (s) of a random road's oldest node kept: the road is known
+    /// from there on (−∞ for the other roads).
+    pub fn earliest_time(&self) -> f64 {
+        match &self.kind {
+            RoadKind::Nodes(nodes) => nodes.node_time(nodes.first),
+            _ => f64::NEG_INFINITY,
+        }
+    }
+
+    /// A random road's node work of a query at `t` after the nodes before
+    /// `from` are released: the nodes it generates and the nodes then kept
+    /// (`(0, 0)` for the other roads), counted in f64 so that no time
+    /// overflows them.
+    pub fn node_work(&self, from: f64, t: f64) -> (f64, f64) {
+        match &self.kind {
+            RoadKind::Nodes(nodes) => {
+                let last = nodes.node_time(nodes.first + nodes.nodes.len() as u64 - 1);
+                let oldest = nodes.node_time(nodes.first).max(from);
+                let generated = ((t - last) / nodes.interval + 1.0).max(0.0);
+                let kept = (t.max(last) - oldest) / nodes.interval + 2.0;
+                (generated, kept)
+            }
+            _ => (0.0, 0.0),
+        }
+    }
+
     /// The generator's dynamic state, for saving: (random word position,
     /// first node index, node values, current input piece).
     pub(crate) fn dynamic_state(&self) -> RoadState {

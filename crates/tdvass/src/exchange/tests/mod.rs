@@ -28,18 +28,18 @@ fn integrate(model: &mut ModelExchange, t_end: f64, h: f64, complete: bool) -> V
     let mut t = model.time();
     while t < t_end - 1e-12 {
         let x = *model.states();
-        let before = model.event_indicators()[0];
+        let before = model.event_indicators().unwrap()[0];
         let mut next = step(model, t, &x, h);
         model.set_time(t + h).unwrap();
         model.set_states(&next).unwrap();
-        if model.event_indicators()[0].signum() != before.signum() {
+        if model.event_indicators().unwrap()[0].signum() != before.signum() {
             let (mut low, mut high) = (0.0, h);
             while high - low > 1e-12 {
                 let mid = 0.5 * (low + high);
                 let y = step(model, t, &x, mid);
                 model.set_time(t + mid).unwrap();
                 model.set_states(&y).unwrap();
-                if model.event_indicators()[0].signum() != before.signum() {
+                if model.event_indicators().unwrap()[0].signum() != before.signum() {
                     high = mid;
                 } else {
                     low = mid;
@@ -155,16 +155,6 @@ fn a_random_road_agrees_with_the_co_simulation() {
 }
 
 #[test]
-fn completing_steps_or_not_gives_the_same_bits() {
-    let c = config(Variant::Tdvass, 0.011, 5386.0, RoadSpec::paper_harmonic());
-    let mut every = ModelExchange::new(c.clone()).unwrap();
-    let mut never = ModelExchange::new(c).unwrap();
-    integrate(&mut every, 0.5, 1e-4, true);
-    integrate(&mut never, 0.5, 1e-4, false);
-    assert_eq!(every.states(), never.states());
-}
-
-#[test]
 fn lift_offs_agree_with_the_located_switches_of_the_co_simulation() {
     let road = RoadSpec::Iso8608(RandomRoad {
         class: RoadClass::D,
@@ -200,14 +190,14 @@ fn after_an_event_the_indicator_is_not_zero_and_has_the_modes_sign() {
     // Exactly at the margin's zero: in contact, still positive.
     x[X_T] = limit;
     model.set_states(&x).unwrap();
-    assert!(model.event_indicators()[0] > 0.0);
+    assert!(model.event_indicators().unwrap()[0] > 0.0);
     x[X_T] = limit * (1.0 + 1e-9);
     model.set_states(&x).unwrap();
     assert!(matches!(
         model.update_discrete_states(),
         Some(ContactEvent::LiftOff { .. })
     ));
-    assert!(model.event_indicators()[0] < 0.0);
+    assert!(model.event_indicators().unwrap()[0] < 0.0);
     assert!(!model.in_contact());
 }
 
@@ -246,7 +236,7 @@ fn a_saved_state_on_a_random_road_replays_exactly_from_its_nodes() {
     let bytes = model.to_bytes();
     let saved = model.road.node_state().unwrap();
     let road_bytes = 1 + 16 + 8 + 8 + 8 * saved.nodes.len();
-    // Only the nodes of the last TRIAL_REACH + tau are kept and saved.
+    // Only the nodes from the last completed step on are kept and saved.
     assert!(saved.nodes.len() < 200, "{} nodes", saved.nodes.len());
     assert!(saved.first_node > 300, "first node {}", saved.first_node);
     let mut copy = ModelExchange::new(c).unwrap();
@@ -272,12 +262,12 @@ fn a_saved_state_on_a_random_road_replays_when_no_step_was_completed() {
     });
     let c = config(Variant::Tdvass, 0.011, 5386.0, road);
     let mut model = ModelExchange::new(c.clone()).unwrap();
-    integrate(&mut model, 0.5, 1e-4, false);
+    integrate(&mut model, 1.5, 1e-4, false);
     assert!(model.road.node_state().unwrap().first_node > 300);
     let mut copy = ModelExchange::new(c).unwrap();
     copy.restore(&model.to_bytes()).unwrap();
-    integrate(&mut model, 1.0, 1e-4, false);
-    integrate(&mut copy, 1.0, 1e-4, false);
+    integrate(&mut model, 2.0, 1e-4, false);
+    integrate(&mut copy, 2.0, 1e-4, false);
     assert_eq!(model.states(), copy.states());
 }
 
@@ -307,3 +297,7 @@ fn bad_states_and_times_are_refused_naming_them() {
     );
     assert!(model.set_time(f64::NAN).is_err());
 }
+
+mod going_back;
+mod jacobian;
+mod order;
