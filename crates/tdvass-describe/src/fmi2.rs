@@ -219,17 +219,18 @@ fn write_model_structure(w: &mut XmlWriter) -> XmlResult {
 }
 
 /// The attributes of the `ModelExchange` element after `modelIdentifier`,
-/// in the order written: the results do not depend on
-/// `fmi2CompletedIntegratorStep` (docs/fmu.md, "Model Exchange"); no
-/// directional derivatives in Model Exchange.
+/// in the order written: `fmi2CompletedIntegratorStep` is wanted (a master
+/// that calls it at its accepted steps keeps its method's order, and the
+/// delay history its bound: docs/fmu.md, "Model Exchange"); exact
+/// directional derivatives of the state derivatives and the outputs.
 pub const MODEL_EXCHANGE_CAPABILITIES: [(&str, &str); 7] = [
     ("needsExecutionTool", "false"),
-    ("completedIntegratorStepNotNeeded", "true"),
+    ("completedIntegratorStepNotNeeded", "false"),
     ("canBeInstantiatedOnlyOncePerProcess", "false"),
     ("canNotUseMemoryManagementFunctions", "true"),
     ("canGetAndSetFMUstate", "true"),
     ("canSerializeFMUstate", "true"),
-    ("providesDirectionalDerivative", "false"),
+    ("providesDirectionalDerivative", "true"),
 ];
 
 /// The attributes of the `CoSimulation` element after `modelIdentifier`,
@@ -371,7 +372,7 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
             "fmi2DoStep: currentCommunicationPoint must equal the FMU time (relative 1e-9), the step must be finite and > 0 and must not pass a stop time given to fmi2SetupExperiment. Any step length is accepted.",
             "Refused calls (wrong state, unknown value reference, bad value) return fmi2Error, are logged and change nothing.",
             "FMU states: fmi2GetFMUstate copies everything (settings, time, solver state, delay history, road generator, RMS accumulators). fmi2SetFMUstate and fmi2FreeFMUstate accept states of the same instance only. Serialized states (versioned, checksummed, position independent) restore in any instance or process of the same FMU and continue bit-identically; they carry every parameter value.",
-            "fmi2GetDirectionalDerivative: exact partials of the outputs with respect to the input x_g and the states, the latter addressed by the value references of the outputs x_s .. v_t. The running RMS values and J depend on the past only (partials 0).",
+            "fmi2GetDirectionalDerivative: Co-Simulation, exact partials of the outputs with respect to the input x_g and the states, the latter addressed by the value references of the outputs x_s .. v_t (the running RMS values and J depend on the past only: partials 0); Model Exchange, exact partials of the state derivatives der(...) and the Real outputs with respect to the 20 continuous states and x_g.",
             "fmi2GetRealOutputDerivatives: exact first derivatives (order 1); the running RMS values and J are piecewise constant in time (derivative 0).",
             "Logging categories: logEvents, logStatusWarning, logStatusDiscard, logStatusError, logStatusFatal, logAll. Discards, errors and fatal errors are always reported; warnings unless switched off.",
         ],
@@ -389,7 +390,7 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
     paragraph(
         w,
         &format!(
-            "numberOfEventIndicators = {EVENT_INDICATORS}; ModelExchange: {}. fmi2GetDirectionalDerivative is a capability of Co-Simulation only.",
+            "numberOfEventIndicators = {EVENT_INDICATORS}; ModelExchange: {}.",
             capabilities.join(", ")
         ),
     )?;
@@ -634,9 +635,9 @@ mod tests {
         for (flag, value) in [
             ("canGetAndSetFMUstate", "true"),
             ("canSerializeFMUstate", "true"),
-            ("completedIntegratorStepNotNeeded", "true"),
+            ("completedIntegratorStepNotNeeded", "false"),
             ("canNotUseMemoryManagementFunctions", "true"),
-            ("providesDirectionalDerivative", "false"),
+            ("providesDirectionalDerivative", "true"),
             ("needsExecutionTool", "false"),
             ("canBeInstantiatedOnlyOncePerProcess", "false"),
         ] {

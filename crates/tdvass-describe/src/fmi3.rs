@@ -21,16 +21,18 @@ use tdvass_fmu::variables::{
 };
 
 /// The attributes of the `ModelExchange` element after `modelIdentifier`:
-/// the results do not depend on `fmi3CompletedIntegratorStep` (docs/fmu.md,
-/// "Model Exchange"); no partial derivatives in Model Exchange.
+/// `fmi3CompletedIntegratorStep` is wanted (a master that calls it at its
+/// accepted steps keeps its method's order: docs/fmu.md, "Model
+/// Exchange"); exact directional and adjoint derivatives of the state
+/// derivatives and the outputs.
 pub const MODEL_EXCHANGE_CAPABILITIES: [(&str, &str); 8] = [
     ("needsExecutionTool", "false"),
     ("canBeInstantiatedOnlyOncePerProcess", "false"),
     ("canGetAndSetFMUState", "true"),
     ("canSerializeFMUState", "true"),
-    ("providesDirectionalDerivatives", "false"),
-    ("providesAdjointDerivatives", "false"),
-    ("needsCompletedIntegratorStep", "false"),
+    ("providesDirectionalDerivatives", "true"),
+    ("providesAdjointDerivatives", "true"),
+    ("needsCompletedIntegratorStep", "true"),
     ("providesEvaluateDiscreteStates", "false"),
 ];
 

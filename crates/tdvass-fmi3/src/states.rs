@@ -214,8 +214,9 @@ const READABLE: PhaseSet = PhaseSet::of(&[Conf, Init, Step, Disc, Inter, Term, E
 /// Where values can be set (which ones depends on causality, variability
 /// and, inside an intermediate update, on the variable's flag).
 const SETTABLE: PhaseSet = PhaseSet::of(&[Inst, Conf, Init, Step, Inter, Event, Cont]);
-/// Where the model's partial derivatives can be evaluated.
-const LINEARIZABLE: PhaseSet = PhaseSet::of(&[Init, Step, Disc, Term, Err_]);
+/// Where the model's partial derivatives and dependencies can be
+/// evaluated (Model Exchange: in Event and Continuous-Time Mode too).
+const LINEARIZABLE: PhaseSet = PhaseSet::of(&[Init, Step, Disc, Term, Err_, Event, Cont]);
 /// Model Exchange: where states, derivatives and indicators can be read.
 const MODEL_READABLE: PhaseSet = PhaseSet::of(&[Event, Cont, Term, Err_]);
 /// Model Exchange: where the model's sizes can be asked.
@@ -300,11 +301,11 @@ mod tests {
         ("fmi3GetInt64", ".xxxxxxx."),
         ("fmi3SetFloat64", "xxxx.x..."),
         ("fmi3SetBinary", "xxxx.x..."),
-        ("fmi3GetVariableDependencies", "..xxx.xx."),
+        ("fmi3GetVariableDependencies", "..xxx.xx.xx"),
         ("fmi3GetFMUState", "xxxxx.xx."),
         ("fmi3DeserializeFMUState", "xxxxx.xx."),
-        ("fmi3GetDirectionalDerivative", "..xxx.xx."),
-        ("fmi3GetAdjointDerivative", "..xxx.xx."),
+        ("fmi3GetDirectionalDerivative", "..xxx.xx.xx"),
+        ("fmi3GetAdjointDerivative", "..xxx.xx.xx"),
         ("fmi3EnterConfigurationMode", "x........"),
         ("fmi3ExitConfigurationMode", ".x......."),
         ("fmi3GetOutputDerivatives", "...xx.xx."),

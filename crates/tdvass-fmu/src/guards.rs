@@ -66,7 +66,7 @@ pub fn check_rates(s: &Settings) -> Result<(), FmiError> {
 }
 
 /// Most internal steps plus road breakpoints in one step (2^22).
-pub const MAX_WORK_PER_STEP: f64 = 4_194_304.0;
+pub const MAX_WORK_PER_STEP: f64 = tdvass::limits::MAX_WORK_PER_CALL;
 /// Node interval of the ISO 8608 road (s).
 const ISO_NODE_INTERVAL: f64 = tdvass::road::ISO_NODE_INTERVAL;
 

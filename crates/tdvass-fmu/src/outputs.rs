@@ -3,6 +3,7 @@
 //! input and the states (Real outputs), and the counts (Integer outputs).
 
 use std::ops::Range;
+use tdvass::exchange::{Gradient, OutputPartials};
 use tdvass::model::{V_H, V_T, X_H, X_S, X_T};
 use tdvass::solver::{
     CONTINUOUS_STATES, INTEGRALS_AT, Instantaneous, OutputDerivatives, Outputs, TimeAverages,
@@ -242,6 +243,31 @@ impl OutputId {
             OutputId::MaxSuspensionDeflection => d
                 .road_holding
                 .map_or(f64::NAN, |r| r.max_suspension_deflection),
+        }
+    }
+
+    /// Model Exchange: the output's partials with respect to the
+    /// continuous states and the input, from the model's `partials`.
+    pub fn exchange_gradient(self, partials: &OutputPartials) -> Gradient {
+        let p = partials;
+        match self {
+            OutputId::State(i) => Gradient::of_state(i),
+            OutputId::BodyAcceleration => p.body_acceleration,
+            OutputId::SuspensionDeflection => p.suspension_deflection,
+            OutputId::TireDeflection => p.tire_deflection,
+            OutputId::RoadDisplacement => p.road_displacement,
+            OutputId::ControlForce => p.control_force,
+            OutputId::RmsBodyAcceleration => p.rms_body_acceleration,
+            OutputId::RmsSuspensionDeflection => p.rms_suspension_deflection,
+            OutputId::RmsTireDeflection => p.rms_tire_deflection,
+            OutputId::Objective => p.objective,
+            OutputId::WeightedBodyAcceleration => p.weighted_body_acceleration,
+            OutputId::RmsWeightedBodyAcceleration => p.rms_weighted_body_acceleration,
+            OutputId::VibrationDoseValue => p.vibration_dose_value,
+            OutputId::DynamicTireLoad => p.dynamic_tire_load,
+            OutputId::RmsDynamicTireLoadRatio => p.rms_dynamic_tire_load_ratio,
+            OutputId::ContactLossTime => p.contact_loss_time,
+            OutputId::MaxSuspensionDeflection => p.max_suspension_deflection,
         }
     }
 

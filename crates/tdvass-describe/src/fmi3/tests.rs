@@ -70,9 +70,9 @@ fn root_co_simulation_and_experiment() {
     for (flag, value) in [
         ("canGetAndSetFMUState", "true"),
         ("canSerializeFMUState", "true"),
-        ("needsCompletedIntegratorStep", "false"),
-        ("providesDirectionalDerivatives", "false"),
-        ("providesAdjointDerivatives", "false"),
+        ("needsCompletedIntegratorStep", "true"),
+        ("providesDirectionalDerivatives", "true"),
+        ("providesAdjointDerivatives", "true"),
         ("providesEvaluateDiscreteStates", "false"),
         ("needsExecutionTool", "false"),
         ("canBeInstantiatedOnlyOncePerProcess", "false"),

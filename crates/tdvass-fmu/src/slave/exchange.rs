@@ -58,7 +58,7 @@ impl Slave {
     }
 
     /// The running model: Model Exchange after initialization.
-    fn exchange(&mut self) -> Result<&mut ModelExchange, FmiError> {
+    pub(super) fn exchange(&mut self) -> Result<&mut ModelExchange, FmiError> {
         self.state.exchange.as_mut().ok_or_else(|| {
             FmiError::error("no Model Exchange model: the instance is not initialized")
         })
@@ -187,7 +187,7 @@ impl Slave {
     /// `GetEventIndicators`.
     pub fn get_event_indicators(&mut self, out: &mut [f64]) -> Result<Status, FmiError> {
         Self::check_count("event indicators", out.len(), EVENT_INDICATORS)?;
-        out.copy_from_slice(&self.exchange()?.event_indicators());
+        out.copy_from_slice(&self.exchange()?.event_indicators()?);
         Ok(Status::Ok)
     }
 
@@ -233,7 +233,7 @@ impl Slave {
     /// without hysteresis).
     pub(super) fn event_indicator_values(&mut self) -> Result<[f64; EVENT_INDICATORS], FmiError> {
         if let Some(model) = self.state.exchange.as_mut() {
-            return Ok(model.event_indicators());
+            return Ok(model.event_indicators()?);
         }
         match self.state.sim.as_mut() {
             Some(sim) => {
@@ -241,7 +241,7 @@ impl Slave {
                 let limit = sim.static_load() / sim.config().params.k_t;
                 Ok([limit - o.performance.tire_deflection])
             }
-            None => Ok(self.build_exchange()?.event_indicators()),
+            None => Ok(self.build_exchange()?.event_indicators()?),
         }
     }
 }

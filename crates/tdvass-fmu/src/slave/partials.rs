@@ -1,18 +1,40 @@
-//! Exact partial derivatives of the outputs with respect to the input and
-//! the states (directional derivatives).
+//! Exact partial derivatives (directional and adjoint derivatives):
+//! Co-Simulation, of the outputs with respect to the input and the plant's
+//! states; Model Exchange, of the state derivatives and the outputs with
+//! respect to the continuous states and the input.
 
 use super::Slave;
 use crate::outputs::{Known, Linearization, OutputId};
-use crate::variables::{Access, Causality, by_vr};
+use crate::variables::{Access, Causality, Variable, by_vr};
 use crate::{FmiError, Status};
+use tdvass::exchange::Gradient;
 use tdvass::model::{V_S, Variant};
+use tdvass::solver::CONTINUOUS_STATES;
+
+/// A known of Model Exchange's partials: a continuous state or the input.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum ExchangeKnown {
+    State(usize),
+    RoadInput,
+}
+
+/// An unknown of Model Exchange's partials.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum ExchangeUnknown {
+    Derivative(usize),
+    Output(OutputId),
+}
 
 impl Slave {
-    /// The exact partials `∂unknown_i/∂known_j` of the outputs
-    /// (`unknowns`) with respect to the input `x_g` and the states
+    /// The exact partials `∂unknown_i/∂known_j`, row by row: for Model
+    /// Exchange see [`Self::exchange_partials`]; for Co-Simulation, of the
+    /// outputs (`unknowns`) with respect to the input `x_g` and the states
     /// (`knowns`, the states addressed by the value references of the
-    /// outputs `x_s` .. `v_t`), row by row.
-    pub fn partials(&self, unknowns: &[u32], knowns: &[u32]) -> Result<Vec<f64>, FmiError> {
+    /// outputs `x_s` .. `v_t`).
+    pub fn partials(&mut self, unknowns: &[u32], knowns: &[u32]) -> Result<Vec<f64>, FmiError> {
+        if self.state.exchange.is_some() {
+            return self.exchange_partials(unknowns, knowns);
+        }
         let known: Vec<Known> = knowns
             .iter()
             .map(|&vr| {
@@ -95,6 +117,69 @@ impl Slave {
                 .sum();
         }
         Self::check_sensitivity(result)
+    }
+
+    /// Model Exchange: the exact partials of the state derivatives
+    /// (`der(...)`) and the Real outputs (`unknowns`) with respect to the
+    /// continuous states and the input `x_g` (`knowns`), at the current
+    /// time and states ([`tdvass::exchange::ModelExchange::jacobian`]).
+    fn exchange_partials(
+        &mut self,
+        unknowns: &[u32],
+        knowns: &[u32],
+    ) -> Result<Vec<f64>, FmiError> {
+        let version = self.dialect.version;
+        let lookup = |vr: u32| {
+            by_vr(version, vr)
+                .ok_or_else(|| FmiError::error(format!("unknown value reference {vr}")))
+        };
+        let known: Vec<ExchangeKnown> = knowns
+            .iter()
+            .map(|&vr| {
+                let var: &Variable = lookup(vr)?;
+                match var.access {
+                    Access::Real { .. } if var.causality == Causality::Input => Ok(ExchangeKnown::RoadInput),
+                    Access::Output(OutputId::State(i)) | Access::ContinuousState(i) => Ok(ExchangeKnown::State(i)),
+                    Access::Output(OutputId::ContactLossTime) => Ok(ExchangeKnown::State(CONTINUOUS_STATES - 1)),
+                    _ => Err(FmiError::error(format!(
+                        "`{}` is not a known of the directional derivative (Model Exchange: the continuous states and the input x_g)",
+                        var.name
+                    ))),
+                }
+            })
+            .collect::<Result<_, _>>()?;
+        let unknown: Vec<ExchangeUnknown> = unknowns
+            .iter()
+            .map(|&vr| {
+                let var: &Variable = lookup(vr)?;
+                match var.access {
+                    Access::StateDerivative(i) => Ok(ExchangeUnknown::Derivative(i)),
+                    Access::Output(id) => Ok(ExchangeUnknown::Output(id)),
+                    _ => Err(FmiError::error(format!(
+                        "`{}` is not an unknown of the directional derivative (Model Exchange: the state derivatives and the Real outputs)",
+                        var.name
+                    ))),
+                }
+            })
+            .collect::<Result<_, _>>()?;
+        let model = self.exchange()?;
+        let jacobian = model.jacobian();
+        let outputs = model.output_partials();
+        let rows = unknown.iter().map(|u| match *u {
+            ExchangeUnknown::Derivative(i) => Gradient {
+                states: jacobian.states[i],
+                road_input: jacobian.road_input[i],
+            },
+            ExchangeUnknown::Output(id) => id.exchange_gradient(&outputs),
+        });
+        Ok(rows
+            .flat_map(|row| {
+                known.iter().map(move |k| match *k {
+                    ExchangeKnown::State(j) => row.states[j],
+                    ExchangeKnown::RoadInput => row.road_input,
+                })
+            })
+            .collect())
     }
 
     fn check_seed(seed: &[f64]) -> Result<(), FmiError> {
