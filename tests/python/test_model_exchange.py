@@ -256,7 +256,10 @@ def me_unzipdir(tmp_path_factory):
 
 
 @pytest.mark.parametrize("tau", [0.011, 2e-4])
-def test_results_do_not_depend_on_when_steps_are_completed(me_unzipdir, tau):
+def test_every_completion_habit_agrees_with_the_cosimulation(me_unzipdir, tau):
+    """Completing every step keeps RK4's order (test_model_exchange_masters.py);
+    completing every output interval or never, with or without an evaluation
+    past each step end, still agrees with the exact co-simulation."""
     md = read_model_description(str(FMUS["fmi2"]))
     start = {"variant": 3, "tau": tau}
     finals = {}
@@ -270,12 +273,12 @@ def test_results_do_not_depend_on_when_steps_are_completed(me_unzipdir, tau):
         master.run(0.5, 2e-4, every=every, peek=peek)
         finals[habit] = master.read("rms_body_acceleration")
         master.free()
-    reference = finals["every step"]
+    cs = run(FMUS["fmi2"], "CoSimulation", start, 0.5)["rms_body_acceleration"]
     for habit, value in finals.items():
-        assert value == pytest.approx(reference, rel=1e-9, abs=0.0), (habit, finals)
-    # The co-simulation, exact, agrees to the integration's accuracy.
-    cs = run(FMUS["fmi2"], "CoSimulation", start, 0.5)
-    assert reference == pytest.approx(cs["rms_body_acceleration"], rel=1e-6)
+        assert value == pytest.approx(cs, rel=1e-6, abs=0.0), (habit, finals, cs)
+    # Completing every step is the most accurate habit.
+    errors = {habit: abs(value / cs - 1) for habit, value in finals.items()}
+    assert errors["every step"] <= min(errors.values()), errors
 
 
 def test_an_fmu_state_taken_mid_run_replays_exactly(me_unzipdir):

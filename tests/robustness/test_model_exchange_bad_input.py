@@ -2,15 +2,20 @@
 alike (each test runs on both): the life cycle through Event Mode and
 Continuous-Time Mode, then bad input to every Model Exchange function:
 NULL pointers, wrong numbers of states and indicators, NaN and infinite
-states, time set back before a completed integrator step or event or not
-finite, calls in the wrong state. Every refusal must return the Error
+states, times not finite, beyond what the model resolves, needing too many
+road nodes or set back before the floor (the last completed integrator step
+or event, or 1 s before the latest time for a master that never completes
+a step), calls in the wrong state. Going back within reach gives the same
+bits as never having looked ahead. Every refusal must return the Error
 status, log one line naming the function and the argument or value, change
 nothing (the serialized state is bit-identical before and after) and leave
 the instance usable. A diverging state asks the master to terminate.
 """
 
 import math
+import resource
 from ctypes import byref, c_bool, c_double, c_int, c_size_t, c_uint8
+from decimal import Decimal
 
 import pytest
 from conftest import rust
@@ -316,24 +321,125 @@ def test_huge_finite_states_give_finite_derivatives_or_a_refusal(me):
 
 # -------------------------------------------------------------------- time
 
+TIME_RESOLUTION = 4398046511104.0  # 2^42: |t| is at most this many times the finest time resolved
+LARGEST_STEP = 0.01  # the coarsest of the finest times (s)
+MAX_ROAD_NODES = 4194304  # random-road nodes generated or kept per call
+ISO_NODE_INTERVAL = 1e-3  # the ISO 8608 road's nodes (s)
+DEFAULT_TAU = 0.0002  # the default delay: variant 3 keeps a history
+# The roads, by the `road` parameter: 2 is an ISO 8608 class C road at 20 m/s.
+ROADS = {0: {"road": 0}, 1: {"road": 1}, 2: {"road": 2, "road_class": 3, "vehicle_speed": 20.0}, 3: {"road": 3}}
+RESOLVES = "2^42 times the finest time the model resolves (the delay, the road's node interval, 0.01 s)"
+
+
+def rust_e(value: float) -> str:
+    """`value` as Rust's `{:e}` prints an f64 (`8.796093022208e8`)."""
+    _, digits, exponent = Decimal(repr(value)).normalize().as_tuple()
+    mantissa = "".join(map(str, digits))
+    mantissa = mantissa[0] + ("." + mantissa[1:] if len(mantissa) > 1 else "")
+    return f"{mantissa}e{exponent + len(digits) - 1}"
+
+
+def time_limit(variant=3, tau=DEFAULT_TAU, road=1, road_sample_interval=0.1, **_):
+    """The largest |time| (s) SetTime takes: 2^42 times the finest time the
+    model resolves (0.01 s, the delay of a history, the random road's node
+    interval)."""
+    finest = LARGEST_STEP
+    if variant == 3 and tau >= 1e-7:
+        finest = min(finest, tau)
+    if road == 2:
+        finest = min(finest, ISO_NODE_INTERVAL)
+    elif road == 3:
+        finest = min(finest, road_sample_interval)
+    return finest * TIME_RESOLUTION
+
+
+def node_interval(road=1, road_sample_interval=0.1, **_):
+    return {2: ISO_NODE_INTERVAL, 3: road_sample_interval}.get(road)
+
+
+def unresolved_message(time, limit):
+    return f"time {rust(time)} s is not finite or beyond {rust_e(limit)} s, {RESOLVES}"
+
+
+def floor_message(time, floor):
+    return (f"time {rust(time)} s is before {rust(floor)} s, the last completed integrator step or event: "
+            "no master goes back before it")
+
+
+def refused_naming(me, inst, key, args, parts, state="continuous"):
+    """As `refused`, for a message checked by the `parts` it contains: the
+    Error status, exactly one log line `<function>: ...`, nothing changed.
+    Returns the message."""
+    before = inst.snapshot()
+    count = len(inst.log.messages)
+    assert me.call(inst, key, *args) == ERROR
+    logged = inst.log.since(count)
+    assert len(logged) == 1 and logged[0][:2] == (ERROR, "logStatusError"), logged
+    message = logged[0][2]
+    assert message.startswith(f"{me.fn[key]}: "), message
+    for part in parts:
+        assert part in message, (part, message)
+    assert inst.machine_state() == me.state_name[state]
+    assert inst.snapshot() == before
+    return message
+
 
 def test_time_before_the_last_completed_step_is_refused_naming_both_times(me):
     inst = me.continuous_time_mode()
     assert inst.set_time(1e-3) == OK
     assert inst.completed_integrator_step() == (OK, 0, 0)
-    refused(me, inst, "set_time", (5e-4,),
-            "time 0.0005 s is before the last completed integrator step or event at 0.001 s (or not finite)",
-            "continuous")
+    refused(me, inst, "set_time", (5e-4,), floor_message(5e-4, 1e-3), "continuous")
     # The completed time itself and later times are fine.
     assert inst.set_time(1e-3) == OK and inst.set_time(2e-3) == OK
 
 
-@pytest.mark.parametrize("value", [NAN, INF, -INF])
-def test_non_finite_time_is_refused(me, value):
+@pytest.mark.parametrize("value", [NAN, INF, -INF, 1e300, -1e300])
+def test_non_finite_or_unresolved_time_is_refused(me, value):
     inst = me.continuous_time_mode(steps=3)
-    refused(me, inst, "set_time", (value,),
-            f"time {rust(value)} s is before the last completed integrator step or event at {rust(inst.time)} s "
-            "(or not finite)", "continuous")
+    refused(me, inst, "set_time", (value,), unresolved_message(value, time_limit()), "continuous")
+    assert inst.euler_step(1e-4) == (OK, 0, 0)
+
+
+LIMITS = [
+    # (the parameters, what SetTime(limit) answers: None = OK, else a part of the refusal)
+    ({"variant": 2, "road": 1}, None),  # 0.01 s
+    ({"variant": 3, "road": 1}, None),  # the delay 0.0002 s
+    ({"variant": 3, "tau": 1e-8, "road": 1}, None),  # folded delay: 0.01 s
+    ({"variant": 2, **ROADS[2]}, "road nodes"),  # 1 ms nodes
+    ({"variant": 2, "road": 3, "road_sample_interval": 0.002}, "road nodes"),
+    ({"variant": 2, "road": 3, "road_sample_interval": 0.5}, "road nodes"),  # 0.01 s
+]
+
+
+@pytest.mark.parametrize("values, at_limit", LIMITS, ids=[
+    "-".join(f"{k}={v}" for k, v in values.items()) for values, _ in LIMITS])
+def test_the_time_limit_is_2_42_times_the_finest_time_resolved(me, values, at_limit):
+    """Just beyond 2^42 times the finest time the model resolves, a time is
+    refused naming the limit; at the limit it is taken, or refused for the
+    random road's nodes it would need."""
+    inst = me.continuous_time_mode(**values)
+    limit = time_limit(**values)
+    beyond = math.nextafter(limit, INF)
+    refused(me, inst, "set_time", (beyond,), unresolved_message(beyond, limit), "continuous")
+    if at_limit is None:
+        assert inst.set_time(limit) == OK, inst.log.last()
+        status, dx = inst.derivatives()
+        assert status == OK and all(math.isfinite(v) for v in dx), (dx, inst.log.last())
+    else:
+        refused_naming(me, inst, "set_time", (limit,), [f"time {rust(limit)} s needs", at_limit,
+                                                        f"more than the limit of {MAX_ROAD_NODES} per call"])
+
+
+def test_a_random_road_needing_too_many_nodes_is_refused_naming_the_limit(me):
+    """ISO 8608 at 1e5 s: 1e8 road nodes, refused naming the work; a master
+    moving on in smaller steps gets there."""
+    inst = me.continuous_time_mode(variant=2, **ROADS[2])
+    refused_naming(me, inst, "set_time", (1e5,), ["time 100000 s needs 1e8 road nodes generated", "road nodes",
+                                                  f"more than the limit of {MAX_ROAD_NODES} per call",
+                                                  "CompletedIntegratorStep"])
+    # 4000 s: 4e6 nodes, within the limit.
+    assert inst.set_time(4000.0) == OK, inst.log.last()
+    assert inst.derivatives()[0] == OK
 
 
 def test_a_trial_time_can_be_taken_back_until_the_step_is_completed(me):
@@ -343,9 +449,24 @@ def test_a_trial_time_can_be_taken_back_until_the_step_is_completed(me):
     assert inst.set_time(5e-4) == OK and inst.derivatives()[0] == OK
     assert inst.set_time(2e-4) == OK and inst.derivatives()[0] == OK
     assert inst.set_time(1e-4) == OK
-    refused(me, inst, "set_time", (0.5e-4,),
-            "time 0.00005 s is before the last completed integrator step or event at 0.0001 s (or not finite)",
+    refused(me, inst, "set_time", (0.5e-4,), floor_message(0.5e-4, 1e-4), "continuous")
+
+
+def test_a_master_that_never_completes_may_go_back_one_second(me):
+    """Without CompletedIntegratorStep the time may go back 1 s from the
+    latest time set; further is refused naming both times and the remedy.
+    After a completed step, it may go back to that step, however far."""
+    inst = me.continuous_time_mode()
+    assert inst.set_time(0.4) == OK and inst.set_time(1.5) == OK
+    refused(me, inst, "set_time", (0.45,),
+            "time 0.45 s is before 0.5 s, the earliest time kept: a master that does not call "
+            "CompletedIntegratorStep may go back at most 1 s from the latest time it set (1.5 s); call "
+            "CompletedIntegratorStep at the solver's accepted steps, and go back no further than the last of them",
             "continuous")
+    assert inst.set_time(0.5) == OK
+    assert inst.completed_integrator_step() == (OK, 0, 0)
+    assert inst.set_time(1.7) == OK and inst.set_time(0.5) == OK  # 1.2 s back, to the completed step
+    refused(me, inst, "set_time", (0.49,), floor_message(0.49, 0.5), "continuous")
 
 
 def test_time_before_an_event_is_refused_in_event_mode(me):
@@ -353,11 +474,170 @@ def test_time_before_an_event_is_refused_in_event_mode(me):
     assert inst.set_time(1e-3) == OK
     assert inst.enter_event_mode() == OK
     assert me.discrete(inst)[:2] == (OK, 0)
-    refused(me, inst, "set_time", (5e-4,),
-            "time 0.0005 s is before the last completed integrator step or event at 0.001 s (or not finite)",
-            "event")
+    refused(me, inst, "set_time", (5e-4,), floor_message(5e-4, 1e-3), "event")
     assert inst.enter_continuous_time_mode() == OK
     assert inst.set_time(1.5e-3) == OK
+
+
+def max_rss_kib():
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss  # KiB on Linux
+
+
+def answered(me, inst, key, args, values=None):
+    """`key` called: the Error status with one log line naming the
+    function, or OK with nothing logged and every value in `values` finite.
+    Returns (status, the message or None)."""
+    count = len(inst.log.messages)
+    status = me.call(inst, key, *args)
+    logged = inst.log.since(count)
+    if status == ERROR:
+        assert len(logged) == 1 and logged[0][:2] == (ERROR, "logStatusError"), logged
+        assert logged[0][2].startswith(f"{me.fn[key]}: "), logged
+        return status, logged[0][2]
+    assert status == OK and not logged, (status, logged)
+    if values is not None:
+        assert all(math.isfinite(v) for v in values), list(values)
+    return status, None
+
+
+@pytest.mark.parametrize("variant", [2, 3])
+@pytest.mark.parametrize("road", list(ROADS), ids=["input", "harmonic", "iso-C", "paper"])
+def test_bad_times_are_refused_or_give_finite_values_in_little_memory(me, road, variant):
+    """SetTime to 1e5, 1e9 and 1e308 s, then the states set again, the
+    derivatives and the event indicators: each refused (one log line) or
+    finite; a time is refused when it is beyond 2^42 times the finest time
+    resolved, or needs more random-road nodes than the limit. The process
+    grows by less than 100 MB."""
+    values = {"variant": variant, **ROADS[road]}
+    limit, interval = time_limit(**values), node_interval(**values)
+    rss = max_rss_kib()
+    inst = me.continuous_time_mode(**values)
+    for far in (1e5, 1e9, 1e308):
+        before = inst.snapshot()
+        status, message = answered(me, inst, "set_time", (far,))
+        if far > limit:
+            assert message == f"{me.fn['set_time']}: {unresolved_message(far, limit)}", message
+        elif interval is not None and far / interval > MAX_ROAD_NODES:
+            assert message is not None and "road nodes" in message and str(MAX_ROAD_NODES) in message, message
+        else:
+            assert status == OK
+        if status == ERROR:
+            assert inst.snapshot() == before
+        status, x = inst.continuous_states()
+        assert status == OK and all(math.isfinite(v) for v in x), x
+        answered(me, inst, "set_states", (array(c_double, x), NX))
+        dx, z = vector(NX), vector(NZ)
+        answered(me, inst, "derivatives", (dx, NX), dx)
+        answered(me, inst, "indicators", (z, NZ), z)
+    assert max_rss_kib() - rss < 100 * 1024, f"grew by {(max_rss_kib() - rss) / 1024:.0f} MB"
+
+
+# ------------------------------------------------------------ going back
+
+H = 1e-3  # the master's step (s)
+GOING_BACK_ROADS = {"harmonic": ROADS[1], "iso-C": ROADS[2]}
+SUSPENSIONS = {"tdvass-tau-0.011": {"variant": 3, "tau": 0.011}, "pvass": {"variant": 2}}
+
+
+def t_of(k):
+    """The time of step k, computed alike in every run."""
+    return k * H
+
+
+def euler(inst, k_from, k_to, complete):
+    """Explicit Euler steps of H from t_of(k_from) to t_of(k_to) with the
+    FMU's derivatives, each completed if `complete`."""
+    for k in range(k_from, k_to):
+        status, x = inst.continuous_states()
+        assert status == OK, inst.log.last()
+        status, dx = inst.derivatives()
+        assert status == OK, inst.log.last()
+        assert inst.set_time(t_of(k + 1)) == OK, inst.log.last()
+        assert inst.set_continuous_states([a + H * b for a, b in zip(x, dx)]) == OK, inst.log.last()
+        if complete:
+            assert inst.completed_integrator_step() == (OK, 0, 0), inst.log.last()
+
+
+def look_ahead(inst, t0, length, n=10):
+    """Trial evaluations (derivatives, event indicators) at t0 + length j/n,
+    j = 1..n, with the Euler predictor from t0; returns the states at t0."""
+    status, x0 = inst.continuous_states()
+    assert status == OK
+    status, dx0 = inst.derivatives()
+    assert status == OK, inst.log.last()
+    for j in range(1, n + 1):
+        s = length * j / n
+        assert inst.set_time(t0 + s) == OK, inst.log.last()
+        assert inst.set_continuous_states([a + s * b for a, b in zip(x0, dx0)]) == OK, inst.log.last()
+        assert inst.derivatives()[0] == OK, inst.log.last()
+        assert inst.event_indicators()[0] == OK, inst.log.last()
+    return x0
+
+
+def bits(values):
+    return [v.hex() for v in values]
+
+
+def going_back_run(me, values, complete, length=None, at=400, until=600):
+    """Euler to t_of(at); if `length`, a look-ahead of `length` s and back
+    to t_of(at) with the states of then; Euler on to t_of(until). Returns
+    the instance and the bits of the final states, derivatives and event
+    indicators."""
+    inst = me.continuous_time_mode(**values)
+    euler(inst, 0, at, complete)
+    if length is not None:
+        x0 = look_ahead(inst, t_of(at), length)
+        assert inst.set_time(t_of(at)) == OK, inst.log.last()
+        assert inst.set_continuous_states(x0) == OK
+    euler(inst, at, until, complete)
+    out = []
+    for read in (inst.continuous_states, inst.derivatives, inst.event_indicators):
+        status, v = read()
+        assert status == OK, inst.log.last()
+        out += bits(v)
+    return inst, out
+
+
+@pytest.mark.parametrize("suspension", list(SUSPENSIONS))
+@pytest.mark.parametrize("road", list(GOING_BACK_ROADS))
+def test_a_look_ahead_and_back_gives_the_same_bits(me, road, suspension):
+    """A master that never completes a step looks ahead 0.15, 0.3 and 1 s
+    from 0.4 s and goes back: on to 0.6 s, the same bits as without."""
+    values = {**GOING_BACK_ROADS[road], **SUSPENSIONS[suspension]}
+    _, plain = going_back_run(me, values, complete=False)
+    for length in (0.15, 0.3, 1.0):
+        _, back = going_back_run(me, values, complete=False, length=length)
+        assert back == plain, length
+
+
+@pytest.mark.parametrize("suspension", list(SUSPENSIONS))
+@pytest.mark.parametrize("road", list(GOING_BACK_ROADS))
+def test_a_rejected_trial_step_gives_the_same_bits(me, road, suspension):
+    """A master that completes every step tries 0.2 s from 0.4 s, rejects
+    it and goes back: the same bits as without; before the last completed
+    step stays refused."""
+    values = {**GOING_BACK_ROADS[road], **SUSPENSIONS[suspension]}
+    _, plain = going_back_run(me, values, complete=True)
+    inst, back = going_back_run(me, values, complete=True, length=0.2)
+    assert back == plain
+    refused(me, inst, "set_time", (0.55,), floor_message(0.55, t_of(600)), "continuous")
+
+
+@pytest.mark.parametrize("suspension", list(SUSPENSIONS))
+@pytest.mark.parametrize("road", list(GOING_BACK_ROADS))
+def test_going_back_beyond_the_reach_is_refused_naming_both_times(me, road, suspension):
+    """Never completing, a look-ahead of 1.5 s from 0.4 s: 0.4 s is then
+    out of reach, refused naming both times and CompletedIntegratorStep;
+    the instance stays usable."""
+    inst = me.continuous_time_mode(**GOING_BACK_ROADS[road], **SUSPENSIONS[suspension])
+    euler(inst, 0, 400, complete=False)
+    look_ahead(inst, t_of(400), 1.5)
+    refused_naming(me, inst, "set_time", (t_of(400),),
+                   ["time 0.4 s is before 0.8", "may go back at most 1 s",
+                    f"latest time it set ({rust(t_of(400) + 1.5)} s)", "CompletedIntegratorStep"])
+    assert inst.set_time(1.45) == OK, inst.log.last()
+    status, dx = inst.derivatives()
+    assert status == OK and all(math.isfinite(v) for v in dx), inst.log.last()
 
 
 # ------------------------------------------------------------ wrong states
