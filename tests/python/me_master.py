@@ -63,12 +63,15 @@ class ModelExchangeMaster:
             (self.fmu.setInt64 if self.fmi3 else self.fmu.setInteger)([v.valueReference], [int(value)])
 
     def event_update(self):
-        if self.fmi3:
-            while self.fmu.updateDiscreteStates()[0]:
-                pass
-        else:
-            while self.fmu.newDiscreteStates()[0]:
-                pass
+        """The event iteration; returns whether the FMU asked for a restart
+        of the integrator (valuesOfContinuousStatesChanged)."""
+        restart = False
+        while True:
+            update = self.fmu.updateDiscreteStates() if self.fmi3 else self.fmu.newDiscreteStates()
+            # (needed, terminate, nominals changed, values changed, ...)
+            restart |= bool(update[3])
+            if not update[0]:
+                return restart
 
     def states(self):
         self.fmu.getContinuousStates(self.buffer, self.n)
@@ -95,11 +98,13 @@ class ModelExchangeMaster:
         self.fmu.completedIntegratorStep()
 
     def event(self, t, x):
-        """Event Mode at (t, x) and back to Continuous-Time Mode."""
+        """Event Mode at (t, x) and back to Continuous-Time Mode; returns
+        whether the FMU asked for a restart of the integrator."""
         self.set_point(t, x)
         self.fmu.enterEventMode()
-        self.event_update()
+        restart = self.event_update()
         self.fmu.enterContinuousTimeMode()
+        return restart
 
     def save(self):
         return self.fmu.getFMUState() if self.fmi3 else self.fmu.getFMUstate()

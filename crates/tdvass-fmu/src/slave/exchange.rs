@@ -18,7 +18,12 @@ use tdvass::solver::CONTINUOUS_STATES;
 pub struct EventUpdate {
     /// The FMU asks the master to stop (after a divergence).
     pub terminate_simulation: bool,
-    /// The continuous states changed (never: the contact switches keep them).
+    /// The master must restart its integrator: set at a switch of the
+    /// contact mode, whose derivatives jump (the time without contact
+    /// starts or stops counting; with the unilateral tire the plant's
+    /// too), although the states keep their values. A master that restarts
+    /// only when told (fmusim) otherwise meets the jump with its old
+    /// history.
     pub values_of_continuous_states_changed: bool,
     /// The next time event, if any (none: see docs/fmu.md).
     pub next_event_time: Option<f64>,
@@ -119,6 +124,7 @@ impl Slave {
         }
         Ok(EventUpdate {
             terminate_simulation: self.divergence_warning(self.dialect.update_discrete_states)?,
+            values_of_continuous_states_changed: event.is_some(),
             ..EventUpdate::default()
         })
     }
