@@ -1,4 +1,5 @@
-"""Worst call against the median call of doStep, for real-time masters.
+"""Worst call against the median call of doStep, for real-time masters, and
+the same for a fixed-step Model Exchange master.
 
     .venv/bin/python benches/worst_case.py [--repeats R] [--seconds S] [--fmu FMU ...]
 
@@ -11,7 +12,10 @@ against their median. The cases: the harmonic road, ISO 8608 class E at
 30 m/s with the unilateral tire (the most lift-offs) and class D at 20 m/s,
 at 1 ms, and the harmonic road and class E at a 0.7 ms master. Several FMUs
 are run case by case in turn, so that they share the machine's state.
-Figures in BENCHMARKS.md.
+Each case then runs the harness's `worst-me` mode (the rows marked ME): its
+Model Exchange master, Heun's method at the same steps with the events at
+step ends and CompletedIntegratorStep after every step, one "call" being
+all the FMI calls of one step. Figures in BENCHMARKS.md.
 """
 
 import argparse
@@ -57,12 +61,15 @@ def main() -> None:
     libraries = [(fmu, *unpack(fmu, work)) for fmu in fmus]
     print(f"per-call minimum over {args.repeats} runs of {args.seconds:g} s: median, largest (call), largest/median")
     for case in CASES:
-        for fmu, version, library, token in libraries:
-            out = subprocess.run([str(harness), "worst", str(version), library, token, case, str(args.repeats),
-                                  str(args.seconds)], capture_output=True, text=True, check=True).stdout
-            found = re.search(r"median ([\d.]+) us, largest ([\d.]+) us \(call (\d+)\), largest/median ([\d.]+)", out)
-            median, largest, call, ratio = found.groups()
-            print(f"{case:30s} FMI {version}  {median:>8s} us  {largest:>9s} us ({call:>5s})  {ratio:>6s}  {fmu}")
+        for mode, label in (("worst", "CS"), ("worst-me", "ME")):
+            for fmu, version, library, token in libraries:
+                out = subprocess.run([str(harness), mode, str(version), library, token, case, str(args.repeats),
+                                      str(args.seconds)], capture_output=True, text=True, check=True).stdout
+                found = re.search(r"median ([\d.]+) us, largest ([\d.]+) us \(call (\d+)\), largest/median ([\d.]+)",
+                                  out)
+                median, largest, call, ratio = found.groups()
+                print(f"{case:30s} FMI {version} {label}  {median:>8s} us  {largest:>9s} us ({call:>5s})  {ratio:>6s}  "
+                      f"{fmu}")
 
 
 if __name__ == "__main__":

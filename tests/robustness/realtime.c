@@ -7,6 +7,7 @@
  *   realtime count FMI LIB TOKEN CASE
  *   realtime count-me FMI LIB TOKEN CASE
  *   realtime worst FMI LIB TOKEN CASE REPEATS SECONDS
+ *   realtime worst-me FMI LIB TOKEN CASE REPEATS SECONDS
  *
  *   FMI     2 or 3
  *   LIB     binaries/linux64/tdvass.so (FMI 2.0) or
@@ -48,7 +49,11 @@
  * "allocations N steps M (restoring a serialized state: R allocations)". `worst` runs the case REPEATS times (the same calls, the same
  * results), takes each call's minimum time over the repetitions and prints
  * the median of these minima, the largest, the call it belongs to and their
- * ratio. Exit code 2: the library could not be loaded or a call failed.
+ * ratio. `worst-me` does the same for `count-me`'s Model Exchange master, one
+ * call being all the FMI calls of one of its steps (time, states and
+ * derivatives at both ends, the indicators, an event if any, the completed
+ * step, the outputs). Exit code 2: the library could not be loaded or a
+ * call failed.
  */
 #define _GNU_SOURCE
 #include <dlfcn.h>
@@ -616,6 +621,7 @@ static long run_model_exchange(const ModelExchangeMaster *m, const Case *c, doub
                           ? t + h
                           : (double)(k + 1) * h;
         h = next - t;
+        double start = call_times ? seconds_now() : 0.0;
         if (restore_at == k) {
             counting = 0;
             counting_restore = 1;
@@ -641,6 +647,7 @@ static long run_model_exchange(const ModelExchangeMaster *m, const Case *c, doub
         if (m->completed_integrator_step(fmu, &terminate) || terminate)
             fail("the completed integrator step", next);
         if (m->read_outputs(fmu, values, &lift_offs)) fail("reading the outputs", next);
+        if (call_times && k < max_calls) call_times[k] = seconds_now() - start;
         t = next;
         k++;
     }
@@ -864,11 +871,12 @@ int main(int argc, char **argv) {
     }
     int count_mode = argc == 6 && !strcmp(argv[1], "count");
     int model_exchange_mode = argc == 6 && !strcmp(argv[1], "count-me");
-    int worst_mode = argc == 8 && !strcmp(argv[1], "worst");
+    int worst_me_mode = argc == 8 && !strcmp(argv[1], "worst-me");
+    int worst_mode = (argc == 8 && !strcmp(argv[1], "worst")) || worst_me_mode;
     if (!count_mode && !model_exchange_mode && !worst_mode) {
         fprintf(stderr,
                 "usage: %s list | count FMI LIB TOKEN CASE | count-me FMI LIB TOKEN CASE | worst FMI LIB "
-                "TOKEN CASE REPEATS SECONDS\n",
+                "TOKEN CASE REPEATS SECONDS | worst-me FMI LIB TOKEN CASE REPEATS SECONDS\n",
                 argv[0]);
         return 2;
     }
@@ -907,7 +915,9 @@ int main(int argc, char **argv) {
     double *minima = __libc_malloc(sizeof(double) * (size_t)max_calls);
     long calls = 0;
     for (int r = 0; r < repeats; r++) {
-        long n = run(fmi, library, token, c, seconds, 0);
+        long n = !worst_me_mode ? run(fmi, library, token, c, seconds, 0)
+                 : fmi == 2     ? run_model_exchange_fmi2(library, token, c, seconds)
+                                : run_model_exchange_fmi3(library, token, c, seconds);
         if (r > 0 && n != calls) {
             fprintf(stderr, "repetition %d made %ld calls, the first %ld\n", r, n, calls);
             return 2;
@@ -922,8 +932,9 @@ int main(int argc, char **argv) {
     double largest = minima[worst];
     qsort(minima, (size_t)calls, sizeof(double), compare);
     double median = minima[calls / 2];
-    printf("%s FMI %d: %ld calls, %d repetitions; per-call minimum: median %.3f us, largest %.3f us "
+    printf("%s FMI %d%s: %ld calls, %d repetitions; per-call minimum: median %.3f us, largest %.3f us "
            "(call %ld), largest/median %.1f\n",
-           c->name, fmi, calls, repeats, median * 1e6, largest * 1e6, worst, largest / median);
+           c->name, fmi, worst_me_mode ? " Model Exchange" : "", calls, repeats, median * 1e6,
+           largest * 1e6, worst, largest / median);
     return 0;
 }
