@@ -30,15 +30,18 @@
 //!   stages of its current step are not used either, and a delay shorter
 //!   than its step is continued from its last two accepted points (the
 //!   cubic of the accepted steps, fourth order);
-//! - **a re-evaluated step end**: a master that never completes evaluates
-//!   its next step's start at the instant of its last stage (RK4's `k4`
-//!   then the next `k1`, a first-same-as-last method's last stage). The
-//!   trial points between the previous such end (an "anchor") and this
-//!   one, at most [`STAGE_POINTS`], are then superseded by it: delayed
-//!   values at later times do not use them. At the anchor's own instant
-//!   they still do, so that every evaluation at one instant (a solver's
-//!   Newton iterations, its difference-quotient Jacobian) sees the same
-//!   function.
+//! - **a re-evaluated step end**: a master that has never completed a step
+//!   evaluates its next step's start at the instant of its last stage
+//!   (RK4's `k4` then the next `k1`, a first-same-as-last method's last
+//!   stage). The trial points between the previous such end (an "anchor")
+//!   and this one, at most [`STAGE_POINTS`], are then superseded by it:
+//!   delayed values at later times do not use them. At the anchor's own
+//!   instant they still do, so that every evaluation at one instant (a
+//!   solver's Newton iterations, its difference-quotient Jacobian) sees the
+//!   same function. A master that completes steps, even rarely, is not
+//!   second-guessed: a BDF solver evaluates each step end several times
+//!   too, and every other of its points would be lost (fmpy's CVODE needed
+//!   24 % more evaluations so).
 //!
 //! **Interpolation.** The delayed value at `s = t − tau` is the cubic
 //! Hermite interpolant, through positions and velocities, of the two
@@ -151,6 +154,8 @@ pub struct DelayHistory {
     /// The master's last `CompletedIntegratorStep` dropped its stages (module
     /// documentation).
     completes_steps: bool,
+    /// The master has called `CompletedIntegratorStep`: no anchors.
+    completed_once: bool,
 }
 
 /// A copy keeps the room of the original (at least `INITIAL_CAPACITY`
@@ -166,6 +171,7 @@ impl Clone for DelayHistory {
             initial_position: self.initial_position,
             tau: self.tau,
             completes_steps: self.completes_steps,
+            completed_once: self.completed_once,
         }
     }
 }
@@ -213,6 +219,7 @@ impl DelayHistory {
             initial_position: position,
             tau,
             completes_steps: false,
+            completed_once: false,
         }
     }
 
@@ -225,7 +232,7 @@ impl DelayHistory {
         initial_position: f64,
         tau: f64,
         points: Vec<HistoryPoint>,
-        completes_steps: bool,
+        (completes_steps, completed_once): (bool, bool),
     ) -> Result<DelayHistory, String> {
         let Some(first) = points.first() else {
             return Err("a delay history without points".into());
@@ -269,6 +276,7 @@ impl DelayHistory {
             initial_position,
             tau,
             completes_steps,
+            completed_once,
         })
     }
 
@@ -282,10 +290,10 @@ impl DelayHistory {
         self.initial_position
     }
 
-    /// Whether the master's last completed step dropped its stages (module
-    /// documentation).
-    pub fn completes_steps(&self) -> bool {
-        self.completes_steps
+    /// Whether the master's last completed step dropped its stages, and
+    /// whether it has completed a step (module documentation).
+    pub fn habits(&self) -> (bool, bool) {
+        (self.completes_steps, self.completed_once)
     }
 
     /// The points, oldest first.
@@ -410,7 +418,10 @@ impl DelayHistory {
         let latest = self.points.back().copied();
         let reevaluated =
             length > self.accepted_len && latest.is_some_and(|p| (p.time - t).abs() <= r);
-        if reevaluated && let Some(stages @ 1..) = self.stages_before_latest() {
+        if reevaluated
+            && !self.completed_once
+            && let Some(stages @ 1..) = self.stages_before_latest()
+        {
             for p in self.points.range_mut(length - 1 - stages..length - 1) {
                 p.superseded_by = t;
             }
@@ -498,6 +509,7 @@ impl DelayHistory {
         self.accepted_len = self.accepted_len.max(at + 1);
         if completed {
             self.completes_steps = stages_dropped;
+            self.completed_once = true;
         }
         if self.points.len() > MAX_HISTORY_POINTS {
             self.pop_oldest();

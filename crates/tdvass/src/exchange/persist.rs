@@ -40,9 +40,11 @@ impl ModelExchange {
         w.f64(self.floor);
         w.f64(self.latest);
         w.u8(u8::from(self.completes));
-        w.u8(u8::from(
-            matches!(&self.delay, Delay::History(h) if h.completes_steps()),
-        ));
+        let (completes_steps, completed_once) = match &self.delay {
+            Delay::History(h) => h.habits(),
+            _ => (false, false),
+        };
+        w.u8(u8::from(completes_steps) | (u8::from(completed_once) << 1));
         w.f64s(&self.states);
         let d = &self.discrete;
         w.u8(u8::from(d.in_contact));
@@ -102,11 +104,15 @@ impl ModelExchange {
         let start = self.config.start_time;
         let time = r.f64()?;
         let accepted = r.f64()?;
-        let (floor, latest, completes, completes_steps) = if version >= FLOOR_VERSION {
-            (r.f64()?, r.f64()?, r.u8()? != 0, r.u8()? != 0)
+        let (floor, latest, completes, habit_bits) = if version >= FLOOR_VERSION {
+            (r.f64()?, r.f64()?, r.u8()? != 0, r.u8()?)
         } else {
-            (accepted, time, false, false)
+            (accepted, time, false, 0)
         };
+        if habit_bits > 3 {
+            return Err(invalid(format!("completion habits {habit_bits}")));
+        }
+        let habits = (habit_bits & 1 != 0, habit_bits & 2 != 0);
         if !([time, accepted, floor, latest]
             .iter()
             .all(|t| t.is_finite())
@@ -193,14 +199,8 @@ impl ModelExchange {
         }
         let delay = match &self.delay {
             Delay::History(h) => Delay::History(
-                DelayHistory::from_points(
-                    start,
-                    h.initial_position(),
-                    h.tau(),
-                    points,
-                    completes_steps,
-                )
-                .map_err(invalid)?,
+                DelayHistory::from_points(start, h.initial_position(), h.tau(), points, habits)
+                    .map_err(invalid)?,
             ),
             other if count == 0 => other.clone(),
             _ => return Err(invalid("a delay history for a model without delay".into())),

@@ -100,7 +100,7 @@ fn a_completed_step_drops_its_stages() {
     h.accept((1.0, 1.0, 0.0), true);
     assert_eq!(times(&h), [0.0, 1.0]);
     assert_eq!(h.points().last().unwrap().position, 1.0);
-    assert!(h.completes_steps());
+    assert!(h.habits().0);
     // While it does, a stage interpolates past the stages before it.
     h.record((1.5, 100.0, 0.0));
     let through_accepted = h.delayed((2.2, 2.0, 0.0)).value;
@@ -121,7 +121,7 @@ fn a_completion_after_many_steps_keeps_them() {
     h.accept(sine(0.2), true);
     assert_eq!(h.points().len(), STAGE_POINTS + 3);
     assert!(h.points().all(|p| p.accepted));
-    assert!(!h.completes_steps());
+    assert!(!h.habits().0);
 }
 
 #[test]
@@ -135,7 +135,7 @@ fn a_completion_at_an_interpolated_point_keeps_the_points_on_both_sides() {
     let accepted: Vec<bool> = h.points().map(|p| p.accepted).collect();
     assert_eq!(accepted, [true, true, true, false]);
     assert_eq!(h.accepted_time(), 0.2);
-    assert!(!h.completes_steps());
+    assert!(!h.habits().0);
     // Going on from 0.3 keeps them; going back to 0.25 drops 0.3.
     h.record((0.25, 2.5, 0.0));
     assert_eq!(times(&h), [0.0, 0.1, 0.2, 0.25]);
@@ -174,7 +174,9 @@ fn restored_points_are_checked() {
         accepted,
         ..HistoryPoint::trial((time, 0.0, 0.0))
     };
-    let from = |points: Vec<HistoryPoint>| DelayHistory::from_points(0.0, 0.0, 0.1, points, false);
+    let from = |points: Vec<HistoryPoint>| {
+        DelayHistory::from_points(0.0, 0.0, 0.1, points, (false, false))
+    };
     assert!(from(vec![p(0.0, true), p(0.1, false)]).is_ok());
     assert!(from(vec![]).is_err());
     assert!(from(vec![p(0.0, false)]).is_err());
