@@ -27,7 +27,8 @@ enum ExchangeUnknown {
 
 impl Slave {
     /// The exact partials `∂unknown_i/∂known_j`, row by row: for Model
-    /// Exchange see [`Self::exchange_partials`]; for Co-Simulation, of the
+    /// Exchange, of the state derivatives and the Real outputs with respect
+    /// to the continuous states and `x_g`; for Co-Simulation, of the
     /// outputs (`unknowns`) with respect to the input `x_g` and the states
     /// (`knowns`, the states addressed by the value references of the
     /// outputs `x_s` .. `v_t`).

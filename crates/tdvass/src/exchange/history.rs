@@ -474,8 +474,8 @@ impl DelayHistory {
     /// Accepts the point `(t, x_t, v_t)` (a completed integrator step when
     /// `completed`, else an event), with the rule of the module
     /// documentation; every point before it is accepted too. A master whose
-    /// completion drops its stages [`Self::completes_steps`] from now on;
-    /// one whose completion keeps its points does not.
+    /// completion drops its stages completes its steps from now on
+    /// ([`Self::habits`]); one whose completion keeps its points does not.
     pub fn accept(&mut self, now: (f64, f64, f64), completed: bool) {
         let t = now.0;
         let r = rounding(t);
