@@ -123,8 +123,8 @@ BAD_INPUT = {
     "me_too_few_states": (ERROR, "19 continuous states given, the model has 20"),
     "me_too_many_derivatives": (ERROR, "fmi2GetDerivatives: 21 derivatives asked for, the model has 20"),
     "me_nan_state": (ERROR, "continuous state 3 (`v_h`) = NaN is not finite"),
-    "me_time_before_completed_step": (ERROR, "time 0.0005 s is before the last completed integrator step or event "
-                                             "at 0.001 s"),
+    "me_time_before_completed_step": (ERROR, "time 0.0005 s is before 0.001 s, the last completed integrator step "
+                                             "or event"),
     "me_null_flags": (ERROR, "fmi2CompletedIntegratorStep: enterEventMode is NULL"),
     "me_state_into_cs_instance": (ERROR, "fmi2DeSerializeFMUstate: a Model Exchange state cannot be restored into a "
                                          "Co-Simulation instance"),
