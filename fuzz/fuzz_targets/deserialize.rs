@@ -132,10 +132,10 @@ fuzz_target!(|data: &[u8]| {
             assert_eq!(check(fmi2SetFMUstate(c, state)), OK);
         }
         let model = snapshot::deserialize(&bytes, &tdvass_fmi2::guid()).expect("accepted above");
-        if let Some(exchange) = &model.exchange {
+        if let Some(exchange) = model.engine.exchange() {
             assert_outputs_finite(c);
             model_exchange_steps(c, exchange.time(), steps);
-        } else if let Some(sim) = &model.sim {
+        } else if let Some(sim) = model.engine.simulator() {
             assert_outputs_finite(c);
             // A few short steps from where the state stands.
             let mut t = sim.time();

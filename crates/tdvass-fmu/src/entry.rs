@@ -15,8 +15,9 @@
 // `unsafe` elsewhere).
 #![allow(unsafe_code)]
 
+use crate::Slave;
+use crate::error::{FmiError, Status};
 use crate::pointers::{self, copy_str, input, panic_text};
-use crate::{FmiError, Slave, Status};
 use std::ffi::{c_char, c_void};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
@@ -194,8 +195,9 @@ pub unsafe fn set_debug_logging(
 /// or NULL; the messages spell it as the slave's dialect does.
 pub mod fmu_state {
     use super::FrontEnd;
+    use crate::Slave;
+    use crate::error::{FmiError, Status};
     use crate::pointers::{input, out_value, output};
-    use crate::{FmiError, Slave, Status};
     use std::ffi::c_void;
 
     /// The handle in an FMU-state value, `None` for NULL.

@@ -18,7 +18,7 @@
 //! - **Outputs** ([`non_finite_output`]): a last line of defence; a
 //!   non-finite output is never handed out.
 
-use crate::FmiError;
+use crate::error::FmiError;
 use crate::settings::Settings;
 use crate::variables::{Access, COMMON_VARIABLES, FMI3_VARIABLES, Variable};
 use tdvass::limits::Bound;

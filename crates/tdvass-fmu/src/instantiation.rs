@@ -7,8 +7,10 @@
 //! 2.0's `fmuType`, FMI 3.0's `eventModeUsed` and intermediate variables,
 //! how each passes its resources).
 
+use crate::Slave;
+use crate::defaults::MODEL_NAME;
+use crate::error::Status;
 use crate::slave::{Dialect, LogSink, Logger};
-use crate::{MODEL_NAME, Slave, Status};
 use std::path::Path;
 
 /// One call of the instantiation function, before the instance exists.

@@ -11,7 +11,7 @@
 // crate, which denies it elsewhere).
 #![allow(unsafe_code)]
 
-use crate::FmiError;
+use crate::error::FmiError;
 use std::ffi::{CStr, CString, c_char, c_void};
 
 /// What an instance pointer points to: a tag (checked on every call,

@@ -1,9 +1,9 @@
 //! The settings of an instance: every parameter and the input, as the core
 //! library's types ([`Params`], [`Weights`], the initial [`State`]) plus the
 //! FMU's integer codes; [`Settings::to_config`] turns them into a
-//! [`SimulationConfig`]. Start values come from the one variable table.
+//! [`SimulationConfig`]. Start values come from the one variable table
+//! ([`crate::variables`], which reads and writes these settings).
 
-use crate::variables::{Access, FMI3_VARIABLES};
 use tdvass::TireContact;
 use tdvass::metrics::Weights;
 use tdvass::model::{Params, State, Variant};
@@ -11,7 +11,7 @@ use tdvass::road::{RandomRoad, RoadClass, RoadSpec, RoadType};
 use tdvass::solver::{DEFAULT_TOLERANCE, Metrics, SimulationConfig};
 
 /// Every setting of an instance: the parameters and the input. Start values
-/// come from [`FMI3_VARIABLES`] ([`Settings::start_values`]).
+/// come from the variable table ([`Settings::start_values`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Settings {
     /// `variant` code: 1 CS, 2 PVASS, 3 TDVASS.
@@ -51,8 +51,10 @@ pub struct Settings {
 }
 
 impl Settings {
-    /// The settings with every start value of [`FMI3_VARIABLES`].
-    pub fn start_values() -> Settings {
+    /// Every value zero (codes 0, no weights), the default tolerance: what
+    /// the table's start values ([`Settings::start_values`], in
+    /// [`crate::variables`]) are written over.
+    pub fn zeroed() -> Settings {
         let zero_params = Params {
             m_s: 0.0,
             m_h: 0.0,
@@ -65,7 +67,7 @@ impl Settings {
             g: 0.0,
             tau: 0.0,
         };
-        let mut s = Settings {
+        Settings {
             variant: 0,
             params: zero_params,
             road: 0,
@@ -89,15 +91,7 @@ impl Settings {
             x_g: 0.0,
             intermediate_update_interval: 0.0,
             root_count: 0,
-        };
-        for v in FMI3_VARIABLES {
-            match (v.access, v.start) {
-                (Access::Real { set, .. }, Some(start)) => set(&mut s, start),
-                (Access::Integer { set, .. }, Some(start)) => set(&mut s, start as i32),
-                _ => {}
-            }
         }
-        s
     }
 
     /// The physical parameters.
@@ -178,7 +172,7 @@ impl Settings {
             max_internal_step: self.max_internal_step,
             // The internal step divides the DefaultExperiment stepSize: a
             // master stepping by it meets internal nodes only.
-            communication_step: crate::DEFAULT_STEP_SIZE,
+            communication_step: crate::defaults::DEFAULT_STEP_SIZE,
             tire_contact: self.tire_contact()?,
             start_time,
             initial_state: State::from(self.initial_state),

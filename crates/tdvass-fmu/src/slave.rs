@@ -5,14 +5,13 @@
 //! `Result<_, FmiError>`. Function names in log messages come from the
 //! front-end's [`Dialect`].
 
+use crate::error::{FmiError, Status};
 use crate::guards;
 use crate::phase::Phase;
 use crate::settings::Settings;
 use crate::variables::FmiVersion;
-use crate::{FmiError, Status};
 use std::collections::HashMap;
 use std::fmt;
-use tdvass::exchange::ModelExchange;
 use tdvass::model::Params;
 use tdvass::solver::{DelayGrid, Simulator};
 
@@ -23,6 +22,7 @@ mod partials;
 mod stepping;
 mod values;
 
+pub use crate::state::{Engine, SlaveState};
 pub use exchange::{EventUpdate, StepCompletion};
 pub use logger::{LogSink, Logger};
 pub use stepping::extrapolation_slope;
@@ -66,75 +66,6 @@ pub struct Dialect {
 /// silent).
 pub const HOLD_WARNING_STEP: f64 = 2e-3;
 
-/// Everything that makes up an FMU state (what getting an FMU state copies
-/// and serializing it writes).
-#[derive(Debug, Clone)]
-pub struct SlaveState {
-    /// Where the slave is in its life cycle.
-    pub phase: Phase,
-    /// Parameter and input values.
-    pub settings: Settings,
-    /// Slope of `x_g` (m/s) set by `an input derivative`.
-    pub input_slope: f64,
-    /// `x_g` or its slope changed since they were last applied to the road.
-    pub input_pending: bool,
-    /// The slope came from `an input derivative` (since `x_g` was
-    /// last set); it then takes precedence over `input_extrapolation`.
-    pub input_slope_given: bool,
-    /// `(t, x_g)` of the last value applied at a communication point: the
-    /// earlier of the two values that `input_extrapolation = 1` uses.
-    pub previous_input: Option<(f64, f64)>,
-    /// `(t, x_g)` of the value applied before `previous_input` (the third
-    /// value of `input_extrapolation = 2`).
-    pub earlier_input: Option<(f64, f64)>,
-    /// The hold warning of [`Slave::do_step`] was logged.
-    pub hold_warned: bool,
-    /// The first loss of tire contact was logged (bilateral tire; the
-    /// unilateral tire logs every lift-off as an event instead).
-    pub contact_warned: bool,
-    /// Start time from `the experiment set-up` (s).
-    pub start_time: f64,
-    /// Stop time from `the experiment set-up`, if defined (s).
-    pub stop_time: Option<f64>,
-    /// End of the last successful communication step (s).
-    pub last_successful_time: f64,
-    /// The FMU asks the master to terminate (after a divergence).
-    pub terminate_requested: bool,
-    /// The simulation, from `the end of initialization` on (co-simulation).
-    pub sim: Option<Simulator>,
-    /// The model, from the end of initialization on (Model Exchange).
-    pub exchange: Option<ModelExchange>,
-}
-
-impl SlaveState {
-    /// A freshly instantiated model: start values, no simulation.
-    pub fn new() -> SlaveState {
-        SlaveState {
-            phase: Phase::Instantiated,
-            settings: Settings::start_values(),
-            input_slope: 0.0,
-            input_pending: false,
-            input_slope_given: false,
-            previous_input: None,
-            earlier_input: None,
-            hold_warned: false,
-            contact_warned: false,
-            start_time: crate::DEFAULT_START_TIME,
-            stop_time: None,
-            last_successful_time: crate::DEFAULT_START_TIME,
-            terminate_requested: false,
-            sim: None,
-            exchange: None,
-        }
-    }
-}
-
-impl Default for SlaveState {
-    fn default() -> Self {
-        SlaveState::new()
-    }
-}
-
 #[derive(Debug, Clone, PartialEq)]
 struct SpectrumCache {
     params: Params,
@@ -154,8 +85,6 @@ pub struct Slave {
     spectrum: Option<SpectrumCache>,
     /// The value references of the last `GetReal`, looked up.
     read_plan: values::ReadPlan,
-    /// Made for Model Exchange (else co-simulation).
-    model_exchange: bool,
 }
 
 /// The C name of a function (`fmi2DoStep`, ...): its dialect's prefix and
@@ -180,11 +109,10 @@ impl Slave {
             dialect,
             token,
             logger,
-            state: SlaveState::new(),
+            state: SlaveState::default(),
             fmu_states: HashMap::new(),
             spectrum: None,
             read_plan: values::ReadPlan::default(),
-            model_exchange: false,
         }
     }
 
@@ -204,7 +132,7 @@ impl Slave {
 
     /// The running simulation (after initialization).
     pub fn simulator(&self) -> Option<&Simulator> {
-        self.state.sim.as_ref()
+        self.state.engine.simulator()
     }
 
     /// Logs an event; the message is formatted only when events are on.
@@ -358,12 +286,12 @@ impl Slave {
     /// stays in initialization mode), starts the simulation and checks
     /// stability (an unstable (g, tau) gives `Warning`).
     pub fn exit_initialization_mode(&mut self) -> Result<Status, FmiError> {
-        if self.model_exchange {
+        if self.state.engine.is_model_exchange() {
             return self.exit_initialization_to_event_mode();
         }
         let sim = self.build_simulator()?;
         let grid = sim.grid();
-        self.state.sim = Some(sim);
+        self.state.engine = Engine::CoSimulation(Some(Box::new(sim)));
         self.state.input_pending = false;
         self.state.previous_input = Some((self.state.start_time, self.state.settings.x_g));
         self.state.earlier_input = None;
@@ -430,7 +358,7 @@ impl Slave {
     /// history, road generator, RMS accumulators, stop time all reset). FMU
     /// states handed out stay valid.
     pub fn reset(&mut self) -> Result<Status, FmiError> {
-        self.state = SlaveState::new();
+        self.state = SlaveState::new(self.state.engine.emptied());
         self.event(format_args!(
             "{}: back to the start values",
             self.call("Reset")
@@ -440,14 +368,11 @@ impl Slave {
 
     /// Current time: the simulator's, or the start time before initialization.
     pub fn time(&self) -> f64 {
-        if let Some(model) = &self.state.exchange {
-            return model.time();
+        match &self.state.engine {
+            Engine::ModelExchange(Some(model)) => model.time(),
+            Engine::CoSimulation(Some(sim)) => sim.time(),
+            _ => self.state.start_time,
         }
-        self.state
-            .sim
-            .as_ref()
-            .map(Simulator::time)
-            .unwrap_or(self.state.start_time)
     }
 }
 

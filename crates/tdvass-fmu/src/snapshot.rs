@@ -26,10 +26,10 @@
 //! consistency of the settings with the simulator: truncated, corrupted or
 //! foreign bytes give an error, never a panic.
 
-use crate::FmiError;
+use crate::error::FmiError;
 use crate::phase::Phase;
 use crate::settings::Settings;
-use crate::slave::SlaveState;
+use crate::state::{Engine, SlaveState};
 use crate::variables::{Access, FMI3_VARIABLES, FmiVersion, by_vr};
 use tdvass::bytes::{ByteReader, ByteWriter};
 use tdvass::exchange::ModelExchange;
@@ -177,7 +177,7 @@ fn encode_payload(model: &SlaveState) -> Vec<u8> {
     w.f64(model.settings.tolerance);
     w.f64(model.last_successful_time);
     w.u8(model.terminate_requested as u8);
-    match &model.exchange {
+    match model.engine.exchange() {
         Some(exchange) => {
             let bytes = exchange.to_bytes();
             w.u8(1);
@@ -186,7 +186,7 @@ fn encode_payload(model: &SlaveState) -> Vec<u8> {
         }
         None => w.u8(0),
     }
-    match &model.sim {
+    match model.engine.simulator() {
         Some(sim) => {
             let bytes = sim.to_bytes();
             w.u8(1);
@@ -377,8 +377,12 @@ fn decode_payload(bytes: &[u8]) -> Result<SlaveState, FmiError> {
         stop_time,
         last_successful_time,
         terminate_requested,
-        sim,
-        exchange,
+        // The kind of a state from before initialization is not in its
+        // bytes: the instance that restores it gives its own.
+        engine: match (sim, exchange) {
+            (_, Some(model)) => Engine::ModelExchange(Some(Box::new(model))),
+            (sim, None) => Engine::CoSimulation(sim.map(Box::new)),
+        },
     })
 }
 
@@ -446,12 +450,20 @@ mod tests {
     use super::*;
     use crate::guid;
 
+    /// The simulator of a Co-Simulation state.
+    fn simulator(state: SlaveState) -> Simulator {
+        match state.engine {
+            Engine::CoSimulation(Some(sim)) => *sim,
+            other => panic!("no simulator in {other:?}"),
+        }
+    }
+
     fn running_model() -> SlaveState {
-        let mut model = SlaveState::new();
+        let mut model = SlaveState::default();
         let config = model.settings.to_config(0.0).unwrap();
         let mut sim = Simulator::new(config).unwrap();
         sim.advance_to(0.0123).unwrap();
-        model.sim = Some(sim);
+        model.engine = Engine::CoSimulation(Some(Box::new(sim)));
         model.phase = Phase::StepComplete;
         model.stop_time = Some(15.0);
         model.last_successful_time = 0.0123;
@@ -472,20 +484,20 @@ mod tests {
         assert_eq!(serialize(&back, &guid()), bytes);
         assert_eq!(back.phase, Phase::StepComplete);
         assert_eq!(back.stop_time, Some(15.0));
-        let (mut a, mut b) = (model.sim.unwrap(), back.sim.unwrap());
+        let (mut a, mut b) = (simulator(model), simulator(back));
         a.advance_to(0.5).unwrap();
         b.advance_to(0.5).unwrap();
         assert_eq!(a.outputs(), b.outputs());
-        let fresh = SlaveState::new();
+        let fresh = SlaveState::default();
         let back = deserialize(&serialize(&fresh, &guid()), &guid()).unwrap();
-        assert!(back.sim.is_none());
+        assert!(back.engine.simulator().is_none());
         assert_eq!(back.settings, fresh.settings);
     }
 
     #[test]
     fn a_unilateral_state_in_flight_round_trips_and_continues_exactly() {
         // TDVASS on an ISO 8608 class D road: stopped in a flight.
-        let mut model = SlaveState::new();
+        let mut model = SlaveState::default();
         model.settings.road = 2;
         model.settings.road_class = 4;
         model.settings.tire_contact = 1;
@@ -501,21 +513,21 @@ mod tests {
         // part of the state).
         assert!(!sim.lift_offs().events().is_empty());
         sim.clear_lift_offs();
-        model.sim = Some(sim);
+        model.engine = Engine::CoSimulation(Some(Box::new(sim)));
         model.phase = Phase::StepComplete;
         model.last_successful_time = t;
         let bytes = serialize(&model, &guid());
         let back = deserialize(&bytes, &guid()).unwrap();
         assert_eq!(back.settings.tire_contact, 1);
         assert_eq!(serialize(&back, &guid()), bytes);
-        let (mut a, mut b) = (model.sim.unwrap(), back.sim.unwrap());
+        let (mut a, mut b) = (simulator(model), simulator(back));
         assert!(b.in_flight());
         a.advance_to(1.5).unwrap();
         b.advance_to(1.5).unwrap();
         assert_eq!(a.outputs(), b.outputs());
         assert_eq!(a.lift_offs(), b.lift_offs());
         // The setting is checked like every other one.
-        let mut bad = SlaveState::new();
+        let mut bad = SlaveState::default();
         bad.settings.tire_contact = 2;
         let e = deserialize(&serialize(&bad, &guid()), &guid())
             .unwrap_err()
@@ -529,7 +541,7 @@ mod tests {
         // commits the node and keeps the requested time as the current one,
         // a hair before the committed time.
         let mut model = running_model();
-        let sim = model.sim.as_mut().unwrap();
+        let sim = model.engine.simulator_mut().unwrap();
         let step = sim.grid().step;
         let end = 400.0 * step - 0.4e-9 * step;
         sim.advance_to(end).unwrap();

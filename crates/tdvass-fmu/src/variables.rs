@@ -19,7 +19,7 @@
 //! declaration of every variable (about 500 lines of data), and splitting it
 //! would scatter what must be read, and changed, in one place.
 
-use crate::FmiError;
+use crate::error::FmiError;
 use crate::outputs::{IntegerOutputId, OutputId};
 use crate::settings::Settings;
 use tdvass::limits::Bound;
@@ -1837,6 +1837,22 @@ pub fn instantiation_token() -> String {
 /// The GUID of this FMU.
 pub fn guid() -> String {
     guid_of(COMMON_VARIABLES)
+}
+
+impl Settings {
+    /// The settings with every start value of [`FMI3_VARIABLES`] (the
+    /// table's; the FMI 2.0 table is a subset with the same starts).
+    pub fn start_values() -> Settings {
+        let mut s = Settings::zeroed();
+        for v in FMI3_VARIABLES {
+            match (v.access, v.start) {
+                (Access::Real { set, .. }, Some(start)) => set(&mut s, start),
+                (Access::Integer { set, .. }, Some(start)) => set(&mut s, start as i32),
+                _ => {}
+            }
+        }
+        s
+    }
 }
 
 #[cfg(test)]

@@ -465,8 +465,10 @@ fn serialized_states_of_the_fmi2_fmu_are_refused_and_own_states_restore() {
     }
     assert_eq!(get(instance, "rms_body_acceleration"), before);
     // The FMI 2.0 FMU writes the same format under its GUID: refused here.
-    let fmi2 =
-        tdvass_fmu::snapshot::serialize(&tdvass_fmu::slave::SlaveState::new(), &tdvass_fmu::guid());
+    let fmi2 = tdvass_fmu::snapshot::serialize(
+        &tdvass_fmu::slave::SlaveState::default(),
+        &tdvass_fmu::guid(),
+    );
     let mut foreign: fmi3FMUState = std::ptr::null_mut();
     // SAFETY: the bytes above; an out-pointer to a local.
     let s = unsafe { fmi3DeserializeFMUState(instance, fmi2.as_ptr(), fmi2.len(), &mut foreign) };

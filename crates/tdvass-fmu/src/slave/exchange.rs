@@ -5,10 +5,10 @@
 //! decide where each may be called; here each checks its arguments and
 //! names what it refuses.
 
-use super::Slave;
+use super::{Engine, Slave};
+use crate::error::{FmiError, Status};
 use crate::guards;
 use crate::phase::Phase;
-use crate::{FmiError, Status};
 use tdvass::exchange::{ContactEvent, EVENT_INDICATORS, ModelExchange, nominals};
 use tdvass::solver::CONTINUOUS_STATES;
 
@@ -41,12 +41,12 @@ pub struct StepCompletion {
 impl Slave {
     /// Whether the instance was made for Model Exchange.
     pub fn is_model_exchange(&self) -> bool {
-        self.model_exchange
+        self.state.engine.is_model_exchange()
     }
 
     /// Makes the instance a Model Exchange instance (at instantiation).
     pub fn use_model_exchange(&mut self) {
-        self.model_exchange = true;
+        self.state.engine = Engine::ModelExchange(None);
     }
 
     /// The model of the current settings at the start time (checked as
@@ -64,7 +64,7 @@ impl Slave {
 
     /// The running model: Model Exchange after initialization.
     pub(super) fn exchange(&mut self) -> Result<&mut ModelExchange, FmiError> {
-        self.state.exchange.as_mut().ok_or_else(|| {
+        self.state.engine.exchange_mut().ok_or_else(|| {
             FmiError::error("no Model Exchange model: the instance is not initialized")
         })
     }
@@ -73,7 +73,7 @@ impl Slave {
     /// starts at the start time, in Event Mode.
     pub(super) fn exit_initialization_to_event_mode(&mut self) -> Result<Status, FmiError> {
         let model = self.build_exchange()?;
-        self.state.exchange = Some(model);
+        self.state.engine = Engine::ModelExchange(Some(Box::new(model)));
         self.state.phase = Phase::EventMode;
         self.state.terminate_requested = false;
         let s = &self.state.settings;
@@ -215,10 +215,10 @@ impl Slave {
     /// The continuous states for a getter: Model Exchange's, the
     /// co-simulation's, or during initialization those of the start.
     pub(super) fn continuous_states(&mut self) -> Result<[f64; CONTINUOUS_STATES], FmiError> {
-        if let Some(model) = &self.state.exchange {
+        if let Some(model) = self.state.engine.exchange() {
             return Ok(*model.states());
         }
-        match self.state.sim.as_mut() {
+        match self.state.engine.simulator_mut() {
             Some(sim) => Ok(sim.continuous_states()),
             None => Ok(*self.build_exchange()?.states()),
         }
@@ -226,10 +226,10 @@ impl Slave {
 
     /// The derivatives of [`Self::continuous_states`].
     pub(super) fn state_derivatives(&mut self) -> Result<[f64; CONTINUOUS_STATES], FmiError> {
-        if let Some(model) = self.state.exchange.as_mut() {
+        if let Some(model) = self.state.engine.exchange_mut() {
             return Ok(model.derivatives()?);
         }
-        match self.state.sim.as_mut() {
+        match self.state.engine.simulator_mut() {
             Some(sim) => Ok(sim.continuous_state_derivatives()),
             None => Ok(self.build_exchange()?.derivatives()?),
         }
@@ -238,10 +238,10 @@ impl Slave {
     /// The event indicators for a getter (the co-simulation: the margin
     /// without hysteresis).
     pub(super) fn event_indicator_values(&mut self) -> Result<[f64; EVENT_INDICATORS], FmiError> {
-        if let Some(model) = self.state.exchange.as_mut() {
+        if let Some(model) = self.state.engine.exchange_mut() {
             return Ok(model.event_indicators()?);
         }
-        match self.state.sim.as_mut() {
+        match self.state.engine.simulator_mut() {
             Some(sim) => {
                 let o = sim.outputs();
                 let limit = sim.static_load() / sim.config().params.k_t;

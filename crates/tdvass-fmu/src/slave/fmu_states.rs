@@ -2,9 +2,8 @@
 //! owned by the slave, and their serialized bytes.
 
 use super::{Slave, SlaveState};
-use crate::phase::Phase;
+use crate::error::{FmiError, Status};
 use crate::snapshot;
-use crate::{FmiError, Status};
 
 impl Slave {
     fn owned(&self, handle: usize) -> Result<&SlaveState, FmiError> {
@@ -47,13 +46,19 @@ impl Slave {
 
     /// `SetFMUstate`: only states of this instance are accepted.
     pub fn set_fmu_state(&mut self, handle: usize) -> Result<Status, FmiError> {
-        self.state = self.owned(handle)?.clone();
+        let mut restored = self.owned(handle)?.clone();
+        // A state from before initialization (deserialized ones do not say
+        // their kind then) takes the instance's.
+        if !restored.engine.is_running() {
+            restored.engine = self.state.engine.emptied();
+        }
+        self.state = restored;
         // A deserialized state carries no tables: build them here, not
         // in the next step.
-        if let Some(sim) = self.state.sim.as_mut() {
+        if let Some(sim) = self.state.engine.simulator_mut() {
             sim.reserve();
         }
-        if let Some(model) = self.state.exchange.as_mut() {
+        if let Some(model) = self.state.engine.exchange_mut() {
             model.reserve();
         }
         self.event(format_args!(
@@ -88,20 +93,13 @@ impl Slave {
             self.owned(handle)?;
         }
         let model = snapshot::deserialize(bytes, &self.token)?;
-        let model_exchange_state = model.exchange.is_some()
-            || matches!(model.phase, Phase::EventMode | Phase::ContinuousTimeMode);
-        if model_exchange_state != self.model_exchange && model.phase.is_simulating() {
-            let kind = |me: bool| {
-                if me {
-                    "Model Exchange"
-                } else {
-                    "Co-Simulation"
-                }
-            };
+        if model.engine.is_model_exchange() != self.state.engine.is_model_exchange()
+            && model.phase.is_simulating()
+        {
             return Err(FmiError::error(format!(
                 "a {} state cannot be restored into a {} instance",
-                kind(model_exchange_state),
-                kind(self.model_exchange)
+                model.engine.kind_name(),
+                self.state.engine.kind_name()
             )));
         }
         let handle = self.store(model, reuse)?;

@@ -1,6 +1,7 @@
 //! Logging of a slave: the master's sink and the categories switched on.
 
-use crate::{FmiError, LOG_CATEGORIES, Status};
+use crate::defaults::LOG_CATEGORIES;
+use crate::error::{FmiError, Status};
 use std::fmt;
 
 /// Bytes of a message formatted on the stack; a longer one is allocated.

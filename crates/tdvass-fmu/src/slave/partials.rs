@@ -4,9 +4,9 @@
 //! respect to the continuous states and the input.
 
 use super::Slave;
+use crate::error::{FmiError, Status};
 use crate::outputs::{Known, Linearization, OutputId};
 use crate::variables::{Access, Causality, Variable, by_vr};
-use crate::{FmiError, Status};
 use tdvass::exchange::Gradient;
 use tdvass::model::{V_S, Variant};
 use tdvass::solver::CONTINUOUS_STATES;
@@ -33,7 +33,7 @@ impl Slave {
     /// (`knowns`, the states addressed by the value references of the
     /// outputs `x_s` .. `v_t`).
     pub fn partials(&mut self, unknowns: &[u32], knowns: &[u32]) -> Result<Vec<f64>, FmiError> {
-        if self.state.exchange.is_some() {
+        if self.state.engine.exchange().is_some() {
             return self.exchange_partials(unknowns, knowns);
         }
         let known: Vec<Known> = knowns
@@ -204,7 +204,7 @@ impl Slave {
 
     fn linearization(&self) -> Result<Linearization, FmiError> {
         let preview;
-        let sim = match &self.state.sim {
+        let sim = match self.state.engine.simulator() {
             Some(sim) => sim,
             None => {
                 preview = self.build_simulator()?;

@@ -2,10 +2,11 @@
 //! slope or extrapolated) and the output derivatives.
 
 use super::{HOLD_WARNING_STEP, Slave};
+use crate::defaults::TIME_TOLERANCE;
+use crate::error::{FmiError, Status};
 use crate::guards;
 use crate::phase::Phase;
 use crate::variables::{Access, Causality, VarType, by_vr};
-use crate::{FmiError, Status, TIME_TOLERANCE};
 
 /// The slope of the straight line that continues the input over a step of
 /// length `h` from its last value `(t_k, x_k)` (the last of `values`, in
@@ -75,7 +76,7 @@ impl Slave {
                 "a step of {h} s from {t} s ends at {target} s, past the stop time {stop} s"
             )));
         }
-        let Some(sim) = self.state.sim.as_ref() else {
+        let Some(sim) = self.state.engine.simulator() else {
             return Err(no_simulator());
         };
         let (settings, step) = (&self.state.settings, sim.grid().step);
@@ -92,7 +93,7 @@ impl Slave {
     /// `target`: an internal grid node strictly between the current time
     /// and `target` (beyond the snap tolerance of each), if there is one.
     pub fn next_intermediate_time(&self, from: f64, target: f64) -> Option<f64> {
-        let sim = self.state.sim.as_ref()?;
+        let sim = self.state.engine.simulator()?;
         let now = sim.time();
         let interval = self.state.settings.intermediate_update_interval;
         let node = sim.node_at_or_after((from + interval).max(now));
@@ -114,7 +115,7 @@ impl Slave {
         } else {
             0.0
         };
-        let Some(sim) = self.state.sim.as_mut() else {
+        let Some(sim) = self.state.engine.simulator_mut() else {
             return Err(no_simulator());
         };
         if pending && settings.road_is_input() {
@@ -127,7 +128,7 @@ impl Slave {
         // The lift-offs up to where the simulation stopped, whatever the
         // outcome.
         self.log_lift_offs();
-        let Some(sim) = self.state.sim.as_mut() else {
+        let Some(sim) = self.state.engine.simulator_mut() else {
             return Err(no_simulator());
         };
         match advanced {
@@ -197,7 +198,7 @@ impl Slave {
     /// reached; those the simulator did not keep are counted in one more
     /// message.
     fn log_lift_offs(&mut self) {
-        let Some(sim) = self.state.sim.as_ref() else {
+        let Some(sim) = self.state.engine.simulator() else {
             return;
         };
         let log = sim.lift_offs();
@@ -218,7 +219,7 @@ impl Slave {
                 "{function}: ... and {dropped} more lift-offs up to t = {now} s, not listed one by one (`lift_off_count` counts every one)"
             ));
         }
-        if let Some(sim) = self.state.sim.as_mut() {
+        if let Some(sim) = self.state.engine.simulator_mut() {
             sim.clear_lift_offs();
         }
     }
@@ -334,7 +335,7 @@ impl Slave {
         orders: &[i32],
         values: &mut [f64],
     ) -> Result<Status, FmiError> {
-        let Some(sim) = self.state.sim.as_mut() else {
+        let Some(sim) = self.state.engine.simulator_mut() else {
             return Err(no_simulator());
         };
         let derivatives = sim.output_derivatives();

@@ -1,7 +1,8 @@
 //! Getting and setting values by value reference: type checks, range and
 //! limit checks, and tunable parameters reaching the running simulation.
 
-use super::{Slave, SpectrumCache};
+use super::{Engine, Slave, SpectrumCache};
+use crate::error::{FmiError, Status};
 use crate::guards;
 use crate::outputs::OutputId;
 use crate::phase::Phase;
@@ -9,7 +10,6 @@ use crate::variables::{
     Access, Calculated, Causality, Dimension, FmiVersion, VarType, Variability, Variable, by_name,
     by_vr,
 };
-use crate::{FmiError, Status};
 use tdvass::analysis::spectrum::CharacteristicRootSolver;
 use tdvass::model::Variant;
 use tdvass::solver::{Instantaneous, Outputs, TimeAverages};
@@ -99,10 +99,10 @@ impl Slave {
     /// A non-finite output is never handed out (a last line of defence:
     /// the states are bounded at every step).
     fn outputs(&mut self) -> Result<Outputs, FmiError> {
-        let outputs = match (self.state.exchange.as_mut(), self.state.sim.as_mut()) {
-            (Some(model), _) => model.outputs(),
-            (None, Some(sim)) => sim.outputs(),
-            (None, None) => self.build_simulator()?.outputs(),
+        let outputs = match &mut self.state.engine {
+            Engine::ModelExchange(Some(model)) => model.outputs(),
+            Engine::CoSimulation(Some(sim)) => sim.outputs(),
+            _ => self.build_simulator()?.outputs(),
         };
         match guards::non_finite_output(&outputs) {
             None => Ok(outputs),
@@ -116,10 +116,10 @@ impl Slave {
     /// The time averages among the outputs now ([`Self::outputs`] has
     /// them too, at more cost).
     fn time_averages(&mut self) -> Result<TimeAverages, FmiError> {
-        if self.state.exchange.is_some() {
+        if self.state.engine.exchange().is_some() {
             return Ok(self.outputs()?.time_averages());
         }
-        Ok(match self.state.sim.as_mut() {
+        Ok(match self.state.engine.simulator_mut() {
             Some(sim) => sim.time_averages(),
             None => self.build_simulator()?.time_averages(),
         })
@@ -128,7 +128,7 @@ impl Slave {
     /// The instantaneous outputs now ([`Self::outputs`] has them too, at
     /// more cost).
     fn instantaneous(&mut self) -> Result<Instantaneous, FmiError> {
-        if self.state.exchange.is_some() {
+        if self.state.engine.exchange().is_some() {
             let o = self.outputs()?;
             return Ok(Instantaneous {
                 time: o.time,
@@ -139,7 +139,7 @@ impl Slave {
                 dynamic_tire_load: o.dynamic_tire_load,
             });
         }
-        Ok(match self.state.sim.as_mut() {
+        Ok(match self.state.engine.simulator_mut() {
             Some(sim) => sim.instantaneous(),
             None => self.build_simulator()?.instantaneous(),
         })
@@ -405,7 +405,7 @@ impl Slave {
         };
         set(&mut self.state.settings, value);
         let weights = self.state.settings.weights();
-        match (var.name, self.state.sim.as_mut()) {
+        match (var.name, self.state.engine.simulator_mut()) {
             ("x_g", _) => {
                 self.state.input_slope = 0.0;
                 self.state.input_slope_given = false;
@@ -418,7 +418,7 @@ impl Slave {
             ("w_ba" | "w_sdd" | "w_tdd", Some(sim)) => sim.set_weights(weights),
             _ => {}
         }
-        if let Some(model) = self.state.exchange.as_mut() {
+        if let Some(model) = self.state.engine.exchange_mut() {
             match var.name {
                 "x_g" => model.set_road_input(value)?,
                 "g" => model.set_gain(value)?,

@@ -108,7 +108,7 @@ fn start_values_are_admissible_and_match_the_library_defaults() {
         config,
         SimulationConfig {
             metrics: tdvass::solver::Metrics::Comfort,
-            communication_step: crate::DEFAULT_STEP_SIZE,
+            communication_step: crate::defaults::DEFAULT_STEP_SIZE,
             ..SimulationConfig::default()
         }
     );

@@ -1,0 +1,153 @@
+//! What an FMU state copies: the slave's life-cycle phase, settings,
+//! input bookkeeping and the engine that integrates the instance. Below
+//! the slave and the byte format of FMU states ([`crate::snapshot`]), which
+//! both use it.
+
+use crate::phase::Phase;
+use crate::settings::Settings;
+use tdvass::exchange::ModelExchange;
+use tdvass::solver::Simulator;
+
+/// What integrates an instance: the kind it was made for (at
+/// instantiation) and, from the end of initialization on, its model. One
+/// value, so that a Co-Simulation instance never holds a Model Exchange
+/// model or the other way round.
+#[derive(Debug, Clone)]
+pub enum Engine {
+    /// The precise integration by the FMU itself (`DoStep`).
+    CoSimulation(Option<Box<Simulator>>),
+    /// The master's solver integrates the states (`GetDerivatives`).
+    ModelExchange(Option<Box<ModelExchange>>),
+}
+
+impl Engine {
+    /// Whether the instance was made for Model Exchange.
+    pub fn is_model_exchange(&self) -> bool {
+        matches!(self, Engine::ModelExchange(_))
+    }
+
+    /// The same kind, without a model (before initialization).
+    pub fn emptied(&self) -> Engine {
+        match self {
+            Engine::CoSimulation(_) => Engine::CoSimulation(None),
+            Engine::ModelExchange(_) => Engine::ModelExchange(None),
+        }
+    }
+
+    /// Whether a model runs (after initialization).
+    pub fn is_running(&self) -> bool {
+        matches!(
+            self,
+            Engine::CoSimulation(Some(_)) | Engine::ModelExchange(Some(_))
+        )
+    }
+
+    /// The kind's name in messages.
+    pub fn kind_name(&self) -> &'static str {
+        match self {
+            Engine::CoSimulation(_) => "Co-Simulation",
+            Engine::ModelExchange(_) => "Model Exchange",
+        }
+    }
+
+    /// The co-simulation's simulator, if it runs.
+    pub fn simulator(&self) -> Option<&Simulator> {
+        match self {
+            Engine::CoSimulation(Some(sim)) => Some(sim),
+            _ => None,
+        }
+    }
+
+    /// The co-simulation's simulator, if it runs.
+    pub fn simulator_mut(&mut self) -> Option<&mut Simulator> {
+        match self {
+            Engine::CoSimulation(Some(sim)) => Some(sim),
+            _ => None,
+        }
+    }
+
+    /// The Model Exchange model, if it runs.
+    pub fn exchange(&self) -> Option<&ModelExchange> {
+        match self {
+            Engine::ModelExchange(Some(model)) => Some(model),
+            _ => None,
+        }
+    }
+
+    /// The Model Exchange model, if it runs.
+    pub fn exchange_mut(&mut self) -> Option<&mut ModelExchange> {
+        match self {
+            Engine::ModelExchange(Some(model)) => Some(model),
+            _ => None,
+        }
+    }
+}
+
+/// Everything that makes up an FMU state (what getting an FMU state copies
+/// and serializing it writes).
+#[derive(Debug, Clone)]
+pub struct SlaveState {
+    /// Where the slave is in its life cycle.
+    pub phase: Phase,
+    /// Parameter and input values.
+    pub settings: Settings,
+    /// Slope of `x_g` (m/s) set by `an input derivative`.
+    pub input_slope: f64,
+    /// `x_g` or its slope changed since they were last applied to the road.
+    pub input_pending: bool,
+    /// The slope came from `an input derivative` (since `x_g` was
+    /// last set); it then takes precedence over `input_extrapolation`.
+    pub input_slope_given: bool,
+    /// `(t, x_g)` of the last value applied at a communication point: the
+    /// earlier of the two values that `input_extrapolation = 1` uses.
+    pub previous_input: Option<(f64, f64)>,
+    /// `(t, x_g)` of the value applied before `previous_input` (the third
+    /// value of `input_extrapolation = 2`).
+    pub earlier_input: Option<(f64, f64)>,
+    /// The hold warning of a communication step was logged.
+    pub hold_warned: bool,
+    /// The first loss of tire contact was logged (bilateral tire; the
+    /// unilateral tire logs every lift-off as an event instead).
+    pub contact_warned: bool,
+    /// Start time from `the experiment set-up` (s).
+    pub start_time: f64,
+    /// Stop time from `the experiment set-up`, if defined (s).
+    pub stop_time: Option<f64>,
+    /// End of the last successful communication step (s).
+    pub last_successful_time: f64,
+    /// The FMU asks the master to terminate (after a divergence).
+    pub terminate_requested: bool,
+    /// The kind of instance and, from the end of initialization on, what
+    /// integrates it.
+    pub engine: Engine,
+}
+
+impl SlaveState {
+    /// A freshly instantiated model of the kind `engine` says: start
+    /// values, no simulation.
+    pub fn new(engine: Engine) -> SlaveState {
+        SlaveState {
+            phase: Phase::Instantiated,
+            settings: Settings::start_values(),
+            input_slope: 0.0,
+            input_pending: false,
+            input_slope_given: false,
+            previous_input: None,
+            earlier_input: None,
+            hold_warned: false,
+            contact_warned: false,
+            start_time: crate::defaults::DEFAULT_START_TIME,
+            stop_time: None,
+            last_successful_time: crate::defaults::DEFAULT_START_TIME,
+            terminate_requested: false,
+            engine: engine.emptied(),
+        }
+    }
+}
+
+impl Default for SlaveState {
+    /// A Co-Simulation instance's.
+    fn default() -> Self {
+        SlaveState::new(Engine::CoSimulation(None))
+    }
+}
