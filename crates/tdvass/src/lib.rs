@@ -7,7 +7,9 @@
 //!
 //! The physics is a plain, safe library:
 //! - [`model`]: parameters (Table 1), the three variants, the state-space
-//!   matrices of Eq. (2) and the outputs BA, SDD, TDD;
+//!   matrices of Eq. (2) and the outputs BA, SDD, TDD, and the dynamics
+//!   both engines share ([`model::dynamics`]: the continuous states, the
+//!   plant in each tire mode, the tire's laws, the rates);
 //! - [`exchange`]: the same model for Model Exchange, an ODE with events
 //!   and a delay history that a master's own solver integrates;
 //! - [`solver`]: the precise (fine) integration method for the delay

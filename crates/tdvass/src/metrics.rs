@@ -1,5 +1,7 @@
-//! RMS values of BA, SDD, TDD, the objective J of Eq. (6) and the sums of
-//! squares the solver keeps for them.
+//! RMS values of BA, SDD, TDD, the objective J of Eq. (6), the sums of
+//! squares the solver keeps for them, and the time averages every output
+//! reports from the integrals of the continuous states
+//! ([`time_averages`]: both engines read them so).
 
 use crate::model::Performance;
 
@@ -92,6 +94,78 @@ impl RunningRms {
     }
 }
 
+/// The time averages from the integrals `∫ y² dt` and `∫ a_w⁴ dt`.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Averages {
+    /// RMS BA, SDD, TDD.
+    pub rms: RmsValues,
+    /// J of Eq. (6).
+    pub objective: f64,
+    /// RMS(a_w) (m/s²).
+    pub rms_weighted_acceleration: f64,
+    /// VDV (m/s^1.75).
+    pub vibration_dose_value: f64,
+    /// `k_t RMS(TDD) / W`.
+    pub dynamic_tire_load_ratio: f64,
+}
+
+/// The time averages over `duration` (s) of the integrals `integral`
+/// (the first five of [`crate::model::dynamics::INTEGRAL_NAMES`]; negative
+/// rounding counts as 0):
+/// `sqrt(∫y²/duration)` (0 before any time has passed), J with `weights`,
+/// `VDV = (∫a_w⁴)^{1/4}`, and the tire-load ratio with `k_t` (N/m) and
+/// the static load W (N).
+pub fn time_averages(
+    integral: &[f64],
+    duration: f64,
+    weights: &Weights,
+    k_t: f64,
+    static_load: f64,
+) -> Averages {
+    let rms = rms_values(integral, duration);
+    let (rms_weighted_acceleration, vibration_dose_value) =
+        weighted_averages(integral[3], integral[4], duration);
+    Averages {
+        rms,
+        objective: rms.objective(weights),
+        rms_weighted_acceleration,
+        vibration_dose_value,
+        dynamic_tire_load_ratio: tire_load_ratio(k_t, rms.tire_deflection, static_load),
+    }
+}
+
+/// `(RMS(a_w), VDV)` from `∫ a_w² dt` and `∫ a_w⁴ dt` over `duration`:
+/// `sqrt(∫a_w²/duration)` (0 before any time has passed) and
+/// `(∫a_w⁴)^{1/4}`.
+pub fn weighted_averages(square: f64, fourth: f64, duration: f64) -> (f64, f64) {
+    let rms = if duration > 0.0 {
+        (square.max(0.0) / duration).sqrt()
+    } else {
+        0.0
+    };
+    (rms, fourth.max(0.0).sqrt().sqrt())
+}
+
+/// The running RMS of the dynamic tire load over the static load W (N):
+/// `k_t RMS(TDD) / W`, k_t (N/m), RMS(TDD) (m).
+pub fn tire_load_ratio(k_t: f64, rms_tire_deflection: f64, static_load: f64) -> f64 {
+    k_t * rms_tire_deflection / static_load
+}
+
+/// The running RMS values of BA, SDD and TDD from their integrals
+/// `∫ y² dt` over `duration` (all 0 before any time has passed).
+pub fn rms_values(integral: &[f64], duration: f64) -> RmsValues {
+    if duration <= 0.0 {
+        return RmsValues::default();
+    }
+    let rms = |i: usize| (integral[i].max(0.0) / duration).sqrt();
+    RmsValues {
+        body_acceleration: rms(0),
+        suspension_deflection: rms(1),
+        tire_deflection: rms(2),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -113,5 +187,18 @@ mod tests {
         assert_eq!(v.tire_deflection, 2.0);
         let j = v.objective(&Weights::default());
         assert!((j - (0.4 * 12.5f64.sqrt() + 0.2 + 0.8)).abs() < 1e-15);
+    }
+
+    #[test]
+    fn the_averages_are_zero_at_the_start_and_follow_the_integrals() {
+        let weights = Weights::default();
+        let zero = time_averages(&[1.0; 5], 0.0, &weights, 1.0, 1.0);
+        assert_eq!(zero.rms, RmsValues::default());
+        assert_eq!(zero.rms_weighted_acceleration, 0.0);
+        let later = time_averages(&[4.0, 9.0, 16.0, 25.0, 16.0], 1.0, &weights, 2.0, 8.0);
+        assert_eq!(later.rms.tire_deflection, 4.0);
+        assert_eq!(later.rms_weighted_acceleration, 5.0);
+        assert_eq!(later.vibration_dose_value, 2.0);
+        assert_eq!(later.dynamic_tire_load_ratio, 1.0);
     }
 }

@@ -10,6 +10,8 @@ use crate::error::{FmiError, Status};
 use crate::guards;
 use crate::phase::Phase;
 use tdvass::exchange::{ContactEvent, EVENT_INDICATORS, ModelExchange, nominals};
+use tdvass::model::X_T;
+use tdvass::model::dynamics::contact_margin;
 use tdvass::solver::CONTINUOUS_STATES;
 
 /// What an event update tells the master (FMI 2.0 `fmi2EventInfo`, the
@@ -245,7 +247,7 @@ impl Slave {
             Some(sim) => {
                 let o = sim.outputs();
                 let limit = sim.static_load() / sim.config().params.k_t;
-                Ok([limit - o.performance.tire_deflection])
+                Ok([contact_margin(limit, o.state[X_T], o.road_displacement)])
             }
             None => Ok(self.build_exchange()?.event_indicators()?),
         }

@@ -55,6 +55,7 @@
 //! ([`DelayHistory::trim`]); at most [`MAX_HISTORY_POINTS`] are kept (the
 //! oldest give way, and [`DelayHistory::earliest_time`] moves on).
 
+use crate::model::dynamics;
 use std::collections::VecDeque;
 
 /// Most points kept (40 MiB).
@@ -181,15 +182,10 @@ fn rounding(t: f64) -> f64 {
     SAME_INSTANT * t.abs().max(1.0)
 }
 
-/// `p(s)` of the cubic through `(t0, x0, v0)` and `(t1, x1, v1)`, `t0 < t1`.
+/// `p(s)` of the cubic through `(t0, x0, v0)` and `(t1, x1, v1)`, `t0 < t1`
+/// (the model's interpolant, [`dynamics::hermite`]).
 fn hermite(s: f64, (t0, x0, v0): (f64, f64, f64), (t1, x1, v1): (f64, f64, f64)) -> f64 {
-    let h = t1 - t0;
-    let theta = (s - t0) / h;
-    let rest = 1.0 - theta;
-    x0 * (1.0 + 2.0 * theta) * rest * rest
-        + h * v0 * theta * rest * rest
-        + x1 * theta * theta * (3.0 - 2.0 * theta)
-        - h * v1 * theta * theta * rest
+    dynamics::hermite([x0, v0, x1, v1], t1 - t0, s - t0)[0]
 }
 
 /// `(∂p/∂x1, ∂p/∂v1)` of [`hermite`]: the weights of the right end.

@@ -148,17 +148,14 @@ impl ModelExchange {
         let mut states = [[0.0; CONTINUOUS_STATES]; CONTINUOUS_STATES];
         let mut road_input = [0.0; CONTINUOUS_STATES];
         let flying = self.flying();
-        let matrix = if flying {
-            self.flight_matrix
-        } else {
-            self.plant.a
-        };
+        let m = &self.matrices;
+        let matrix = if flying { m.flight } else { m.contact };
         for (i, row) in states.iter_mut().enumerate().take(6) {
             for (j, value) in row.iter_mut().enumerate().take(6) {
                 *value = matrix[(i, j)];
             }
-            row[X_T] += self.plant.b[i] * delayed.by_position;
-            row[V_T] += self.plant.b[i] * delayed.by_velocity;
+            row[X_T] += m.feedback[i] * delayed.by_position;
+            row[V_T] += m.feedback[i] * delayed.by_velocity;
             if p.road_is_input && !flying {
                 road_input[i] = self.plant.e[i];
             }

@@ -52,6 +52,14 @@
 //! Outputs that are extrema or counts (the largest |SDD|, the lift-offs)
 //! are updated at completed integrator steps and events.
 //!
+//! **One model.** The plant's right-hand side in each tire mode, the
+//! tire's laws, the fold of a short delay, the delayed input's
+//! interpolant and the rates of the continuous states are those of
+//! [`crate::model::dynamics`], and the time averages
+//! [`crate::metrics::time_averages`]: the functions the co-simulation
+//! builds its operators and outputs from ([`ModelExchange::mode_rates`]
+//! equals [`Simulator::mode_rates`] to the bit).
+//!
 //! Layer: exchange (docs/architecture.md); it imports the crate's `comfort`,
 //! `error`, `limits`, `metrics`, `model`, `road` and the solver's public
 //! configuration and report types.
@@ -67,13 +75,18 @@ pub use persist::EXCHANGE_FORMAT_VERSION;
 
 use crate::comfort::{WK_STATES, WkStateSpace, wk_state_space};
 use crate::error::{Error, Result};
-use crate::limits::{DIVERGENCE_BOUNDS, check_config};
-use crate::metrics::RmsValues;
-use crate::model::{Performance, Plant, STATE_NAMES, State, V_H, V_T, Variant, X_H, X_S, X_T};
+use crate::limits::DIVERGENCE_BOUNDS;
+use crate::metrics::time_averages;
+use crate::model::dynamics::{
+    CONTINUOUS_STATES, FILTER_STATES_AT, INTEGRAL_NAMES, INTEGRALS_AT, Instant, contact_margin,
+    continuous_rates, flight_input, flight_matrix, folded_delay, folded_feedback, plant_rates,
+    tire_load,
+};
+use crate::model::{Performance, Plant, STATE_NAMES, State, V_T, X_S, X_T};
 use crate::road::Road;
 use crate::solver::{
-    CONTINUOUS_STATES, ComfortValues, ContactLoss, FILTER_STATES_AT, INTEGRAL_NAMES, INTEGRALS_AT,
-    MIN_RESOLVED_DELAY, Metrics, Outputs, RoadHolding, SimulationConfig,
+    ComfortValues, ContactLoss, MIN_RESOLVED_DELAY, Metrics, Outputs, RoadHolding,
+    SimulationConfig, Simulator,
 };
 use nalgebra::{Matrix6, SVector};
 
@@ -99,6 +112,35 @@ enum Delay {
     Folded(f64),
     /// From the history of evaluated points.
     History(DelayHistory),
+}
+
+/// The plant's matrices as the co-simulation's operators have them.
+#[derive(Debug, Clone, PartialEq)]
+struct Matrices {
+    /// In contact: A, with the feedback `g (x_t − tau v_t)` folded in
+    /// where the delay is folded or there is no controller (as the
+    /// co-simulation folds it).
+    contact: Matrix6<f64>,
+    /// In flight: `contact + e c_tᵀ` ([`flight_matrix`]).
+    flight: Matrix6<f64>,
+    /// The delayed input's column: b, or zero where folded.
+    feedback: State,
+}
+
+impl Matrices {
+    /// The matrices of `plant` for the delay `delay`.
+    fn of(plant: &Plant, delay: &Delay) -> Matrices {
+        let (contact, feedback) = match delay {
+            Delay::History(_) => (plant.a, plant.b),
+            Delay::Folded(tau) => folded_feedback(plant, *tau),
+            Delay::None => folded_feedback(plant, 0.0),
+        };
+        Matrices {
+            flight: flight_matrix(&contact, &plant.e),
+            contact,
+            feedback,
+        }
+    }
 }
 
 /// The discrete state: the contact mode and what events update.
@@ -130,8 +172,8 @@ pub enum ContactEvent {
 pub struct ModelExchange {
     config: SimulationConfig,
     plant: Plant,
-    /// `A + e c_tᵀ`: the plant matrix in flight.
-    flight_matrix: Matrix6<f64>,
+    /// The plant's matrices as the co-simulation's operators have them.
+    matrices: Matrices,
     wk: WkStateSpace,
     road: Road,
     /// W/k_t (m).
@@ -182,23 +224,10 @@ pub fn nominals() -> [f64; CONTINUOUS_STATES] {
 impl ModelExchange {
     /// The model of `config` at its start time and initial state (the
     /// tolerance and the internal step of the co-simulation play no part).
-    /// The configuration is checked as the simulator checks it.
+    /// The configuration is checked by the one check
+    /// ([`Simulator::check_config`]).
     pub fn new(config: SimulationConfig) -> Result<ModelExchange> {
-        check_config(
-            &config.params,
-            config.variant,
-            &config.road,
-            &config.initial_state,
-            &config.weights,
-        )?;
-        if !config.start_time.is_finite() {
-            return Err(Error::InvalidParameter {
-                name: "start_time",
-                value: config.start_time,
-                reason: "must be finite",
-            });
-        }
-        let plant = Plant::new(config.params, config.variant)?;
+        let plant = Simulator::check_config(&config)?;
         let max_time = Self::time_bound(&config);
         if config.start_time.abs() > max_time {
             return Err(Error::InvalidTime {
@@ -208,16 +237,10 @@ impl ModelExchange {
             });
         }
         let k_t = config.params.k_t;
-        let mut flight_matrix = plant.a;
-        flight_matrix[(V_T, X_T)] += plant.e[V_T];
         let static_load = config.params.static_load(config.variant);
         let mut road = Road::new(&config.road, config.start_time)?;
         let t0 = config.start_time;
-        let mut x = config.initial_state;
-        if config.variant == Variant::Cs {
-            x[X_H] = x[X_T];
-            x[V_H] = x[V_T];
-        }
+        let x = plant.reported_state(&config.initial_state);
         let tau = config.params.tau;
         let delay = if !config.variant.has_control() {
             Delay::None
@@ -227,13 +250,13 @@ impl ModelExchange {
             Delay::History(DelayHistory::new(t0, x[X_T], x[V_T], tau))
         };
         let limit = static_load / k_t;
-        let margin = limit - (x[X_T] - road.value(t0));
+        let margin = contact_margin(limit, x[X_T], road.value(t0));
         let in_contact = margin >= 0.0;
         let mut states = [0.0; CONTINUOUS_STATES];
         states[..6].copy_from_slice(x.as_slice());
         let mut model = ModelExchange {
+            matrices: Matrices::of(&plant, &delay),
             plant,
-            flight_matrix,
             wk: wk_state_space(),
             road,
             limit,
@@ -324,8 +347,7 @@ impl ModelExchange {
             ..self.config.params
         };
         let plant = Plant::new(params, self.config.variant)?;
-        self.flight_matrix = plant.a;
-        self.flight_matrix[(V_T, X_T)] += plant.e[V_T];
+        self.matrices = Matrices::of(&plant, &self.delay);
         self.plant = plant;
         self.config.params = params;
         Ok(())
@@ -360,7 +382,7 @@ impl ModelExchange {
                 by_velocity: 0.0,
             },
             Delay::Folded(tau) => Delayed {
-                value: x[X_T] - tau * x[V_T],
+                value: folded_delay(&self.plant_state(), *tau),
                 by_position: 1.0,
                 by_velocity: -tau,
             },
@@ -411,40 +433,44 @@ impl ModelExchange {
         let t = self.time;
         let x = self.plant_state();
         let road = self.road.value(t);
-        let mut dx = if self.flying() {
-            self.flight_matrix * x + self.plant.b * delayed - self.plant.e * self.limit
+        let flying = self.flying();
+        let road_input = if flying {
+            flight_input(self.limit)
         } else {
-            self.plant.derivative(&x, delayed, road)
+            road
         };
-        if self.config.variant == Variant::Cs {
-            dx[X_H] = dx[X_T];
-            dx[V_H] = dx[V_T];
-        }
+        let dx = self
+            .plant
+            .reported_state(&self.mode_rates(flying, &x, delayed, road_input));
         let body_acceleration = self.plant.body_acceleration(&x);
         let w = self.filter_state();
-        let dw = self.wk.derivative(&w, body_acceleration);
-        let weighted = self.wk.weighted_acceleration(&w, body_acceleration);
-        let sdd = x[X_S] - x[X_T];
-        let tdd = x[X_T] - road;
-        let mut rates = [0.0; CONTINUOUS_STATES];
-        rates[..6].copy_from_slice(dx.as_slice());
-        rates[FILTER_STATES_AT..INTEGRALS_AT].copy_from_slice(dw.as_slice());
-        let squared = weighted * weighted;
-        rates[INTEGRALS_AT..].copy_from_slice(&[
-            body_acceleration * body_acceleration,
-            sdd * sdd,
-            tdd * tdd,
-            squared,
-            squared * squared,
-            if self.discrete.in_contact { 0.0 } else { 1.0 },
-        ]);
-        rates
+        let now = Instant {
+            body_acceleration,
+            suspension_deflection: x[X_S] - x[X_T],
+            tire_deflection: x[X_T] - road,
+            weighted_acceleration: self.wk.weighted_acceleration(&w, body_acceleration),
+            contact_lost: if self.discrete.in_contact { 0.0 } else { 1.0 },
+        };
+        continuous_rates(&dx, &w, Some(&self.wk), &now)
+    }
+
+    /// The right-hand side of the plant in the tire's mode `flight`:
+    /// `Ẋ = A_m X + b u + e r_m` ([`plant_rates`]) at the state `x`, the
+    /// delayed input `delayed` (m) and the road column's input
+    /// `road_input` (m: the road in contact, `−W/k_t` in flight), with the
+    /// matrices of the co-simulation's operators (the feedback folded in
+    /// below the delay it resolves): what
+    /// [`Simulator::mode_rates`] evaluates too.
+    pub fn mode_rates(&self, flight: bool, x: &State, delayed: f64, road_input: f64) -> State {
+        let m = &self.matrices;
+        let a = if flight { &m.flight } else { &m.contact };
+        plant_rates(a, &m.feedback, &self.plant.e, x, delayed, road_input)
     }
 
     /// The margin `W/k_t − (x_t − x_g)` (m) now.
     fn margin(&mut self) -> f64 {
         let road = self.road.value(self.time);
-        self.limit - (self.states[X_T] - road)
+        contact_margin(self.limit, self.states[X_T], road)
     }
 
     /// The event indicators (module documentation); one that is not
@@ -549,45 +575,34 @@ impl ModelExchange {
         let road = self.road.value(t);
         let delayed = self.delayed_now().value;
         let performance = Performance::at(&self.plant, &x, road);
-        let duration = t - self.config.start_time;
-        let integral = &self.states[INTEGRALS_AT..];
-        let rms_of = |i: usize| {
-            if duration > 0.0 {
-                (integral[i].max(0.0) / duration).sqrt()
-            } else {
-                0.0
-            }
-        };
-        let rms = RmsValues {
-            body_acceleration: rms_of(0),
-            suspension_deflection: rms_of(1),
-            tire_deflection: rms_of(2),
-        };
         let k_t = self.config.params.k_t;
-        let w = self.filter_state();
-        let dynamic_tire_load = if self.flying() {
-            -self.static_load
-        } else {
-            k_t * (road - x[X_T])
-        };
         let static_load = self.static_load;
+        let averages = time_averages(
+            &self.states[INTEGRALS_AT..],
+            t - self.config.start_time,
+            &self.config.weights,
+            k_t,
+            static_load,
+        );
+        let w = self.filter_state();
+        let unilateral = self.config.tire_contact.is_unilateral();
         Outputs {
             time: t,
             state: x,
             performance,
             road_displacement: road,
             control_force: self.config.params.effective_gain(self.config.variant) * delayed,
-            rms,
-            objective: rms.objective(&self.config.weights),
+            rms: averages.rms,
+            objective: averages.objective,
             comfort: Some(ComfortValues {
                 weighted_body_acceleration: self
                     .wk
                     .weighted_acceleration(&w, performance.body_acceleration),
-                rms_weighted_body_acceleration: rms_of(3),
-                vibration_dose_value: integral[4].max(0.0).sqrt().sqrt(),
+                rms_weighted_body_acceleration: averages.rms_weighted_acceleration,
+                vibration_dose_value: averages.vibration_dose_value,
             }),
-            dynamic_tire_load,
-            rms_dynamic_tire_load_ratio: k_t * rms.tire_deflection / static_load,
+            dynamic_tire_load: tire_load(unilateral, k_t * (road - x[X_T]), static_load),
+            rms_dynamic_tire_load_ratio: averages.dynamic_tire_load_ratio,
             road_holding: Some(RoadHolding {
                 contact_loss_time: self.states[CONTACT_LOSS_TIME],
                 max_suspension_deflection: self

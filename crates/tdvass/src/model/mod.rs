@@ -6,6 +6,7 @@
 //! absorber coordinates carry no dynamics (their rows and columns of A are
 //! zero and they stay at zero); outputs report `x_h = x_t`, `v_h = v_t`.
 
+pub mod dynamics;
 mod equations;
 mod tire;
 
@@ -351,7 +352,7 @@ impl Plant {
     /// `A X + b x_t(t - tau) + e x_g`.
     #[inline]
     pub fn derivative(&self, x: &State, delayed_tire: f64, road: f64) -> State {
-        self.a * x + self.b * delayed_tire + self.e * road
+        dynamics::plant_rates(&self.a, &self.b, &self.e, x, delayed_tire, road)
     }
 
     /// Body acceleration BA = d²x_s/dt² (m/s²), first row of Eq. (26).

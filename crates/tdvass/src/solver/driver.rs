@@ -24,7 +24,7 @@ use super::deferred::{Deferred, Kind};
 use super::grid::DelayGrid;
 use super::holding::Holding;
 use super::inputs::Inputs;
-use super::integrals::{Accumulated, INTEGRALS, Squares, rms_from_integral};
+use super::integrals::{Accumulated, INTEGRALS, Squares};
 use super::kernel;
 use super::modes::Modes;
 use super::observers::Observers;
@@ -34,7 +34,9 @@ use super::stepping::stepping;
 use super::system::Filter;
 use super::trajectory::Trajectory;
 use crate::error::{Error, Result};
+use crate::metrics::rms_values;
 use crate::metrics::{RmsValues, Weights};
+use crate::model::dynamics::tire_load;
 use crate::model::{Params, Plant, State, V_T, Variant, X_T};
 use crate::road::{Road, RoadPiece};
 
@@ -698,11 +700,11 @@ impl Simulator {
     /// The tire load as the tire law gives it (N): `load` =
     /// `k_t (x_g − x_t)`, at least −W with the unilateral tire.
     pub(super) fn tire_load(&self, load: f64) -> f64 {
-        if self.config.tire_contact.is_unilateral() {
-            load.max(-self.static_load())
-        } else {
-            load
-        }
+        tire_load(
+            self.config.tire_contact.is_unilateral(),
+            load,
+            self.static_load(),
+        )
     }
 
     /// Puts the operators of the mode the holding state says, the contact
@@ -817,7 +819,7 @@ impl Simulator {
     /// The running RMS values at the current time.
     pub(super) fn rms_now(&mut self) -> RmsValues {
         let integral = self.rms_integral_now();
-        rms_from_integral(
+        rms_values(
             &integral,
             self.trajectory.current_time - self.config.start_time,
         )

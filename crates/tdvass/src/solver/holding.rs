@@ -38,6 +38,7 @@
 //!
 //! Layer: system (docs/architecture.md); it imports the crate's `model`.
 
+use crate::model::dynamics::contact_margin;
 use crate::model::{V_S, V_T, X_S, X_T};
 
 /// The bound factor 4/27 of the module documentation, rounded up.
@@ -164,7 +165,7 @@ pub(crate) fn largest_magnitude(length: f64, a: [f64; 2], b: [f64; 2]) -> f64 {
 /// `g' = x_g' − v_t`; `limit` = W/k_t (m).
 #[inline(always)]
 pub(crate) fn margin(limit: f64, x: &[f64; 6], road: f64, road_rate: f64) -> [f64; 2] {
-    [limit - (x[X_T] - road), road_rate - x[V_T]]
+    [contact_margin(limit, x[X_T], road), road_rate - x[V_T]]
 }
 
 /// What the whole-step loop needs to test its steps for contact loss.

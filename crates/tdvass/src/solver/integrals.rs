@@ -45,7 +45,7 @@
 use super::holding::{Holding, deflection, margin};
 use super::stepping::Stepping;
 use super::system::Filter;
-use crate::metrics::{RmsValues, RunningRms};
+use crate::metrics::RunningRms;
 use crate::model::{State, V_S, X_S, X_T};
 use crate::road::RoadPiece;
 
@@ -161,21 +161,6 @@ pub(crate) struct Accumulated {
     pub holding: Holding,
     /// The W_k filter state now (zero without the filter).
     pub filter: Filter,
-}
-
-/// RMS values from `∫ y²` over a duration (0 for a zero duration; a
-/// rounding-negative integral counts as 0).
-/// `integral` holds at least those of BA², SDD², TDD², in that order.
-pub(crate) fn rms_from_integral(integral: &[f64], duration: f64) -> RmsValues {
-    if duration <= 0.0 {
-        return RmsValues::default();
-    }
-    let rms = |i: usize| (integral[i].max(0.0) / duration).sqrt();
-    RmsValues {
-        body_acceleration: rms(0),
-        suspension_deflection: rms(1),
-        tire_deflection: rms(2),
-    }
 }
 
 impl Stepping<'_> {

@@ -7,21 +7,12 @@
 use crate::model::State;
 use nalgebra::{Matrix4, Matrix6, SMatrix, Vector4};
 
-/// Cubic Hermite interpolant of `x_t` over one grid interval of length h:
+/// The delayed input's cubic Hermite interpolant over one grid interval
+/// of length h ([`crate::model::dynamics::hermite`]), as a column:
 /// `[u, u', u'', u''']` at offset σ.
 #[inline]
 pub(super) fn hermite(nodes: [f64; 4], h: f64, offset: f64) -> Vector4<f64> {
-    let [x0, v0, x1, v1] = nodes;
-    let slope = (x1 - x0) / h;
-    let c2 = (3.0 * slope - 2.0 * v0 - v1) / h;
-    let c3 = (v0 + v1 - 2.0 * slope) / (h * h);
-    let s = offset;
-    Vector4::new(
-        x0 + s * (v0 + s * (c2 + s * c3)),
-        v0 + s * (2.0 * c2 + 3.0 * c3 * s),
-        2.0 * c2 + 6.0 * c3 * s,
-        6.0 * c3,
-    )
+    Vector4::from(crate::model::dynamics::hermite(nodes, h, offset))
 }
 
 /// The 4×4 matrix of [`hermite`]: `[u, u', u'', u''']` at offset σ is

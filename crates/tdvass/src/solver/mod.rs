@@ -94,6 +94,8 @@ mod trajectory;
 use crate::error::Result;
 pub use crate::limits::{DIVERGENCE_DISPLACEMENT, DIVERGENCE_VELOCITY};
 use crate::metrics::RmsValues;
+use crate::model::dynamics::plant_rates;
+use crate::model::{Plant, State};
 pub use config::{DEFAULT_TOLERANCE, Metrics, SimulationConfig, StepChoice};
 pub use contact::{LIFT_OFF_LOG, LiftOff, LiftOffLog, MAX_SWITCHES_PER_STEP};
 pub use driver::Simulator;
@@ -127,6 +129,29 @@ impl Simulator {
             }
             (choice, None) => Self::with_choice(config, choice),
         }
+    }
+
+    /// The one check of a configuration, whatever integrates it (this
+    /// simulator, Model Exchange): every value finite and in range, the
+    /// numerical limits of [`crate::limits::check_config`]; the plant it
+    /// describes. The tolerance and the internal step are the
+    /// simulator's own ([`Self::new`]).
+    pub fn check_config(config: &SimulationConfig) -> Result<Plant> {
+        Self::validate(config)
+    }
+
+    /// The right-hand side the operators of the tire's mode `flight`
+    /// integrate: `Ẋ = A_m X + b u + e r_m`
+    /// ([`crate::model::dynamics::plant_rates`]) at the state `x`, the
+    /// delayed input `delayed` (m) and the road column's input
+    /// `road_input` (m: the road in contact, `−W/k_t` in flight), with the
+    /// solver's matrices (the feedback folded in below the grid's
+    /// resolution). Model Exchange evaluates the same
+    /// ([`crate::exchange::ModelExchange::mode_rates`]).
+    pub fn mode_rates(&self, flight: bool, x: &State, delayed: f64, road_input: f64) -> State {
+        let e = &self.plant.e;
+        let a = self.modes.mode_matrix(flight, self.in_flight(), e);
+        plant_rates(&a, &self.modes.input_column, e, x, delayed, road_input)
     }
 
     /// Checks `config` as [`Self::new`] does and chooses its internal step

@@ -17,7 +17,8 @@ use super::linalg::infinity_norm;
 use super::operators::StepOperator;
 use super::system::FilterCoupling;
 use crate::error::{Error, Result};
-use crate::model::{Plant, State, V_T, X_T};
+use crate::model::dynamics::{flight_matrix, folded_feedback};
+use crate::model::{Plant, State};
 use nalgebra::Matrix6;
 
 /// Node k + 1 (its state and `(x_t, v_t)`) reached from `(from, state)`
@@ -86,21 +87,17 @@ impl Modes {
         grid: &DelayGrid,
         angular_frequency: f64,
     ) -> Result<Modes> {
-        let mut a = plant.a;
-        let mut b = plant.b;
-        if !grid.resolves_delay() {
+        let (a, b) = if grid.resolves_delay() {
+            (plant.a, plant.b)
+        } else {
             // u = g (x_t − tau v_t): fold the feedback into the plant.
             let tau = if config.variant.has_control() {
                 config.params.tau
             } else {
                 0.0
             };
-            for row in 0..6 {
-                a[(row, X_T)] += b[row];
-                a[(row, V_T)] -= tau * b[row];
-            }
-            b = State::zeros();
-        }
+            folded_feedback(plant, tau)
+        };
         let omega = angular_frequency;
         let (h, tau) = (grid.step, grid.inner_delay());
         let coupling = config
@@ -149,16 +146,27 @@ impl Modes {
         })
     }
 
+    /// The solver's plant matrix of the tire's mode `flight` (the feedback
+    /// folded in as in force), `in_flight` saying which mode is in force:
+    /// the matrix in force or the other mode's; flight's made from
+    /// contact's ([`flight_matrix`]) while its operators are not.
+    pub(super) fn mode_matrix(&self, flight: bool, in_flight: bool, e: &State) -> Matrix6<f64> {
+        if flight == in_flight {
+            return self.solver_matrix;
+        }
+        match &self.other_mode {
+            Some(other) => other.solver_matrix,
+            None => flight_matrix(&self.solver_matrix, e),
+        }
+    }
+
     /// The flight mode's operators for the contact plant matrix `contact`
     /// (the solver's, with any folded feedback): the tire's column of A
     /// gains the road column `e` of `plant`, whose input is then the
     /// constant −W/k_t.
     fn flight_operators(&self, plant: &Plant, contact: &Matrix6<f64>, h: f64) -> ModeOperators {
         let e = plant.e;
-        let mut a = *contact;
-        for row in 0..6 {
-            a[(row, X_T)] += e[row];
-        }
+        let a = flight_matrix(contact, &e);
         let (omega, b) = (self.angular_frequency, self.input_column);
         ModeOperators {
             solver_matrix_norm: infinity_norm(&a),

@@ -6,13 +6,15 @@
 //! `model`, `road`.
 
 use super::driver::Simulator;
-use super::integrals::{Accumulated, WEIGHTED_FOURTH, WEIGHTED_SQUARE, rms_from_integral};
+use super::integrals::{Accumulated, WEIGHTED_FOURTH, WEIGHTED_SQUARE};
 use super::reports::{
     CONTINUOUS_STATES, ComfortValues, ContactLoss, FILTER_STATES_AT, INTEGRAL_STATES, INTEGRALS_AT,
     Instantaneous, OutputDerivatives, Outputs, RoadHolding, TimeAverages,
 };
 use super::stepping::stepping;
 use crate::metrics::RmsValues;
+use crate::metrics::{rms_values, tire_load_ratio, weighted_averages};
+use crate::model::dynamics::{Instant, continuous_rates, plant_rates};
 use crate::model::{Performance, State, V_T, X_S, X_T};
 use crate::road::RoadPiece;
 
@@ -129,11 +131,15 @@ pub(super) fn time_averages(sim: &mut Simulator) -> TimeAverages {
 
 /// The time averages from the integrals `∫ y² dt` over `duration`.
 fn time_averages_of(sim: &Simulator, integral: &[f64], duration: f64) -> TimeAverages {
-    let rms = rms_from_integral(integral, duration);
+    let rms = rms_values(integral, duration);
     TimeAverages {
         rms,
         objective: rms.objective(&sim.config.weights),
-        rms_dynamic_tire_load_ratio: sim.config.params.k_t * rms.tire_deflection / static_load(sim),
+        rms_dynamic_tire_load_ratio: tire_load_ratio(
+            sim.config.params.k_t,
+            rms.tire_deflection,
+            static_load(sim),
+        ),
     }
 }
 
@@ -247,15 +253,15 @@ fn contact_loss_at(sim: &Simulator, time: f64) -> ContactLoss {
 
 fn comfort_values(sim: &Simulator, now: &Accumulated, duration: f64) -> Option<ComfortValues> {
     let coupling = sim.modes.coupling.as_ref()?;
-    let rms = if duration > 0.0 {
-        (now.integral[WEIGHTED_SQUARE].max(0.0) / duration).sqrt()
-    } else {
-        0.0
-    };
+    let (rms, dose) = weighted_averages(
+        now.integral[WEIGHTED_SQUARE],
+        now.integral[WEIGHTED_FOURTH],
+        duration,
+    );
     Some(ComfortValues {
         weighted_body_acceleration: coupling.weighted(&now.filter),
         rms_weighted_body_acceleration: rms,
-        vibration_dose_value: now.integral[WEIGHTED_FOURTH].max(0.0).sqrt().sqrt(),
+        vibration_dose_value: dose,
     })
 }
 
@@ -269,7 +275,14 @@ pub(super) fn output_derivatives(sim: &mut Simulator) -> OutputDerivatives {
     let (delayed, delayed_rate) = delayed_tire_now(sim);
     let b = sim.modes.input_column;
     let drive = stepping!(sim).forcing(&piece);
-    let dx = sim.modes.solver_matrix * x + b * delayed + sim.plant.e * drive.value(t);
+    let dx = plant_rates(
+        &sim.modes.solver_matrix,
+        &b,
+        &sim.plant.e,
+        &x,
+        delayed,
+        drive.value(t),
+    );
     let d2x = sim.modes.solver_matrix * dx + b * delayed_rate + sim.plant.e * drive.slope(t);
     let gain = sim.config.params.effective_gain(sim.config.variant);
     let now = Performance::at(&sim.plant, &x, road);
@@ -368,24 +381,15 @@ pub(super) fn continuous_state_derivatives(sim: &mut Simulator) -> [f64; CONTINU
     let d = output_derivatives(sim);
     let o = outputs(sim);
     let filter = sim.accumulated_now().filter;
-    let mut rates = [0.0; CONTINUOUS_STATES];
-    rates[..6].copy_from_slice(d.state.as_slice());
-    let body_acceleration = o.performance.body_acceleration;
-    if let Some(coupling) = &sim.modes.coupling {
-        let filter_rate = coupling.wk.derivative(&filter, body_acceleration);
-        rates[FILTER_STATES_AT..INTEGRALS_AT].copy_from_slice(filter_rate.as_slice());
-    }
-    let weighted = o.comfort.map_or(0.0, |c| c.weighted_body_acceleration);
-    let integrands = [
-        body_acceleration * body_acceleration,
-        o.performance.suspension_deflection * o.performance.suspension_deflection,
-        o.performance.tire_deflection * o.performance.tire_deflection,
-        weighted * weighted,
-        weighted * weighted * weighted * weighted,
-        d.road_holding.map_or(0.0, |r| r.contact_loss_time),
-    ];
-    rates[INTEGRALS_AT..].copy_from_slice(&integrands);
-    rates
+    let now = Instant {
+        body_acceleration: o.performance.body_acceleration,
+        suspension_deflection: o.performance.suspension_deflection,
+        tire_deflection: o.performance.tire_deflection,
+        weighted_acceleration: o.comfort.map_or(0.0, |c| c.weighted_body_acceleration),
+        contact_lost: d.road_holding.map_or(0.0, |r| r.contact_loss_time),
+    };
+    let wk = sim.modes.coupling.as_ref().map(|c| &c.wk);
+    continuous_rates(&d.state, &filter, wk, &now)
 }
 
 /// [`Simulator::rms`].

@@ -3,33 +3,12 @@
 //! `outputs` computes them). Plain data; it imports the model and the
 //! metrics.
 
-use crate::comfort::WK_STATES;
 use crate::metrics::RmsValues;
 use crate::model::{Performance, State};
 
-/// The continuous states of the model as one vector, the layout of Model
-/// Exchange (`crate::exchange`) and of [`super::Simulator::continuous_states`]:
-/// the plant `[x_s, v_s, x_h, v_h, x_t, v_t]` (CS: `x_h`, `v_h` mirror the
-/// wheel), the 8 states of the W_k filter, then the integrals
-/// [`INTEGRAL_NAMES`] from the start time.
-pub const CONTINUOUS_STATES: usize = 6 + WK_STATES + INTEGRAL_STATES;
-/// Index of the first W_k filter state in the continuous states.
-pub const FILTER_STATES_AT: usize = 6;
-/// Index of the first integral in the continuous states.
-pub const INTEGRALS_AT: usize = 6 + WK_STATES;
-/// Number of integrals among the continuous states.
-pub const INTEGRAL_STATES: usize = 6;
-/// The integrals among the continuous states, in order: `∫ BA² dt`
-/// (m²/s³), `∫ SDD² dt` (m²·s), `∫ TDD² dt` (m²·s), `∫ a_w² dt` (m²/s³),
-/// `∫ a_w⁴ dt` (m⁴/s⁷) and the time without tire contact (s).
-pub const INTEGRAL_NAMES: [&str; INTEGRAL_STATES] = [
-    "integral_body_acceleration_squared",
-    "integral_suspension_deflection_squared",
-    "integral_tire_deflection_squared",
-    "integral_weighted_acceleration_squared",
-    "integral_weighted_acceleration_fourth",
-    "contact_loss_time",
-];
+pub use crate::model::dynamics::{
+    CONTINUOUS_STATES, FILTER_STATES_AT, INTEGRAL_NAMES, INTEGRAL_STATES, INTEGRALS_AT,
+};
 
 /// Ride comfort by ISO 2631-1:1997 (vertical whole-body vibration, W_k
 /// weighting of the body acceleration BA; see [`crate::comfort`]), present

@@ -23,6 +23,7 @@ use super::linalg::{self, hermite, hermite_matrix};
 use super::modes::{Modes, NextNode};
 use super::pieces::{self, Stretch};
 use super::system::{DELAY_INPUT, Filter, tire_pick};
+use crate::model::dynamics::{flight_input, folded_delay};
 use crate::model::{Plant, State, V_T, X_T};
 use crate::road::RoadPiece;
 use nalgebra::{Matrix2, SMatrix, Vector2, Vector4};
@@ -425,7 +426,7 @@ impl Stepping<'_> {
             let piece = self.inputs.piece_from(t);
             let xg = self.forcing(&piece).value(t);
             let dx = self.modes.solver_matrix * x + self.plant.e * xg;
-            Vector4::new(x[X_T] - tau * x[V_T], dx[X_T] - tau * dx[V_T], 0.0, 0.0)
+            Vector4::new(folded_delay(x, tau), folded_delay(&dx, tau), 0.0, 0.0)
         }
     }
 
@@ -438,7 +439,7 @@ impl Stepping<'_> {
             RoadPiece::Linear {
                 start: 0.0,
                 end: piece.end(),
-                value: -self.modes.grid_step.contact.limit,
+                value: flight_input(self.modes.grid_step.contact.limit),
                 slope: 0.0,
             }
         } else {

@@ -1,0 +1,241 @@
+//! The model's dynamics, written once for both engines: the precise
+//! integration of the co-simulation (`crate::solver`) builds its operators
+//! and reads its outputs from these, and Model Exchange (`crate::exchange`)
+//! evaluates them at the master's points.
+//!
+//! - **The continuous states** ([`CONTINUOUS_STATES`]): the plant X of
+//!   Eq. (2), the 8 states w of the ISO 2631-1 W_k filter, and the
+//!   integrals from the start time behind every time average
+//!   ([`INTEGRAL_NAMES`]).
+//! - **The plant in a mode** ([`plant_rates`]): `Ẋ = A_m X + b u + e r_m`,
+//!   Eq. (2) in contact, and in flight the tire's force held at −W.
+//! - **The tire** ([`contact_margin`], [`tire_load`], [`flight_matrix`]):
+//!   the margin `W/k_t − (x_t − x_g)` whose sign is the contact, the load
+//!   the tire law gives, and the plant in flight, `A + e c_tᵀ` with the
+//!   constant input `−W/k_t` on the road column `e` (the tire's force held
+//!   at −W).
+//! - **The delayed input's interpolant** ([`hermite`]): the cubic through
+//!   positions and velocities at two points.
+//! - **A short delay** folded into the current state ([`folded_delay`]):
+//!   `x_t(t − tau) ≈ x_t − tau v_t`, below what the grid resolves.
+//! - **The rates of the continuous states** ([`continuous_rates`]): the
+//!   plant's, the filter's `ẇ = A_w w + b_w BA`, and the integrands `BA²`,
+//!   `SDD²`, `TDD²`, `a_w²`, `a_w⁴` and the loss of contact.
+//!
+//! The time averages the outputs report from the integrals are the
+//! metrics' ([`crate::metrics::time_averages`]).
+//!
+//! Layer: data (docs/architecture.md), with the model; it imports the
+//! model and the crate's `comfort`.
+
+use super::{Plant, State, V_T, X_T};
+use crate::comfort::{WK_STATES, WkStateSpace};
+use nalgebra::{Matrix6, SVector};
+
+/// The continuous states of the model as one vector, the layout of Model
+/// Exchange and of the co-simulation's continuous states: the plant
+/// `[x_s, v_s, x_h, v_h, x_t, v_t]` (CS: `x_h`, `v_h` mirror the wheel),
+/// the 8 states of the W_k filter, then the integrals [`INTEGRAL_NAMES`]
+/// from the start time.
+pub const CONTINUOUS_STATES: usize = 6 + WK_STATES + INTEGRAL_STATES;
+/// Index of the first W_k filter state in the continuous states.
+pub const FILTER_STATES_AT: usize = 6;
+/// Index of the first integral in the continuous states.
+pub const INTEGRALS_AT: usize = 6 + WK_STATES;
+/// Number of integrals among the continuous states.
+pub const INTEGRAL_STATES: usize = 6;
+/// The integrals among the continuous states, in order: `∫ BA² dt`
+/// (m²/s³), `∫ SDD² dt` (m²·s), `∫ TDD² dt` (m²·s), `∫ a_w² dt` (m²/s³),
+/// `∫ a_w⁴ dt` (m⁴/s⁷) and the time without tire contact (s).
+pub const INTEGRAL_NAMES: [&str; INTEGRAL_STATES] = [
+    "integral_body_acceleration_squared",
+    "integral_suspension_deflection_squared",
+    "integral_tire_deflection_squared",
+    "integral_weighted_acceleration_squared",
+    "integral_weighted_acceleration_fourth",
+    "contact_loss_time",
+];
+
+/// The margin to the loss of tire contact (m): `limit − (x_t − x_g)`, with
+/// `limit` = W/k_t; positive in contact.
+#[inline(always)]
+pub fn contact_margin(limit: f64, tire: f64, road: f64) -> f64 {
+    limit - (tire - road)
+}
+
+/// The dynamic tire load the tire law gives (N) for the linear load `load`
+/// = `k_t (x_g − x_t)`: the load itself (bilateral), at least −W
+/// (`static_load`) for a unilateral tire, which cannot pull.
+#[inline(always)]
+pub fn tire_load(unilateral: bool, load: f64, static_load: f64) -> f64 {
+    if unilateral {
+        load.max(-static_load)
+    } else {
+        load
+    }
+}
+
+/// The plant matrix in flight for the matrix `contact` of contact (the
+/// plant's A, or the solver's with the feedback folded in): the tire's
+/// column gains the road column `e`, whose input is then the constant
+/// `−W/k_t` (the tire's force held at −W).
+pub fn flight_matrix(contact: &Matrix6<f64>, e: &State) -> Matrix6<f64> {
+    let mut a = *contact;
+    for row in 0..6 {
+        a[(row, X_T)] += e[row];
+    }
+    a
+}
+
+/// `Ẋ = A_m X + b u + e r_m`: the plant's rates in a mode m of matrix
+/// `a` (A in contact, [`flight_matrix`] in flight; either with the
+/// feedback folded in, [`folded_feedback`]), with the delayed input u
+/// (`delayed`, m) through the feedback column `b` and the road column
+/// `e`'s input `road_input` (the road x_g in contact, [`flight_input`] in
+/// flight). The operators of the co-simulation's exact step are those of
+/// this system.
+#[inline(always)]
+pub fn plant_rates(
+    a: &Matrix6<f64>,
+    b: &State,
+    e: &State,
+    x: &State,
+    delayed: f64,
+    road_input: f64,
+) -> State {
+    // By value, as the solver's products are (nalgebra's product of
+    // references takes a slower, general path).
+    *a * *x + *b * delayed + *e * road_input
+}
+
+/// The road column's input in flight (m): `−W/k_t`, with `limit` = W/k_t.
+#[inline(always)]
+pub fn flight_input(limit: f64) -> f64 {
+    -limit
+}
+
+/// The cubic Hermite interpolant of the delayed input through
+/// `nodes = [x_0, v_0, x_1, v_1]` (positions and velocities at the two
+/// ends of an interval of length `h`): `[u, u', u'', u''']` at `offset`
+/// from the left end. Fourth order; both engines' delayed input is it
+/// (the co-simulation's between grid nodes, Model Exchange's between the
+/// points of its history).
+#[inline(always)]
+pub fn hermite(nodes: [f64; 4], h: f64, offset: f64) -> [f64; 4] {
+    let [x0, v0, x1, v1] = nodes;
+    let slope = (x1 - x0) / h;
+    let c2 = (3.0 * slope - 2.0 * v0 - v1) / h;
+    let c3 = (v0 + v1 - 2.0 * slope) / (h * h);
+    let s = offset;
+    [
+        x0 + s * (v0 + s * (c2 + s * c3)),
+        v0 + s * (2.0 * c2 + 3.0 * c3 * s),
+        2.0 * c2 + 6.0 * c3 * s,
+        6.0 * c3,
+    ]
+}
+
+/// `x_t(t − tau) ≈ x_t − tau v_t` for a delay `tau` below what the grid
+/// resolves; the same of any vector's `x_t`, `v_t` components (the
+/// derivatives of the folded input).
+#[inline(always)]
+pub fn folded_delay(x: &State, tau: f64) -> f64 {
+    x[X_T] - tau * x[V_T]
+}
+
+/// The plant's `(A, b)` with the feedback `u = g (x_t − tau v_t)` folded
+/// into A (the delay below what the grid resolves): `b` is then zero.
+pub fn folded_feedback(plant: &Plant, tau: f64) -> (Matrix6<f64>, State) {
+    let (mut a, b) = (plant.a, plant.b);
+    for row in 0..6 {
+        a[(row, X_T)] += b[row];
+        a[(row, V_T)] -= tau * b[row];
+    }
+    (a, State::zeros())
+}
+
+/// What the integrands are made of at an instant.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Instant {
+    /// BA (m/s²).
+    pub body_acceleration: f64,
+    /// SDD (m).
+    pub suspension_deflection: f64,
+    /// TDD (m).
+    pub tire_deflection: f64,
+    /// a_w (m/s²).
+    pub weighted_acceleration: f64,
+    /// 1 without tire contact, else 0 (the rate of the time without it).
+    pub contact_lost: f64,
+}
+
+/// The rates of the continuous states ([`CONTINUOUS_STATES`]): the plant's
+/// `plant` (as reported: CS mirrors the wheel), the W_k filter's
+/// `A_w w + b_w BA` (when `wk` is given, else 0) and the integrands of the
+/// integrals at `now`.
+pub fn continuous_rates(
+    plant: &State,
+    filter: &SVector<f64, WK_STATES>,
+    wk: Option<&WkStateSpace>,
+    now: &Instant,
+) -> [f64; CONTINUOUS_STATES] {
+    let mut rates = [0.0; CONTINUOUS_STATES];
+    rates[..6].copy_from_slice(plant.as_slice());
+    if let Some(wk) = wk {
+        let dw = wk.derivative(filter, now.body_acceleration);
+        rates[FILTER_STATES_AT..INTEGRALS_AT].copy_from_slice(dw.as_slice());
+    }
+    let squared = now.weighted_acceleration * now.weighted_acceleration;
+    rates[INTEGRALS_AT..].copy_from_slice(&[
+        now.body_acceleration * now.body_acceleration,
+        now.suspension_deflection * now.suspension_deflection,
+        now.tire_deflection * now.tire_deflection,
+        squared,
+        squared * squared,
+        now.contact_lost,
+    ]);
+    rates
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{Params, Variant};
+
+    #[test]
+    fn the_margin_and_the_load_agree_on_the_loss_of_contact() {
+        let (k_t, weight) = (190_000.0, 3_820.0);
+        let limit = weight / k_t;
+        for tire in [0.0, 0.5 * limit, limit, 1.5 * limit] {
+            let margin = contact_margin(limit, tire, 0.0);
+            let load = tire_load(true, k_t * (0.0 - tire), weight);
+            assert_eq!(margin >= 0.0, load > -weight || margin == 0.0);
+            assert!(load >= -weight);
+        }
+        assert_eq!(tire_load(false, -2.0 * weight, weight), -2.0 * weight);
+    }
+
+    #[test]
+    fn flight_adds_the_road_column_to_the_tire_column() {
+        let plant = Plant::new(Params::default(), Variant::Tdvass).unwrap();
+        let flight = flight_matrix(&plant.a, &plant.e);
+        // In flight the tire's stiffness no longer acts on x_t.
+        let x = State::from_column_slice(&[0.0, 0.0, 0.0, 0.0, 1.0, 0.0]);
+        let contact = plant.a * x + plant.e * 0.0;
+        let flying = flight * x;
+        assert!((flying[V_T] - (contact[V_T] + plant.e[V_T])).abs() < 1e-9);
+    }
+
+    #[test]
+    fn folding_the_feedback_is_the_folded_delay_through_b() {
+        let plant = Plant::new(Params::default(), Variant::Tdvass).unwrap();
+        let tau = 1e-8;
+        let (a, b) = folded_feedback(&plant, tau);
+        assert_eq!(b, State::zeros());
+        let x = State::from_column_slice(&[0.1, -0.2, 0.3, 0.4, -0.5, 0.6]);
+        let direct = plant.a * x + plant.b * folded_delay(&x, tau);
+        for (p, q) in (a * x).iter().zip(direct.iter()) {
+            assert!((p - q).abs() <= 1e-12 * q.abs().max(1.0));
+        }
+    }
+}
