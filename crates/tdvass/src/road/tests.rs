@@ -1,4 +1,5 @@
 use super::*;
+use std::collections::VecDeque;
 
 #[test]
 fn a_sampled_road_reports_its_last_sample_and_holds_it() {
