@@ -222,7 +222,11 @@ impl ModelExchange {
             0.0
         };
         let k_t = self.config.params.k_t;
-        let tire_load = if self.flying() {
+        // The tire law `max(k_t (x_g − x_t), −W)` of a unilateral tire is
+        // flat where it holds the load at −W (the kink counts as contact).
+        let held = self.config.tire_contact.is_unilateral()
+            && k_t * -p.tire_deflection < -self.static_load;
+        let tire_load = if held {
             Gradient::ZERO
         } else {
             tire.scaled(-k_t)
