@@ -12,19 +12,8 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from fmu_helpers import fmu_path
 from me_master import HEUN, RK4, ModelExchangeMaster, explicit
-
-FMUS = {"fmi2": fmu_path(), "fmi3": fmu_path().with_name("tdvass-fmi3.fmu")}
-
-AVERAGES = [
-    "rms_body_acceleration",
-    "rms_suspension_deflection",
-    "rms_tire_deflection",
-    "objective",
-    "rms_weighted_body_acceleration",
-    "rms_dynamic_tire_load_ratio",
-]
+from test_model_exchange import AVERAGES, FMUS
 
 
 @pytest.fixture(scope="module")

@@ -217,39 +217,33 @@ impl Slave {
     /// The continuous states for a getter: Model Exchange's, the
     /// co-simulation's, or during initialization those of the start.
     pub(super) fn continuous_states(&mut self) -> Result<[f64; CONTINUOUS_STATES], FmiError> {
-        if let Some(model) = self.state.engine.exchange() {
-            return Ok(*model.states());
-        }
-        match self.state.engine.simulator_mut() {
-            Some(sim) => Ok(sim.continuous_states()),
-            None => Ok(*self.build_exchange()?.states()),
+        match &mut self.state.engine {
+            Engine::ModelExchange(Some(model)) => Ok(*model.states()),
+            Engine::CoSimulation(Some(sim)) => Ok(sim.continuous_states()),
+            _ => Ok(*self.build_exchange()?.states()),
         }
     }
 
     /// The derivatives of [`Self::continuous_states`].
     pub(super) fn state_derivatives(&mut self) -> Result<[f64; CONTINUOUS_STATES], FmiError> {
-        if let Some(model) = self.state.engine.exchange_mut() {
-            return Ok(model.derivatives()?);
-        }
-        match self.state.engine.simulator_mut() {
-            Some(sim) => Ok(sim.continuous_state_derivatives()),
-            None => Ok(self.build_exchange()?.derivatives()?),
+        match &mut self.state.engine {
+            Engine::ModelExchange(Some(model)) => Ok(model.derivatives()?),
+            Engine::CoSimulation(Some(sim)) => Ok(sim.continuous_state_derivatives()),
+            _ => Ok(self.build_exchange()?.derivatives()?),
         }
     }
 
     /// The event indicators for a getter (the co-simulation: the margin
     /// without hysteresis).
     pub(super) fn event_indicator_values(&mut self) -> Result<[f64; EVENT_INDICATORS], FmiError> {
-        if let Some(model) = self.state.engine.exchange_mut() {
-            return Ok(model.event_indicators()?);
-        }
-        match self.state.engine.simulator_mut() {
-            Some(sim) => {
+        match &mut self.state.engine {
+            Engine::ModelExchange(Some(model)) => Ok(model.event_indicators()?),
+            Engine::CoSimulation(Some(sim)) => {
                 let o = sim.outputs();
                 let limit = sim.static_load() / sim.config().params.k_t;
                 Ok([contact_margin(limit, o.state[X_T], o.road_displacement)])
             }
-            None => Ok(self.build_exchange()?.event_indicators()?),
+            _ => Ok(self.build_exchange()?.event_indicators()?),
         }
     }
 }

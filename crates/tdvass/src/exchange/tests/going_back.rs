@@ -4,14 +4,6 @@
 
 use super::*;
 
-fn iso(class: RoadClass) -> RoadSpec {
-    RoadSpec::Iso8608(RandomRoad {
-        class,
-        speed: 20.0,
-        ..RandomRoad::default()
-    })
-}
-
 fn roads() -> Vec<RoadSpec> {
     vec![
         RoadSpec::paper_harmonic(),

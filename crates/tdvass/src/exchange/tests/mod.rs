@@ -62,6 +62,15 @@ fn integrate(model: &mut ModelExchange, t_end: f64, h: f64, complete: bool) -> V
     lift_offs
 }
 
+/// ISO 8608 `class` at 20 m/s.
+fn iso(class: RoadClass) -> RoadSpec {
+    RoadSpec::Iso8608(RandomRoad {
+        class,
+        speed: 20.0,
+        ..RandomRoad::default()
+    })
+}
+
 fn config(variant: Variant, tau: f64, g: f64, road: RoadSpec) -> SimulationConfig {
     SimulationConfig {
         params: Params {
@@ -141,11 +150,7 @@ fn a_delay_below_the_step_and_a_negative_gain_agree_with_the_co_simulation() {
 
 #[test]
 fn a_random_road_agrees_with_the_co_simulation() {
-    let road = RoadSpec::Iso8608(RandomRoad {
-        class: RoadClass::D,
-        speed: 20.0,
-        ..RandomRoad::default()
-    });
+    let road = iso(RoadClass::D);
     agrees_with_the_co_simulation(
         config(Variant::Tdvass, 0.011, 5386.0, road),
         1.0,
@@ -156,11 +161,7 @@ fn a_random_road_agrees_with_the_co_simulation() {
 
 #[test]
 fn lift_offs_agree_with_the_located_switches_of_the_co_simulation() {
-    let road = RoadSpec::Iso8608(RandomRoad {
-        class: RoadClass::D,
-        speed: 20.0,
-        ..RandomRoad::default()
-    });
+    let road = iso(RoadClass::D);
     let c = SimulationConfig {
         tire_contact: TireContact::Unilateral,
         ..config(Variant::Tdvass, 0.011, 5386.0, road)
@@ -225,11 +226,7 @@ fn a_saved_state_replays_exactly() {
 
 #[test]
 fn a_saved_state_on_a_random_road_replays_exactly_from_its_nodes() {
-    let road = RoadSpec::Iso8608(RandomRoad {
-        class: RoadClass::D,
-        speed: 20.0,
-        ..RandomRoad::default()
-    });
+    let road = iso(RoadClass::D);
     let c = config(Variant::Tdvass, 0.011, 5386.0, road);
     let mut model = ModelExchange::new(c.clone()).unwrap();
     integrate(&mut model, 0.5, 1e-4, true);
@@ -255,11 +252,7 @@ fn a_saved_state_on_a_random_road_replays_exactly_from_its_nodes() {
 fn a_saved_state_on_a_random_road_replays_when_no_step_was_completed() {
     // The nodes of the start are released as the derivatives move on:
     // the restored model takes the window it was saved with.
-    let road = RoadSpec::Iso8608(RandomRoad {
-        class: RoadClass::C,
-        speed: 20.0,
-        ..RandomRoad::default()
-    });
+    let road = iso(RoadClass::C);
     let c = config(Variant::Tdvass, 0.011, 5386.0, road);
     let mut model = ModelExchange::new(c.clone()).unwrap();
     integrate(&mut model, 1.5, 1e-4, false);
@@ -345,11 +338,7 @@ fn version_1_bytes(model: &ModelExchange) -> Vec<u8> {
 
 #[test]
 fn a_state_of_format_version_1_still_loads() {
-    let road = RoadSpec::Iso8608(RandomRoad {
-        class: RoadClass::C,
-        speed: 20.0,
-        ..RandomRoad::default()
-    });
+    let road = iso(RoadClass::C);
     let c = config(Variant::Tdvass, 0.011, 5386.0, road);
     let mut model = ModelExchange::new(c.clone()).unwrap();
     integrate(&mut model, 0.3, 1e-4, true);
