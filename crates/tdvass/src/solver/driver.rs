@@ -1,16 +1,16 @@
 //! The driver: the [`Simulator`] and its step. It holds the grouped parts
 //! (configuration, modes, inputs, trajectory, observers), advances them
-//! ([`Simulator::advance_to`]: whole steps through `kernel`, points inside
+//! ([`Simulator::advance_to`]: whole steps through `whole_steps`, points inside
 //! a step through `stepping`, the tire's switches through `events`), and
 //! alone moves the committed point and tells the observers of it (the
-//! whole steps do it through the view `kernel::WholeSteps` it lends them).
+//! whole steps do it through the view `whole_steps::WholeSteps` it lends them).
 //! The public constructors and readers that need the clients
 //! (`accuracy`, `outputs`, `persist`) are declared in the solver's module.
 //!
 //! Layer: driver (docs/architecture.md); it imports the solver's `config`,
 //! `contact`, `deferred`, `grid`, `holding`, `inputs`, `integrals`,
-//! `kernel`, `modes`, `observers`, `pieces`, `reports`, `stepping`,
-//! `system`, `trajectory` and the crate's `error`, `limits`, `metrics`,
+//! `modes`, `observers`, `pieces`, `reports`, `stepping`, `system`,
+//! `trajectory`, `whole_steps` and the crate's `error`, `limits`, `metrics`,
 //! `model`, `monotone`, `road`.
 
 use super::config::{
@@ -25,7 +25,6 @@ use super::grid::DelayGrid;
 use super::holding::Holding;
 use super::inputs::Inputs;
 use super::integrals::{Accumulated, INTEGRALS, Squares};
-use super::kernel;
 use super::modes::Modes;
 use super::observers::Observers;
 use super::pieces;
@@ -33,6 +32,7 @@ use super::reports::{Outputs, RunSummary};
 use super::stepping::stepping;
 use super::system::Filter;
 use super::trajectory::Trajectory;
+use super::whole_steps;
 use crate::error::{Error, Result};
 use crate::metrics::rms_values;
 use crate::metrics::{RmsValues, Weights};
@@ -875,10 +875,10 @@ impl Simulator {
     }
 
     /// The view of this simulator that runs its whole steps
-    /// ([`kernel::WholeSteps`]).
+    /// ([`whole_steps::WholeSteps`]).
     #[inline]
-    pub(super) fn whole_steps_view(&mut self) -> kernel::WholeSteps<'_> {
-        kernel::WholeSteps {
+    pub(super) fn whole_steps_view(&mut self) -> whole_steps::WholeSteps<'_> {
+        whole_steps::WholeSteps {
             config: &self.config,
             plant: &self.plant,
             grid: self.grid,

@@ -33,7 +33,8 @@
 //! committed where the input changes.
 //!
 //! **Hot path.** From a committed grid node, [`Simulator::advance_to`] runs
-//! every whole step the call reaches in one loop (`kernel`, see
+//! every whole step the call reaches in one loop (`whole_steps` around the
+//! hot loop of `kernel`, see
 //! BENCHMARKS.md): the delayed input acts on the two history nodes through
 //! `Γ_u H` precomputed, the harmonic road phase is rotated from node to
 //! node (exact every `PHASE_ANCHOR` = 1024 nodes), a linear road piece
@@ -59,8 +60,9 @@
 //! of the tire (`modes`); stepping inside a step (`stepping`, `integrals`,
 //! `events`, `deferred`), on a view of the simulator's parts
 //! (`stepping!`); the observers (`observers`, `trajectory`); the whole-step
-//! loop (`kernel`: all of the solver's `unsafe`; the crate denies it
-//! elsewhere); the driver (`driver`: the [`Simulator`] and its step); the
+//! loop (`kernel`: the hot loop and its AVX2 build, and `whole_steps`:
+//! its segments and commits; the solver's only `unsafe`, which the crate
+//! denies elsewhere); the driver (`driver`: the [`Simulator`] and its step); the
 //! clients (`accuracy`, `outputs`, `persist`); and this file, which
 //! declares the simulator's public constructors and readers over the
 //! clients and re-exports the public names.
@@ -90,6 +92,7 @@ mod reports;
 mod stepping;
 mod system;
 mod trajectory;
+mod whole_steps;
 
 use crate::error::Result;
 pub use crate::limits::{DIVERGENCE_DISPLACEMENT, DIVERGENCE_VELOCITY};

@@ -9,7 +9,8 @@
 //! committed point's grid index and the tire's mode, and changes only
 //! caches (the dense table, the next node, the road's window and the
 //! phases). It knows nothing of the trajectory's commits or of the
-//! accumulators; the whole-step loop is `kernel`'s.
+//! accumulators; the whole-step loop is `kernel`'s and
+//! `whole_steps`'.
 //!
 //! Layer: stepping (docs/architecture.md); it imports the solver's
 //! `config`, `dense`, `grid`, `inputs`, `linalg`, `modes`, `pieces`,
