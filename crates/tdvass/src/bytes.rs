@@ -40,6 +40,17 @@ impl ByteWriter {
         self.u64(v.len() as u64);
         v.iter().for_each(|&x| self.f64(x));
     }
+    /// Appends an optional f64: the tag 0 (none) or 1 and the value, as
+    /// u64 words.
+    pub fn optional_f64(&mut self, v: Option<f64>) {
+        match v {
+            Some(value) => {
+                self.u64(1);
+                self.f64(value);
+            }
+            None => self.u64(0),
+        }
+    }
     /// Appends raw bytes (no length).
     pub fn raw(&mut self, v: &[u8]) {
         self.bytes.extend_from_slice(v);
@@ -107,6 +118,15 @@ impl<'a> ByteReader<'a> {
             return Err(Error::InvalidState(format!("implausible length {n}")));
         }
         (0..n).map(|_| self.f64()).collect()
+    }
+    /// Reads what [`ByteWriter::optional_f64`] wrote; another tag is an
+    /// error naming `what`.
+    pub fn optional_f64(&mut self, what: &str) -> Result<Option<f64>> {
+        match self.u64()? {
+            0 => Ok(None),
+            1 => Ok(Some(self.f64()?)),
+            other => Err(Error::InvalidState(format!("{what} tag {other}"))),
+        }
     }
     /// Every byte not read yet.
     pub fn rest(&mut self) -> &'a [u8] {

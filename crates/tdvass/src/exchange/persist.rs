@@ -77,9 +77,7 @@ impl ModelExchange {
         match self.road.node_state() {
             Some(road) => {
                 w.u8(1);
-                w.u128(road.word_position);
-                w.u64(road.first_node);
-                w.f64s(&road.nodes);
+                road.write_nodes(&mut w);
             }
             None => w.u8(0),
         }
@@ -179,13 +177,15 @@ impl ModelExchange {
         }
         let road = match r.u8()? {
             0 => None,
-            _ => Some(RoadState {
-                word_position: r.u128()?,
-                first_node: r.u64()?,
-                nodes: r.f64s(MAX_ROAD_NODES)?,
-                input: None,
-            }),
+            _ => Some(RoadState::read_nodes(&mut r)?),
         };
+        if let Some(kept) = road.as_ref().map(|road| road.nodes.len() as u64)
+            && kept > MAX_ROAD_NODES
+        {
+            return Err(invalid(format!(
+                "{kept} road nodes: a model keeps at most {MAX_ROAD_NODES}"
+            )));
+        }
         if !r.is_empty() {
             return Err(invalid(
                 "trailing bytes after the Model Exchange state".into(),

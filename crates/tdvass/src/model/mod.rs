@@ -13,6 +13,7 @@ mod tire;
 pub use equations::{Element, MassSpringDamper};
 pub use tire::TireContact;
 
+use crate::bytes::{ByteReader, ByteWriter};
 use crate::error::{Error, Result};
 use nalgebra::{Matrix6, Vector6};
 
@@ -221,6 +222,30 @@ impl Params {
             ("g", self.g),
             ("tau", self.tau),
         ]
+    }
+
+    /// Writes every parameter, in the order of [`Params::named_values`].
+    pub(crate) fn write(&self, w: &mut ByteWriter) {
+        self.named_values().iter().for_each(|(_, v)| w.f64(*v));
+    }
+
+    /// Reads what [`Params::write`] wrote (checked by [`Params::validate`]
+    /// where the configuration is).
+    pub(crate) fn read(r: &mut ByteReader) -> Result<Params> {
+        // Field initialisers run in the order written: that of
+        // `named_values`.
+        Ok(Params {
+            m_s: r.f64()?,
+            m_h: r.f64()?,
+            m_t: r.f64()?,
+            k_s: r.f64()?,
+            k_h: r.f64()?,
+            k_t: r.f64()?,
+            c_s: r.f64()?,
+            c_h: r.f64()?,
+            g: r.f64()?,
+            tau: r.f64()?,
+        })
     }
 
     /// Checks that masses are > 0, stiffnesses and dampings >= 0, tau >= 0

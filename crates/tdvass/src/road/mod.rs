@@ -23,11 +23,14 @@
 //!   as a value plus a slope from the time it is set.
 //!
 //! The module's parts: [`spec`] (what road to apply), [`piece`] (a piece
-//! with a closed form), `nodes` (the random roads' generator) and here the
-//! [`Road`] the solvers consume, with its saved state.
+//! with a closed form), `nodes` (the random roads' generator), `saved`
+//! (the byte forms of the specification and the dynamic state, which both
+//! engines save) and here the [`Road`] the solvers consume, with its saved
+//! state.
 
 mod nodes;
 pub mod piece;
+mod saved;
 pub mod spec;
 
 use crate::error::{Error, Result};

@@ -5,6 +5,7 @@
 //! internal step came from the tolerance ([`StepChoice`]). It imports the
 //! model, the road and the metrics, nothing of the solver.
 
+use crate::bytes::{ByteReader, ByteWriter};
 use crate::error::{Error, Result};
 use crate::metrics::Weights;
 use crate::model::{Params, State, TireContact, Variant};
@@ -101,6 +102,65 @@ impl Metrics {
                 value: i64::try_from(code).unwrap_or(i64::MAX),
                 reason: "must be 0 (paper), 1 (road holding) or 2 (comfort)",
             })
+    }
+}
+
+impl SimulationConfig {
+    /// Writes the configuration: the parameters, the variant, the road,
+    /// the solver's settings, the start, the weights, the metrics level
+    /// and the tire's contact law.
+    pub(super) fn write(&self, w: &mut ByteWriter) {
+        self.params.write(w);
+        w.u64(self.variant.code() as u64);
+        self.road.write(w);
+        w.f64(self.tolerance);
+        w.f64(self.max_internal_step);
+        w.f64(self.communication_step);
+        w.f64(self.start_time);
+        self.initial_state.iter().for_each(|&v| w.f64(v));
+        w.f64(self.weights.body_acceleration);
+        w.f64(self.weights.suspension_deflection);
+        w.f64(self.weights.tire_deflection);
+        w.u64(self.metrics.code());
+        w.u64(self.tire_contact.code() as u64);
+    }
+
+    /// Reads what [`SimulationConfig::write`] wrote; the codes are
+    /// checked here, the values by `Simulator::new`.
+    pub(super) fn read(r: &mut ByteReader) -> Result<SimulationConfig> {
+        let params = Params::read(r)?;
+        let variant = Variant::from_code(r.u64()? as i64)?;
+        let road = RoadSpec::read(r)?;
+        let tolerance = r.f64()?;
+        let max_internal_step = r.f64()?;
+        let communication_step = r.f64()?;
+        let start_time = r.f64()?;
+        let mut initial_state = State::zeros();
+        for v in initial_state.iter_mut() {
+            *v = r.f64()?;
+        }
+        let weights = Weights {
+            body_acceleration: r.f64()?,
+            suspension_deflection: r.f64()?,
+            tire_deflection: r.f64()?,
+        };
+        let metrics = Metrics::from_code(r.u64()?)
+            .map_err(|e| Error::InvalidState(format!("metrics level: {e}")))?;
+        let tire_contact = TireContact::from_code(i64::try_from(r.u64()?).unwrap_or(i64::MAX))
+            .map_err(|e| Error::InvalidState(format!("tire contact: {e}")))?;
+        Ok(SimulationConfig {
+            params,
+            variant,
+            road,
+            tolerance,
+            max_internal_step,
+            communication_step,
+            tire_contact,
+            start_time,
+            initial_state,
+            weights,
+            metrics,
+        })
     }
 }
 

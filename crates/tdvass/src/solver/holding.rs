@@ -36,8 +36,11 @@
 //! lost time is counted as one step, its length added at read-out), so
 //! they do not depend on how a run is split.
 //!
-//! Layer: system (docs/architecture.md); it imports the crate's `model`.
+//! Layer: system (docs/architecture.md); it imports the crate's `bytes`,
+//! `error`, `model`.
 
+use crate::bytes::{ByteReader, ByteWriter};
+use crate::error::Result;
 use crate::model::dynamics::contact_margin;
 use crate::model::{V_S, V_T, X_S, X_T};
 
@@ -65,6 +68,27 @@ pub(crate) struct Holding {
 }
 
 impl Holding {
+    /// Writes the accumulators.
+    pub(super) fn write(&self, w: &mut ByteWriter) {
+        w.f64(self.max_deflection);
+        w.u64(self.lost_steps);
+        w.f64(self.lost_time);
+        w.optional_f64(self.first_loss);
+        w.u64(self.lift_offs);
+    }
+
+    /// Reads what [`Holding::write`] wrote (checked against the run by
+    /// the caller).
+    pub(super) fn read(r: &mut ByteReader) -> Result<Holding> {
+        Ok(Holding {
+            max_deflection: r.f64()?,
+            lost_steps: r.u64()?,
+            lost_time: r.f64()?,
+            first_loss: r.optional_f64("first contact loss")?,
+            lift_offs: r.u64()?,
+        })
+    }
+
     /// At the start of a run, state with suspension deflection `sdd` and
     /// margin `margin` (negative: no contact from the start, at `start`).
     pub fn new(sdd: f64, margin: f64, start: f64) -> Holding {

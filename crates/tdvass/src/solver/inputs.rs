@@ -22,10 +22,12 @@
 //! rotation and the linear algebra; nothing of the operators, the
 //! trajectory or the accumulators.
 
-use super::grid::DelayGrid;
+use super::grid::{DelayGrid, MAX_HISTORY_NODES};
 use super::linalg::hermite;
 use super::pieces::{self, Stretch};
 use super::system::{phase_rotation, rotate};
+use crate::bytes::{ByteReader, ByteWriter};
+use crate::error::{Error, Result};
 use crate::road::{Road, RoadPiece, RoadSpec};
 use nalgebra::Vector4;
 
@@ -139,6 +141,29 @@ impl Inputs {
             None => pieces::piece_from(&mut self.road, t, step),
         };
         (!pieces::ends_before(&piece, to, step)).then_some(piece)
+    }
+
+    /// Writes the delay history ring.
+    pub(super) fn write_history(&self, w: &mut ByteWriter) {
+        let flat: Vec<f64> = self.history.iter().flatten().copied().collect();
+        w.f64s(&flat);
+    }
+
+    /// Reads what [`Inputs::write_history`] wrote into a ring of the same
+    /// length.
+    pub(super) fn read_history(&mut self, r: &mut ByteReader) -> Result<()> {
+        let flat = r.f64s(2 * MAX_HISTORY_NODES + 2)?;
+        if flat.len() != 2 * self.history.len() {
+            return Err(Error::InvalidState(format!(
+                "history of {} values where {} were expected",
+                flat.len(),
+                2 * self.history.len()
+            )));
+        }
+        for (slot, pair) in self.history.iter_mut().zip(flat.chunks(2)) {
+            *slot = [pair[0], pair[1]];
+        }
+        Ok(())
     }
 
     /// `(x_t, v_t)` at grid node k, from the history ring (k at most `m`

@@ -18,6 +18,8 @@ use super::holding::Holding;
 use super::integrals::{Accumulated, INTEGRALS, SquareIntegral, Squares, add};
 use super::stepping::{Committed, Stepping};
 use super::system::Filter;
+use crate::bytes::{ByteReader, ByteWriter};
+use crate::error::Result;
 use crate::metrics::RunningRms;
 use crate::model::State;
 use crate::road::RoadPiece;
@@ -52,6 +54,47 @@ impl Observers {
             start_load: 0.0,
             lift_off_log: Box::default(),
         }
+    }
+
+    /// Writes the sums of the open run and the time integral: the RMS sums
+    /// of squares and sample count, the closed integral, the anchor's
+    /// index, time, squares and their rates, and the `a_w` sums.
+    pub(super) fn write_sums(&self, w: &mut ByteWriter) {
+        self.rms.sums_of_squares.iter().for_each(|&v| w.f64(v));
+        w.u64(self.rms.samples);
+        let integral = &self.integral;
+        integral.closed.iter().for_each(|&v| w.f64(v));
+        w.u64(integral.anchor_index);
+        w.f64(integral.anchor_time);
+        integral.anchor.value.iter().for_each(|&v| w.f64(v));
+        integral.anchor.rate.iter().for_each(|&v| w.f64(v));
+        self.weighted.iter().for_each(|&v| w.f64(v));
+    }
+
+    /// Reads what [`Observers::write_sums`] wrote (checked against the
+    /// run by the caller).
+    pub(super) fn read_sums(&mut self, r: &mut ByteReader) -> Result<()> {
+        let mut rms = RunningRms::default();
+        for v in rms.sums_of_squares.iter_mut() {
+            *v = r.f64()?;
+        }
+        rms.samples = r.u64()?;
+        self.rms = rms;
+        for v in self.integral.closed.iter_mut() {
+            *v = r.f64()?;
+        }
+        self.integral.anchor_index = r.u64()?;
+        self.integral.anchor_time = r.f64()?;
+        for v in self.integral.anchor.value.iter_mut() {
+            *v = r.f64()?;
+        }
+        for v in self.integral.anchor.rate.iter_mut() {
+            *v = r.f64()?;
+        }
+        for v in self.weighted.iter_mut() {
+            *v = r.f64()?;
+        }
+        Ok(())
     }
 
     /// Starts a new, empty run at grid index k and time t (s): the anchor

@@ -4,11 +4,14 @@
 //! tire's mode. Only the driver moves the committed point.
 //!
 //! Layer: observers (docs/architecture.md); it imports the solver's
-//! `deferred`, `stepping`, `system` and the crate's `model`.
+//! `deferred`, `stepping`, `system` and the crate's `bytes`, `error`,
+//! `model`.
 
 use super::deferred::Deferred;
 use super::stepping::Committed;
 use super::system::Filter;
+use crate::bytes::{ByteReader, ByteWriter};
+use crate::error::Result;
 use crate::model::State;
 
 /// Where the run is: the committed point (a grid node, or a point where
@@ -51,6 +54,55 @@ impl Trajectory {
     #[inline]
     pub(super) fn committed_point(&self) -> (u64, f64, &State) {
         (self.grid_index, self.committed_time, &self.committed_state)
+    }
+
+    /// Writes the grid index and the committed and current points (a
+    /// deferred current state is settled before).
+    pub(super) fn write_points(&self, w: &mut ByteWriter) {
+        w.u64(self.grid_index);
+        w.f64(self.committed_time);
+        self.committed_state.iter().for_each(|&v| w.f64(v));
+        w.f64(self.current_time);
+        self.current_state.iter().for_each(|&v| w.f64(v));
+    }
+
+    /// Reads what [`Trajectory::write_points`] wrote (checked against the
+    /// grid by the caller, which knows it).
+    pub(super) fn read_points(&mut self, r: &mut ByteReader) -> Result<()> {
+        self.grid_index = r.u64()?;
+        self.committed_time = r.f64()?;
+        for v in self.committed_state.iter_mut() {
+            *v = r.f64()?;
+        }
+        self.current_time = r.f64()?;
+        for v in self.current_state.iter_mut() {
+            *v = r.f64()?;
+        }
+        Ok(())
+    }
+
+    /// Writes the filter state at the committed point.
+    pub(super) fn write_filter(&self, w: &mut ByteWriter) {
+        self.committed_filter.iter().for_each(|&v| w.f64(v));
+    }
+
+    /// Reads what [`Trajectory::write_filter`] wrote.
+    pub(super) fn read_filter(&mut self, r: &mut ByteReader) -> Result<()> {
+        for v in self.committed_filter.iter_mut() {
+            *v = r.f64()?;
+        }
+        Ok(())
+    }
+
+    /// Writes the tire's mode: the start of the flight in progress.
+    pub(super) fn write_mode(&self, w: &mut ByteWriter) {
+        w.optional_f64(self.flight_start);
+    }
+
+    /// Reads what [`Trajectory::write_mode`] wrote.
+    pub(super) fn read_mode(&mut self, r: &mut ByteReader) -> Result<()> {
+        self.flight_start = r.optional_f64("flight")?;
+        Ok(())
     }
 
     /// Sets the current point (time, state computed).
