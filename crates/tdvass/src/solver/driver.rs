@@ -511,11 +511,7 @@ impl Simulator {
         arrival: (Squares, RoadPiece),
     ) {
         self.inputs.record_node(k, [x[X_T], x[V_T]]);
-        self.trajectory.grid_index = k;
-        self.trajectory.committed_time = time;
-        self.trajectory.committed_state = x;
-        self.trajectory.committed_filter = w;
-        self.trajectory.set_current(time, x);
+        self.trajectory.commit_node(k, time, x, w);
         if self.config.metrics.road_holding() {
             self.observers.holding.add_node(&x.into());
         }
@@ -834,12 +830,8 @@ impl Simulator {
     pub(super) fn close_run_for_input(&mut self) -> f64 {
         let (tc, t) = (self.trajectory.committed_time, self.trajectory.current_time);
         if self.snaps(t, tc) {
-            let (closed, _) = self
-                .observers
-                .integral_to_committed(&mut stepping!(self), &self.trajectory.committed());
-            self.observers.integral.closed = closed;
             self.observers
-                .start_run(self.trajectory.grid_index, self.trajectory.committed_time);
+                .close_run_at_committed(&mut stepping!(self), &self.trajectory.committed());
         } else {
             self.close_run_here();
         }
@@ -853,23 +845,19 @@ impl Simulator {
     pub(super) fn close_run_here(&mut self) {
         self.settle();
         if self.trajectory.current_time == self.trajectory.committed_time {
-            let (closed, _) = self
-                .observers
-                .integral_to_committed(&mut stepping!(self), &self.trajectory.committed());
-            self.observers.integral.closed = closed;
-        } else {
-            let now = self.accumulated_now();
-            self.observers.integral.closed = now.integral;
-            self.observers.holding = now.holding;
-            if self.config.metrics.road_holding() {
-                self.observers
-                    .holding
-                    .add_node(&self.trajectory.current_state.into());
-            }
-            self.trajectory.committed_filter = now.filter;
-            self.trajectory.committed_time = self.trajectory.current_time;
-            self.trajectory.committed_state = self.trajectory.current_state;
+            self.observers
+                .close_run_at_committed(&mut stepping!(self), &self.trajectory.committed());
+            return;
         }
+        let now = self.accumulated_now();
+        self.observers.integral.closed = now.integral;
+        self.observers.holding = now.holding;
+        if self.config.metrics.road_holding() {
+            self.observers
+                .holding
+                .add_node(&self.trajectory.current_state.into());
+        }
+        self.trajectory.commit_current(now.filter);
         self.observers
             .start_run(self.trajectory.grid_index, self.trajectory.committed_time);
     }

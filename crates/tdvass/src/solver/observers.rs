@@ -107,6 +107,14 @@ impl Observers {
         self.integral.anchor_time = t;
     }
 
+    /// Closes the open run at the committed point `at` (its integral added
+    /// to the closed part) and starts a new, empty one there.
+    pub(super) fn close_run_at_committed(&mut self, s: &mut Stepping, at: &Committed) {
+        let (closed, _) = self.integral_to_committed(s, at);
+        self.integral.closed = closed;
+        self.start_run(at.k, at.time);
+    }
+
     /// `∫_{t_0} f` up to the committed point `at` (the end of the open
     /// run), and the squares there.
     pub(super) fn integral_to_committed(

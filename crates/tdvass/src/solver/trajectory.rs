@@ -105,6 +105,26 @@ impl Trajectory {
         Ok(())
     }
 
+    /// Commits grid node k at `time` with state x and filter state w; it is
+    /// the current point too.
+    #[inline]
+    pub(super) fn commit_node(&mut self, k: u64, time: f64, x: State, w: Filter) {
+        self.grid_index = k;
+        self.committed_time = time;
+        self.committed_state = x;
+        self.committed_filter = w;
+        self.set_current(time, x);
+    }
+
+    /// Commits the current point (inside step `grid_index`, where a switch
+    /// or an input change is), with filter state w there.
+    #[inline]
+    pub(super) fn commit_current(&mut self, w: Filter) {
+        self.committed_filter = w;
+        self.committed_time = self.current_time;
+        self.committed_state = self.current_state;
+    }
+
     /// Sets the current point (time, state computed).
     #[inline]
     pub(super) fn set_current(&mut self, time: f64, x: State) {

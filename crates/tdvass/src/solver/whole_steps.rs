@@ -140,12 +140,8 @@ impl WholeSteps<'_> {
     fn set_committed_node(&mut self, first: u64, k: u64, x: [f64; 6], w: [f64; 8]) {
         if k > first {
             let time = self.inputs.node_time(k);
-            self.trajectory.grid_index = k;
-            self.trajectory.committed_time = time;
-            self.trajectory.committed_state = State::from(x);
-            self.trajectory.committed_filter = Filter::from(w);
             self.trajectory
-                .set_current(time, self.trajectory.committed_state);
+                .commit_node(k, time, State::from(x), Filter::from(w));
             self.inputs.road.release_before(time);
         }
     }
