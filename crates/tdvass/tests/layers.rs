@@ -39,7 +39,7 @@ const SOLVER_LAYERS: &[(&str, &[&str])] = &[
     ("stepping", &["stepping", "integrals", "events", "deferred"]),
     ("observers", &["observers", "trajectory"]),
     ("whole steps", &["whole_steps"]),
-    ("driver", &["driver"]),
+    ("driver", &["driver", "setup", "switching"]),
     ("clients", &["accuracy", "outputs", "persist"]),
     ("facade", &["mod"]),
 ];

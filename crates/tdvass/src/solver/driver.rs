@@ -13,16 +13,9 @@
 //! `trajectory`, `whole_steps` and the crate's `error`, `limits`, `metrics`,
 //! `model`, `monotone`, `road`.
 
-use super::config::{
-    SimulationConfig, StepChoice, check_communication_step, check_max_internal_step,
-    check_tolerance,
-};
-#[cfg(doc)]
-use super::contact::LIFT_OFF_LOG;
-use super::contact::{LiftOff, LiftOffLog, MAX_SWITCHES_PER_STEP};
+use super::config::{SimulationConfig, StepChoice};
 use super::deferred::{Deferred, Kind};
 use super::grid::DelayGrid;
-use super::holding::Holding;
 use super::inputs::Inputs;
 use super::integrals::{Accumulated, INTEGRALS, Squares};
 use super::modes::Modes;
@@ -36,8 +29,7 @@ use super::whole_steps;
 use crate::error::{Error, Result};
 use crate::metrics::rms_values;
 use crate::metrics::{RmsValues, Weights};
-use crate::model::dynamics::tire_load;
-use crate::model::{Params, Plant, State, V_T, Variant, X_T};
+use crate::model::{Params, Plant, State, V_T, X_T};
 use crate::road::{Road, RoadPiece};
 
 /// Rounding drift covered by the snap tolerance, in additions: a time
@@ -76,157 +68,6 @@ pub struct Simulator {
 }
 
 impl Simulator {
-    /// Largest |start time| in internal steps (2^42). Node times
-    /// `t_0 + k h` then resolve every step to 2^-10 h near the start; from
-    /// 2^53 steps on, `t_0 + h` can round to `t_0` and a step would no
-    /// longer advance time.
-    pub const MAX_START_TIME_IN_STEPS: f64 = 4_398_046_511_104.0;
-
-    /// As [`Self::new`], with the internal step bound given (a restored
-    /// state keeps the step it was saved with).
-    pub(crate) fn with_step_bound(config: SimulationConfig, step_bound: f64) -> Result<Simulator> {
-        let plant = Self::validate(&config)?;
-        check_tolerance(config.tolerance)?;
-        check_max_internal_step(config.max_internal_step)?;
-        check_communication_step(config.communication_step)?;
-        let grid = DelayGrid::new(Self::resolved_delay(&config), step_bound)?;
-        let mut sim = Self::with_grid(config, plant, grid)?;
-        sim.step_choice.step_bound = step_bound;
-        Ok(sim)
-    }
-
-    /// The delay the grid resolves: tau with the controller, else 0.
-    pub(super) fn resolved_delay(config: &SimulationConfig) -> f64 {
-        if config.variant.has_control() {
-            config.params.tau
-        } else {
-            0.0
-        }
-    }
-
-    /// The plant of a configuration whose every value is checked.
-    pub(super) fn validate(config: &SimulationConfig) -> Result<Plant> {
-        let plant = Plant::new(config.params, config.variant)?;
-        if !config.start_time.is_finite() {
-            return Err(Error::InvalidTime {
-                name: "start_time",
-                value: config.start_time,
-                reason: "must be finite",
-            });
-        }
-        for (i, value) in config.initial_state.iter().enumerate() {
-            if !value.is_finite() {
-                return Err(Error::InvalidParameter {
-                    name: crate::model::STATE_NAMES[i],
-                    value: *value,
-                    reason: "the initial state must be finite",
-                });
-            }
-        }
-        let w = config.weights;
-        for (name, value) in [
-            ("w_ba", w.body_acceleration),
-            ("w_sdd", w.suspension_deflection),
-            ("w_tdd", w.tire_deflection),
-        ] {
-            if !value.is_finite() {
-                return Err(Error::InvalidParameter {
-                    name,
-                    value,
-                    reason: "a weight must be finite",
-                });
-            }
-        }
-        crate::limits::check_config(
-            &config.params,
-            config.variant,
-            &config.road,
-            &config.initial_state,
-            &config.weights,
-        )?;
-        Ok(plant)
-    }
-
-    /// The simulator of a checked configuration on the given grid.
-    pub(crate) fn with_grid(
-        config: SimulationConfig,
-        plant: Plant,
-        grid: DelayGrid,
-    ) -> Result<Simulator> {
-        if config.start_time.abs() > grid.step * Self::MAX_START_TIME_IN_STEPS {
-            return Err(Error::InvalidTime {
-                name: "start_time",
-                value: config.start_time,
-                reason: "|start_time| must be at most 2^42 internal steps (the step the tolerance sets, max_internal_step, or less to divide tau) so that node times resolve the step",
-            });
-        }
-        let road = Road::new(&config.road, config.start_time)?;
-        let mut initial = config.initial_state;
-        if config.variant == Variant::Cs {
-            initial[crate::model::X_H] = 0.0;
-            initial[crate::model::V_H] = 0.0;
-        }
-        let inputs = Inputs::new(
-            road,
-            &config.road,
-            grid,
-            config.start_time,
-            [initial[X_T], initial[V_T]],
-        );
-        let modes = Modes::new(&plant, &config, &grid, inputs.angular_frequency())?;
-        let start_time = config.start_time;
-        let mut sim = Simulator {
-            plant,
-            grid,
-            step_choice: StepChoice {
-                step_bound: grid.step,
-                model_step: f64::NAN,
-                probe_error: f64::NAN,
-                probe_rounds: 0,
-            },
-            modes,
-            inputs,
-            trajectory: Trajectory {
-                grid_index: 0,
-                committed_time: config.start_time,
-                committed_state: initial,
-                committed_filter: Filter::zeros(),
-                current_time: config.start_time,
-                current_state: initial,
-                deferred: None,
-                flight_start: None,
-            },
-            observers: Observers::new(start_time),
-            outputs_cache: None,
-            config,
-        };
-        let piece = sim.inputs.piece_from(start_time);
-        let rest = Filter::zeros();
-        sim.observers.integral.anchor = stepping!(sim).squares_at(
-            0,
-            start_time,
-            &initial,
-            &rest,
-            (start_time, initial),
-            &piece,
-        );
-        let margin = stepping!(sim).margin_at(start_time, &initial, &piece);
-        sim.observers.holding = Holding::new(
-            initial[crate::model::X_S] - initial[X_T],
-            margin[0],
-            start_time,
-        );
-        sim.observers.start_load = sim.config.params.k_t * (piece.value(start_time) - initial[X_T]);
-        if sim.config.tire_contact.is_unilateral() {
-            // A start without contact is a lift-off at the start, made by
-            // the first step's switch search.
-            sim.observers.holding.first_loss = None;
-            sim.observers.holding.lift_offs = 0;
-        }
-        sim.enter_recorded_mode();
-        Ok(sim)
-    }
-
     /// The configuration.
     pub fn config(&self) -> &SimulationConfig {
         &self.config
@@ -392,19 +233,6 @@ impl Simulator {
                 return Ok(());
             }
         }
-    }
-
-    /// With a unilateral tire: to the end node of the current step,
-    /// through the switches of the tire contact inside it.
-    pub(super) fn step_to_node_switching(&mut self, switches: &mut u32) -> Result<()> {
-        let k = self.trajectory.grid_index;
-        let next_node = self.grid_time(k + 1);
-        while self.switch_by(k, next_node, switches)? {
-            if self.snaps(next_node, self.trajectory.committed_time) {
-                break;
-            }
-        }
-        self.step_to_node()
     }
 
     /// From the committed point inside the current step (where an
@@ -674,111 +502,6 @@ impl Simulator {
         self.trajectory.current_state = x;
         self.trajectory.deferred = Some(Deferred { kind, drift });
         true
-    }
-
-    /// Whether the wheel is in flight now (unilateral tire only).
-    pub fn in_flight(&self) -> bool {
-        self.trajectory.flight_start.is_some()
-    }
-
-    /// The lift-offs since the log was last cleared (at most
-    /// [`LIFT_OFF_LOG`], and the count of those left out), for an event
-    /// log; a fixed array, so keeping them allocates nothing.
-    pub fn lift_offs(&self) -> &LiftOffLog {
-        &self.observers.lift_off_log
-    }
-
-    /// Empties the lift-off log ([`Self::lift_offs`]).
-    pub fn clear_lift_offs(&mut self) {
-        self.observers.lift_off_log.clear();
-    }
-
-    /// The tire load as the tire law gives it (N): `load` =
-    /// `k_t (x_g − x_t)`, at least −W with the unilateral tire.
-    pub(super) fn tire_load(&self, load: f64) -> f64 {
-        tire_load(
-            self.config.tire_contact.is_unilateral(),
-            load,
-            self.static_load(),
-        )
-    }
-
-    /// Puts the operators of the mode the holding state says, the contact
-    /// operators being in force (after a restore or a rebuild of them).
-    pub(super) fn enter_recorded_mode(&mut self) {
-        self.modes.other_mode = None;
-        if self.in_flight() {
-            self.modes.swap(&self.plant, self.grid.step);
-        }
-    }
-
-    /// In unilateral mode: the first switch in grid step k after the
-    /// committed point, if it comes at or before `until`, is committed and
-    /// the mode flipped (`Ok(true)`); `Ok(false)` if none comes by then.
-    /// `switches`: the switches made in this step so far (refused beyond
-    /// [`MAX_SWITCHES_PER_STEP`]).
-    pub(super) fn switch_by(&mut self, k: u64, until: f64, switches: &mut u32) -> Result<bool> {
-        let from = (
-            self.trajectory.committed_time,
-            self.trajectory.committed_state,
-        );
-        let Some(time) = stepping!(self).next_switch(k, from) else {
-            return Ok(false);
-        };
-        if time > until && !self.snaps(until, time) {
-            return Ok(false);
-        }
-        *switches += 1;
-        if *switches > MAX_SWITCHES_PER_STEP {
-            return Err(Error::Numerical {
-                what: "the unilateral tire (tire_contact = 1)",
-                reason: format!(
-                    "more than {MAX_SWITCHES_PER_STEP} switches between contact and flight in the internal step from {} s: the margin to W/k_t = {} m changes sign faster than a step of {} s resolves; use a tighter tolerance or a smaller max_internal_step, or the bilateral tire",
-                    self.grid_time(k),
-                    self.modes.grid_step.contact.limit,
-                    self.grid.step
-                ),
-            });
-        }
-        self.commit_switch(k, time)
-    }
-
-    /// Commits the state at the switch time `time` in step k and flips the
-    /// mode.
-    pub(super) fn commit_switch(&mut self, k: u64, time: f64) -> Result<bool> {
-        let (tc, xc) = (
-            self.trajectory.committed_time,
-            self.trajectory.committed_state,
-        );
-        let x = if time == tc {
-            xc
-        } else {
-            stepping!(self).integrate_within_step(k, tc, xc, time)
-        };
-        crate::limits::check_divergence(time, &x)?;
-        self.outputs_cache = None;
-        self.trajectory.set_current(time, x);
-        self.close_run_here();
-        let piece = self.inputs.piece_from(time);
-        if self.in_flight() {
-            let start = self.trajectory.flight_start.take().unwrap_or(time);
-            self.observers.holding.lost_time += time - start;
-        } else {
-            let limit = self.modes.grid_step.contact.limit;
-            self.trajectory.flight_start = Some(time);
-            self.observers.holding.lift_offs += 1;
-            self.observers.holding.first_loss.get_or_insert(time);
-            let event = LiftOff {
-                time,
-                tire_deflection: x[X_T] - piece.value(time),
-                limit,
-            };
-            self.observers.lift_off_log.record(event);
-        }
-        self.modes.swap(&self.plant, self.grid.step);
-        self.observers
-            .reanchor(&mut stepping!(self), &self.trajectory.committed());
-        Ok(true)
     }
 
     /// Everything accumulated from `t_0` to the current time
