@@ -1,5 +1,6 @@
 //! The `tdvass` command line as a user meets it: the built binary, its exit
-//! status, standard output and standard error.
+//! status, standard output and standard error. One test binary on purpose
+//! (each file under `tests/` links its own): hence its length.
 
 use serde_json::Value;
 use std::path::PathBuf;

@@ -4,7 +4,8 @@
     python tools/output_digests.py --fmu2 target/fmu/tdvass.fmu \
         --fmu3 target/fmu/tdvass-fmi3.fmu --cli target/release/tdvass > digests.txt
 
-prints one line per case, `<case> <first 16 hex digits of a sha256>`, always
+(One list of every case, with its inputs beside its name: hence the
+length.) It prints one line per case, `<case> <first 16 hex digits of a sha256>`, always
 the same cases in the same order, so that the files of two builds (before
 and after a refactor) compare with `diff`. A case that fails prints
 `<case> ERROR <message>` instead; the script itself does not stop.

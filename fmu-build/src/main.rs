@@ -1,7 +1,9 @@
 //! Builds the FMI 2.0 FMU `target/fmu/tdvass.fmu` and the FMI 3.0 FMU
 //! `target/fmu/tdvass-fmi3.fmu`, and refreshes the checked-in
 //! `modelDescription/modelDescription.xml` (FMI 2.0) and
-//! `modelDescription/fmi3/modelDescription.xml` (FMI 3.0).
+//! `modelDescription/fmi3/modelDescription.xml` (FMI 3.0). The build's
+//! steps stay in this one file, in the order they run (a long file on
+//! purpose).
 //!
 //! ```text
 //! cargo run --release -p fmu-build                   # the host platform only

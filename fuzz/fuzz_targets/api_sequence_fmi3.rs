@@ -1,4 +1,5 @@
-//! Fuzzes sequences of FMI 3.0 calls with random arguments on up to two
+//! (A fuzz target is one source file: hence its length.) Fuzzes sequences
+//! of FMI 3.0 calls with random arguments on up to two
 //! instances (Co-Simulation or Model Exchange, as the input chooses) and
 //! their FMU states: wrong states, Configuration Mode and structural
 //! parameters, NULL arrays and out-pointers, unknown value references and

@@ -1,7 +1,8 @@
 /*
  * Real-time harness of the shipped Linux libraries (FMI 2.0 and FMI 3.0,
  * Co-Simulation and Model Exchange): heap allocations while stepping, and
- * the worst call.
+ * the worst call. One harness for every mode on purpose (one binary, run
+ * under valgrind too): hence its length.
  *
  *   realtime list
  *   realtime count FMI LIB TOKEN CASE

@@ -2,7 +2,8 @@
 exact status, the log message where there is an instance to log through,
 that a refused call changed nothing (the serialized state of the instance
 is bit-identical before and after), and (fixture teardown) that the
-process and the library are still alive."""
+process and the library are still alive. One file per interface on purpose
+(the fixtures load the library once): hence its length."""
 
 import ctypes
 import math

@@ -1,13 +1,17 @@
 //! The C ABI: every fmi3 function of the FMI 3.0 standard, exported with C
-//! linkage. The Co-Simulation functions reach the safe [`Instance`]
-//! through [`tdvass_fmu::entry`] ([`entry::call`], [`entry::with_instance`]:
-//! the FMI 3.0 state table through [`FrontEnd::run`], which logs failures,
-//! and every panic caught); Model Exchange and Scheduled Execution
-//! instantiation return NULL with the reason logged, and the functions of
-//! Model Exchange, event mode, clocks and Scheduled Execution return
-//! `fmi3Error` with the reason logged. Every entry point runs inside
+//! linkage. The Co-Simulation and Model Exchange functions reach the safe
+//! [`Instance`] through [`tdvass_fmu::entry`] ([`entry::call`],
+//! [`entry::with_instance`]: the FMI 3.0 state table through
+//! [`FrontEnd::run`], which logs failures, and every panic caught);
+//! Scheduled Execution instantiation returns NULL with the reason logged,
+//! and the functions of clocks and Scheduled Execution return `fmi3Error`
+//! with the reason logged. Every entry point runs inside
 //! [`std::panic::catch_unwind`]: a panic becomes `fmi3Fatal` instead of
 //! unwinding into the host.
+//!
+//! Its length (all 75 functions of the standard, each a few lines of
+//! conversions) is kept in one file on purpose: every `unsafe` of this
+//! crate is then in one place.
 //!
 //! What both FMI versions do alike (the guarded call, `fmi3FreeInstance`,
 //! `fmi3SetDebugLogging`, the FMU-state functions) is [`tdvass_fmu::entry`],

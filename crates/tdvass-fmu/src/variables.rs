@@ -1,4 +1,5 @@
-//! The one table of FMU variables: [`COMMON_VARIABLES`], the variables of
+//! The one table of FMU variables (a long file on purpose: one declaration
+//! per variable, read as one list): [`COMMON_VARIABLES`], the variables of
 //! both FMI versions (all of FMI 2.0's), and [`FMI3_VARIABLES`], the same
 //! followed by the FMI 3.0 additions. [`variables_of`] gives a version's,
 //! and [`by_vr`] and [`by_name`] search it.

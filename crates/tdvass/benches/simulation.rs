@@ -1,6 +1,8 @@
 //! Cost of the simulation core: one internal TDVASS step against the
 //! arithmetic floor of a step, and whole 15 s runs of the three variants on
 //! the paper's roads. See BENCHMARKS.md for the figures and how to read them.
+//! One bench binary on purpose: every ratio is against the floor measured
+//! in the same run (hence its length).
 //!
 //! The floor ratio: `cargo bench --bench simulation -- 'floor ratio'`.
 //! Both sides run 1000 internal steps per iteration; divide the reported

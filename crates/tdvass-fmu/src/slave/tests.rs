@@ -1,7 +1,9 @@
 //! The slave's behaviour, called directly as a front-end calls it (after
 //! its state table allowed the call): values and their checks, stepping,
 //! divergence, FMU states, the input over a step, partials, logging and the
-//! tire's contact.
+//! tire's contact. Its length is the slave's whole surface, kept in one
+//! file over one set of helpers (a slave in each phase, its values read
+//! back).
 
 use super::*;
 use crate::variables::{

@@ -11,6 +11,7 @@
 pub mod characteristic;
 pub mod frf;
 pub mod optimize;
+mod parallel;
 pub mod polynomial;
 pub mod pso;
 pub mod spectrum;
