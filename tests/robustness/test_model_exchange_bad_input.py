@@ -11,7 +11,6 @@ status, log one line naming the function and the argument or value, change
 nothing (the serialized state is bit-identical before and after) and leave
 the instance usable. A diverging state asks the master to terminate.
 
-
 One file for the whole Model Exchange surface on purpose (the fixtures load
 both libraries once): hence its length."""
 
