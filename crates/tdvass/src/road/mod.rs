@@ -131,26 +131,33 @@ impl Road {
     }
 
     /// The piece valid at `t` (a right-continuous choice at breakpoints).
-    #[inline]
+    /// The one piece of the harmonic and external roads, and the cached
+    /// piece, are returned inline (every call of a step asks); a new piece
+    /// of a random or sampled road is [`Road::new_piece`]'s.
+    #[inline(always)]
     pub fn piece(&mut self, t: f64) -> RoadPiece {
-        match &mut self.kind {
+        match &self.kind {
             RoadKind::Harmonic(piece) | RoadKind::Input(piece) => *piece,
-            kind => {
-                if let Some(cached @ RoadPiece::Linear { start, end, .. }) = self.cache
-                    && start <= t
-                    && t < end
-                {
-                    return cached;
+            _ => match self.cache {
+                Some(cached @ RoadPiece::Linear { start, end, .. }) if start <= t && t < end => {
+                    cached
                 }
-                let piece = match kind {
-                    RoadKind::Nodes(nodes) => nodes.piece(t),
-                    RoadKind::Samples(samples) => sample_piece(samples, t),
-                    RoadKind::Harmonic(piece) | RoadKind::Input(piece) => *piece,
-                };
-                self.cache = Some(piece);
-                piece
-            }
+                _ => self.new_piece(t),
+            },
         }
+    }
+
+    /// [`Road::piece`] of a random or sampled road at a `t` outside the
+    /// cached piece: found, and cached.
+    #[inline(never)]
+    fn new_piece(&mut self, t: f64) -> RoadPiece {
+        let piece = match &mut self.kind {
+            RoadKind::Nodes(nodes) => nodes.piece(t),
+            RoadKind::Samples(samples) => sample_piece(samples, t),
+            RoadKind::Harmonic(piece) | RoadKind::Input(piece) => *piece,
+        };
+        self.cache = Some(piece);
+        piece
     }
 
     /// `x_g(t)` (m).

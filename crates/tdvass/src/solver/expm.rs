@@ -40,13 +40,47 @@ pub fn precise_exp_increment<const D: usize>(m: &SMatrix<f64, D, D>) -> SMatrix<
         0
     };
     let scaled = m * 0.5f64.powi(squarings as i32);
-    let scaled2 = scaled * scaled;
-    let mut increment = scaled
-        + scaled2 * (0.5 * SMatrix::identity() + scaled * (1.0 / 6.0) + scaled2 * (1.0 / 24.0));
+    // One buffer for every product (each overwrites all of it).
+    let mut product = SMatrix::<f64, D, D>::zeros();
+    multiply(&mut product, &scaled, &scaled);
+    let scaled2 = product;
+    multiply(
+        &mut product,
+        &scaled2,
+        &(0.5 * SMatrix::identity() + scaled * (1.0 / 6.0) + scaled2 * (1.0 / 24.0)),
+    );
+    let mut increment = scaled + product;
     for _ in 0..squarings {
-        increment = increment * 2.0 + increment * increment;
+        multiply(&mut product, &increment, &increment);
+        increment = increment * 2.0 + product;
     }
     increment
+}
+
+/// `out = a b`, column by column: column j is `Σ_k a_k b_kj` summed in k
+/// order from `a_0 b_0j`, each term rounded before it is added
+/// (nalgebra's order for static matrices, so the bits are the same). One
+/// loop of our own, because the code the compiler makes of the generic
+/// product for these sizes changes with where it is instantiated; this
+/// product is most of the cost of building a simulator.
+#[inline(never)]
+fn multiply<const D: usize>(
+    out: &mut SMatrix<f64, D, D>,
+    a: &SMatrix<f64, D, D>,
+    b: &SMatrix<f64, D, D>,
+) {
+    // Column-major arrays: `x.data.0[j]` is column j.
+    let a = &a.data.0;
+    for (column, b_column) in out.data.0.iter_mut().zip(&b.data.0) {
+        for (out, &a_0) in column.iter_mut().zip(&a[0]) {
+            *out = a_0 * b_column[0];
+        }
+        for (a_column, &scale) in a.iter().zip(b_column).skip(1) {
+            for (out, &a_k) in column.iter_mut().zip(a_column) {
+                *out += a_k * scale;
+            }
+        }
+    }
 }
 
 /// The least integer e with `2^e >= x`, for a finite x > 0, from its bits

@@ -113,7 +113,7 @@ impl Inputs {
     }
 
     /// The road piece in force from `t` on ([`pieces::piece_from`]).
-    #[inline]
+    #[inline(always)]
     pub(super) fn piece_from(&mut self, t: f64) -> RoadPiece {
         pieces::piece_from(&mut self.road, t, self.grid.step)
     }

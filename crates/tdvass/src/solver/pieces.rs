@@ -28,7 +28,7 @@ pub(super) fn coincide(a: f64, b: f64, step: f64) -> bool {
 
 /// The road piece in force from `t` on: the piece after a breakpoint that
 /// `t` coincides with.
-#[inline]
+#[inline(always)]
 pub(super) fn piece_from(road: &mut Road, t: f64, step: f64) -> RoadPiece {
     let piece = road.piece(t);
     piece_after(road, piece, t, step)
