@@ -8,8 +8,13 @@
 //! `mod.rs`), outside comments, strings and `#[cfg(test)]` items, is
 //! resolved to the file it names; a name that a parent re-exports
 //! (`pub use piece::RoadPiece` in `road/mod.rs`, `pub use slave::Slave` in
-//! `lib.rs`) is resolved to the child that defines it. An import must not
-//! name a file in a layer above the importer's.
+//! `lib.rs`) is resolved to the child that defines it. Two checks follow:
+//!
+//! - an import must not name a file in a layer above the importer's;
+//! - in a folder with a table, a call `.name(` or `Type::name(` must not
+//!   reach a function that only files above the caller's layer define (a
+//!   name also defined at or below the caller's layer is ambiguous and
+//!   passes).
 //!
 //! Inside a folder the files are compared by the folder's table; across
 //! folders, and between a folder and a top-level module, the top-level
@@ -34,6 +39,10 @@ pub struct Layout {
     /// `mod.rs`, or the `name.rs` beside a folder `name/`, is `mod`); any
     /// other folder is read as one module with its parent file.
     pub folders: &'static [(&'static str, Layers)],
+    /// Names of the crate's functions that a method of the standard library
+    /// or of a dependency shares (`Iterator::filter`): a call of one cannot
+    /// be told from the other by reading, so it is no upward call.
+    pub foreign_names: &'static [&'static str],
 }
 
 /// A module of the layers: a top-level module (`folder` empty) or a file
@@ -103,7 +112,7 @@ pub struct Source {
     pub code: String,
 }
 
-/// A finding of the check: `from` imports `what` of `to`.
+/// A finding of the checks: `from` imports or calls `what` of `to`.
 #[derive(Clone, Debug)]
 pub struct Finding {
     pub file: String,
@@ -387,6 +396,74 @@ impl Crate {
                     to,
                     what: path,
                     message,
+                });
+            }
+        }
+        found
+    }
+
+    /// The modules that define each function ([`defined_functions`]).
+    fn definitions(&self) -> BTreeMap<String, BTreeSet<Module>> {
+        let mut defined: BTreeMap<String, BTreeSet<Module>> = BTreeMap::new();
+        for source in &self.sources {
+            for name in defined_functions(&source.code) {
+                defined
+                    .entry(name)
+                    .or_default()
+                    .insert(source.module.clone());
+            }
+        }
+        defined
+    }
+
+    /// Every call, in a folder with a table, of a function that only files
+    /// above the caller's layer define, one of them in the caller's folder:
+    /// a method reached through a value (`sim.run_for(…)` in a file below
+    /// the facade) needs no import. A name defined at or below the caller's
+    /// layer anywhere in the crate is ambiguous and passes; across top-level
+    /// modules the calls are not compared, as the standard library's and
+    /// other crates' methods share too many names with them.
+    pub fn upward_calls(&self) -> Vec<Finding> {
+        let defined = self.definitions();
+        let mut found = Vec::new();
+        for source in &self.sources {
+            for (line, name) in calls(&source.code) {
+                if self.layout.foreign_names.contains(&name.as_str()) {
+                    continue;
+                }
+                let Some(definers) = defined.get(&name) else {
+                    continue;
+                };
+                let in_folder = |definer: &Module| {
+                    !definer.folder.is_empty() && definer.folder == source.module.folder
+                };
+                if !definers.iter().any(in_folder)
+                    || definers
+                        .iter()
+                        .any(|definer| self.above(&source.module, definer).is_none())
+                {
+                    continue;
+                }
+                let to = definers
+                    .iter()
+                    .filter(|definer| in_folder(definer))
+                    .min_by_key(|definer| self.rank(definer))
+                    .expect("a definer in the folder")
+                    .clone();
+                let (own, other) = self.above(&source.module, &to).expect("above");
+                let names: Vec<String> = definers.iter().map(Module::to_string).collect();
+                found.push(Finding {
+                    file: source.path.clone(),
+                    line,
+                    from: source.module.clone(),
+                    message: format!(
+                        "{}:{line} (layer \"{own}\") calls `{name}`, defined only above it: \
+                         in {} ({to}: layer \"{other}\")",
+                        source.path,
+                        names.join(", "),
+                    ),
+                    to,
+                    what: name,
                 });
             }
         }
@@ -694,4 +771,78 @@ fn identifiers(code: &str) -> Vec<(usize, &str)> {
         }
     }
     out
+}
+
+/// The functions the code defines in inherent `impl` blocks and `trait`
+/// definitions, and its free functions with a `pub` (a trait's
+/// implementation defines the trait's names, not new ones).
+pub fn defined_functions(code: &str) -> BTreeSet<String> {
+    let mut defined = BTreeSet::new();
+    // Per open brace: whether it opened an `impl` or `trait` block.
+    let mut blocks: Vec<bool> = Vec::new();
+    let mut pending = false;
+    let words = identifiers(code);
+    let mut next_word = 0;
+    for (at, c) in code.char_indices() {
+        while next_word < words.len() && words[next_word].0 < at {
+            next_word += 1;
+        }
+        match c {
+            '{' => blocks.push(std::mem::take(&mut pending)),
+            '}' => {
+                blocks.pop();
+            }
+            ';' => pending = false,
+            _ => {}
+        }
+        let Some(&(word_at, word)) = words.get(next_word) else {
+            continue;
+        };
+        if word_at != at {
+            continue;
+        }
+        let before = code[..at].trim_end();
+        match word {
+            "impl" | "trait" => {
+                let item_start = before.is_empty()
+                    || before.ends_with(['}', ';', '{', ']', ')'])
+                    || before.ends_with("pub")
+                    || before.ends_with("unsafe");
+                // `impl Trait for Type`: the trait's names, not the crate's.
+                let header = &code[at..code[at..].find('{').map_or(code.len(), |e| at + e)];
+                let trait_impl = word == "impl" && identifiers(header).iter().any(|w| w.1 == "for");
+                pending |= item_start && !trait_impl;
+            }
+            "fn" => {
+                let Some(&(_, name)) = words.get(next_word + 1) else {
+                    continue;
+                };
+                let name_follows = code[at + 2..].trim_start().starts_with(name);
+                let line_start = before.rfind('\n').map_or(0, |n| n + 1);
+                let public = code[line_start..at].contains("pub");
+                if name_follows && (blocks.iter().any(|b| *b) || public) {
+                    defined.insert(name.to_string());
+                }
+            }
+            _ => {}
+        }
+    }
+    defined
+}
+
+/// The calls `.name(` and `Path::name(` of the code (a turbofish
+/// allowed), each with its line.
+pub fn calls(code: &str) -> Vec<(usize, String)> {
+    let lines = LineIndex::of(code);
+    let mut found = Vec::new();
+    for (at, name) in identifiers(code) {
+        let before = code[..at].trim_end();
+        let through = (before.ends_with('.') && !before.ends_with(".."))
+            || (before.ends_with("::") && !before.ends_with(":::"));
+        let after = &code[at + name.len()..];
+        if through && (after.starts_with('(') || after.starts_with("::<")) {
+            found.push((lines.line(at), name.to_string()));
+        }
+    }
+    found
 }
