@@ -41,6 +41,7 @@ use std::f64::consts::PI;
 use std::sync::Arc;
 
 pub use piece::RoadPiece;
+pub(crate) use saved::RoadState;
 pub use spec::{
     ISO_NODE_INTERVAL, REFERENCE_SPATIAL_FREQUENCY, RandomRoad, RoadClass, RoadSpec, RoadType,
 };
@@ -373,15 +374,6 @@ impl Road {
             _ => Ok(()),
         }
     }
-}
-
-/// Saved dynamic state of a [`Road`].
-#[derive(Debug, Clone, Default, PartialEq)]
-pub(crate) struct RoadState {
-    pub word_position: u128,
-    pub first_node: u64,
-    pub nodes: Vec<f64>,
-    pub input: Option<(f64, f64, f64)>,
 }
 
 #[cfg(test)]

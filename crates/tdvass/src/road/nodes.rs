@@ -2,7 +2,8 @@
 //! `x_{n+1} = decay x_n + gain ξ_n` from a seeded generator, the window of
 //! nodes kept, and the linear piece between two nodes.
 
-use super::{RoadPiece, RoadState};
+use super::piece::RoadPiece;
+use super::saved::RoadState;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};

@@ -4,7 +4,6 @@
 //! nodes, an external input's current piece). Written and read with the
 //! crate's one codec ([`crate::bytes`]); a read checks lengths and codes.
 
-use super::RoadState;
 use super::spec::{RandomRoad, RoadClass, RoadSpec, RoadType};
 use crate::bytes::{ByteReader, ByteWriter};
 use crate::error::{Error, Result};
@@ -13,6 +12,17 @@ use std::sync::Arc;
 /// Most values a saved list may hold (road samples, road nodes): a bound on
 /// what a read allocates; the engines check their own, tighter windows.
 const MAX_SAVED_VALUES: u64 = 1 << 28;
+
+/// Saved dynamic state of a [`super::Road`]: a random road's generator
+/// position (its random word), the index of its first kept node and the
+/// nodes (m), and an external input's piece (start s, value m, slope m/s).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub(crate) struct RoadState {
+    pub word_position: u128,
+    pub first_node: u64,
+    pub nodes: Vec<f64>,
+    pub input: Option<(f64, f64, f64)>,
+}
 
 impl RandomRoad {
     fn write(&self, w: &mut ByteWriter) {
