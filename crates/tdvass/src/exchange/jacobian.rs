@@ -21,7 +21,7 @@
 //! respect to its integral I, taken as 0 where I is 0 (its slope there is
 //! unbounded) and at the start.
 
-use super::ModelExchange;
+use super::instance::ModelExchange;
 use crate::model::{V_S, V_T, Variant, X_H, X_S, X_T};
 use crate::solver::{CONTINUOUS_STATES, FILTER_STATES_AT, INTEGRALS_AT};
 

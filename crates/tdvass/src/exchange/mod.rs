@@ -65,22 +65,24 @@
 //! configuration and report types.
 
 mod history;
+mod instance;
 mod jacobian;
 mod persist;
 mod reach;
 
 pub use history::{DelayHistory, Delayed, HistoryPoint, MAX_HISTORY_POINTS, STAGE_POINTS};
+use instance::{CONTACT_LOSS_TIME, Delay, Discrete, HYSTERESIS, Matrices};
+pub use instance::{ContactEvent, EVENT_INDICATORS, ModelExchange, TRIAL_REACH};
 pub use jacobian::{Gradient, Jacobian, OutputPartials};
 pub use persist::EXCHANGE_FORMAT_VERSION;
 
-use crate::comfort::{WK_STATES, WkStateSpace, wk_state_space};
+use crate::comfort::wk_state_space;
 use crate::error::{Error, Result};
 use crate::limits::DIVERGENCE_BOUNDS;
 use crate::metrics::time_averages;
 use crate::model::dynamics::{
     CONTINUOUS_STATES, FILTER_STATES_AT, INTEGRAL_NAMES, INTEGRALS_AT, Instant, contact_margin,
-    continuous_rates, flight_input, flight_matrix, folded_delay, folded_feedback, plant_rates,
-    tire_load,
+    continuous_rates, flight_input, plant_rates, tire_load,
 };
 use crate::model::{Performance, Plant, STATE_NAMES, State, V_T, X_S, X_T};
 use crate::road::Road;
@@ -88,115 +90,6 @@ use crate::solver::{
     ComfortValues, ContactLoss, MIN_RESOLVED_DELAY, Metrics, Outputs, RoadHolding,
     SimulationConfig, Simulator,
 };
-use nalgebra::{Matrix6, SVector};
-
-/// Number of event indicators: the margin to the loss of tire contact.
-pub const EVENT_INDICATORS: usize = 1;
-
-/// Index of the time without tire contact among the continuous states.
-const CONTACT_LOSS_TIME: usize = CONTINUOUS_STATES - 1;
-
-/// The hysteresis of the event indicator, relative to W/k_t.
-const HYSTERESIS: f64 = 1e-12;
-
-/// How far back (s) a master that has never completed a step may set the
-/// time, from the latest time it set.
-pub const TRIAL_REACH: f64 = 1.0;
-
-/// How the delayed input is formed.
-#[derive(Debug, Clone, PartialEq)]
-enum Delay {
-    /// No control force (CS, PVASS).
-    None,
-    /// `x_t − tau v_t` (tau below [`MIN_RESOLVED_DELAY`]).
-    Folded(f64),
-    /// From the history of evaluated points.
-    History(DelayHistory),
-}
-
-/// The plant's matrices as the co-simulation's operators have them.
-#[derive(Debug, Clone, PartialEq)]
-struct Matrices {
-    /// In contact: A, with the feedback `g (x_t − tau v_t)` folded in
-    /// where the delay is folded or there is no controller (as the
-    /// co-simulation folds it).
-    contact: Matrix6<f64>,
-    /// In flight: `contact + e c_tᵀ` ([`flight_matrix`]).
-    flight: Matrix6<f64>,
-    /// The delayed input's column: b, or zero where folded.
-    feedback: State,
-}
-
-impl Matrices {
-    /// The matrices of `plant` for the delay `delay`.
-    fn of(plant: &Plant, delay: &Delay) -> Matrices {
-        let (contact, feedback) = match delay {
-            Delay::History(_) => (plant.a, plant.b),
-            Delay::Folded(tau) => folded_feedback(plant, *tau),
-            Delay::None => folded_feedback(plant, 0.0),
-        };
-        Matrices {
-            flight: flight_matrix(&contact, &plant.e),
-            contact,
-            feedback,
-        }
-    }
-}
-
-/// The discrete state: the contact mode and what events update.
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct Discrete {
-    /// The tire is in contact (the margin was >= 0 at the last event).
-    in_contact: bool,
-    /// ε of the event indicator (m, > 0).
-    hysteresis: f64,
-    /// Lift-offs since the start (a start without contact counts one).
-    lift_off_count: u64,
-    /// The largest |SDD| at the accepted points (m).
-    max_suspension_deflection: f64,
-    /// The first loss of contact: time (s) and dynamic tire load (N).
-    first_contact_loss: Option<(f64, f64)>,
-}
-
-/// What an event changed.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum ContactEvent {
-    /// The margin fell through 0 at this time (s): TDD (m) then.
-    LiftOff { time: f64, tire_deflection: f64 },
-    /// The margin rose through 0 at this time (s).
-    TouchDown { time: f64 },
-}
-
-/// One Model Exchange instance of the model; see the module documentation.
-#[derive(Debug, Clone)]
-pub struct ModelExchange {
-    config: SimulationConfig,
-    plant: Plant,
-    /// The plant's matrices as the co-simulation's operators have them.
-    matrices: Matrices,
-    wk: WkStateSpace,
-    road: Road,
-    /// W/k_t (m).
-    limit: f64,
-    /// W (N).
-    static_load: f64,
-    time: f64,
-    states: [f64; CONTINUOUS_STATES],
-    delay: Delay,
-    discrete: Discrete,
-    /// The time of the last accepted point (s).
-    accepted: f64,
-    /// The earliest time [`Self::set_time`] takes (s): see the module
-    /// documentation. Never decreases.
-    floor: f64,
-    /// The latest time set (s).
-    latest: f64,
-    /// The master has called `CompletedIntegratorStep`: the floor is its
-    /// last accepted point.
-    completes: bool,
-    /// The largest |time| (s) the model resolves.
-    max_time: f64,
-}
 
 /// The names of the continuous states, in order.
 pub fn state_names() -> [String; CONTINUOUS_STATES] {
@@ -361,37 +254,6 @@ impl ModelExchange {
     /// Sets the external road input `x_g` (m; road = input only).
     pub fn set_road_input(&mut self, value: f64) -> Result<()> {
         self.road.set_input(self.time, value, 0.0)
-    }
-
-    fn plant_state(&self) -> State {
-        State::from_column_slice(&self.states[..6])
-    }
-
-    fn filter_state(&self) -> SVector<f64, WK_STATES> {
-        SVector::from_column_slice(&self.states[FILTER_STATES_AT..INTEGRALS_AT])
-    }
-
-    /// `x_t(t − tau)` now, with its partials with respect to the current
-    /// `x_t` and `v_t`, without recording the point.
-    fn delayed_now(&self) -> Delayed {
-        let x = &self.states;
-        match &self.delay {
-            Delay::None => Delayed {
-                value: 0.0,
-                by_position: 0.0,
-                by_velocity: 0.0,
-            },
-            Delay::Folded(tau) => Delayed {
-                value: folded_delay(&self.plant_state(), *tau),
-                by_position: 1.0,
-                by_velocity: -tau,
-            },
-            Delay::History(h) => h.delayed((self.time, x[X_T], x[V_T])),
-        }
-    }
-
-    fn flying(&self) -> bool {
-        self.config.tire_contact.is_unilateral() && !self.discrete.in_contact
     }
 
     /// The time derivatives of the continuous states at the current time

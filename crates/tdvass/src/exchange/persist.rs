@@ -7,7 +7,8 @@
 //! completion habits; a state of version 1 still loads (its floor is the
 //! latest of its accepted time and what its history and road still hold).
 
-use super::{Delay, DelayHistory, HistoryPoint, ModelExchange};
+use super::history::{DelayHistory, HistoryPoint};
+use super::instance::{Delay, ModelExchange};
 use crate::bytes::{ByteReader, ByteWriter};
 use crate::error::{Error, Result};
 use crate::road::RoadState;

@@ -2,7 +2,7 @@
 //! [`super`]): the floor [`ModelExchange::set_time`] keeps, what the
 //! history and the road keep for it, and the times it refuses.
 
-use super::{Delay, ModelExchange, TRIAL_REACH};
+use super::instance::{Delay, ModelExchange, TRIAL_REACH};
 use crate::error::{Error, Result};
 use crate::exchange::MAX_HISTORY_POINTS;
 use crate::limits::MAX_WORK_PER_CALL;

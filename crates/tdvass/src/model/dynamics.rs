@@ -28,9 +28,19 @@
 //! Layer: data (docs/architecture.md), with the model; it imports the
 //! model and the crate's `comfort`.
 
-use super::{Plant, State, V_T, X_T};
+use super::params::{State, V_T, X_T};
+use super::plant::Plant;
 use crate::comfort::{WK_STATES, WkStateSpace};
 use nalgebra::{Matrix6, SVector};
+
+impl Plant {
+    /// Time derivative of the state, Eq. (2):
+    /// `A X + b x_t(t - tau) + e x_g` ([`plant_rates`]).
+    #[inline]
+    pub fn derivative(&self, x: &State, delayed_tire: f64, road: f64) -> State {
+        plant_rates(&self.a, &self.b, &self.e, x, delayed_tire, road)
+    }
+}
 
 /// The continuous states of the model as one vector, the layout of Model
 /// Exchange and of the co-simulation's continuous states: the plant

@@ -9,7 +9,7 @@
 //! Sums are formed element by element in the order of [`MassSpringDamper::elements`],
 //! so every consumer adds the same terms in the same order.
 
-use super::{Params, Variant, X_H, X_S, X_T};
+use super::params::{Params, Variant, X_H, X_S, X_T};
 use crate::error::Result;
 
 /// One spring–damper element of Eq. (1).

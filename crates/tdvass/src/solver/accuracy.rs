@@ -90,7 +90,7 @@
 //! continuous across the regime changes to within the tolerance.
 //!
 //! Layer: clients (docs/architecture.md); it imports the solver's `config`,
-//! `driver`, `grid` and the crate's `error`, `model`, `road`.
+//! `driver`, `grid`, `outputs` and the crate's `error`, `model`, `road`.
 
 use super::config::SimulationConfig;
 use super::driver::Simulator;
@@ -369,7 +369,8 @@ fn probe(
         Some(sim)
     };
     let measure = |mut sim: Box<Simulator>| -> Option<[f64; 4]> {
-        let summary = sim.run_for(PROBE_DURATION).ok()?;
+        sim.advance_to(sim.time() + PROBE_DURATION).ok()?;
+        let summary = super::outputs::outputs(&mut sim);
         let largest = summary
             .road_holding
             .map_or(0.0, |h| h.max_suspension_deflection);

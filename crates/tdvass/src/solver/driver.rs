@@ -21,7 +21,7 @@ use super::integrals::{Accumulated, INTEGRALS, Squares};
 use super::modes::Modes;
 use super::observers::Observers;
 use super::pieces;
-use super::reports::{Outputs, RunSummary};
+use super::reports::Outputs;
 use super::stepping::stepping;
 use super::system::Filter;
 use super::trajectory::Trajectory;
@@ -428,19 +428,6 @@ impl Simulator {
     pub fn set_weights(&mut self, weights: Weights) {
         self.outputs_cache = None;
         self.config.weights = weights;
-    }
-
-    /// Runs from the current time for `duration` seconds and summarises.
-    pub fn run_for(&mut self, duration: f64) -> Result<RunSummary> {
-        self.advance_to(self.trajectory.current_time + duration)?;
-        let outputs = self.outputs();
-        Ok(RunSummary {
-            rms: outputs.rms,
-            objective: outputs.objective,
-            comfort: outputs.comfort,
-            rms_dynamic_tire_load_ratio: outputs.rms_dynamic_tire_load_ratio,
-            road_holding: outputs.road_holding,
-        })
     }
 
     /// The current state if it has been computed; `None` while it is

@@ -181,6 +181,19 @@ impl Simulator {
         outputs::instantaneous(self)
     }
 
+    /// Runs from the current time for `duration` seconds and summarises.
+    pub fn run_for(&mut self, duration: f64) -> Result<RunSummary> {
+        self.advance_to(self.trajectory.current_time + duration)?;
+        let outputs = self.outputs();
+        Ok(RunSummary {
+            rms: outputs.rms,
+            objective: outputs.objective,
+            comfort: outputs.comfort,
+            rms_dynamic_tire_load_ratio: outputs.rms_dynamic_tire_load_ratio,
+            road_holding: outputs.road_holding,
+        })
+    }
+
     /// All outputs at the current time.
     pub fn outputs(&mut self) -> Outputs {
         outputs::outputs(self)

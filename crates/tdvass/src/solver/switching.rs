@@ -52,7 +52,7 @@ impl Simulator {
         tire_load(
             self.config.tire_contact.is_unilateral(),
             load,
-            self.static_load(),
+            self.config.params.static_load(self.config.variant),
         )
     }
 

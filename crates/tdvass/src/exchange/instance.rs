@@ -1,0 +1,163 @@
+//! A Model Exchange instance's parts: the delayed input's form, the
+//! plant's matrices as the co-simulation has them, the discrete state that
+//! events change, the [`ModelExchange`] that holds them, and the readers of
+//! its continuous states that its derivatives, partials and saved state
+//! share.
+//!
+//! Layer: exchange (docs/architecture.md), the ground of its folder; it
+//! imports the folder's `history` and the crate's `comfort`, `model`,
+//! `road` and the solver's public configuration and layout.
+
+use super::history::{DelayHistory, Delayed};
+use crate::comfort::{WK_STATES, WkStateSpace};
+use crate::model::dynamics::{
+    CONTINUOUS_STATES, FILTER_STATES_AT, INTEGRALS_AT, flight_matrix, folded_delay, folded_feedback,
+};
+use crate::model::{Plant, State, V_T, X_T};
+use crate::road::Road;
+use crate::solver::SimulationConfig;
+use nalgebra::{Matrix6, SVector};
+
+/// Number of event indicators: the margin to the loss of tire contact.
+pub const EVENT_INDICATORS: usize = 1;
+
+/// Index of the time without tire contact among the continuous states.
+pub(super) const CONTACT_LOSS_TIME: usize = CONTINUOUS_STATES - 1;
+
+/// The hysteresis of the event indicator, relative to W/k_t.
+pub(super) const HYSTERESIS: f64 = 1e-12;
+
+/// How far back (s) a master that has never completed a step may set the
+/// time, from the latest time it set.
+pub const TRIAL_REACH: f64 = 1.0;
+
+/// How the delayed input is formed.
+#[derive(Debug, Clone, PartialEq)]
+pub(super) enum Delay {
+    /// No control force (CS, PVASS).
+    None,
+    /// `x_t − tau v_t` (tau below [`MIN_RESOLVED_DELAY`]).
+    Folded(f64),
+    /// From the history of evaluated points.
+    History(DelayHistory),
+}
+
+/// The plant's matrices as the co-simulation's operators have them.
+#[derive(Debug, Clone, PartialEq)]
+pub(super) struct Matrices {
+    /// In contact: A, with the feedback `g (x_t − tau v_t)` folded in
+    /// where the delay is folded or there is no controller (as the
+    /// co-simulation folds it).
+    pub(super) contact: Matrix6<f64>,
+    /// In flight: `contact + e c_tᵀ` ([`flight_matrix`]).
+    pub(super) flight: Matrix6<f64>,
+    /// The delayed input's column: b, or zero where folded.
+    pub(super) feedback: State,
+}
+
+impl Matrices {
+    /// The matrices of `plant` for the delay `delay`.
+    pub(super) fn of(plant: &Plant, delay: &Delay) -> Matrices {
+        let (contact, feedback) = match delay {
+            Delay::History(_) => (plant.a, plant.b),
+            Delay::Folded(tau) => folded_feedback(plant, *tau),
+            Delay::None => folded_feedback(plant, 0.0),
+        };
+        Matrices {
+            flight: flight_matrix(&contact, &plant.e),
+            contact,
+            feedback,
+        }
+    }
+}
+
+/// The discrete state: the contact mode and what events update.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Discrete {
+    /// The tire is in contact (the margin was >= 0 at the last event).
+    pub(super) in_contact: bool,
+    /// ε of the event indicator (m, > 0).
+    pub(super) hysteresis: f64,
+    /// Lift-offs since the start (a start without contact counts one).
+    pub(super) lift_off_count: u64,
+    /// The largest |SDD| at the accepted points (m).
+    pub(super) max_suspension_deflection: f64,
+    /// The first loss of contact: time (s) and dynamic tire load (N).
+    pub(super) first_contact_loss: Option<(f64, f64)>,
+}
+
+/// What an event changed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ContactEvent {
+    /// The margin fell through 0 at this time (s): TDD (m) then.
+    LiftOff { time: f64, tire_deflection: f64 },
+    /// The margin rose through 0 at this time (s).
+    TouchDown { time: f64 },
+}
+
+/// One Model Exchange instance of the model; see the module documentation.
+#[derive(Debug, Clone)]
+pub struct ModelExchange {
+    pub(super) config: SimulationConfig,
+    pub(super) plant: Plant,
+    /// The plant's matrices as the co-simulation's operators have them.
+    pub(super) matrices: Matrices,
+    pub(super) wk: WkStateSpace,
+    pub(super) road: Road,
+    /// W/k_t (m).
+    pub(super) limit: f64,
+    /// W (N).
+    pub(super) static_load: f64,
+    pub(super) time: f64,
+    pub(super) states: [f64; CONTINUOUS_STATES],
+    pub(super) delay: Delay,
+    pub(super) discrete: Discrete,
+    /// The time of the last accepted point (s).
+    pub(super) accepted: f64,
+    /// The earliest time [`Self::set_time`] takes (s): see the module
+    /// documentation. Never decreases.
+    pub(super) floor: f64,
+    /// The latest time set (s).
+    pub(super) latest: f64,
+    /// The master has called `CompletedIntegratorStep`: the floor is its
+    /// last accepted point.
+    pub(super) completes: bool,
+    /// The largest |time| (s) the model resolves.
+    pub(super) max_time: f64,
+}
+
+impl ModelExchange {
+    /// The plant's state X (the first six continuous states).
+    pub(super) fn plant_state(&self) -> State {
+        State::from_column_slice(&self.states[..6])
+    }
+
+    /// The W_k filter's state w.
+    pub(super) fn filter_state(&self) -> SVector<f64, WK_STATES> {
+        SVector::from_column_slice(&self.states[FILTER_STATES_AT..INTEGRALS_AT])
+    }
+
+    /// `x_t(t − tau)` now, with its partials with respect to the current
+    /// `x_t` and `v_t`, without recording the point.
+    pub(super) fn delayed_now(&self) -> Delayed {
+        let x = &self.states;
+        match &self.delay {
+            Delay::None => Delayed {
+                value: 0.0,
+                by_position: 0.0,
+                by_velocity: 0.0,
+            },
+            Delay::Folded(tau) => Delayed {
+                value: folded_delay(&self.plant_state(), *tau),
+                by_position: 1.0,
+                by_velocity: -tau,
+            },
+            Delay::History(h) => h.delayed((self.time, x[X_T], x[V_T])),
+        }
+    }
+
+    /// Whether the wheel flies: a unilateral tire out of contact.
+    pub(super) fn flying(&self) -> bool {
+        self.config.tire_contact.is_unilateral() && !self.discrete.in_contact
+    }
+}
