@@ -11,7 +11,8 @@
 use super::history::{DelayHistory, Delayed};
 use crate::comfort::{WK_STATES, WkStateSpace};
 use crate::model::dynamics::{
-    CONTINUOUS_STATES, FILTER_STATES_AT, INTEGRALS_AT, flight_matrix, folded_delay, folded_feedback,
+    CONTINUOUS_STATES, FILTER_STATES_AT, INTEGRALS_AT, Mode, Switch, folded_delay, folded_feedback,
+    mode_matrix,
 };
 use crate::model::{Plant, State, V_T, X_T};
 use crate::road::Road;
@@ -36,7 +37,7 @@ pub const TRIAL_REACH: f64 = 1.0;
 pub(super) enum Delay {
     /// No control force (CS, PVASS).
     None,
-    /// `x_t − tau v_t` (tau below [`MIN_RESOLVED_DELAY`]).
+    /// `x_t − tau v_t` (tau below [`crate::solver::MIN_RESOLVED_DELAY`]).
     Folded(f64),
     /// From the history of evaluated points.
     History(DelayHistory),
@@ -45,12 +46,11 @@ pub(super) enum Delay {
 /// The plant's matrices as the co-simulation's operators have them.
 #[derive(Debug, Clone, PartialEq)]
 pub(super) struct Matrices {
-    /// In contact: A, with the feedback `g (x_t − tau v_t)` folded in
+    /// By [`Mode::index`], each mode's matrix ([`mode_matrix`]) of the
+    /// contact matrix: A, with the feedback `g (x_t − tau v_t)` folded in
     /// where the delay is folded or there is no controller (as the
     /// co-simulation folds it).
-    pub(super) contact: Matrix6<f64>,
-    /// In flight: `contact + e c_tᵀ` ([`flight_matrix`]).
-    pub(super) flight: Matrix6<f64>,
+    pub(super) modes: [Matrix6<f64>; Mode::COUNT],
     /// The delayed input's column: b, or zero where folded.
     pub(super) feedback: State,
 }
@@ -64,8 +64,7 @@ impl Matrices {
             Delay::None => folded_feedback(plant, 0.0),
         };
         Matrices {
-            flight: flight_matrix(&contact, &plant.e),
-            contact,
+            modes: std::array::from_fn(|i| mode_matrix(&contact, &plant.e, Mode::from_index(i))),
             feedback,
         }
     }
@@ -154,6 +153,11 @@ impl ModelExchange {
             },
             Delay::History(h) => h.delayed((self.time, x[X_T], x[V_T])),
         }
+    }
+
+    /// The mode in force: the tire's bit set while it flies.
+    pub(super) fn mode(&self) -> Mode {
+        Mode::CONTACT.with(Switch::Tire, self.flying())
     }
 
     /// Whether the wheel flies: a unilateral tire out of contact.

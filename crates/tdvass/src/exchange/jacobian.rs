@@ -149,7 +149,7 @@ impl ModelExchange {
         let mut road_input = [0.0; CONTINUOUS_STATES];
         let flying = self.flying();
         let m = &self.matrices;
-        let matrix = if flying { m.flight } else { m.contact };
+        let matrix = m.modes[self.mode().index()];
         for (i, row) in states.iter_mut().enumerate().take(6) {
             for (j, value) in row.iter_mut().enumerate().take(6) {
                 *value = matrix[(i, j)];

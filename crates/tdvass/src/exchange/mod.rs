@@ -81,8 +81,8 @@ use crate::error::{Error, Result};
 use crate::limits::DIVERGENCE_BOUNDS;
 use crate::metrics::time_averages;
 use crate::model::dynamics::{
-    CONTINUOUS_STATES, FILTER_STATES_AT, INTEGRAL_NAMES, INTEGRALS_AT, Instant, contact_margin,
-    continuous_rates, flight_input, plant_rates, tire_load,
+    CONTINUOUS_STATES, FILTER_STATES_AT, INTEGRAL_NAMES, INTEGRALS_AT, Instant, Mode, Switch,
+    contact_margin, continuous_rates, flight_input, plant_rates, tire_load,
 };
 use crate::model::{Performance, Plant, STATE_NAMES, State, V_T, X_S, X_T};
 use crate::road::Road;
@@ -295,15 +295,15 @@ impl ModelExchange {
         let t = self.time;
         let x = self.plant_state();
         let road = self.road.value(t);
-        let flying = self.flying();
-        let road_input = if flying {
+        let mode = self.mode();
+        let road_input = if mode.is(Switch::Tire) {
             flight_input(self.limit)
         } else {
             road
         };
         let dx = self
             .plant
-            .reported_state(&self.mode_rates(flying, &x, delayed, road_input));
+            .reported_state(&self.mode_rates(mode, &x, delayed, road_input));
         let body_acceleration = self.plant.body_acceleration(&x);
         let w = self.filter_state();
         let now = Instant {
@@ -316,17 +316,23 @@ impl ModelExchange {
         continuous_rates(&dx, &w, Some(&self.wk), &now)
     }
 
-    /// The right-hand side of the plant in the tire's mode `flight`:
+    /// The right-hand side of the plant in `mode`:
     /// `Ẋ = A_m X + b u + e r_m` ([`plant_rates`]) at the state `x`, the
     /// delayed input `delayed` (m) and the road column's input
     /// `road_input` (m: the road in contact, `−W/k_t` in flight), with the
     /// matrices of the co-simulation's operators (the feedback folded in
     /// below the delay it resolves): what
     /// [`Simulator::mode_rates`] evaluates too.
-    pub fn mode_rates(&self, flight: bool, x: &State, delayed: f64, road_input: f64) -> State {
+    pub fn mode_rates(&self, mode: Mode, x: &State, delayed: f64, road_input: f64) -> State {
         let m = &self.matrices;
-        let a = if flight { &m.flight } else { &m.contact };
-        plant_rates(a, &m.feedback, &self.plant.e, x, delayed, road_input)
+        plant_rates(
+            &m.modes[mode.index()],
+            &m.feedback,
+            &self.plant.e,
+            x,
+            delayed,
+            road_input,
+        )
     }
 
     /// The margin `W/k_t − (x_t − x_g)` (m) now.

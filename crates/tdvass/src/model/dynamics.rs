@@ -9,6 +9,8 @@
 //!   ([`INTEGRAL_NAMES`]).
 //! - **The plant in a mode** ([`plant_rates`]): `Ẋ = A_m X + b u + e r_m`,
 //!   Eq. (2) in contact, and in flight the tire's force held at −W.
+//! - **The modes** ([`Mode`], [`mode_matrix`]): one bit per switching
+//!   element of the list [`SWITCHES`] (today the unilateral tire).
 //! - **The tire** ([`contact_margin`], [`tire_load`], [`flight_matrix`]):
 //!   the margin `W/k_t − (x_t − x_g)` whose sign is the contact, the load
 //!   the tire law gives, and the plant in flight, `A + e c_tᵀ` with the
@@ -95,6 +97,76 @@ pub fn flight_matrix(contact: &Matrix6<f64>, e: &State) -> Matrix6<f64> {
         a[(row, X_T)] += e[row];
     }
     a
+}
+
+/// A switching element of the model: a piecewise-linear part whose law
+/// changes where its switch function crosses zero. Each has a bit of the
+/// [`Mode`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Switch {
+    /// The unilateral tire: in contact (bit clear) while its margin
+    /// ([`contact_margin`]) is not negative, in flight (bit set), with its
+    /// force held at −W, after the margin fell through zero.
+    Tire,
+}
+
+/// Every switching element, in bit order: the list the engines' switch
+/// searches go through.
+pub const SWITCHES: [Switch; 1] = [Switch::Tire];
+
+/// The mode in force: one bit per switching element ([`SWITCHES`]), clear
+/// for its first law (the tire in contact). One value that the engines
+/// keep, compare and save.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
+pub struct Mode(u8);
+
+impl Mode {
+    /// Every element in its first law (the tire in contact).
+    pub const CONTACT: Mode = Mode(0);
+    /// How many modes there are: `2^SWITCHES.len()`.
+    pub const COUNT: usize = 1 << SWITCHES.len();
+
+    /// This mode with `switch` in its second law (`on`) or its first.
+    pub const fn with(self, switch: Switch, on: bool) -> Mode {
+        let bit = 1 << switch as u8;
+        Mode(if on { self.0 | bit } else { self.0 & !bit })
+    }
+
+    /// Whether `switch` is in its second law (the tire in flight).
+    #[inline(always)]
+    pub const fn is(self, switch: Switch) -> bool {
+        self.0 & (1 << switch as u8) != 0
+    }
+
+    /// This mode with `switch` in its other law.
+    pub const fn toggled(self, switch: Switch) -> Mode {
+        Mode(self.0 ^ (1 << switch as u8))
+    }
+
+    /// The mode's index in `0..Mode::COUNT`.
+    pub const fn index(self) -> usize {
+        self.0 as usize
+    }
+
+    /// The mode of index `index` (in `0..Mode::COUNT`).
+    pub const fn from_index(index: usize) -> Mode {
+        Mode(index as u8)
+    }
+
+    /// Every mode, by index.
+    pub fn all() -> impl Iterator<Item = Mode> {
+        (0..Mode::COUNT).map(Mode::from_index)
+    }
+}
+
+/// The plant matrix in `mode` for the matrix `contact` of every element's
+/// first law: [`flight_matrix`] with the tire in flight.
+pub fn mode_matrix(contact: &Matrix6<f64>, e: &State, mode: Mode) -> Matrix6<f64> {
+    if mode.is(Switch::Tire) {
+        flight_matrix(contact, e)
+    } else {
+        *contact
+    }
 }
 
 /// `Ẋ = A_m X + b u + e r_m`: the plant's rates in a mode m of matrix

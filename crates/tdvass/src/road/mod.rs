@@ -134,7 +134,7 @@ impl Road {
     /// The piece valid at `t` (a right-continuous choice at breakpoints).
     /// The one piece of the harmonic and external roads, and the cached
     /// piece, are returned inline (every call of a step asks); a new piece
-    /// of a random or sampled road is [`Road::new_piece`]'s.
+    /// of a random or sampled road is `Road::new_piece`'s.
     #[inline(always)]
     pub fn piece(&mut self, t: f64) -> RoadPiece {
         match &self.kind {

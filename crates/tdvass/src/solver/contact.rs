@@ -8,7 +8,7 @@
 //! the same form as contact, with the road replaced by the constant
 //! `−W/k_t` ([`Stepping::forcing`](super::stepping::Stepping::forcing)), so every exact step map of the solver
 //! applies to flight unchanged: the mode's plant matrix and its operators
-//! are swapped at a switch ([`Modes::swap`](super::modes::Modes::swap)).
+//! are put in force at a switch ([`Modes::enter`](super::modes::Modes::enter)).
 //!
 //! **The switches.** With the margin `g = W/k_t − (x_t − x_g)` (m) of
 //! `solver::holding`, the wheel lifts off where g falls through 0 in

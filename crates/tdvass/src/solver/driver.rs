@@ -418,7 +418,9 @@ impl Simulator {
     /// ([`Self::set_gain`]) drops them (call it again after one).
     pub fn reserve(&mut self) {
         let unilateral = self.config.tire_contact.is_unilateral();
-        self.modes.reserve(&self.plant, &self.grid, unilateral);
+        let in_force = self.trajectory.mode;
+        self.modes
+            .reserve(&self.plant, &self.grid, in_force, unilateral);
         // The road keeps its nodes from the step before the committed
         // point to the end of the next step.
         self.inputs.road.reserve_window(4.0 * self.grid.step);

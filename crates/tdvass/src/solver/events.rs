@@ -16,6 +16,7 @@
 
 use super::holding;
 use super::stepping::Stepping;
+use crate::model::dynamics::{SWITCHES, Switch};
 use crate::model::{State, X_T};
 use crate::road::RoadPiece;
 
@@ -27,42 +28,88 @@ pub const LOCATION_TOLERANCE: f64 = 1e-13;
 const LOCATION_ITERATIONS: usize = 64;
 
 impl Stepping<'_> {
-    /// The switch function `[φ, φ']` at time t with state x: the margin g
-    /// in contact, −g in flight; the mode switches where φ falls through 0.
-    fn switch_function(&mut self, t: f64, x: &State, piece: &RoadPiece) -> [f64; 2] {
-        let [g, rate] = self.margin_at(t, x, piece);
-        if self.flight { [-g, -rate] } else { [g, rate] }
+    /// Whether `switch` can switch in this configuration: the tire only
+    /// when it is unilateral.
+    fn applies(&self, switch: Switch) -> bool {
+        match switch {
+            Switch::Tire => self.config.tire_contact.is_unilateral(),
+        }
     }
 
-    /// The rounding level of φ at state x (m): below it a φ of the other
-    /// sign is taken for 0.
-    fn switch_rounding(&self, t: f64, x: &State, piece: &RoadPiece) -> f64 {
-        let scale = self.modes.grid_step.contact.limit.abs() + x[X_T].abs() + piece.value(t).abs();
-        64.0 * f64::EPSILON * scale
+    /// The switch function `[φ, φ']` of `switch` at time t with state x;
+    /// the element switches where φ falls through 0. The tire's: the
+    /// margin g in contact, −g in flight.
+    fn switch_function(
+        &mut self,
+        switch: Switch,
+        t: f64,
+        x: &State,
+        piece: &RoadPiece,
+    ) -> [f64; 2] {
+        match switch {
+            Switch::Tire => {
+                let [g, rate] = self.margin_at(t, x, piece);
+                if self.mode.is(Switch::Tire) {
+                    [-g, -rate]
+                } else {
+                    [g, rate]
+                }
+            }
+        }
     }
 
-    /// The first switch in grid step k after the committed point, searched
-    /// up to the step's end node in the current mode (`None` if there is
+    /// The rounding level of `switch`'s φ at state x: below it a φ of the
+    /// other sign is taken for 0. The tire's (m): from W/k_t, x_t and x_g.
+    fn switch_rounding(&self, switch: Switch, t: f64, x: &State, piece: &RoadPiece) -> f64 {
+        match switch {
+            Switch::Tire => {
+                let scale =
+                    self.modes.grid_step.contact.limit.abs() + x[X_T].abs() + piece.value(t).abs();
+                64.0 * f64::EPSILON * scale
+            }
+        }
+    }
+
+    /// The first switch in grid step k after the committed point among the
+    /// elements of [`SWITCHES`] that apply, searched up to the step's end
+    /// node in the current mode: its time and element (`None` if there is
     /// none).
-    pub(super) fn next_switch(&mut self, k: u64, (tc, xc): (f64, State)) -> Option<f64> {
+    pub(super) fn next_switch(&mut self, k: u64, from: (f64, State)) -> Option<(f64, Switch)> {
+        let mut first: Option<(f64, Switch)> = None;
+        for switch in SWITCHES {
+            if !self.applies(switch) {
+                continue;
+            }
+            if let Some(time) = self.next_switch_of(switch, k, from)
+                && first.is_none_or(|(earliest, _)| time < earliest)
+            {
+                first = Some((time, switch));
+            }
+        }
+        first
+    }
+
+    /// The first switch of `switch` in grid step k after the committed
+    /// point, up to the step's end node (`None` if there is none).
+    fn next_switch_of(&mut self, switch: Switch, k: u64, (tc, xc): (f64, State)) -> Option<f64> {
         let node = self.inputs.node_time(k + 1);
         let (mut start, mut x_start) = (tc, xc);
         while start < node {
             let super::pieces::Stretch { piece, end, .. } = self.inputs.stretch(start, node, None);
             let x_end = self.integrate_within_step(k, tc, xc, end);
-            let a = self.switch_function(start, &x_start, &piece);
-            let b = self.switch_function(end, &x_end, &piece);
+            let a = self.switch_function(switch, start, &x_start, &piece);
+            let b = self.switch_function(switch, end, &x_end, &piece);
             // A start on the other side by rounding only, and leaving it,
             // is a switch just made (or a graze), not a new one.
             let skip_start = start == tc
-                && a[0] >= -self.switch_rounding(start, &x_start, &piece)
+                && a[0] >= -self.switch_rounding(switch, start, &x_start, &piece)
                 && a[1] >= 0.0;
             if let Some([lo, root, hi]) = holding::first_fall(end - start, a, b, skip_start) {
                 if hi == 0.0 {
                     return Some(start);
                 }
                 let bracket = [start + lo, start + root, start + hi];
-                if let Some(time) = self.locate_switch(k, (tc, xc), bracket, &piece) {
+                if let Some(time) = self.locate_switch(switch, k, (tc, xc), bracket, &piece) {
                     return Some(time);
                 }
             }
@@ -75,6 +122,7 @@ impl Stepping<'_> {
     /// point: `[φ, φ']`.
     fn exact_switch_function(
         &mut self,
+        switch: Switch,
         k: u64,
         (tc, xc): (f64, State),
         t: f64,
@@ -85,7 +133,7 @@ impl Stepping<'_> {
         } else {
             self.integrate_within_step(k, tc, xc, t)
         };
-        self.switch_function(t, &x, piece)
+        self.switch_function(switch, t, &x, piece)
     }
 
     /// The root of φ where the cubic falls through 0, given as `[lo, root,
@@ -101,6 +149,7 @@ impl Stepping<'_> {
     /// narrowed by Newton steps kept inside it by bisection.
     fn locate_switch(
         &mut self,
+        switch: Switch,
         k: u64,
         from: (f64, State),
         [lo, root, hi]: [f64; 3],
@@ -108,33 +157,34 @@ impl Stepping<'_> {
     ) -> Option<f64> {
         let mut t = root;
         for _ in 0..2 {
-            let [phi, rate] = self.exact_switch_function(k, from, t, piece);
+            let [phi, rate] = self.exact_switch_function(switch, k, from, t, piece);
             let next = t - phi / rate;
             if !(rate < 0.0 && next >= lo && next <= hi) {
                 break;
             }
             if (next - t).abs() <= 0.25 * LOCATION_TOLERANCE {
                 let past = (next + 0.5 * LOCATION_TOLERANCE).min(hi);
-                if self.exact_switch_function(k, from, past, piece)[0] < 0.0 {
+                if self.exact_switch_function(switch, k, from, past, piece)[0] < 0.0 {
                     return Some(past);
                 }
                 break;
             }
             t = next;
         }
-        self.locate_switch_in_bracket(k, from, (lo, hi), piece)
+        self.locate_switch_in_bracket(switch, k, from, (lo, hi), piece)
     }
 
     /// [`Self::locate_switch`] from the bracket alone.
     fn locate_switch_in_bracket(
         &mut self,
+        switch: Switch,
         k: u64,
         from: (f64, State),
         (mut lo, mut hi): (f64, f64),
         piece: &RoadPiece,
     ) -> Option<f64> {
-        let at_lo = self.exact_switch_function(k, from, lo, piece);
-        let at_hi = self.exact_switch_function(k, from, hi, piece);
+        let at_lo = self.exact_switch_function(switch, k, from, lo, piece);
+        let at_hi = self.exact_switch_function(switch, k, from, hi, piece);
         if at_hi[0] >= 0.0 || at_lo[0] < 0.0 {
             return None;
         }
@@ -147,7 +197,7 @@ impl Stepping<'_> {
             if !(t > lo && t < hi) {
                 t = 0.5 * (lo + hi);
             }
-            let [phi, rate] = self.exact_switch_function(k, from, t, piece);
+            let [phi, rate] = self.exact_switch_function(switch, k, from, t, piece);
             if phi < 0.0 {
                 hi = t;
             } else {
@@ -158,7 +208,7 @@ impl Stepping<'_> {
             t = newton;
             if step <= 0.25 * LOCATION_TOLERANCE && t > lo && t < hi {
                 let past = (t + LOCATION_TOLERANCE / 2.0).min(hi);
-                if self.exact_switch_function(k, from, past, piece)[0] < 0.0 {
+                if self.exact_switch_function(switch, k, from, past, piece)[0] < 0.0 {
                     hi = past;
                 }
                 break;

@@ -99,7 +99,7 @@ mod whole_steps;
 use crate::error::Result;
 pub use crate::limits::{DIVERGENCE_DISPLACEMENT, DIVERGENCE_VELOCITY};
 use crate::metrics::RmsValues;
-use crate::model::dynamics::plant_rates;
+use crate::model::dynamics::{Mode, plant_rates};
 use crate::model::{Plant, State};
 pub use config::{DEFAULT_TOLERANCE, Metrics, SimulationConfig, StepChoice};
 pub use contact::{LIFT_OFF_LOG, LiftOff, LiftOffLog, MAX_SWITCHES_PER_STEP};
@@ -145,7 +145,7 @@ impl Simulator {
         Self::validate(config)
     }
 
-    /// The right-hand side the operators of the tire's mode `flight`
+    /// The right-hand side the operators of `mode`
     /// integrate: `Ẋ = A_m X + b u + e r_m`
     /// ([`crate::model::dynamics::plant_rates`]) at the state `x`, the
     /// delayed input `delayed` (m) and the road column's input
@@ -153,9 +153,9 @@ impl Simulator {
     /// solver's matrices (the feedback folded in below the grid's
     /// resolution). Model Exchange evaluates the same
     /// ([`crate::exchange::ModelExchange::mode_rates`]).
-    pub fn mode_rates(&self, flight: bool, x: &State, delayed: f64, road_input: f64) -> State {
+    pub fn mode_rates(&self, mode: Mode, x: &State, delayed: f64, road_input: f64) -> State {
         let e = &self.plant.e;
-        let a = self.modes.mode_matrix(flight, self.in_flight(), e);
+        let a = self.modes.mode_matrix(mode, self.trajectory.mode, e);
         plant_rates(&a, &self.modes.input_column, e, x, delayed, road_input)
     }
 

@@ -17,7 +17,7 @@ use super::linalg::infinity_norm;
 use super::operators::StepOperator;
 use super::system::FilterCoupling;
 use crate::error::{Error, Result};
-use crate::model::dynamics::{flight_matrix, folded_feedback};
+use crate::model::dynamics::{Mode, Switch, folded_feedback, mode_matrix};
 use crate::model::{Plant, State};
 use nalgebra::Matrix6;
 
@@ -28,12 +28,12 @@ pub(super) struct NextNode {
     pub(super) k: u64,
     pub(super) from: f64,
     pub(super) state: State,
-    pub(super) flight: bool,
+    pub(super) mode: Mode,
     pub(super) node: State,
     pub(super) end: [f64; 2],
 }
 
-/// The operators of the mode that is not in force.
+/// The operators of a mode that is not in force.
 #[derive(Debug, Clone)]
 pub(super) struct ModeOperators {
     pub(super) solver_matrix: Matrix6<f64>,
@@ -47,8 +47,12 @@ pub(super) struct ModeOperators {
 /// functions of them.
 #[derive(Debug, Clone)]
 pub(super) struct Modes {
-    /// Plant matrix used by the solver (the plant's A, plus the folded
-    /// feedback when the delay is not resolved on the grid).
+    /// The solver's plant matrix with every element in its first law (the
+    /// tire in contact), which every mode's matrix is made from.
+    pub(super) contact_matrix: Matrix6<f64>,
+    /// Plant matrix used by the solver in the mode in force (the plant's
+    /// A, plus the folded feedback when the delay is not resolved on the
+    /// grid).
     pub(super) solver_matrix: Matrix6<f64>,
     /// `‖solver_matrix‖_∞` (largest absolute row sum, 1/s): chooses the
     /// order of the Taylor series near a node.
@@ -68,10 +72,11 @@ pub(super) struct Modes {
     pub(super) next_node: Option<NextNode>,
     /// How BA drives the W_k filter (only with the comfort metrics).
     pub(super) coupling: Option<FilterCoupling>,
-    /// Unilateral tire: the operators of the mode not in force; `None`
-    /// with the bilateral tire, and until the first lift-off or
-    /// [`Self::reserve`].
-    pub(super) other_mode: Option<Box<ModeOperators>>,
+    /// The operators of the modes not in force, by [`Mode::index`]:
+    /// `None` for the mode in force, for a mode never entered (until
+    /// [`Self::reserve`] builds those the configuration can reach) and
+    /// for every mode of a bilateral tire.
+    pub(super) stored: [Option<Box<ModeOperators>>; Mode::COUNT],
     /// The road's angular frequency ω (0 but on the harmonic road).
     angular_frequency: f64,
 }
@@ -134,6 +139,7 @@ impl Modes {
         grid_step.holding = config.metrics.road_holding();
         Ok(Modes {
             solver_matrix_norm: infinity_norm(&a),
+            contact_matrix: a,
             solver_matrix: a,
             input_column: b,
             full_step: step,
@@ -141,32 +147,31 @@ impl Modes {
             dense: None,
             next_node: None,
             coupling,
-            other_mode: None,
+            stored: Default::default(),
             angular_frequency,
         })
     }
 
-    /// The solver's plant matrix of the tire's mode `flight` (the feedback
-    /// folded in as in force), `in_flight` saying which mode is in force:
-    /// the matrix in force or the other mode's; flight's made from
-    /// contact's ([`flight_matrix`]) while its operators are not.
-    pub(super) fn mode_matrix(&self, flight: bool, in_flight: bool, e: &State) -> Matrix6<f64> {
-        if flight == in_flight {
+    /// The solver's plant matrix of `mode` (the feedback folded in as in
+    /// force), `in_force` being the mode whose operators are in force: the
+    /// matrix in force, a stored mode's, or one made from the contact
+    /// matrix ([`mode_matrix`]) while its operators are not.
+    pub(super) fn mode_matrix(&self, mode: Mode, in_force: Mode, e: &State) -> Matrix6<f64> {
+        if mode == in_force {
             return self.solver_matrix;
         }
-        match &self.other_mode {
-            Some(other) => other.solver_matrix,
-            None => flight_matrix(&self.solver_matrix, e),
+        match &self.stored[mode.index()] {
+            Some(stored) => stored.solver_matrix,
+            None => mode_matrix(&self.contact_matrix, e, mode),
         }
     }
 
-    /// The flight mode's operators for the contact plant matrix `contact`
-    /// (the solver's, with any folded feedback): the tire's column of A
-    /// gains the road column `e` of `plant`, whose input is then the
-    /// constant −W/k_t.
-    fn flight_operators(&self, plant: &Plant, contact: &Matrix6<f64>, h: f64) -> ModeOperators {
+    /// The operators of `mode` ([`mode_matrix`] of the contact matrix):
+    /// in flight the tire's column of A gains the road column `e` of
+    /// `plant`, whose input is then the constant −W/k_t.
+    fn operators_of(&self, mode: Mode, plant: &Plant, h: f64) -> ModeOperators {
         let e = plant.e;
-        let a = flight_matrix(contact, &e);
+        let a = mode_matrix(&self.contact_matrix, &e, mode);
         let (omega, b) = (self.angular_frequency, self.input_column);
         ModeOperators {
             solver_matrix_norm: infinity_norm(&a),
@@ -208,47 +213,67 @@ impl Modes {
     /// that stepping allocates nothing: the partial steps' maps of the
     /// mode in force (their table's entries, and the filter's table with
     /// the W_k filter: [`DenseOutput::reserve`]) and, with `unilateral`,
-    /// the flight operators and their maps. Each is
-    /// the same value whenever it is built (a cache of a function of the
-    /// operators), so the results do not change.
-    pub(super) fn reserve(&mut self, plant: &Plant, grid: &DelayGrid, unilateral: bool) {
+    /// the operators of the other modes the tire can reach and their maps.
+    /// Each is the same value whenever it is built (a cache of a function
+    /// of the operators), so the results do not change.
+    pub(super) fn reserve(
+        &mut self,
+        plant: &Plant,
+        grid: &DelayGrid,
+        in_force: Mode,
+        unilateral: bool,
+    ) {
         let coupling = self.coupling.clone();
         self.dense_output(plant, grid).reserve(coupling.as_ref());
         if !unilateral {
             return;
         }
-        if self.other_mode.is_none() {
-            // Never swapped: contact is in force.
-            let flight = self.flight_operators(plant, &self.solver_matrix, grid.step);
-            self.other_mode = Some(Box::new(flight));
-        }
-        let Some(other) = self.other_mode.as_deref() else {
-            return;
-        };
-        if other.dense.is_none() {
-            let mut dense = self.dense_output_of(&other.solver_matrix, plant, grid);
+        for mode in [Mode::CONTACT, Mode::CONTACT.with(Switch::Tire, true)] {
+            if mode == in_force {
+                continue;
+            }
+            if self.stored[mode.index()].is_none() {
+                let operators = self.operators_of(mode, plant, grid.step);
+                self.stored[mode.index()] = Some(Box::new(operators));
+            }
+            let Some(matrix) = self.stored[mode.index()]
+                .as_deref()
+                .filter(|stored| stored.dense.is_none())
+                .map(|stored| stored.solver_matrix)
+            else {
+                continue;
+            };
+            let mut dense = self.dense_output_of(&matrix, plant, grid);
             dense.reserve(coupling.as_ref());
-            if let Some(other) = self.other_mode.as_deref_mut() {
-                other.dense = Some(Box::new(dense));
+            if let Some(stored) = self.stored[mode.index()].as_deref_mut() {
+                stored.dense = Some(Box::new(dense));
             }
         }
     }
 
-    /// Swaps the operators in force with those of the other mode. Those
-    /// of flight are made at the first lift-off unless [`Self::reserve`]
-    /// made them: until then (`other_mode` empty) the contact operators
-    /// are in force.
-    pub(super) fn swap(&mut self, plant: &Plant, h: f64) {
-        if self.other_mode.is_none() {
-            let flight = self.flight_operators(plant, &self.solver_matrix, h);
-            self.other_mode = Some(Box::new(flight));
-        }
-        let Some(other) = self.other_mode.as_mut() else {
+    /// Puts the operators of `to` in force in place of those of `from`,
+    /// which are stored. A mode's operators are made when it is first
+    /// entered unless [`Self::reserve`] made them.
+    pub(super) fn enter(&mut self, from: Mode, to: Mode, plant: &Plant, h: f64) {
+        if from == to {
             return;
+        }
+        // The box of the incoming mode takes the outgoing one's operators:
+        // no allocation once every mode was entered or reserved.
+        let mut boxed = match self.stored[to.index()].take() {
+            Some(stored) => stored,
+            None => Box::new(self.operators_of(to, plant, h)),
         };
-        std::mem::swap(&mut self.solver_matrix, &mut other.solver_matrix);
-        std::mem::swap(&mut self.solver_matrix_norm, &mut other.solver_matrix_norm);
-        std::mem::swap(&mut self.full_step, &mut other.full_step);
-        std::mem::swap(&mut self.dense, &mut other.dense);
+        std::mem::swap(&mut self.solver_matrix, &mut boxed.solver_matrix);
+        std::mem::swap(&mut self.solver_matrix_norm, &mut boxed.solver_matrix_norm);
+        std::mem::swap(&mut self.full_step, &mut boxed.full_step);
+        std::mem::swap(&mut self.dense, &mut boxed.dense);
+        self.stored[from.index()] = Some(boxed);
+    }
+
+    /// Forgets the stored operators (after a restore or a rebuild of the
+    /// operators in force, which are then contact's).
+    pub(super) fn forget_stored(&mut self) {
+        self.stored = Default::default();
     }
 }

@@ -20,6 +20,7 @@ use super::stepping::stepping;
 use super::system::Filter;
 use super::trajectory::Trajectory;
 use crate::error::{Error, Result};
+use crate::model::dynamics::Mode;
 use crate::model::{Plant, V_T, Variant, X_T};
 use crate::road::Road;
 
@@ -142,6 +143,7 @@ impl Simulator {
                 current_time: config.start_time,
                 current_state: initial,
                 deferred: None,
+                mode: Mode::CONTACT,
                 flight_start: None,
             },
             observers: Observers::new(start_time),

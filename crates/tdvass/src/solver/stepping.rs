@@ -24,7 +24,7 @@ use super::linalg::{self, hermite, hermite_matrix};
 use super::modes::{Modes, NextNode};
 use super::pieces::{self, Stretch};
 use super::system::{DELAY_INPUT, Filter, tire_pick};
-use crate::model::dynamics::{flight_input, folded_delay};
+use crate::model::dynamics::{Mode, Switch, flight_input, folded_delay};
 use crate::model::{Plant, State, V_T, X_T};
 use crate::road::RoadPiece;
 use nalgebra::{Matrix2, SMatrix, Vector2, Vector4};
@@ -41,7 +41,7 @@ macro_rules! stepping {
             modes: &mut $sim.modes,
             inputs: &mut $sim.inputs,
             grid_index: $sim.trajectory.grid_index,
-            flight: $sim.trajectory.flight_start.is_some(),
+            mode: $sim.trajectory.mode,
         }
     };
 }
@@ -77,8 +77,8 @@ pub(super) struct Stepping<'a> {
     pub(super) inputs: &'a mut Inputs,
     /// The grid index of the committed point.
     pub(super) grid_index: u64,
-    /// Whether the wheel is in flight (unilateral tire).
-    pub(super) flight: bool,
+    /// The mode in force (the tire in contact or in flight).
+    pub(super) mode: Mode,
 }
 
 impl Stepping<'_> {
@@ -182,9 +182,9 @@ impl Stepping<'_> {
         from: f64,
         x: State,
     ) -> (State, [f64; 2]) {
-        let flight = self.flight;
+        let mode = self.mode;
         if let Some(c) = &self.modes.next_node
-            && (c.k, c.from.to_bits(), c.flight) == (k, from.to_bits(), flight)
+            && (c.k, c.from.to_bits(), c.mode) == (k, from.to_bits(), mode)
             && c.state
                 .iter()
                 .zip(x.iter())
@@ -197,7 +197,7 @@ impl Stepping<'_> {
             k,
             from,
             state: x,
-            flight,
+            mode,
             node,
             end,
         });
@@ -224,7 +224,7 @@ impl Stepping<'_> {
     /// `from`, state `x`), when the step lies in one road piece and the
     /// wheel is on the road; `None` otherwise.
     fn whole_step_from_node(&mut self, k: u64, from: f64, x: &State) -> Option<State> {
-        if from != self.inputs.node_time(k) || self.flight {
+        if from != self.inputs.node_time(k) || self.mode.is(Switch::Tire) {
             return None;
         }
         #[cfg(test)]
@@ -436,7 +436,7 @@ impl Stepping<'_> {
     /// docs).
     #[inline]
     pub(super) fn forcing(&self, piece: &RoadPiece) -> RoadPiece {
-        if self.flight {
+        if self.mode.is(Switch::Tire) {
             RoadPiece::Linear {
                 start: 0.0,
                 end: piece.end(),

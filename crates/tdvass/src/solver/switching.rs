@@ -12,8 +12,9 @@ use super::contact::{LiftOff, LiftOffLog, MAX_SWITCHES_PER_STEP};
 use super::driver::Simulator;
 use super::stepping::stepping;
 use crate::error::{Error, Result};
-use crate::model::X_T;
-use crate::model::dynamics::tire_load;
+use crate::model::dynamics::{Mode, Switch, tire_load};
+use crate::model::{State, X_T};
+use crate::road::RoadPiece;
 
 impl Simulator {
     /// With a unilateral tire: to the end node of the current step,
@@ -31,7 +32,7 @@ impl Simulator {
 
     /// Whether the wheel is in flight now (unilateral tire only).
     pub fn in_flight(&self) -> bool {
-        self.trajectory.flight_start.is_some()
+        self.trajectory.mode.is(Switch::Tire)
     }
 
     /// The lift-offs since the log was last cleared (at most
@@ -56,18 +57,20 @@ impl Simulator {
         )
     }
 
-    /// Puts the operators of the mode the holding state says, the contact
+    /// Puts the operators of the recorded mode in force, the contact
     /// operators being in force (after a restore or a rebuild of them).
     pub(super) fn enter_recorded_mode(&mut self) {
-        self.modes.other_mode = None;
-        if self.in_flight() {
-            self.modes.swap(&self.plant, self.grid.step);
-        }
+        self.modes.forget_stored();
+        let mode = self.trajectory.mode;
+        self.modes
+            .enter(Mode::CONTACT, mode, &self.plant, self.grid.step);
     }
 
-    /// In unilateral mode: the first switch in grid step k after the
-    /// committed point, if it comes at or before `until`, is committed and
-    /// the mode flipped (`Ok(true)`); `Ok(false)` if none comes by then.
+    /// The first switch of an element of the list
+    /// ([`SWITCHES`](crate::model::dynamics::SWITCHES)) in grid
+    /// step k after the committed point, if it comes at or before `until`,
+    /// is committed and its bit of the mode flipped (`Ok(true)`);
+    /// `Ok(false)` if none comes by then.
     /// `switches`: the switches made in this step so far (refused beyond
     /// [`MAX_SWITCHES_PER_STEP`]).
     pub(super) fn switch_by(&mut self, k: u64, until: f64, switches: &mut u32) -> Result<bool> {
@@ -75,7 +78,7 @@ impl Simulator {
             self.trajectory.committed_time,
             self.trajectory.committed_state,
         );
-        let Some(time) = stepping!(self).next_switch(k, from) else {
+        let Some((time, switch)) = stepping!(self).next_switch(k, from) else {
             return Ok(false);
         };
         if time > until && !self.snaps(until, time) {
@@ -93,12 +96,34 @@ impl Simulator {
                 ),
             });
         }
-        self.commit_switch(k, time)
+        self.commit_switch(k, time, switch)
     }
 
-    /// Commits the state at the switch time `time` in step k and flips the
-    /// mode.
-    pub(super) fn commit_switch(&mut self, k: u64, time: f64) -> Result<bool> {
+    /// The tire's switch at `time` with state x: the end of the flight in
+    /// progress (its time joins the lost time), or a lift-off (counted,
+    /// logged, the flight starts).
+    fn record_tire_switch(&mut self, time: f64, x: &State, piece: &RoadPiece) {
+        if self.in_flight() {
+            let start = self.trajectory.flight_start.take().unwrap_or(time);
+            self.observers.holding.lost_time += time - start;
+            return;
+        }
+        let limit = self.modes.grid_step.contact.limit;
+        self.trajectory.flight_start = Some(time);
+        self.observers.holding.lift_offs += 1;
+        self.observers.holding.first_loss.get_or_insert(time);
+        let event = LiftOff {
+            time,
+            tire_deflection: x[X_T] - piece.value(time),
+            limit,
+        };
+        self.observers.lift_off_log.record(event);
+    }
+
+    /// Commits the state at the switch time `time` of `switch` in step k,
+    /// records what the element's switch means (the tire: a lift-off or
+    /// the end of a flight) and flips its bit of the mode.
+    pub(super) fn commit_switch(&mut self, k: u64, time: f64, switch: Switch) -> Result<bool> {
         let (tc, xc) = (
             self.trajectory.committed_time,
             self.trajectory.committed_state,
@@ -113,22 +138,13 @@ impl Simulator {
         self.trajectory.set_current(time, x);
         self.close_run_here();
         let piece = self.inputs.piece_from(time);
-        if self.in_flight() {
-            let start = self.trajectory.flight_start.take().unwrap_or(time);
-            self.observers.holding.lost_time += time - start;
-        } else {
-            let limit = self.modes.grid_step.contact.limit;
-            self.trajectory.flight_start = Some(time);
-            self.observers.holding.lift_offs += 1;
-            self.observers.holding.first_loss.get_or_insert(time);
-            let event = LiftOff {
-                time,
-                tire_deflection: x[X_T] - piece.value(time),
-                limit,
-            };
-            self.observers.lift_off_log.record(event);
+        let from = self.trajectory.mode;
+        match switch {
+            Switch::Tire => self.record_tire_switch(time, &x, &piece),
         }
-        self.modes.swap(&self.plant, self.grid.step);
+        self.trajectory.mode = from.toggled(switch);
+        self.modes
+            .enter(from, self.trajectory.mode, &self.plant, self.grid.step);
         self.observers
             .reanchor(&mut stepping!(self), &self.trajectory.committed());
         Ok(true)

@@ -13,6 +13,7 @@ use super::system::Filter;
 use crate::bytes::{ByteReader, ByteWriter};
 use crate::error::Result;
 use crate::model::State;
+use crate::model::dynamics::{Mode, Switch};
 
 /// Where the run is: the committed point (a grid node, or a point where
 /// an external road input changed or the tire contact switched) and the
@@ -32,8 +33,11 @@ pub(super) struct Trajectory {
     /// what finds it and the bounds that showed it passes the divergence
     /// check.
     pub(super) deferred: Option<Deferred>,
-    /// The tire's mode: with the unilateral tire, the start of the
-    /// flight in progress (s); `None` in contact. The flights that ended
+    /// The mode in force: one bit per switching element (the tire in
+    /// flight).
+    pub(super) mode: Mode,
+    /// With the tire in flight, the start of its flight (s), which the
+    /// lost time counts from; `None` in contact. The flights that ended
     /// are in the road-holding accumulators' lost time.
     pub(super) flight_start: Option<f64>,
 }
@@ -94,14 +98,18 @@ impl Trajectory {
         Ok(())
     }
 
-    /// Writes the tire's mode: the start of the flight in progress.
+    /// Writes the mode: with the tire its only switching element, the
+    /// start of its flight in progress says it (format 4).
     pub(super) fn write_mode(&self, w: &mut ByteWriter) {
+        debug_assert_eq!(self.mode.is(Switch::Tire), self.flight_start.is_some());
         w.optional_f64(self.flight_start);
     }
 
-    /// Reads what [`Trajectory::write_mode`] wrote.
+    /// Reads what [`Trajectory::write_mode`] wrote: the flight in progress
+    /// and the mode.
     pub(super) fn read_mode(&mut self, r: &mut ByteReader) -> Result<()> {
         self.flight_start = r.optional_f64("flight")?;
+        self.mode = Mode::CONTACT.with(Switch::Tire, self.flight_start.is_some());
         Ok(())
     }
 

@@ -362,6 +362,7 @@ fn a_state_of_format_version_1_still_loads() {
 /// Model Exchange's equals the co-simulation's to the bit.
 #[test]
 fn both_engines_evaluate_the_same_right_hand_side() {
+    use crate::model::dynamics::Mode;
     use rand::{RngExt, SeedableRng};
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(41);
     for variant in Variant::ALL {
@@ -376,10 +377,10 @@ fn both_engines_evaluate_the_same_right_hand_side() {
             for _ in 0..50 {
                 let x = State::from_fn(|_, _| rng.random_range(-0.1..0.1));
                 let (u, r) = (rng.random_range(-0.1..0.1), rng.random_range(-0.1..0.1));
-                for flight in [false, true] {
-                    let me = model.mode_rates(flight, &x, u, r);
-                    let cs = sim.mode_rates(flight, &x, u, r);
-                    assert_eq!(me, cs, "{variant:?} tau {tau} flight {flight}");
+                for mode in Mode::all() {
+                    let me = model.mode_rates(mode, &x, u, r);
+                    let cs = sim.mode_rates(mode, &x, u, r);
+                    assert_eq!(me, cs, "{variant:?} tau {tau} mode {mode:?}");
                 }
             }
         }
