@@ -323,6 +323,7 @@ impl ModelExchange {
     /// matrices of the co-simulation's operators (the feedback folded in
     /// below the delay it resolves): what
     /// [`Simulator::mode_rates`] evaluates too.
+    #[inline]
     pub fn mode_rates(&self, mode: Mode, x: &State, delayed: f64, road_input: f64) -> State {
         let m = &self.matrices;
         plant_rates(
