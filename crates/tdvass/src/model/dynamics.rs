@@ -32,6 +32,7 @@
 
 use super::params::{State, V_T, X_T};
 use super::plant::Plant;
+use super::tire::TireContact;
 use crate::comfort::{WK_STATES, WkStateSpace};
 use nalgebra::{Matrix6, SVector};
 
@@ -110,6 +111,16 @@ pub enum Switch {
     Tire,
 }
 
+impl Switch {
+    /// Whether the element switches at all under the tire law
+    /// `tire_contact`: the tire only when it is unilateral.
+    pub fn applies(self, tire_contact: TireContact) -> bool {
+        match self {
+            Switch::Tire => tire_contact.is_unilateral(),
+        }
+    }
+}
+
 /// Every switching element, in bit order: the list the engines' switch
 /// searches go through.
 pub const SWITCHES: [Switch; 1] = [Switch::Tire];
@@ -156,6 +167,17 @@ impl Mode {
     /// Every mode, by index.
     pub fn all() -> impl Iterator<Item = Mode> {
         (0..Mode::COUNT).map(Mode::from_index)
+    }
+
+    /// The modes a run under the tire law `tire_contact` can reach: those
+    /// whose every element in its second law applies
+    /// ([`Switch::applies`]).
+    pub fn reachable(tire_contact: TireContact) -> impl Iterator<Item = Mode> {
+        Mode::all().filter(move |mode| {
+            SWITCHES
+                .iter()
+                .all(|&switch| !mode.is(switch) || switch.applies(tire_contact))
+        })
     }
 }
 
@@ -295,6 +317,28 @@ mod tests {
             assert!(load >= -weight);
         }
         assert_eq!(tire_load(false, -2.0 * weight, weight), -2.0 * weight);
+    }
+
+    #[test]
+    fn the_mode_is_one_bit_per_switching_element() {
+        let flight = Mode::CONTACT.with(Switch::Tire, true);
+        assert!(flight.is(Switch::Tire) && !Mode::CONTACT.is(Switch::Tire));
+        assert_eq!(flight.toggled(Switch::Tire), Mode::CONTACT);
+        assert_eq!(flight.with(Switch::Tire, false), Mode::CONTACT);
+        let every: Vec<Mode> = Mode::all().collect();
+        assert_eq!(every, [Mode::CONTACT, flight]);
+        assert!(every.iter().all(|m| Mode::from_index(m.index()) == *m));
+        // A bilateral tire never flies; a unilateral one reaches both.
+        let bilateral: Vec<Mode> = Mode::reachable(TireContact::Bilateral).collect();
+        let unilateral: Vec<Mode> = Mode::reachable(TireContact::Unilateral).collect();
+        assert_eq!(bilateral, [Mode::CONTACT]);
+        assert_eq!(unilateral, [Mode::CONTACT, flight]);
+        let plant = Plant::new(Params::default(), Variant::Tdvass).unwrap();
+        assert_eq!(mode_matrix(&plant.a, &plant.e, Mode::CONTACT), plant.a);
+        assert_eq!(
+            mode_matrix(&plant.a, &plant.e, flight),
+            flight_matrix(&plant.a, &plant.e)
+        );
     }
 
     #[test]

@@ -417,10 +417,9 @@ impl Simulator {
     /// results are the same with or without it. A gain change
     /// ([`Self::set_gain`]) drops them (call it again after one).
     pub fn reserve(&mut self) {
-        let unilateral = self.config.tire_contact.is_unilateral();
         let in_force = self.trajectory.mode;
         self.modes
-            .reserve(&self.plant, &self.grid, in_force, unilateral);
+            .reserve(&self.plant, &self.grid, in_force, self.config.tire_contact);
         // The road keeps its nodes from the step before the committed
         // point to the end of the next step.
         self.inputs.road.reserve_window(4.0 * self.grid.step);

@@ -28,14 +28,6 @@ pub const LOCATION_TOLERANCE: f64 = 1e-13;
 const LOCATION_ITERATIONS: usize = 64;
 
 impl Stepping<'_> {
-    /// Whether `switch` can switch in this configuration: the tire only
-    /// when it is unilateral.
-    fn applies(&self, switch: Switch) -> bool {
-        match switch {
-            Switch::Tire => self.config.tire_contact.is_unilateral(),
-        }
-    }
-
     /// The switch function `[φ, φ']` of `switch` at time t with state x;
     /// the element switches where φ falls through 0. The tire's: the
     /// margin g in contact, −g in flight.
@@ -77,7 +69,7 @@ impl Stepping<'_> {
     pub(super) fn next_switch(&mut self, k: u64, from: (f64, State)) -> Option<(f64, Switch)> {
         let mut first: Option<(f64, Switch)> = None;
         for switch in SWITCHES {
-            if !self.applies(switch) {
+            if !switch.applies(self.config.tire_contact) {
                 continue;
             }
             if let Some(time) = self.next_switch_of(switch, k, from)

@@ -17,7 +17,8 @@ use super::linalg::infinity_norm;
 use super::operators::StepOperator;
 use super::system::FilterCoupling;
 use crate::error::{Error, Result};
-use crate::model::dynamics::{Mode, Switch, folded_feedback, mode_matrix};
+use crate::model::TireContact;
+use crate::model::dynamics::{Mode, folded_feedback, mode_matrix};
 use crate::model::{Plant, State};
 use nalgebra::Matrix6;
 
@@ -212,8 +213,9 @@ impl Modes {
     /// Builds now what stepping would otherwise build on first use, so
     /// that stepping allocates nothing: the partial steps' maps of the
     /// mode in force (their table's entries, and the filter's table with
-    /// the W_k filter: [`DenseOutput::reserve`]) and, with `unilateral`,
-    /// the operators of the other modes the tire can reach and their maps.
+    /// the W_k filter: [`DenseOutput::reserve`]) and the operators of the
+    /// other modes a run under `tire_contact` can reach
+    /// ([`Mode::reachable`]) and their maps.
     /// Each is the same value whenever it is built (a cache of a function
     /// of the operators), so the results do not change.
     pub(super) fn reserve(
@@ -221,14 +223,11 @@ impl Modes {
         plant: &Plant,
         grid: &DelayGrid,
         in_force: Mode,
-        unilateral: bool,
+        tire_contact: TireContact,
     ) {
         let coupling = self.coupling.clone();
         self.dense_output(plant, grid).reserve(coupling.as_ref());
-        if !unilateral {
-            return;
-        }
-        for mode in [Mode::CONTACT, Mode::CONTACT.with(Switch::Tire, true)] {
+        for mode in Mode::reachable(tire_contact) {
             if mode == in_force {
                 continue;
             }
