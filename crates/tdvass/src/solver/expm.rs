@@ -64,20 +64,26 @@ pub fn precise_exp_increment<const D: usize>(m: &SMatrix<f64, D, D>) -> SMatrix<
 /// product for these sizes changes with where it is instantiated; this
 /// product is most of the cost of building a simulator.
 #[inline(never)]
+#[allow(clippy::needless_range_loop)]
 fn multiply<const D: usize>(
     out: &mut SMatrix<f64, D, D>,
     a: &SMatrix<f64, D, D>,
     b: &SMatrix<f64, D, D>,
 ) {
-    // Column-major arrays: `x.data.0[j]` is column j.
-    let a = &a.data.0;
-    for (column, b_column) in out.data.0.iter_mut().zip(&b.data.0) {
-        for (out, &a_0) in column.iter_mut().zip(&a[0]) {
-            *out = a_0 * b_column[0];
+    // Column-major arrays: `x.data.0[j]` is column j. Plain index loops
+    // over arrays of constant length: no iterator adaptors whose inlining
+    // could differ from one build of the crate to the next.
+    let (a, b) = (&a.data.0, &b.data.0);
+    let c = &mut out.data.0;
+    for j in 0..D {
+        let scale = b[j][0];
+        for i in 0..D {
+            c[j][i] = a[0][i] * scale;
         }
-        for (a_column, &scale) in a.iter().zip(b_column).skip(1) {
-            for (out, &a_k) in column.iter_mut().zip(a_column) {
-                *out += a_k * scale;
+        for k in 1..D {
+            let scale = b[j][k];
+            for i in 0..D {
+                c[j][i] += a[k][i] * scale;
             }
         }
     }
