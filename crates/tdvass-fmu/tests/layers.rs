@@ -37,15 +37,6 @@ fn slave_crate() -> Crate {
     Crate::read(&LAYOUT, &Path::new(env!("CARGO_MANIFEST_DIR")).join("src"))
 }
 
-/// A crate of the slave's layout with the given files (`entry.rs`).
-fn synthetic(files: &[(&str, &str)]) -> Crate {
-    let files = files
-        .iter()
-        .map(|(path, text)| (path.to_string(), text.to_string()))
-        .collect();
-    Crate::new(&LAYOUT, files)
-}
-
 #[test]
 fn no_module_imports_a_layer_above_its_own() {
     let found: Vec<String> = slave_crate()
@@ -104,7 +95,7 @@ fn an_upward_import_is_found() {
         ];
         files.retain(|(path, _)| *path != file);
         files.push((file, code));
-        let found = synthetic(&files).upward_imports();
+        let found = Crate::of_texts(&LAYOUT, &files).upward_imports();
         assert_eq!(found.len(), upward, "{file}: {code}: {found:?}");
     }
 }

@@ -120,15 +120,6 @@ fn library() -> Crate {
     Crate::read(&LAYOUT, &Path::new(env!("CARGO_MANIFEST_DIR")).join("src"))
 }
 
-/// A crate of the library's layout with the given files (`solver/linalg.rs`).
-fn synthetic(files: &[(&str, &str)]) -> Crate {
-    let files = files
-        .iter()
-        .map(|(path, text)| (path.to_string(), text.to_string()))
-        .collect();
-    Crate::new(&LAYOUT, files)
-}
-
 /// The findings whose key is not in `known`, and the entries of `known`
 /// that no finding has.
 fn unexpected(
@@ -214,23 +205,29 @@ fn an_upward_import_is_found() {
         "use crate::solver::Simulator;\n",
         "use crate::solver::{driver::Simulator as Sim};\n",
     ] {
-        let crate_ = synthetic(&[
-            ("solver/linalg.rs", code),
-            ("solver/dense.rs", ""),
-            ("solver/driver.rs", ""),
-            ("solver/expm.rs", ""),
-            (
-                "solver/mod.rs",
-                "mod dense;\nmod driver;\npub use driver::Simulator;\n",
-            ),
-        ]);
+        let crate_ = Crate::of_texts(
+            &LAYOUT,
+            &[
+                ("solver/linalg.rs", code),
+                ("solver/dense.rs", ""),
+                ("solver/driver.rs", ""),
+                ("solver/expm.rs", ""),
+                (
+                    "solver/mod.rs",
+                    "mod dense;\nmod driver;\npub use driver::Simulator;\n",
+                ),
+            ],
+        );
         let found = of_file(crate_.upward_imports(), "solver/linalg.rs");
         assert_eq!(found.len(), 1, "{code}: {found:?}");
     }
-    let crate_ = synthetic(&[
-        ("road/mod.rs", "use crate::solver::dense::Augmented;\n"),
-        ("solver/dense.rs", ""),
-    ]);
+    let crate_ = Crate::of_texts(
+        &LAYOUT,
+        &[
+            ("road/mod.rs", "use crate::solver::dense::Augmented;\n"),
+            ("solver/dense.rs", ""),
+        ],
+    );
     assert_eq!(crate_.upward_imports().len(), 1);
 }
 
@@ -243,11 +240,14 @@ fn comments_strings_and_tests_are_no_imports() {
          #[cfg(test)]\n\
          mod tests {\n    use super::super::Simulator;\n    use crate::solver::dense;\n}\n\
          use super::expm;\n";
-    let crate_ = synthetic(&[
-        ("solver/linalg.rs", code),
-        ("solver/dense.rs", ""),
-        ("solver/expm.rs", ""),
-    ]);
+    let crate_ = Crate::of_texts(
+        &LAYOUT,
+        &[
+            ("solver/linalg.rs", code),
+            ("solver/dense.rs", ""),
+            ("solver/expm.rs", ""),
+        ],
+    );
     let found = crate_.upward_imports();
     assert!(found.is_empty(), "{code}: {found:?}");
 }
@@ -255,16 +255,19 @@ fn comments_strings_and_tests_are_no_imports() {
 #[test]
 fn a_folder_file_importing_a_higher_sibling_is_found() {
     let files = |spec: &'static str, nodes: &'static str| {
-        synthetic(&[
-            ("road/spec.rs", spec),
-            ("road/piece.rs", ""),
-            ("road/nodes.rs", nodes),
-            (
-                "road/mod.rs",
-                "mod nodes;\npub mod piece;\npub mod spec;\n\
+        Crate::of_texts(
+            &LAYOUT,
+            &[
+                ("road/spec.rs", spec),
+                ("road/piece.rs", ""),
+                ("road/nodes.rs", nodes),
+                (
+                    "road/mod.rs",
+                    "mod nodes;\npub mod piece;\npub mod spec;\n\
                  use nodes::NodeSequence;\npub use piece::RoadPiece;\npub struct Road;\n",
-            ),
-        ])
+                ),
+            ],
+        )
     };
     // A sibling's item re-exported by mod.rs is the sibling's: below nodes.
     let lower = files(
@@ -289,26 +292,29 @@ fn a_folder_file_importing_a_higher_sibling_is_found() {
 
 #[test]
 fn an_upward_call_is_found() {
-    let crate_ = synthetic(&[
-        (
-            "solver/linalg.rs",
-            "fn f(sim: &mut Simulator) {\n    sim.step();\n    sim\n        .run_for(1.0);\n}\n",
-        ),
-        ("solver/expm.rs", "impl Exp {\n    fn step(&self) {}\n}\n"),
-        (
-            "solver/driver.rs",
-            "fn g() { let s = Simulator::summary(1); }\n",
-        ),
-        (
-            "solver/outputs.rs",
-            "impl Simulator {\n    pub(super) fn summary(n: u8) {}\n}\n",
-        ),
-        (
-            "solver/mod.rs",
-            "impl Simulator {\n    pub fn run_for(&mut self, t: f64) {}\n    \
+    let crate_ = Crate::of_texts(
+        &LAYOUT,
+        &[
+            (
+                "solver/linalg.rs",
+                "fn f(sim: &mut Simulator) {\n    sim.step();\n    sim\n        .run_for(1.0);\n}\n",
+            ),
+            ("solver/expm.rs", "impl Exp {\n    fn step(&self) {}\n}\n"),
+            (
+                "solver/driver.rs",
+                "fn g() { let s = Simulator::summary(1); }\n",
+            ),
+            (
+                "solver/outputs.rs",
+                "impl Simulator {\n    pub(super) fn summary(n: u8) {}\n}\n",
+            ),
+            (
+                "solver/mod.rs",
+                "impl Simulator {\n    pub fn run_for(&mut self, t: f64) {}\n    \
              pub fn step(&mut self) {}\n}\n",
-        ),
-    ]);
+            ),
+        ],
+    );
     let found = crate_.upward_calls();
     let mut calls: Vec<(&str, usize, &str, String)> = found
         .iter()

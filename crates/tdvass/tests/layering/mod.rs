@@ -145,6 +145,16 @@ impl Crate {
         Crate::new(layout, files)
     }
 
+    /// The crate of the given files (`("road/nodes.rs", text)`), for the
+    /// tests that show a check can fail.
+    pub fn of_texts(layout: &'static Layout, files: &[(&str, &str)]) -> Crate {
+        let files = files
+            .iter()
+            .map(|(path, text)| (path.to_string(), text.to_string()))
+            .collect();
+        Crate::new(layout, files)
+    }
+
     /// The crate of `files`: paths below `src` (`road/nodes.rs`) with
     /// their text.
     pub fn new(layout: &'static Layout, files: Vec<(String, String)>) -> Crate {
