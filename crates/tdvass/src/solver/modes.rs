@@ -4,10 +4,11 @@
 //!
 //! [`Modes`] holds the operators of the mode in force (the solver's state
 //! matrix with any folded feedback, the whole step, its grid form, the
-//! partial steps' table) and those of the other mode, which it swaps at a
-//! switch; a new piecewise-linear element adds its mode's matrices here.
-//! It imports the configuration, the system and the step maps; nothing of
-//! the trajectory or the accumulators.
+//! partial steps' table) and, by [`Mode`], those of the others, which it
+//! puts in force at a switch ([`Modes::enter`]). A mode's matrix comes
+//! from the contact matrix by [`mode_matrix`]: a new switching element
+//! adds its law there, not here. It imports the configuration, the system
+//! and the step maps; nothing of the trajectory or the accumulators.
 
 use super::config::SimulationConfig;
 use super::dense::{self, DenseOutput};
