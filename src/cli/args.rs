@@ -525,7 +525,40 @@ pub(super) fn write_text(path: &str, text: &str) -> Result<()> {
 }
 
 /// The command line: the derived parser, with negative numbers accepted as
-/// the value of every flag (`--tau -1` reaches the model's own check).
+/// the value of every flag that takes one (`--tau -1` reaches the model's
+/// own check; a switch such as `--json` takes none, and clap refuses the
+/// setting on it).
 pub(super) fn command() -> clap::Command {
-    Cli::command().mut_subcommands(|sub| sub.mut_args(|arg| arg.allow_negative_numbers(true)))
+    Cli::command().mut_subcommands(|sub| {
+        sub.mut_args(|arg| {
+            if arg.get_action().takes_values() {
+                arg.allow_negative_numbers(true)
+            } else {
+                arg
+            }
+        })
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    /// clap's own consistency checks of the parser run only in debug
+    /// builds (the suite tests a release build), where a flag that takes
+    /// no value but accepts negative numbers panics at every command: the
+    /// rule is checked here in any build, and clap's checks where they run.
+    #[test]
+    fn the_parser_passes_clap_s_checks() {
+        let command = super::command();
+        for sub in command.get_subcommands() {
+            for arg in sub.get_arguments() {
+                assert!(
+                    !arg.is_allow_negative_numbers_set() || arg.get_action().takes_values(),
+                    "{} --{}: negative numbers for a flag that takes no value",
+                    sub.get_name(),
+                    arg.get_id()
+                );
+            }
+        }
+        command.debug_assert();
+    }
 }
