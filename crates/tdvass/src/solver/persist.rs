@@ -23,18 +23,24 @@ use super::holding::Holding;
 use super::integrals::{INTEGRALS, WEIGHTED_FOURTH, WEIGHTED_SQUARE};
 use crate::bytes::{ByteReader, ByteWriter};
 use crate::error::{Error, Result};
+use crate::model::dynamics::Mode;
 use crate::road::RoadState;
 
 /// Version of the byte layout written by [`Simulator::to_bytes`] (the
-/// first u64), and the only one read. Version 2 added the metrics level, the
+/// first u64). Version 2 added the metrics level, the
 /// W_k filter state, the integrals of a_w² and a_w⁴, and the road-holding
 /// and working-space accumulators; the bytes of version 1 had no version
 /// word (they begin with the body mass) and are refused. Version 3 added
 /// the tolerance, the communication step the internal step divides and the
 /// internal step bound they gave (a restored simulator keeps its step
 /// without probing again). Version 4 added the tire's contact law, the
-/// lift-off count and the start of the flight in progress.
-pub const STATE_FORMAT_VERSION: u64 = 4;
+/// lift-off count and the start of the flight in progress. Version 5 added
+/// the mode in force as one word ([`crate::model::dynamics::Mode`]);
+/// version 4 still loads (its flight in progress says the mode).
+pub const STATE_FORMAT_VERSION: u64 = 5;
+
+/// The oldest version read.
+const OLDEST_FORMAT_VERSION: u64 = 4;
 
 /// The internal step bound a saved simulator keeps, within the range the
 /// step choice can give for `config`.
@@ -82,9 +88,9 @@ pub(super) fn to_bytes(sim: &Simulator) -> Vec<u8> {
 pub(super) fn from_bytes(bytes: &[u8]) -> Result<Simulator> {
     let mut r = ByteReader::new(bytes);
     let version = r.u64()?;
-    if version != STATE_FORMAT_VERSION {
+    if !(OLDEST_FORMAT_VERSION..=STATE_FORMAT_VERSION).contains(&version) {
         return Err(Error::InvalidState(format!(
-            "state format version {version}: only version {STATE_FORMAT_VERSION} is read"
+            "state format version {version}: versions {OLDEST_FORMAT_VERSION} to {STATE_FORMAT_VERSION} are read"
         )));
     }
     let config = SimulationConfig::read(&mut r)?;
@@ -96,7 +102,14 @@ pub(super) fn from_bytes(bytes: &[u8]) -> Result<Simulator> {
     sim.trajectory.read_filter(&mut r)?;
     let initial_holding = sim.observers.holding;
     sim.observers.holding = Holding::read(&mut r)?;
-    sim.trajectory.read_mode(&mut r)?;
+    sim.trajectory.read_mode(&mut r, version >= 5)?;
+    let mode = sim.trajectory.mode;
+    if !Mode::reachable(sim.config.tire_contact).any(|reachable| reachable == mode) {
+        return Err(Error::InvalidState(format!(
+            "mode {}: a run with this configuration cannot reach it (a flight in progress with the bilateral tire)",
+            mode.index()
+        )));
+    }
     sim.enter_recorded_mode();
     let road = RoadState::read(&mut r)?;
     if !r.is_empty() {

@@ -11,7 +11,7 @@ use super::deferred::Deferred;
 use super::stepping::Committed;
 use super::system::Filter;
 use crate::bytes::{ByteReader, ByteWriter};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::model::State;
 use crate::model::dynamics::{Mode, Switch};
 
@@ -98,18 +98,43 @@ impl Trajectory {
         Ok(())
     }
 
-    /// Writes the mode: with the tire its only switching element, the
-    /// start of its flight in progress says it (format 4).
+    /// Writes the mode (its index, one word) and the start of the tire's
+    /// flight in progress.
     pub(super) fn write_mode(&self, w: &mut ByteWriter) {
-        debug_assert_eq!(self.mode.is(Switch::Tire), self.flight_start.is_some());
+        w.u64(self.mode.index() as u64);
         w.optional_f64(self.flight_start);
     }
 
-    /// Reads what [`Trajectory::write_mode`] wrote: the flight in progress
-    /// and the mode.
-    pub(super) fn read_mode(&mut self, r: &mut ByteReader) -> Result<()> {
+    /// Reads what [`Trajectory::write_mode`] wrote; `with_mode_word`:
+    /// false for the bytes of format 4, which had no mode word (the flight
+    /// in progress says the tire's mode, then the only one). The mode must
+    /// be one of [`Mode::COUNT`] and agree with the flight in progress.
+    pub(super) fn read_mode(&mut self, r: &mut ByteReader, with_mode_word: bool) -> Result<()> {
+        let word = if with_mode_word { Some(r.u64()?) } else { None };
         self.flight_start = r.optional_f64("flight")?;
-        self.mode = Mode::CONTACT.with(Switch::Tire, self.flight_start.is_some());
+        let in_flight = self.flight_start.is_some();
+        self.mode = match word {
+            None => Mode::CONTACT.with(Switch::Tire, in_flight),
+            Some(index) if index < Mode::COUNT as u64 => Mode::from_index(index as usize),
+            Some(index) => {
+                return Err(Error::InvalidState(format!(
+                    "mode {index}: there are {} modes",
+                    Mode::COUNT
+                )));
+            }
+        };
+        if self.mode.is(Switch::Tire) != in_flight {
+            return Err(Error::InvalidState(format!(
+                "mode {} says the tire is {}, the flight in progress says {}",
+                self.mode.index(),
+                if self.mode.is(Switch::Tire) {
+                    "in flight"
+                } else {
+                    "in contact"
+                },
+                if in_flight { "in flight" } else { "in contact" }
+            )));
+        }
         Ok(())
     }
 

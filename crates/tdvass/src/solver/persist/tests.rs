@@ -2,6 +2,7 @@
 //! a message naming it.
 
 use super::*;
+use crate::model::TireContact;
 use crate::road::{RandomRoad, RoadClass, RoadSpec};
 
 /// Offset of `grid_index` in [`Simulator::to_bytes`]: right after the
@@ -202,13 +203,14 @@ fn comfort_and_holding_accumulators_inconsistent_with_the_run_are_refused() {
     Simulator::from_bytes(&bytes).unwrap();
     // Offsets from the end: the road state (input tag, the nodes with
     // their count, first_node, word position), then the flight in
-    // progress (tag 0), the lift-offs, the first loss (tag and time),
-    // the lost time, the lost steps, the max deflection, the 8 filter
-    // states and the 2 a_w sums.
+    // progress (tag 0), the mode, the lift-offs, the first loss (tag and
+    // time), the lost time, the lost steps, the max deflection, the 8
+    // filter states and the 2 a_w sums.
     let road = sim.inputs.road.dynamic_state();
     let road_len = 16 + 8 + 8 + 8 * road.nodes.len() + 8;
     let flight_at = bytes.len() - road_len - 8;
-    let lift_offs_at = flight_at - 8;
+    let mode_at = flight_at - 8;
+    let lift_offs_at = mode_at - 8;
     let first_loss_at = lift_offs_at - 16;
     assert_eq!(
         bytes[lift_offs_at..lift_offs_at + 8],
@@ -257,7 +259,15 @@ fn comfort_and_holding_accumulators_inconsistent_with_the_run_are_refused() {
     forged.extend(1u64.to_le_bytes());
     forged.extend(0.25f64.to_le_bytes());
     forged.extend(&bytes[flight_at + 8..]);
+    put(&mut forged, mode_at, 1);
     refused(&forged, &["flight in progress", "bilateral"]);
+    // A mode that is not one, and one the flight in progress contradicts.
+    let mut forged = bytes.clone();
+    put(&mut forged, mode_at, 2);
+    refused(&forged, &["mode 2", "2 modes"]);
+    let mut forged = bytes.clone();
+    put(&mut forged, mode_at, 1);
+    refused(&forged, &["mode 1", "in flight", "in contact"]);
     // A foreign version.
     let mut forged = bytes.clone();
     put(&mut forged, 0, 1);
@@ -271,6 +281,43 @@ fn comfort_and_holding_accumulators_inconsistent_with_the_run_are_refused() {
     Simulator::from_bytes(&paper.to_bytes()).unwrap();
     paper.observers.holding.lost_steps = 1;
     refused(&paper.to_bytes(), &["road holding is off"]);
+}
+
+/// The bytes of format 4, which had no mode word, still load: a
+/// unilateral run saved in flight and in contact restores to the same
+/// simulator as its bytes of the current format.
+#[test]
+fn states_of_format_4_still_load() {
+    let config = SimulationConfig {
+        road: RoadSpec::Iso8608(RandomRoad {
+            class: RoadClass::E,
+            speed: 30.0,
+            ..RandomRoad::default()
+        }),
+        tire_contact: TireContact::Unilateral,
+        ..SimulationConfig::default()
+    };
+    let mut sim = Simulator::new(config).unwrap();
+    let (mut saw_flight, mut saw_contact) = (false, false);
+    for step in 1..=400 {
+        sim.advance_to(step as f64 * 2.5e-3).unwrap();
+        let in_flight = sim.in_flight();
+        if (in_flight && saw_flight) || (!in_flight && saw_contact) {
+            continue;
+        }
+        (saw_flight, saw_contact) = (saw_flight || in_flight, saw_contact || !in_flight);
+        let bytes = sim.to_bytes();
+        let road_len = 16 + 8 + 8 + 8 * sim.inputs.road.dynamic_state().nodes.len() + 8;
+        let flight_len = if in_flight { 16 } else { 8 };
+        let mode_at = bytes.len() - road_len - flight_len - 8;
+        let mut old = bytes[..mode_at].to_vec();
+        old.extend(&bytes[mode_at + 8..]);
+        put(&mut old, 0, 4);
+        let restored = Simulator::from_bytes(&old).unwrap();
+        assert_eq!(restored.in_flight(), in_flight);
+        assert_eq!(restored.to_bytes(), bytes, "in flight: {in_flight}");
+    }
+    assert!(saw_flight && saw_contact, "the run should lift off");
 }
 
 /// The bytes of `sim` with its random road state replaced.
