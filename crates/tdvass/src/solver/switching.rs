@@ -1,10 +1,13 @@
-//! The tire's switches between contact and flight, as the driver commits
-//! them: the next switch in a step located and committed, the mode
-//! flipped, the lift-off logged; the tire law and the mode a restored
+//! The switches of the model's switching elements (today the unilateral
+//! tire's, between contact and flight), as the driver commits them: the
+//! next switch in a step located among the elements and committed, its
+//! bit of the mode flipped and the operators of the new mode put in
+//! force, what the element's switch means recorded (the tire's lift-offs
+//! logged, its flights timed); the tire law and the mode a restored
 //! simulator is in.
 //!
 //! Layer: driver (docs/architecture.md); it imports the solver's `contact`,
-//! `driver`, `stepping` and the crate's `error`, `model`.
+//! `driver`, `stepping` and the crate's `error`, `model`, `road`.
 
 #[cfg(doc)]
 use super::contact::LIFT_OFF_LOG;
