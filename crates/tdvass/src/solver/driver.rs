@@ -409,8 +409,8 @@ impl Simulator {
     }
 
     /// Builds now every table that stepping would build at its first use
-    /// (the partial steps' maps of both tire modes, the W_k filter's, the
-    /// flight operators) and makes room for the road's nodes (also after
+    /// (the partial steps' maps of every mode a run can reach, the W_k
+    /// filter's, the operators of the modes not in force) and makes room for the road's nodes (also after
     /// a restored state, whose nodes come without room), so that stepping
     /// from here on allocates nothing; a front-end with real-time callers
     /// calls it once the run is set up. The tables are caches of functions of the operators:

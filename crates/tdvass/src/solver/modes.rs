@@ -45,8 +45,8 @@ pub(super) struct ModeOperators {
 }
 
 /// The operators of the plant: those of the mode in force (contact, or
-/// flight with the unilateral tire), the other mode's, and caches of
-/// functions of them.
+/// flight with the unilateral tire), those of the other modes by
+/// [`Mode`], and caches of functions of them.
 #[derive(Debug, Clone)]
 pub(super) struct Modes {
     /// The solver's plant matrix with every element in its first law (the
