@@ -22,6 +22,7 @@
 //! unbounded) and at the start.
 
 use super::instance::ModelExchange;
+use crate::model::dynamics::Switch;
 use crate::model::{V_S, V_T, Variant, X_H, X_S, X_T};
 use crate::solver::{CONTINUOUS_STATES, FILTER_STATES_AT, INTEGRALS_AT};
 
@@ -147,9 +148,10 @@ impl ModelExchange {
         let p = self.point();
         let mut states = [[0.0; CONTINUOUS_STATES]; CONTINUOUS_STATES];
         let mut road_input = [0.0; CONTINUOUS_STATES];
-        let flying = self.flying();
+        let mode = self.mode();
+        let flying = mode.is(Switch::Tire);
         let m = &self.matrices;
-        let matrix = m.modes[self.mode().index()];
+        let matrix = m.modes[mode.index()];
         for (i, row) in states.iter_mut().enumerate().take(6) {
             for (j, value) in row.iter_mut().enumerate().take(6) {
                 *value = matrix[(i, j)];

@@ -274,10 +274,8 @@ fn check_holding(sim: &Simulator) -> Result<()> {
             holding.lift_offs
         )));
     }
+    // A flight with the bilateral tire was refused with its mode.
     match sim.trajectory.flight_start {
-        Some(_) if !sim.config.tire_contact.is_unilateral() => Err(Error::InvalidState(
-            "a flight in progress, but the tire is bilateral".into(),
-        )),
         Some(time)
             if !(time >= sim.config.start_time
                 && time <= sim.trajectory.committed_time + tolerance
