@@ -10,8 +10,7 @@ use crate::error::{FmiError, Status};
 use crate::guards;
 use crate::phase::Phase;
 use tdvass::exchange::{ContactEvent, EVENT_INDICATORS, ModelExchange, nominals};
-use tdvass::model::X_T;
-use tdvass::model::dynamics::contact_margin;
+use tdvass::model::dynamics::SWITCHES;
 use tdvass::solver::CONTINUOUS_STATES;
 
 /// What an event update tells the master (FMI 2.0 `fmi2EventInfo`, the
@@ -233,15 +232,16 @@ impl Slave {
         }
     }
 
-    /// The event indicators for a getter (the co-simulation: the margin
-    /// without hysteresis).
+    /// The event indicators for a getter (the co-simulation: the elements'
+    /// levels without hysteresis).
     pub(super) fn event_indicator_values(&mut self) -> Result<[f64; EVENT_INDICATORS], FmiError> {
         match &mut self.state.engine {
             Engine::ModelExchange(Some(model)) => Ok(model.event_indicators()?),
             Engine::CoSimulation(Some(sim)) => {
                 let o = sim.outputs();
-                let limit = sim.static_load() / sim.config().params.k_t;
-                Ok([contact_margin(limit, o.state[X_T], o.road_displacement)])
+                let (x, road) = (o.state.as_slice(), o.road_displacement);
+                let switching = sim.switching();
+                Ok(SWITCHES.map(|switch| switching.level(switch, x, road)))
             }
             _ => Ok(self.build_exchange()?.event_indicators()?),
         }

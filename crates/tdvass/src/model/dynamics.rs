@@ -30,7 +30,7 @@
 //! Layer: data (docs/architecture.md), with the model; it imports the
 //! model and the crate's `comfort`.
 
-use super::params::{State, V_T, X_T};
+use super::params::{Params, State, V_T, Variant, X_T};
 use super::plant::Plant;
 use super::tire::TireContact;
 use crate::comfort::{WK_STATES, WkStateSpace};
@@ -124,6 +124,136 @@ impl Switch {
 /// Every switching element, in bit order: the list the engines' switch
 /// searches go through.
 pub const SWITCHES: [Switch; 1] = [Switch::Tire];
+
+/// The switching elements of a configuration, for both engines: which of
+/// [`SWITCHES`] switch, and the constants of their switch functions. A
+/// new element adds its constants here and its arms to [`Switch::applies`],
+/// [`Switching::side`] and [`Switching::rounding`]; the co-simulation's
+/// whole-step test, its switch search and Model Exchange's event
+/// indicators go through the list.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Switching {
+    /// Whether each element of [`SWITCHES`] switches, in bit order.
+    pub applies: [bool; SWITCHES.len()],
+    /// W/k_t (m): the tire deflection `x_t − x_g` at which the tire's load
+    /// reaches zero ([`contact_margin`]); +∞ when k_t = 0.
+    pub tire_limit: f64,
+}
+
+impl Switching {
+    /// No element switches (the tire never lifts off).
+    pub const NONE: Switching = Switching {
+        applies: [false; SWITCHES.len()],
+        tire_limit: f64::INFINITY,
+    };
+
+    /// The elements of the configuration (`params` of `variant`, the tire
+    /// law `tire_contact`).
+    pub fn of(params: &Params, variant: Variant, tire_contact: TireContact) -> Switching {
+        let tire_limit = if params.k_t > 0.0 {
+            params.static_load(variant) / params.k_t
+        } else {
+            f64::INFINITY
+        };
+        Switching {
+            applies: SWITCHES.map(|switch| switch.applies(tire_contact)),
+            tire_limit,
+        }
+    }
+
+    /// Whether any element switches.
+    #[inline(always)]
+    pub fn any(&self) -> bool {
+        self.applies.iter().any(|&applies| applies)
+    }
+
+    /// The elements that switch, in bit order.
+    pub fn elements(&self) -> impl Iterator<Item = Switch> + '_ {
+        SWITCHES
+            .into_iter()
+            .zip(self.applies)
+            .filter_map(|(switch, applies)| applies.then_some(switch))
+    }
+
+    /// The side `[s, s']` of `switch` at the plant state `x`
+    /// (`[x_s, v_s, x_h, v_h, x_t, v_t]`) with the road `road` (m) and its
+    /// rate `road_rate` (m/s): the element's first law holds where
+    /// `s ≥ 0`. The tire's is its contact margin `W/k_t − (x_t − x_g)`
+    /// ([`contact_margin`], m) with the rate `x_g' − v_t`.
+    #[inline(always)]
+    pub fn side(&self, switch: Switch, x: &[f64], road: f64, road_rate: f64) -> [f64; 2] {
+        let level = self.level(switch, x, road);
+        match switch {
+            Switch::Tire => [level, road_rate - x[V_T]],
+        }
+    }
+
+    /// The side's value `s` alone ([`Self::side`]); Model Exchange's event
+    /// indicators are made of it.
+    #[inline(always)]
+    pub fn level(&self, switch: Switch, x: &[f64], road: f64) -> f64 {
+        match switch {
+            Switch::Tire => contact_margin(self.tire_limit, x[X_T], road),
+        }
+    }
+
+    /// The length that the side of `switch` is measured against (the
+    /// tire: W/k_t, m); Model Exchange's hysteresis is relative to it.
+    pub fn scale(&self, switch: Switch) -> f64 {
+        match switch {
+            Switch::Tire => self.tire_limit,
+        }
+    }
+
+    /// The mode in force when the elements are on the sides `sides` (a bit
+    /// set for an element on the side of its second law): an element that
+    /// does not switch keeps its first law.
+    pub fn mode_of(&self, sides: Mode) -> Mode {
+        self.elements().fold(Mode::CONTACT, |mode, switch| {
+            mode.with(switch, sides.is(switch))
+        })
+    }
+
+    /// The sides of every element of [`SWITCHES`] (those that do not
+    /// switch too), in bit order.
+    #[inline(always)]
+    pub fn sides(&self, x: &[f64], road: f64, road_rate: f64) -> [[f64; 2]; SWITCHES.len()] {
+        SWITCHES.map(|switch| self.side(switch, x, road, road_rate))
+    }
+
+    /// The switch function `[φ, φ']` of `switch` in `mode`: its side in
+    /// its first law, the side's negative in its second; the element
+    /// switches where φ falls through 0 (the tire: the margin in contact,
+    /// its negative in flight).
+    #[inline(always)]
+    pub fn function(
+        &self,
+        switch: Switch,
+        mode: Mode,
+        x: &[f64],
+        road: f64,
+        road_rate: f64,
+    ) -> [f64; 2] {
+        let [side, rate] = self.side(switch, x, road, road_rate);
+        if mode.is(switch) {
+            [-side, -rate]
+        } else {
+            [side, rate]
+        }
+    }
+
+    /// The rounding level of the side of `switch` at the plant state `x`
+    /// with the road `road` (m): below it a side of the other sign is
+    /// taken for 0. The tire's (m): `64 ε (|W/k_t| + |x_t| + |x_g|)`.
+    pub fn rounding(&self, switch: Switch, x: &[f64], road: f64) -> f64 {
+        match switch {
+            Switch::Tire => {
+                let scale = self.tire_limit.abs() + x[X_T].abs() + road.abs();
+                64.0 * f64::EPSILON * scale
+            }
+        }
+    }
+}
 
 /// The mode in force: one bit per switching element ([`SWITCHES`]), clear
 /// for its first law (the tire in contact). One value that the engines
@@ -339,6 +469,46 @@ mod tests {
             mode_matrix(&plant.a, &plant.e, flight),
             flight_matrix(&plant.a, &plant.e)
         );
+    }
+
+    #[test]
+    fn the_switch_functions_come_from_the_list() {
+        let params = Params::default();
+        let variant = Variant::Tdvass;
+        let bilateral = Switching::of(&params, variant, TireContact::Bilateral);
+        let unilateral = Switching::of(&params, variant, TireContact::Unilateral);
+        let limit = params.static_load(variant) / params.k_t;
+        assert_eq!(unilateral.tire_limit, limit);
+        assert!(!bilateral.any() && bilateral.elements().next().is_none());
+        assert!(unilateral.any());
+        assert_eq!(unilateral.elements().collect::<Vec<_>>(), [Switch::Tire]);
+        // An element that does not switch keeps its first law whatever its
+        // side; one that does follows its side.
+        let out = Mode::CONTACT.with(Switch::Tire, true);
+        assert_eq!(bilateral.mode_of(out), Mode::CONTACT);
+        assert_eq!(unilateral.mode_of(out), out);
+        // The tire's side is its margin and rate; its switch function is
+        // the side in contact and its negative in flight.
+        let x = [0.01, 0.2, 0.0, 0.0, 0.004, -0.3];
+        let (road, road_rate) = (0.001, 0.5);
+        let side = unilateral.side(Switch::Tire, &x, road, road_rate);
+        assert_eq!(
+            side,
+            [contact_margin(limit, x[X_T], road), road_rate - x[V_T]]
+        );
+        assert_eq!(unilateral.level(Switch::Tire, &x, road), side[0]);
+        assert_eq!(unilateral.sides(&x, road, road_rate), [side]);
+        let f = |mode| unilateral.function(Switch::Tire, mode, &x, road, road_rate);
+        assert_eq!(f(Mode::CONTACT), side);
+        assert_eq!(f(out), [-side[0], -side[1]]);
+        assert_eq!(unilateral.scale(Switch::Tire), limit);
+        let rounding = unilateral.rounding(Switch::Tire, &x, road);
+        assert!(rounding > 0.0 && rounding < 1e-12 * limit.max(1.0) * 1e3);
+        // Without a tire spring the wheel never lifts off.
+        let soft = Params { k_t: 0.0, ..params };
+        let never = Switching::of(&soft, variant, TireContact::Unilateral);
+        assert_eq!(never.tire_limit, f64::INFINITY);
+        assert!(never.level(Switch::Tire, &x, road) > 0.0);
     }
 
     #[test]

@@ -29,6 +29,7 @@ use super::whole_steps;
 use crate::error::{Error, Result};
 use crate::metrics::rms_values;
 use crate::metrics::{RmsValues, Weights};
+use crate::model::dynamics::Mode;
 use crate::model::{Params, Plant, State, V_T, X_T};
 use crate::road::{Road, RoadPiece};
 
@@ -193,10 +194,11 @@ impl Simulator {
             let next_node = self.grid_time(k + 1);
             if next_node < t_end || self.snaps(t_end, next_node) {
                 let on_node = self.trajectory.committed_time == self.grid_time(k);
-                if on_node && !self.in_flight() && switches == 0 {
-                    // On a grid node: whole steps up to the last node the
-                    // interval reaches, in one tight loop; with a
-                    // unilateral tire, up to a step that may lift off.
+                if on_node && self.trajectory.mode == Mode::CONTACT && switches == 0 {
+                    // On a grid node, every switching element in its first
+                    // law: whole steps up to the last node the interval
+                    // reaches, in one tight loop, up to a step in which an
+                    // element may switch (the wheel lift off).
                     let last = self.last_node_until(t_end);
                     if self.whole_steps_view().whole_steps(last)? {
                         self.step_to_node_switching(&mut switches)?;

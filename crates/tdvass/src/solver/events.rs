@@ -1,10 +1,10 @@
-//! Events inside a step: the switches of the tire's contact, located on
-//! the exact partial steps from the committed point (see `contact` for
-//! the modes and the switch function).
+//! Events inside a step: the switches of the switching elements (today
+//! the tire's contact), located on the exact partial steps from the
+//! committed point (see `contact` for the tire's modes).
 //!
-//! The switch function φ is the contact margin g (the tire load over k_t,
-//! `holding::margin`) in contact and −g in flight; the mode switches where
-//! φ falls through 0. Over each stretch of [`super::pieces`] up to the
+//! Each element's switch function φ is the model's
+//! ([`Switching::function`](crate::model::dynamics::Switching::function): the tire's contact margin g in contact, −g in
+//! flight); the mode switches where φ falls through 0. Over each stretch of [`super::pieces`] up to the
 //! step's end node, φ's cubic (from the ends' values and rates) brackets
 //! its first fall ([`super::holding::first_fall`]); Newton's method on the
 //! exact output, kept inside the bracket by bisection, locates it within
@@ -16,8 +16,8 @@
 
 use super::holding;
 use super::stepping::Stepping;
-use crate::model::dynamics::{SWITCHES, Switch};
-use crate::model::{State, X_T};
+use crate::model::State;
+use crate::model::dynamics::Switch;
 use crate::road::RoadPiece;
 
 /// The accuracy to which a switch time is located (s).
@@ -28,50 +28,31 @@ pub const LOCATION_TOLERANCE: f64 = 1e-13;
 const LOCATION_ITERATIONS: usize = 64;
 
 impl Stepping<'_> {
-    /// The switch function `[φ, φ']` of `switch` at time t with state x;
-    /// the element switches where φ falls through 0. The tire's: the
-    /// margin g in contact, −g in flight.
-    fn switch_function(
-        &mut self,
-        switch: Switch,
-        t: f64,
-        x: &State,
-        piece: &RoadPiece,
-    ) -> [f64; 2] {
-        match switch {
-            Switch::Tire => {
-                let [g, rate] = self.margin_at(t, x, piece);
-                if self.mode.is(Switch::Tire) {
-                    [-g, -rate]
-                } else {
-                    [g, rate]
-                }
-            }
-        }
+    /// The switch function `[φ, φ']` of `switch` in the mode in force at
+    /// time t with state x ([`Switching::function`](crate::model::dynamics::Switching::function)); the element switches
+    /// where φ falls through 0.
+    fn switch_function(&self, switch: Switch, t: f64, x: &State, piece: &RoadPiece) -> [f64; 2] {
+        let (road, road_rate) = (piece.value(t), piece.slope(t));
+        let switching = &self.modes.grid_step.switching;
+        switching.function(switch, self.mode, x.as_slice(), road, road_rate)
     }
 
-    /// The rounding level of `switch`'s φ at state x: below it a φ of the
-    /// other sign is taken for 0. The tire's (m): from W/k_t, x_t and x_g.
+    /// The rounding level of `switch`'s φ at state x
+    /// ([`Switching::rounding`](crate::model::dynamics::Switching::rounding)): below it a φ of the other sign is taken
+    /// for 0.
     fn switch_rounding(&self, switch: Switch, t: f64, x: &State, piece: &RoadPiece) -> f64 {
-        match switch {
-            Switch::Tire => {
-                let scale =
-                    self.modes.grid_step.contact.limit.abs() + x[X_T].abs() + piece.value(t).abs();
-                64.0 * f64::EPSILON * scale
-            }
-        }
+        let switching = &self.modes.grid_step.switching;
+        switching.rounding(switch, x.as_slice(), piece.value(t))
     }
 
     /// The first switch in grid step k after the committed point among the
-    /// elements of [`SWITCHES`] that apply, searched up to the step's end
+    /// elements of [`crate::model::dynamics::SWITCHES`] that apply, searched up to the step's end
     /// node in the current mode: its time and element (`None` if there is
     /// none).
     pub(super) fn next_switch(&mut self, k: u64, from: (f64, State)) -> Option<(f64, Switch)> {
         let mut first: Option<(f64, Switch)> = None;
-        for switch in SWITCHES {
-            if !switch.applies(self.config.tire_contact) {
-                continue;
-            }
+        let switching = self.modes.grid_step.switching;
+        for switch in switching.elements() {
             if let Some(time) = self.next_switch_of(switch, k, from)
                 && first.is_none_or(|(earliest, _)| time < earliest)
             {

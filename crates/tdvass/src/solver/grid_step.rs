@@ -13,6 +13,7 @@ use super::operators::{FilterRows, StepOperator};
 use super::system::{FilterCoupling, phase_rotation, rotate, tire_pick};
 use crate::comfort::WK_STATES;
 use crate::metrics::RunningRms;
+use crate::model::dynamics::Switching;
 use crate::model::{X_S, X_T};
 use nalgebra::{Matrix6, SMatrix};
 
@@ -38,9 +39,12 @@ pub(super) struct GridStep {
     pub(super) outputs: [[f64; 2]; 6],
     /// The W_k filter's step, when the comfort outputs are on.
     pub(super) filter: Option<FilterGridStep>,
-    /// The contact-loss test of every step (the limit is set by the
-    /// simulator; +∞ until then).
+    /// What the road-holding counts of every step need.
     pub(super) contact: ContactCheck,
+    /// The switching elements whose switch every step is tested for (set
+    /// by the simulator; none until then): the loop stops before a step
+    /// in which one may switch.
+    pub(super) switching: Switching,
     /// Whether the whole-step loop runs the road-holding test and the
     /// largest |SDD| (the road-holding metrics level and above).
     pub(super) holding: bool,
@@ -141,12 +145,11 @@ impl GridStep {
             }),
             filter: None,
             contact: ContactCheck {
-                limit: f64::INFINITY,
                 angular_frequency,
                 start_time: 0.0,
                 step: h,
-                unilateral: false,
             },
+            switching: Switching::NONE,
             holding: false,
         }
     }

@@ -41,7 +41,6 @@
 
 use crate::bytes::{ByteReader, ByteWriter};
 use crate::error::Result;
-use crate::model::dynamics::contact_margin;
 use crate::model::{V_S, V_T, X_S, X_T};
 
 /// The bound factor 4/27 of the module documentation, rounded up.
@@ -184,29 +183,37 @@ pub(crate) fn largest_magnitude(length: f64, a: [f64; 2], b: [f64; 2]) -> f64 {
         .fold(ends, f64::max)
 }
 
-/// The contact margin `[g, g']` (m, m/s) at state x with road displacement
-/// `road` and rate `road_rate`: `g = limit − (x_t − x_g)`,
-/// `g' = x_g' − v_t`; `limit` = W/k_t (m).
-#[inline(always)]
-pub(crate) fn margin(limit: f64, x: &[f64; 6], road: f64, road_rate: f64) -> [f64; 2] {
-    [contact_margin(limit, x[X_T], road), road_rate - x[V_T]]
-}
-
-/// What the whole-step loop needs to test its steps for contact loss.
+/// What the whole-step loop needs to count its steps' loss of contact
+/// (the tire's side, [`crate::model::dynamics::Switching::side`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct ContactCheck {
-    /// W/k_t (m): the TDD at which the tire load reaches zero (+∞ when
-    /// k_t = 0).
-    pub limit: f64,
     /// ω of the harmonic road (rad/s; 0 for the other roads).
     pub angular_frequency: f64,
     /// t_0 (s): node k lies at `t_0 + k h`.
     pub start_time: f64,
     /// h (s).
     pub step: f64,
-    /// The tire is unilateral: a step that may lose contact stops the
-    /// whole-step loop ([`super::kernel::SegmentEnd::Switch`]).
-    pub unilateral: bool,
+}
+
+/// Whether a switch function `φ` may fall through 0 in a step of length
+/// `h` from `a = [φ, φ']` to `b`: the whole-step loop's test of every
+/// switching element, which stops the loop before such a step
+/// ([`super::kernel::SegmentEnd::Switch`]). Its cubic cannot be negative
+/// (the common case, decided inline), or it is negative nowhere inside by
+/// [`below_zero`]: no; else yes. For the tire in contact it is the
+/// step's loss of contact by [`check_step`].
+#[inline(always)]
+pub(crate) fn may_fall_through_zero(h: f64, a: [f64; 2], b: [f64; 2]) -> bool {
+    let slack = HERMITE_BOUND * h * (a[1].abs() + b[1].abs());
+    a[0].min(b[0]) < slack && negative_in_step(h, a, b, slack)
+}
+
+/// Whether the cubic of [`may_fall_through_zero`] is negative in the step:
+/// throughout (both ends below `−slack`), or somewhere by [`below_zero`].
+#[cold]
+#[inline(never)]
+fn negative_in_step(h: f64, a: [f64; 2], b: [f64; 2], slack: f64) -> bool {
+    a[0].max(b[0]) < -slack || below_zero(h, a, b).first.is_some()
 }
 
 /// The whole-step loop's test of the step from node k (margins a) to node
@@ -596,13 +603,18 @@ mod tests {
                     for &d1 in &rates {
                         let mut fast = Holding::new(0.0, 1.0, 0.0);
                         let check = ContactCheck {
-                            limit: 0.02,
                             angular_frequency: 0.0,
                             start_time: 0.0,
                             step: h,
-                            unilateral: false,
                         };
-                        if let Some(loss) = check_step(check, 0, [g0, d0], [g1, d1]) {
+                        let loss = check_step(check, 0, [g0, d0], [g1, d1]);
+                        let falls = may_fall_through_zero(h, [g0, d0], [g1, d1]);
+                        assert_eq!(
+                            falls,
+                            loss.is_some_and(|l| l.whole || l.first.is_some()),
+                            "{g0} {d0} {g1} {d1}"
+                        );
+                        if let Some(loss) = loss {
                             fast.add_step(loss);
                         }
                         let fast_time = fast.lost_steps as f64 * h + fast.lost_time;

@@ -42,10 +42,11 @@
 //! `holding`, `stepping`, `system` and the crate's `metrics`, `model`,
 //! `road`.
 
-use super::holding::{Holding, deflection, margin};
+use super::holding::{Holding, deflection};
 use super::stepping::Stepping;
 use super::system::Filter;
 use crate::metrics::RunningRms;
+use crate::model::dynamics::Switch;
 use crate::model::{State, V_S, X_S, X_T};
 use crate::road::RoadPiece;
 
@@ -240,13 +241,13 @@ impl Stepping<'_> {
         (y, rate)
     }
 
-    /// The contact margin `[g, g']` ([`super::holding::margin`]) at time `t`
-    /// with state `x`, the road given by `piece`.
+    /// The contact margin `[g, g']` (the tire's side,
+    /// [`Switching::side`](crate::model::dynamics::Switching::side)) at
+    /// time `t` with state `x`, the road given by `piece`.
     pub(super) fn margin_at(&self, t: f64, x: &State, piece: &RoadPiece) -> [f64; 2] {
-        let x: [f64; 6] = (*x).into();
-        margin(
-            self.modes.grid_step.contact.limit,
-            &x,
+        self.modes.grid_step.switching.side(
+            Switch::Tire,
+            x.as_slice(),
             piece.value(t),
             piece.slope(t),
         )
@@ -256,8 +257,8 @@ impl Stepping<'_> {
     /// kept `sin_cos` (the same bits).
     pub(super) fn margin_kept(&mut self, t: f64, x: &State, piece: &RoadPiece) -> [f64; 2] {
         let [road, road_rate] = self.inputs.road_at(piece, t);
-        let x: [f64; 6] = (*x).into();
-        margin(self.modes.grid_step.contact.limit, &x, road, road_rate)
+        let switching = &self.modes.grid_step.switching;
+        switching.side(Switch::Tire, x.as_slice(), road, road_rate)
     }
 
     /// `∫ f` over `[from.0, to]` inside grid step k (state `to_state` at

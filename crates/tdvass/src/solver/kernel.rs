@@ -14,11 +14,12 @@
 #![allow(unsafe_code)]
 
 use super::grid_step::{FilterGridStep, GridStep, filter_combine};
-use super::holding::{Holding, check_step, deflection, margin};
+use super::holding::{Holding, check_step, deflection, may_fall_through_zero};
 use super::linalg::{add6, combine2, combine4, combine6};
 use crate::comfort::WK_STATES;
 use crate::limits::DIVERGENCE_BOUNDS;
 use crate::metrics::RunningRms;
+use crate::model::dynamics::{SWITCHES, Switch};
 use crate::model::{V_T, X_T};
 
 /// Whether every state component is within its divergence bound (false
@@ -165,10 +166,12 @@ pub(super) struct Segment<'a> {
 /// the new node stored in the history. The BA, SDD, TDD of every node
 /// after the first are added to the RMS sums, except the last one's, which
 /// the caller adds (on the harmonic road its phase is exact at an anchor).
-/// Every step is tested for contact loss and every new node enters the
-/// largest |SDD| ([`super::holding`]). Stops at `end`, before a state out
-/// of bounds, or (unilateral tire) before a step that may lift the wheel
-/// off ([`SegmentEnd`]). `DELAY`: the delay is resolved on the grid;
+/// With road holding, every step is tested for contact loss and every new
+/// node enters the largest |SDD| ([`super::holding`]). Stops at `end`,
+/// before a state out of bounds, or before a step in which a switching
+/// element of the grid step's list may switch (its switch function, in
+/// the mode of every element's first law where the loop runs, may fall
+/// through 0: the unilateral tire may lift off) ([`SegmentEnd`]). `DELAY`: the delay is resolved on the grid;
 /// `BEFORE`: all the delayed nodes lie before the start; `FILTER`: the W_k
 /// filter steps along ([`FilterGridStep`]) and its `a_w²`, `a_w⁴` are
 /// summed like the RMS sums.
@@ -204,8 +207,10 @@ pub(super) fn segment<
         mut holding,
     } = *hot;
     let filter = if FILTER { op.filter.as_ref() } else { None };
-    let contact = op.contact;
-    let mut edge = margin(contact.limit, &x, road.displacement(), road.rate(op));
+    let (contact, switching) = (op.contact, op.switching);
+    // The switching elements' sides at node k: their switch functions in
+    // the loop's mode; the tire's is the margin of the road-holding test.
+    let mut sides = switching.sides(&x, road.displacement(), road.rate(op));
     let mut bend = deflection(&x);
     let mut end = SegmentEnd::Reached;
     // Node k, where the segment starts, was counted in the RMS sums already;
@@ -248,29 +253,27 @@ pub(super) fn segment<
         let mut road_next = road;
         road_next.advance(op);
         if HOLDING {
-            let next_edge = margin(
-                contact.limit,
-                &x_next,
-                road_next.displacement(),
-                road_next.rate(op),
-            );
-            if let Some(loss) = check_step(contact, k, edge, next_edge) {
-                if contact.unilateral && (loss.whole || loss.first.is_some()) {
-                    // The wheel may lift off in this step: it is left to
-                    // the caller (nothing of it is committed).
-                    end = SegmentEnd::Switch;
-                    break;
-                }
-                if op.holding {
-                    holding.add_step(loss);
-                }
+            let next_sides = switching.sides(&x_next, road_next.displacement(), road_next.rate(op));
+            let switches = (0..SWITCHES.len()).any(|i| {
+                may_fall_through_zero(contact.step, sides[i], next_sides[i]) && switching.applies[i]
+            });
+            if switches {
+                // An element may switch in this step (the wheel may lift
+                // off): it is left to the caller (nothing of it is
+                // committed).
+                end = SegmentEnd::Switch;
+                break;
             }
             if op.holding {
+                let tire = Switch::Tire as usize;
+                if let Some(loss) = check_step(contact, k, sides[tire], next_sides[tire]) {
+                    holding.add_step(loss);
+                }
                 let next_bend = deflection(&x_next);
                 holding.add_deflection(contact.step, bend, next_bend);
                 bend = next_bend;
             }
-            edge = next_edge;
+            sides = next_sides;
         }
         if count {
             op.count(&mut rms, &x, road.displacement());
@@ -333,10 +336,10 @@ pub(super) fn segment_avx2<
 }
 
 /// Runs [`segment`] with the widest vector unit available; the filter
-/// steps along when the grid step has it, the contact test when the grid
+/// steps along when the grid step has it, the sides' test when the grid
 /// step keeps road holding ([`super::Metrics`]: the filter implies it) or
-/// has a unilateral tire (which stops at a lift-off; its accumulators run
-/// only with road holding).
+/// has a switching element (which stops the loop before it may switch;
+/// the road-holding accumulators run only with road holding).
 pub(super) fn run_segment<R: NodeRoad, const DELAY: bool>(
     seg: Segment,
     hot: &mut HotState<R>,
@@ -344,7 +347,7 @@ pub(super) fn run_segment<R: NodeRoad, const DELAY: bool>(
 ) -> SegmentEnd {
     match (
         seg.op.filter.is_some(),
-        seg.op.holding || seg.op.contact.unilateral,
+        seg.op.holding || seg.op.switching.any(),
     ) {
         (true, _) => run_segment_with::<R, DELAY, true, true>(seg, hot, before),
         (false, true) => run_segment_with::<R, DELAY, false, true>(seg, hot, before),

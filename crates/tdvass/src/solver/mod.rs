@@ -207,6 +207,12 @@ impl Simulator {
         outputs::time_averages(self)
     }
 
+    /// The switching elements of the configuration and their switch
+    /// functions' constants (the model's, which Model Exchange uses too).
+    pub fn switching(&self) -> &crate::model::dynamics::Switching {
+        &self.modes.grid_step.switching
+    }
+
     /// The static tire load W (N) of the configured variant
     /// ([`crate::model::Params::static_load`]).
     pub fn static_load(&self) -> f64 {

@@ -19,7 +19,7 @@ use super::operators::StepOperator;
 use super::system::FilterCoupling;
 use crate::error::{Error, Result};
 use crate::model::TireContact;
-use crate::model::dynamics::{Mode, folded_feedback, mode_matrix};
+use crate::model::dynamics::{Mode, Switching, folded_feedback, mode_matrix};
 use crate::model::{Plant, State};
 use nalgebra::Matrix6;
 
@@ -131,13 +131,8 @@ impl Modes {
             grid_step
         };
         let params = &config.params;
-        grid_step.contact.limit = if params.k_t > 0.0 {
-            params.static_load(config.variant) / params.k_t
-        } else {
-            f64::INFINITY
-        };
+        grid_step.switching = Switching::of(params, config.variant, config.tire_contact);
         grid_step.contact.start_time = config.start_time;
-        grid_step.contact.unilateral = config.tire_contact.is_unilateral();
         grid_step.holding = config.metrics.road_holding();
         Ok(Modes {
             solver_matrix_norm: infinity_norm(&a),

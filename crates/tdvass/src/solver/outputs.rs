@@ -225,7 +225,7 @@ fn stretch_keeps_contact(
         return false;
     }
     let length = t - tc;
-    let limit = sim.modes.grid_step.contact.limit;
+    let limit = sim.modes.grid_step.switching.tire_limit;
     let amplitude = amplitude.abs();
     let sweep = (amplitude * angular_frequency).abs();
     let slack = 1e-9 * (limit.abs() + amplitude + xc[X_T].abs() + end.tire_magnitude)

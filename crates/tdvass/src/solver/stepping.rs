@@ -440,7 +440,7 @@ impl Stepping<'_> {
             RoadPiece::Linear {
                 start: 0.0,
                 end: piece.end(),
-                value: flight_input(self.modes.grid_step.contact.limit),
+                value: flight_input(self.modes.grid_step.switching.tire_limit),
                 slope: 0.0,
             }
         } else {

@@ -94,7 +94,7 @@ impl Simulator {
                 reason: format!(
                     "more than {MAX_SWITCHES_PER_STEP} switches between contact and flight in the internal step from {} s: the margin to W/k_t = {} m changes sign faster than a step of {} s resolves; use a tighter tolerance or a smaller max_internal_step, or the bilateral tire",
                     self.grid_time(k),
-                    self.modes.grid_step.contact.limit,
+                    self.modes.grid_step.switching.tire_limit,
                     self.grid.step
                 ),
             });
@@ -111,7 +111,7 @@ impl Simulator {
             self.observers.holding.lost_time += time - start;
             return;
         }
-        let limit = self.modes.grid_step.contact.limit;
+        let limit = self.modes.grid_step.switching.tire_limit;
         self.trajectory.flight_start = Some(time);
         self.observers.holding.lift_offs += 1;
         self.observers.holding.first_loss.get_or_insert(time);

@@ -271,9 +271,9 @@ impl WholeSteps<'_> {
                 piece_at_node = Some(piece_now);
                 continue;
             }
-            if op.contact.unilateral {
-                // A step that a road breakpoint splits, with a tire that
-                // may lift off inside it: the caller integrates it.
+            if op.switching.any() {
+                // A step that a road breakpoint splits, with an element
+                // that may switch inside it: the caller integrates it.
                 break Ok(true);
             }
             // A step that a road breakpoint splits.
