@@ -11,21 +11,24 @@
 use super::history::{DelayHistory, Delayed};
 use crate::comfort::{WK_STATES, WkStateSpace};
 use crate::model::dynamics::{
-    CONTINUOUS_STATES, FILTER_STATES_AT, INTEGRALS_AT, Mode, Switch, folded_delay, folded_feedback,
-    mode_matrix,
+    CONTINUOUS_STATES, FILTER_STATES_AT, INTEGRALS_AT, Mode, SWITCHES, Switch, Switching,
+    folded_delay, folded_feedback, mode_matrix,
 };
 use crate::model::{Plant, State, V_T, X_T};
 use crate::road::Road;
 use crate::solver::SimulationConfig;
 use nalgebra::{Matrix6, SVector};
 
-/// Number of event indicators: the margin to the loss of tire contact.
-pub const EVENT_INDICATORS: usize = 1;
+/// Number of event indicators: one per switching element of [`SWITCHES`]
+/// (today the margin to the loss of tire contact, which marks the loss of
+/// contact of the bilateral tire too).
+pub const EVENT_INDICATORS: usize = SWITCHES.len();
 
 /// Index of the time without tire contact among the continuous states.
 pub(super) const CONTACT_LOSS_TIME: usize = CONTINUOUS_STATES - 1;
 
-/// The hysteresis of the event indicator, relative to W/k_t.
+/// The hysteresis of an event indicator, relative to its element's scale
+/// ([`Switching::scale`]: the tire's W/k_t).
 pub(super) const HYSTERESIS: f64 = 1e-12;
 
 /// How far back (s) a master that has never completed a step may set the
@@ -70,13 +73,15 @@ impl Matrices {
     }
 }
 
-/// The discrete state: the contact mode and what events update.
+/// The discrete state: the elements' sides and what events update.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct Discrete {
-    /// The tire is in contact (the margin was >= 0 at the last event).
-    pub(super) in_contact: bool,
-    /// ε of the event indicator (m, > 0).
-    pub(super) hysteresis: f64,
+    /// The side of each element at the last event, a bit set for the side
+    /// of its second law (the tire: out of contact, its margin < 0); the
+    /// mode in force is [`Switching::mode_of`] it.
+    pub(super) sides: Mode,
+    /// ε of each event indicator (> 0; the tire's in m), in bit order.
+    pub(super) hysteresis: [f64; EVENT_INDICATORS],
     /// Lift-offs since the start (a start without contact counts one).
     pub(super) lift_off_count: u64,
     /// The largest |SDD| at the accepted points (m).
@@ -103,8 +108,8 @@ pub struct ModelExchange {
     pub(super) matrices: Matrices,
     pub(super) wk: WkStateSpace,
     pub(super) road: Road,
-    /// W/k_t (m).
-    pub(super) limit: f64,
+    /// The switching elements and their switch functions' constants.
+    pub(super) switching: Switching,
     /// W (N).
     pub(super) static_load: f64,
     pub(super) time: f64,
@@ -155,13 +160,15 @@ impl ModelExchange {
         }
     }
 
-    /// The mode in force: the tire's bit set while it flies.
+    /// The mode in force ([`Switching::mode_of`] the sides): the tire's
+    /// bit set while it flies (a unilateral tire out of contact).
     pub(super) fn mode(&self) -> Mode {
-        Mode::CONTACT.with(Switch::Tire, self.flying())
+        self.switching.mode_of(self.discrete.sides)
     }
 
-    /// Whether the wheel flies: a unilateral tire out of contact.
-    pub(super) fn flying(&self) -> bool {
-        self.config.tire_contact.is_unilateral() && !self.discrete.in_contact
+    /// Whether the tire is out of contact (its margin was < 0 at the last
+    /// event), whatever its law.
+    pub(super) fn contact_lost(&self) -> bool {
+        self.discrete.sides.is(Switch::Tire)
     }
 }

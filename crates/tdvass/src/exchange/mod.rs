@@ -40,15 +40,19 @@
 //! co-simulation refuses times its grid cannot resolve. No derivative or
 //! event indicator that is not finite is handed out.
 //!
-//! **Events.** One event indicator, the margin `W/k_t − (x_t − x_g)` (m)
-//! to the loss of tire contact, moved away from zero by a hysteresis after
-//! each event: in contact `z = margin + ε_c`, out of contact `z = margin −
-//! ε_f`, with the ε set at each event to `1e-12 W/k_t` plus whatever margin
-//! of the wrong sign the located event left, so that z ≠ 0 after every
-//! event. At an event the contact mode follows the sign of the margin:
+//! **Events.** One event indicator per switching element of the model's
+//! list ([`crate::model::dynamics::SWITCHES`]): its level
+//! ([`Switching::level`]), moved away from zero by a hysteresis after each
+//! event. Today that is the tire's margin `W/k_t − (x_t − x_g)` (m) to the
+//! loss of contact: in contact `z = margin + ε_c`, out of contact
+//! `z = margin − ε_f`, with the ε set at each event to `1e-12 W/k_t` (the
+//! element's [`Switching::scale`]) plus whatever margin of the wrong sign
+//! the located event left, so that z ≠ 0 after every event. At an event
+//! each element's side follows the sign of its level, and the mode the
+//! sides ([`Switching::mode_of`]); for the tire:
 //! a fall through 0 is a lift-off (counted in `lift_off_count`; with the
 //! unilateral tire the wheel then flies), a rise a touch-down. With the
-//! bilateral tire the mode only counts and times the losses of contact.
+//! bilateral tire its side only counts and times the losses of contact.
 //! Outputs that are extrema or counts (the largest |SDD|, the lift-offs)
 //! are updated at completed integrator steps and events.
 //!
@@ -81,8 +85,8 @@ use crate::error::{Error, Result};
 use crate::limits::DIVERGENCE_BOUNDS;
 use crate::metrics::time_averages;
 use crate::model::dynamics::{
-    CONTINUOUS_STATES, FILTER_STATES_AT, INTEGRAL_NAMES, INTEGRALS_AT, Instant, Mode, Switch,
-    contact_margin, continuous_rates, flight_input, plant_rates, tire_load,
+    CONTINUOUS_STATES, FILTER_STATES_AT, INTEGRAL_NAMES, INTEGRALS_AT, Instant, Mode, SWITCHES,
+    Switch, Switching, continuous_rates, flight_input, plant_rates, tire_load,
 };
 use crate::model::{Performance, Plant, STATE_NAMES, State, V_T, X_S, X_T};
 use crate::road::Road;
@@ -142,9 +146,16 @@ impl ModelExchange {
         } else {
             Delay::History(DelayHistory::new(t0, x[X_T], x[V_T], tau))
         };
-        let limit = static_load / k_t;
-        let margin = contact_margin(limit, x[X_T], road.value(t0));
-        let in_contact = margin >= 0.0;
+        let switching = Switching::of(&config.params, config.variant, config.tire_contact);
+        let road_now = road.value(t0);
+        // Each element starts on the side its level gives (the tire: in
+        // contact at a margin of 0).
+        let sides = SWITCHES.into_iter().fold(Mode::CONTACT, |sides, switch| {
+            sides.with(
+                switch,
+                switching.level(switch, x.as_slice(), road_now) < 0.0,
+            )
+        });
         let mut states = [0.0; CONTINUOUS_STATES];
         states[..6].copy_from_slice(x.as_slice());
         let mut model = ModelExchange {
@@ -152,7 +163,7 @@ impl ModelExchange {
             plant,
             wk: wk_state_space(),
             road,
-            limit,
+            switching,
             static_load,
             time: t0,
             states,
@@ -163,9 +174,9 @@ impl ModelExchange {
             completes: false,
             max_time,
             discrete: Discrete {
-                in_contact,
-                hysteresis: 0.0,
-                lift_off_count: u64::from(!in_contact),
+                sides,
+                hysteresis: [0.0; EVENT_INDICATORS],
+                lift_off_count: u64::from(sides.is(Switch::Tire)),
                 max_suspension_deflection: (x[X_S] - x[X_T]).abs(),
                 first_contact_loss: None,
             },
@@ -174,8 +185,13 @@ impl ModelExchange {
                 ..config
             },
         };
-        model.discrete.hysteresis = model.hysteresis_for(margin, in_contact);
-        if !in_contact {
+        for (i, switch) in SWITCHES.into_iter().enumerate() {
+            let level = switching.level(switch, x.as_slice(), road_now);
+            model.discrete.hysteresis[i] = model.hysteresis_for(switch, level, sides.is(switch));
+        }
+        if sides.is(Switch::Tire) {
+            let margin = switching.level(Switch::Tire, x.as_slice(), road_now);
+            let limit = switching.tire_limit;
             model.discrete.first_contact_loss = Some((t0, k_t * (-margin - limit)));
         }
         model.reserve();
@@ -297,7 +313,7 @@ impl ModelExchange {
         let road = self.road.value(t);
         let mode = self.mode();
         let road_input = if mode.is(Switch::Tire) {
-            flight_input(self.limit)
+            flight_input(self.switching.tire_limit)
         } else {
             road
         };
@@ -311,7 +327,7 @@ impl ModelExchange {
             suspension_deflection: x[X_S] - x[X_T],
             tire_deflection: x[X_T] - road,
             weighted_acceleration: self.wk.weighted_acceleration(&w, body_acceleration),
-            contact_lost: if self.discrete.in_contact { 0.0 } else { 1.0 },
+            contact_lost: if self.contact_lost() { 1.0 } else { 0.0 },
         };
         continuous_rates(&dx, &w, Some(&self.wk), &now)
     }
@@ -336,35 +352,42 @@ impl ModelExchange {
         )
     }
 
-    /// The margin `W/k_t − (x_t − x_g)` (m) now.
-    fn margin(&mut self) -> f64 {
+    /// The levels of the elements of [`SWITCHES`] now
+    /// ([`Switching::level`]: the tire's margin `W/k_t − (x_t − x_g)`, m).
+    fn levels(&mut self) -> [f64; EVENT_INDICATORS] {
         let road = self.road.value(self.time);
-        contact_margin(self.limit, self.states[X_T], road)
+        let x = &self.states[..6];
+        SWITCHES.map(|switch| self.switching.level(switch, x, road))
     }
 
-    /// The event indicators (module documentation); one that is not
-    /// finite is an error naming the time.
+    /// The event indicators (module documentation), one per element of
+    /// [`SWITCHES`]; one that is not finite is an error naming the time.
     pub fn event_indicators(&mut self) -> Result<[f64; EVENT_INDICATORS]> {
-        let margin = self.margin();
-        let z = if self.discrete.in_contact {
-            margin + self.discrete.hysteresis
-        } else {
-            margin - self.discrete.hysteresis
-        };
-        if !z.is_finite() {
-            return Err(Error::Refused(format!(
-                "the event indicator is {z} at t = {} s",
-                self.time
-            )));
+        let levels = self.levels();
+        let mut z = [0.0; EVENT_INDICATORS];
+        for (i, switch) in SWITCHES.into_iter().enumerate() {
+            let hysteresis = self.discrete.hysteresis[i];
+            z[i] = if self.discrete.sides.is(switch) {
+                levels[i] - hysteresis
+            } else {
+                levels[i] + hysteresis
+            };
+            if !z[i].is_finite() {
+                return Err(Error::Refused(format!(
+                    "the event indicator is {} at t = {} s",
+                    z[i], self.time
+                )));
+            }
         }
-        Ok([z])
+        Ok(z)
     }
 
-    /// ε for the mode `in_contact` at the margin `margin` (m): the base
-    /// hysteresis and any margin of the wrong sign for the mode.
-    fn hysteresis_for(&self, margin: f64, in_contact: bool) -> f64 {
-        let wrong_side = if in_contact { -margin } else { margin };
-        HYSTERESIS * self.limit + wrong_side.max(0.0)
+    /// ε of `switch` on the side `second` (of its second law) at the level
+    /// `level`: the base hysteresis and any level of the wrong sign for
+    /// the side.
+    fn hysteresis_for(&self, switch: Switch, level: f64, second: bool) -> f64 {
+        let wrong_side = if second { level } else { -level };
+        HYSTERESIS * self.switching.scale(switch) + wrong_side.max(0.0)
     }
 
     /// Accepts the current point as a completed integrator step: it joins
@@ -390,37 +413,48 @@ impl ModelExchange {
         self.follow_history_bound();
     }
 
-    /// Event Mode: accepts the current point and sets the contact mode from
-    /// the sign of the margin; returns the switch, if any.
+    /// Event Mode: accepts the current point and sets each element's side
+    /// from the sign of its level (the mode follows); returns the tire's
+    /// switch, if any.
     pub fn update_discrete_states(&mut self) -> Option<ContactEvent> {
         self.accept(false);
-        let margin = self.margin();
-        let time = self.time;
-        let event = if self.discrete.in_contact && margin < 0.0 {
-            self.discrete.in_contact = false;
-            self.discrete.lift_off_count += 1;
-            if self.discrete.first_contact_loss.is_none() {
-                self.discrete.first_contact_loss = Some((time, -self.static_load));
+        let levels = self.levels();
+        let mut tire_event = None;
+        for (i, switch) in SWITCHES.into_iter().enumerate() {
+            let (level, second) = (levels[i], self.discrete.sides.is(switch));
+            if !(if second { level > 0.0 } else { level < 0.0 }) {
+                continue;
             }
-            Some(ContactEvent::LiftOff {
-                time,
-                tire_deflection: self.limit - margin,
-            })
-        } else if !self.discrete.in_contact && margin > 0.0 {
-            self.discrete.in_contact = true;
-            Some(ContactEvent::TouchDown { time })
-        } else {
-            None
-        };
-        if event.is_some() {
-            self.discrete.hysteresis = self.hysteresis_for(margin, self.discrete.in_contact);
+            self.discrete.sides = self.discrete.sides.toggled(switch);
+            self.discrete.hysteresis[i] = self.hysteresis_for(switch, level, !second);
+            match switch {
+                Switch::Tire => tire_event = Some(self.record_tire_switch(level, !second)),
+            }
         }
-        event
+        tire_event
     }
 
-    /// Whether the tire is in contact (the mode of the last event).
+    /// What the tire's switch at the margin `margin` (m) means: a lift-off
+    /// (`lost`: counted, the first loss of contact kept) or a touch-down.
+    fn record_tire_switch(&mut self, margin: f64, lost: bool) -> ContactEvent {
+        let time = self.time;
+        if !lost {
+            return ContactEvent::TouchDown { time };
+        }
+        self.discrete.lift_off_count += 1;
+        if self.discrete.first_contact_loss.is_none() {
+            self.discrete.first_contact_loss = Some((time, -self.static_load));
+        }
+        ContactEvent::LiftOff {
+            time,
+            tire_deflection: self.switching.tire_limit - margin,
+        }
+    }
+
+    /// Whether the tire is in contact (its margin was >= 0 at the last
+    /// event).
     pub fn in_contact(&self) -> bool {
-        self.discrete.in_contact
+        !self.contact_lost()
     }
 
     /// Lift-offs since the start.

@@ -11,6 +11,7 @@ use super::history::{DelayHistory, HistoryPoint};
 use super::instance::{Delay, ModelExchange};
 use crate::bytes::{ByteReader, ByteWriter};
 use crate::error::{Error, Result};
+use crate::model::dynamics::SWITCHES;
 use crate::road::RoadState;
 use crate::solver::CONTINUOUS_STATES;
 
@@ -48,8 +49,12 @@ impl ModelExchange {
         w.u8(u8::from(completes_steps) | (u8::from(completed_once) << 1));
         w.f64s(&self.states);
         let d = &self.discrete;
-        w.u8(u8::from(d.in_contact));
-        w.f64(d.hysteresis);
+        // Each element's side (1 on its first) and hysteresis, in bit
+        // order (the tire's alone: the bytes of format 1).
+        for (i, switch) in SWITCHES.into_iter().enumerate() {
+            w.u8(u8::from(!d.sides.is(switch)));
+            w.f64(d.hysteresis[i]);
+        }
         w.u64(d.lift_off_count);
         w.f64(d.max_suspension_deflection);
         match d.first_contact_loss {
@@ -134,16 +139,20 @@ impl ModelExchange {
             )));
         }
         let mut discrete = self.discrete;
-        discrete.in_contact = r.u8()? != 0;
-        discrete.hysteresis = r.f64()?;
+        for (i, switch) in SWITCHES.into_iter().enumerate() {
+            discrete.sides = discrete.sides.with(switch, r.u8()? == 0);
+            discrete.hysteresis[i] = r.f64()?;
+        }
         discrete.lift_off_count = r.u64()?;
         discrete.max_suspension_deflection = r.f64()?;
         discrete.first_contact_loss = match r.u8()? {
             0 => None,
             _ => Some((r.f64()?, r.f64()?)),
         };
-        if !(discrete.hysteresis.is_finite()
-            && discrete.hysteresis > 0.0
+        if !(discrete
+            .hysteresis
+            .iter()
+            .all(|h| h.is_finite() && *h > 0.0)
             && discrete.max_suspension_deflection.is_finite()
             && discrete
                 .first_contact_loss

@@ -171,7 +171,7 @@ fn the_partials_agree_with_central_differences_in_flight_and_with_the_road_input
     check(&mut model, x_g);
     // Lift the wheel off: in flight the road drops out.
     let mut x = *model.states();
-    x[X_T] = x_g + 2.0 * model.limit;
+    x[X_T] = x_g + 2.0 * model.switching.tire_limit;
     x[V_T] = 0.3;
     model.set_states(&x).unwrap();
     assert!(matches!(

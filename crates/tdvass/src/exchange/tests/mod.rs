@@ -186,7 +186,7 @@ fn after_an_event_the_indicator_is_not_zero_and_has_the_modes_sign() {
         ..config(Variant::Cs, 0.0, 0.0, RoadSpec::paper_harmonic())
     };
     let mut model = ModelExchange::new(c).unwrap();
-    let limit = model.limit;
+    let limit = model.switching.tire_limit;
     let mut x = *model.states();
     // Exactly at the margin's zero: in contact, still positive.
     x[X_T] = limit;
