@@ -246,6 +246,7 @@ impl RunArgs {
             max_internal_step: self.max_internal_step,
             communication_step: 0.0,
             tire_contact: self.tire_contact()?,
+            body: tdvass::model::Body::Mass,
             start_time: 0.0,
             initial_state: State::zeros(),
             weights: Weights {

@@ -174,6 +174,7 @@ impl Settings {
             // master stepping by it meets internal nodes only.
             communication_step: crate::defaults::DEFAULT_STEP_SIZE,
             tire_contact: self.tire_contact()?,
+            body: tdvass::model::Body::Mass,
             start_time,
             initial_state: State::from(self.initial_state),
             weights: self.weights(),

@@ -125,6 +125,13 @@ impl ModelExchange {
     /// ([`Simulator::check_config`]).
     pub fn new(config: SimulationConfig) -> Result<ModelExchange> {
         let plant = Simulator::check_config(&config)?;
+        if config.body.is_attached() {
+            return Err(Error::InvalidSetting {
+                name: "body",
+                value: config.body.code() as i64,
+                reason: "Model Exchange takes the sprung mass (body = 0) only",
+            });
+        }
         let max_time = Self::time_bound(&config);
         if config.start_time.abs() > max_time {
             return Err(Error::InvalidTime {
@@ -255,7 +262,7 @@ impl ModelExchange {
             g,
             ..self.config.params
         };
-        let plant = Plant::new(params, self.config.variant)?;
+        let plant = Plant::new(params, self.config.variant)?.with_body(self.config.body);
         self.matrices = Matrices::of(&plant, &self.delay);
         self.plant = plant;
         self.config.params = params;

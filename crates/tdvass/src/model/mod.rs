@@ -6,12 +6,14 @@
 //! absorber coordinates carry no dynamics (their rows and columns of A are
 //! zero and they stay at zero); outputs report `x_h = x_t`, `v_h = v_t`.
 
+mod body;
 pub mod dynamics;
 mod equations;
 mod params;
 mod plant;
 mod tire;
 
+pub use body::Body;
 pub use equations::{Element, MassSpringDamper};
 pub(crate) use params::check;
 pub use params::{

@@ -4,10 +4,11 @@
 //! Layer: data (docs/architecture.md), with the model; it imports the
 //! model's `params`, `equations` and the crate's `error`.
 
+use super::body::Body;
 use super::equations::MassSpringDamper;
 use super::params::{Params, State, V_H, V_S, V_T, Variant, X_H, X_S, X_T};
 use crate::error::Result;
-use nalgebra::Matrix6;
+use nalgebra::{Matrix6, RowVector6};
 
 /// The linear plant of Eq. (2) for one variant:
 /// `dX/dt = A X + b x_t(t - tau) + e x_g(t)`.
@@ -27,6 +28,13 @@ pub struct Plant {
     pub b: State,
     /// Road column E of Eq. (2).
     pub e: State,
+    /// What carries the suspension ([`Body`]).
+    pub body: Body,
+    /// The suspension's force on the body (N) per unit of each state:
+    /// `m_s` times Eq. (2)'s body row of A (the spring and damper between
+    /// the body and the absorber, or the wheel for the CS). Zero at the
+    /// static equilibrium, positive up.
+    pub body_force_row: RowVector6<f64>,
 }
 
 impl Plant {
@@ -56,13 +64,36 @@ impl Plant {
                 e[v_i] = eq1.road_stiffness(i) / mass;
             }
         }
+        let body_force_row = a.row(V_S) * params.m_s;
         Ok(Plant {
             variant,
             params,
             a,
             b,
             e,
+            body: Body::Mass,
+            body_force_row,
         })
+    }
+
+    /// This plant carrying `body`: with [`Body::Attached`] the body's
+    /// attachment point moves at its given velocity (A's body row
+    /// `dv_s/dt` is zero; `dx_s/dt = v_s` stays), its motion set from
+    /// outside.
+    pub fn with_body(mut self, body: Body) -> Plant {
+        self.body = body;
+        if body.is_attached() {
+            self.a.row_mut(V_S).fill(0.0);
+        }
+        self
+    }
+
+    /// The suspension's force on the body (N), positive up, zero at the
+    /// static equilibrium: [`Self::body_force_row`] times the state. With
+    /// the sprung mass it is `m_s BA`.
+    #[inline]
+    pub fn body_force(&self, x: &State) -> f64 {
+        self.body_force_row.dot(&x.transpose())
     }
 
     /// Body acceleration BA = d²x_s/dt² (m/s²), first row of Eq. (26).

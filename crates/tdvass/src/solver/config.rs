@@ -8,7 +8,7 @@
 use crate::bytes::{ByteReader, ByteWriter};
 use crate::error::{Error, Result};
 use crate::metrics::Weights;
-use crate::model::{Params, State, TireContact, Variant};
+use crate::model::{Body, Params, State, TireContact, Variant};
 use crate::road::RoadSpec;
 
 /// Default relative tolerance of every reported metric.
@@ -38,6 +38,10 @@ pub struct SimulationConfig {
     /// The tire's contact law ([`TireContact`]; the paper's bilateral
     /// tire by default).
     pub tire_contact: TireContact,
+    /// What carries the suspension ([`Body`]: the paper's sprung mass by
+    /// default, or a body outside the model whose attachment point's
+    /// motion is an input, the corner of a vehicle).
+    pub body: Body,
     /// Start time t_0 (s).
     pub start_time: f64,
     /// X(t_0) = [x_s, v_s, x_h, v_h, x_t, v_t]; also the history for t < t_0.
@@ -107,8 +111,8 @@ impl Metrics {
 
 impl SimulationConfig {
     /// Writes the configuration: the parameters, the variant, the road,
-    /// the solver's settings, the start, the weights, the metrics level
-    /// and the tire's contact law.
+    /// the solver's settings, the start, the weights, the metrics level,
+    /// the tire's contact law and the body.
     pub(super) fn write(&self, w: &mut ByteWriter) {
         self.params.write(w);
         w.u64(self.variant.code() as u64);
@@ -123,11 +127,14 @@ impl SimulationConfig {
         w.f64(self.weights.tire_deflection);
         w.u64(self.metrics.code());
         w.u64(self.tire_contact.code() as u64);
+        w.u64(self.body.code() as u64);
     }
 
     /// Reads what [`SimulationConfig::write`] wrote; the codes are
-    /// checked here, the values by `Simulator::new`.
-    pub(super) fn read(r: &mut ByteReader) -> Result<SimulationConfig> {
+    /// checked here, the values by `Simulator::new`. Without `with_body`
+    /// (the bytes of saved-state formats before 6) the body is the sprung
+    /// mass.
+    pub(super) fn read(r: &mut ByteReader, with_body: bool) -> Result<SimulationConfig> {
         let params = Params::read(r)?;
         let variant = Variant::from_code(r.u64()? as i64)?;
         let road = RoadSpec::read(r)?;
@@ -148,6 +155,12 @@ impl SimulationConfig {
             .map_err(|e| Error::InvalidState(format!("metrics level: {e}")))?;
         let tire_contact = TireContact::from_code(i64::try_from(r.u64()?).unwrap_or(i64::MAX))
             .map_err(|e| Error::InvalidState(format!("tire contact: {e}")))?;
+        let body = if with_body {
+            Body::from_code(i64::try_from(r.u64()?).unwrap_or(i64::MAX))
+                .map_err(|e| Error::InvalidState(format!("body: {e}")))?
+        } else {
+            Body::Mass
+        };
         Ok(SimulationConfig {
             params,
             variant,
@@ -156,6 +169,7 @@ impl SimulationConfig {
             max_internal_step,
             communication_step,
             tire_contact,
+            body,
             start_time,
             initial_state,
             weights,
@@ -175,6 +189,7 @@ impl Default for SimulationConfig {
             max_internal_step: 0.0,
             communication_step: 0.0,
             tire_contact: TireContact::Bilateral,
+            body: Body::Mass,
             start_time: 0.0,
             initial_state: State::zeros(),
             weights: Weights::default(),

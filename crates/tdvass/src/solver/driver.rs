@@ -27,10 +27,11 @@ use super::system::Filter;
 use super::trajectory::Trajectory;
 use super::whole_steps;
 use crate::error::{Error, Result};
+use crate::limits::Bound;
 use crate::metrics::rms_values;
 use crate::metrics::{RmsValues, Weights};
 use crate::model::dynamics::Mode;
-use crate::model::{Params, Plant, State, V_T, X_T};
+use crate::model::{Params, Plant, State, V_S, V_T, X_S, X_T};
 use crate::road::{Road, RoadPiece};
 
 /// Rounding drift covered by the snap tolerance, in additions: a time
@@ -380,6 +381,62 @@ impl Simulator {
         Ok(())
     }
 
+    /// Sets the body's attachment point from the current time on (only
+    /// with [`Body::Attached`], a corner): `x_s = displacement` (m) and
+    /// `v_s = velocity` (m/s), moving at that velocity until the next
+    /// change (the plant's body row, [`Plant::with_body`]). The current
+    /// point is committed first (the RMS run closes there, as at a change
+    /// of the road input); the history of the delayed `x_t` is the wheel's
+    /// and stays. A value that is not finite or beyond the divergence
+    /// bounds is refused by name and changes nothing.
+    pub fn set_body_input(&mut self, displacement: f64, velocity: f64) -> Result<()> {
+        if !self.config.body.is_attached() {
+            return Err(Error::InvalidSetting {
+                name: "body",
+                value: self.config.body.code() as i64,
+                reason: "the body's attachment point is an input only of a corner (a body outside the model, body = 1)",
+            });
+        }
+        for (name, value, bound) in [
+            ("body_displacement", displacement, Bound::Displacement),
+            ("body_velocity", velocity, Bound::Velocity),
+        ] {
+            if !value.is_finite() {
+                return Err(Error::InvalidParameter {
+                    name,
+                    value,
+                    reason: "the body's attachment point must be finite",
+                });
+            }
+            crate::limits::check_value(bound, name, value)?;
+        }
+        self.settle();
+        let x = self.trajectory.current_state;
+        if x[X_S].to_bits() == displacement.to_bits() && x[V_S].to_bits() == velocity.to_bits() {
+            // The attachment is where it was set to be: nothing to commit.
+            return Ok(());
+        }
+        self.outputs_cache = None;
+        self.modes.next_node = None;
+        self.close_run_for_input();
+        for point in [
+            &mut self.trajectory.committed_state,
+            &mut self.trajectory.current_state,
+        ] {
+            point[X_S] = displacement;
+            point[V_S] = velocity;
+        }
+        if self.config.metrics.road_holding() {
+            // The largest |SDD| sees the new attachment at once.
+            self.observers
+                .holding
+                .add_node(&self.trajectory.committed_state.into());
+        }
+        self.observers
+            .reanchor(&mut stepping!(self), &self.trajectory.committed());
+        Ok(())
+    }
+
     /// Changes the feedback gain g (tunable; within the rate limit of
     /// [`crate::limits::check_rates`]); the history is kept.
     pub fn set_gain(&mut self, g: f64) -> Result<()> {
@@ -394,7 +451,7 @@ impl Simulator {
             g,
             ..self.config.params
         };
-        let plant = Plant::new(params, self.config.variant)?;
+        let plant = Plant::new(params, self.config.variant)?.with_body(self.config.body);
         crate::limits::check_rates(&params, Some(self.config.variant))?;
         self.config.params = params;
         self.modes = Modes::new(

@@ -207,6 +207,15 @@ impl Simulator {
         outputs::time_averages(self)
     }
 
+    /// The suspension's force on the body (N) now, positive up, zero at
+    /// the static equilibrium ([`crate::model::Plant::body_force`]): a
+    /// corner's output ([`crate::model::Body::Attached`]); with the sprung
+    /// mass it is `m_s BA`.
+    pub fn body_force(&mut self) -> f64 {
+        let x = self.instantaneous().state;
+        self.plant.body_force(&x)
+    }
+
     /// The switching elements of the configuration and their switch
     /// functions' constants (the model's, which Model Exchange uses too).
     pub fn switching(&self) -> &crate::model::dynamics::Switching {

@@ -36,8 +36,10 @@ use crate::road::RoadState;
 /// without probing again). Version 4 added the tire's contact law, the
 /// lift-off count and the start of the flight in progress. Version 5 added
 /// the mode in force as one word ([`crate::model::dynamics::Mode`]);
-/// version 4 still loads (its flight in progress says the mode).
-pub const STATE_FORMAT_VERSION: u64 = 5;
+/// version 4 still loads (its flight in progress says the mode). Version 6
+/// added the body ([`crate::model::Body`]) to the configuration; versions
+/// 4 and 5 load with the sprung mass.
+pub const STATE_FORMAT_VERSION: u64 = 6;
 
 /// The oldest version read.
 const OLDEST_FORMAT_VERSION: u64 = 4;
@@ -93,7 +95,7 @@ pub(super) fn from_bytes(bytes: &[u8]) -> Result<Simulator> {
             "state format version {version}: versions {OLDEST_FORMAT_VERSION} to {STATE_FORMAT_VERSION} are read"
         )));
     }
-    let config = SimulationConfig::read(&mut r)?;
+    let config = SimulationConfig::read(&mut r, version >= 6)?;
     let step_bound = read_step_bound(&mut r, &config)?;
     let mut sim = Simulator::with_step_bound(config, step_bound)?;
     sim.trajectory.read_points(&mut r)?;

@@ -55,7 +55,7 @@ impl Simulator {
 
     /// The plant of a configuration whose every value is checked.
     pub(super) fn validate(config: &SimulationConfig) -> Result<Plant> {
-        let plant = Plant::new(config.params, config.variant)?;
+        let plant = Plant::new(config.params, config.variant)?.with_body(config.body);
         if !config.start_time.is_finite() {
             return Err(Error::InvalidTime {
                 name: "start_time",

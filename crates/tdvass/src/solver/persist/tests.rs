@@ -2,8 +2,9 @@
 //! a message naming it.
 
 use super::*;
-use crate::model::TireContact;
+use crate::model::{Body, TireContact};
 use crate::road::{RandomRoad, RoadClass, RoadSpec};
+use crate::solver::Metrics;
 
 /// Offset of `grid_index` in [`Simulator::to_bytes`]: right after the
 /// configuration. `committed_time` follows it, then the committed state
@@ -312,7 +313,7 @@ fn states_of_format_4_still_load() {
         let mode_at = bytes.len() - road_len - flight_len - 8;
         let mut old = bytes[..mode_at].to_vec();
         old.extend(&bytes[mode_at + 8..]);
-        put(&mut old, 0, 4);
+        let old = without_body(&sim, &old, 4);
         let restored = Simulator::from_bytes(&old).unwrap();
         assert_eq!(restored.in_flight(), in_flight);
         assert_eq!(restored.to_bytes(), bytes, "in flight: {in_flight}");
@@ -470,4 +471,55 @@ fn last_node_until_is_bounded_where_node_times_do_not_resolve_steps() {
     // About 1.8e11 nodes coincide with 1e22 s.
     assert!(j > 1 << 36, "{j}");
     assert!(reached(&sim, j) && !reached(&sim, j + 1));
+}
+
+/// `bytes` (of `sim`) as format `version` (4 or 5) wrote them: without
+/// the configuration's body word (the last of the configuration).
+fn without_body(sim: &Simulator, bytes: &[u8], version: u64) -> Vec<u8> {
+    let mut config = ByteWriter::default();
+    sim.config.write(&mut config);
+    let body_at = 8 + config.bytes.len() - 8;
+    let mut old = bytes[..body_at].to_vec();
+    old.extend(&bytes[body_at + 8..]);
+    put(&mut old, 0, version);
+    old
+}
+
+#[test]
+fn states_of_format_5_still_load_with_the_sprung_mass() {
+    let mut sim = Simulator::new(SimulationConfig {
+        metrics: Metrics::Comfort,
+        ..SimulationConfig::default()
+    })
+    .unwrap();
+    sim.advance_to(0.1234).unwrap();
+    let bytes = sim.to_bytes();
+    let restored = Simulator::from_bytes(&without_body(&sim, &bytes, 5)).unwrap();
+    assert_eq!(restored.config().body, Body::Mass);
+    assert_eq!(restored.to_bytes(), bytes);
+}
+
+#[test]
+fn a_corner_s_state_keeps_its_body_and_its_attachment() {
+    let mut sim = Simulator::new(SimulationConfig {
+        body: Body::Attached,
+        ..SimulationConfig::default()
+    })
+    .unwrap();
+    sim.advance_to(0.05).unwrap();
+    sim.set_body_input(0.002, -0.03).unwrap();
+    sim.advance_to(0.0875).unwrap();
+    let bytes = sim.to_bytes();
+    let mut restored = Simulator::from_bytes(&bytes).unwrap();
+    assert_eq!(restored.config().body, Body::Attached);
+    sim.advance_to(0.2).unwrap();
+    restored.advance_to(0.2).unwrap();
+    assert_eq!(restored.to_bytes(), sim.to_bytes());
+    // A body code out of range is refused by name.
+    let mut config = ByteWriter::default();
+    sim.config.write(&mut config);
+    let mut wrong = bytes.clone();
+    put(&mut wrong, config.bytes.len(), 7);
+    let e = Simulator::from_bytes(&wrong).unwrap_err().to_string();
+    assert!(e.contains("body"), "{e}");
 }
