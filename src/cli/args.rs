@@ -242,6 +242,7 @@ impl RunArgs {
             params,
             variant,
             road: self.road_spec()?,
+            road_shift: tdvass::road::RoadShift::NONE,
             tolerance: self.tolerance,
             max_internal_step: self.max_internal_step,
             communication_step: 0.0,

@@ -168,6 +168,7 @@ impl Settings {
             params: self.params(),
             variant: self.variant()?,
             road: self.road_spec()?,
+            road_shift: tdvass::road::RoadShift::NONE,
             tolerance: self.tolerance,
             max_internal_step: self.max_internal_step,
             // The internal step divides the DefaultExperiment stepSize: a

@@ -142,7 +142,7 @@ impl ModelExchange {
         }
         let k_t = config.params.k_t;
         let static_load = config.params.static_load(config.variant);
-        let mut road = Road::new(&config.road, config.start_time)?;
+        let mut road = Road::with_shift(&config.road, config.start_time, config.road_shift)?;
         let t0 = config.start_time;
         let x = plant.reported_state(&config.initial_state);
         let tau = config.params.tau;

@@ -43,7 +43,8 @@ use std::sync::Arc;
 pub use piece::RoadPiece;
 pub(crate) use saved::RoadState;
 pub use spec::{
-    ISO_NODE_INTERVAL, REFERENCE_SPATIAL_FREQUENCY, RandomRoad, RoadClass, RoadSpec, RoadType,
+    ISO_NODE_INTERVAL, REFERENCE_SPATIAL_FREQUENCY, RandomRoad, RoadClass, RoadShift, RoadSpec,
+    RoadType,
 };
 
 /// The road as the simulator consumes it.
@@ -56,6 +57,10 @@ pub struct Road {
     /// query inside the cached piece returns it unchanged (the cache never
     /// changes a result; it is not part of the saved state).
     cache: Option<RoadPiece>,
+    /// A delayed random road's piece before its profile starts: `x_g = 0`
+    /// from the start time to the profile's start ([`RoadShift`]); `None`
+    /// for the other roads.
+    lead: Option<RoadPiece>,
 }
 
 #[derive(Debug, Clone)]
@@ -70,7 +75,22 @@ impl Road {
     /// Builds the road for a simulation starting at `start_time` (random
     /// roads start at `x_g = 0` there, like the vehicle at rest).
     pub fn new(spec: &RoadSpec, start_time: f64) -> Result<Road> {
+        Road::with_shift(spec, start_time, RoadShift::NONE)
+    }
+
+    /// [`Road::new`] as a wheel sees it with `shift`: the profile delayed
+    /// by `shift.delay` (a random road then starts at `x_g = 0` at
+    /// `start_time + delay`, 0 before), the harmonic road also moved by
+    /// `shift.phase`.
+    pub fn with_shift(spec: &RoadSpec, start_time: f64, shift: RoadShift) -> Result<Road> {
         spec.validate()?;
+        shift.validate(spec)?;
+        let delayed = shift.delay != 0.0;
+        let profile_start = if delayed {
+            start_time + shift.delay
+        } else {
+            start_time
+        };
         let kind = match spec {
             RoadSpec::Input => RoadKind::Input(RoadPiece::Linear {
                 start: start_time,
@@ -84,6 +104,11 @@ impl Road {
             } => RoadKind::Harmonic(RoadPiece::Harmonic {
                 amplitude: *amplitude,
                 angular_frequency: *angular_frequency,
+                phase: if delayed || shift.phase != 0.0 {
+                    shift.phase - angular_frequency * shift.delay
+                } else {
+                    0.0
+                },
             }),
             RoadSpec::Iso8608(road) => {
                 // Exact Ornstein–Uhlenbeck transition over one node interval.
@@ -96,7 +121,7 @@ impl Road {
                 let gain = diffusion
                     * (-crate::math::exp_m1(-2.0 * rate * ISO_NODE_INTERVAL) / (2.0 * rate)).sqrt();
                 RoadKind::Nodes(Box::new(NodeSequence::new(
-                    start_time,
+                    profile_start,
                     ISO_NODE_INTERVAL,
                     decay,
                     gain,
@@ -110,19 +135,29 @@ impl Road {
                 let d = *sample_interval;
                 let decay = 1.0 - 2.0 * PI * road.cutoff_frequency * d;
                 RoadKind::Nodes(Box::new(NodeSequence::new(
-                    start_time,
+                    profile_start,
                     d,
                     decay,
                     d * road.noise_gain(),
                     road.seed,
                 )))
             }
+            RoadSpec::Samples(samples) if delayed => RoadKind::Samples(Arc::new(
+                samples.iter().map(|&(t, x)| (t + shift.delay, x)).collect(),
+            )),
             RoadSpec::Samples(samples) => RoadKind::Samples(samples.clone()),
         };
+        let random = matches!(kind, RoadKind::Nodes(_));
         Ok(Road {
             spec: spec.clone(),
             kind,
             cache: None,
+            lead: (random && delayed).then_some(RoadPiece::Linear {
+                start: start_time,
+                end: profile_start,
+                value: 0.0,
+                slope: 0.0,
+            }),
         })
     }
 
@@ -152,13 +187,23 @@ impl Road {
     /// cached piece: found, and cached.
     #[inline(never)]
     fn new_piece(&mut self, t: f64) -> RoadPiece {
-        let piece = match &mut self.kind {
-            RoadKind::Nodes(nodes) => nodes.piece(t),
-            RoadKind::Samples(samples) => sample_piece(samples, t),
-            RoadKind::Harmonic(piece) | RoadKind::Input(piece) => *piece,
+        let piece = match (&mut self.kind, self.lead) {
+            // A delayed random road before its profile starts.
+            (RoadKind::Nodes(_), Some(lead)) if t < lead.end() => lead,
+            (RoadKind::Nodes(nodes), _) => nodes.piece(t),
+            (RoadKind::Samples(samples), _) => sample_piece(samples, t),
+            (RoadKind::Harmonic(piece) | RoadKind::Input(piece), _) => *piece,
         };
         self.cache = Some(piece);
         piece
+    }
+
+    /// The harmonic road's one piece (`None` for the other roads).
+    pub fn harmonic(&self) -> Option<RoadPiece> {
+        match self.kind {
+            RoadKind::Harmonic(piece) => Some(piece),
+            _ => None,
+        }
     }
 
     /// `x_g(t)` (m).
@@ -239,6 +284,8 @@ impl Road {
     /// from there on (−∞ for the other roads).
     pub fn earliest_time(&self) -> f64 {
         match &self.kind {
+            // A delayed road is 0 before its first node.
+            RoadKind::Nodes(nodes) if nodes.first == 0 && self.lead.is_some() => f64::NEG_INFINITY,
             RoadKind::Nodes(nodes) => nodes.node_time(nodes.first),
             _ => f64::NEG_INFINITY,
         }

@@ -4,10 +4,12 @@
 /// A piece of road over which `x_g` has a closed form.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum RoadPiece {
-    /// `x_g(t) = amplitude sin(angular_frequency t)` for every t.
+    /// `x_g(t) = amplitude sin(angular_frequency t + phase)` for every t
+    /// ([`harmonic_angle`]).
     Harmonic {
         amplitude: f64,
         angular_frequency: f64,
+        phase: f64,
     },
     /// `x_g(t) = value + slope (t − start)` on `[start, end)`.
     Linear {
@@ -26,7 +28,8 @@ impl RoadPiece {
             RoadPiece::Harmonic {
                 amplitude,
                 angular_frequency,
-            } => amplitude * crate::math::sin(angular_frequency * t),
+                phase,
+            } => amplitude * crate::math::sin(harmonic_angle(angular_frequency, phase, t)),
             RoadPiece::Linear {
                 start,
                 value,
@@ -43,13 +46,17 @@ impl RoadPiece {
             RoadPiece::Harmonic {
                 amplitude,
                 angular_frequency,
-            } => amplitude * angular_frequency * crate::math::cos(angular_frequency * t),
+                phase,
+            } => {
+                let angle = harmonic_angle(angular_frequency, phase, t);
+                amplitude * angular_frequency * crate::math::cos(angle)
+            }
             RoadPiece::Linear { slope, .. } => slope,
         }
     }
 
     /// `[x_g, x_g', x_g'', x_g''']` at t (m, m/s, m/s², m/s³): of the
-    /// harmonic piece `A sin ω t` (`sin ω t` and `cos ω t` from one
+    /// harmonic piece `A sin(ω t + φ)` (its sine and cosine from one
     /// [`crate::math::sin_cos`]), of a linear piece its value and slope.
     #[inline]
     pub fn derivatives(&self, t: f64) -> [f64; 4] {
@@ -57,8 +64,9 @@ impl RoadPiece {
             RoadPiece::Harmonic {
                 amplitude: a,
                 angular_frequency: w,
+                phase,
             } => {
-                let (sin, cos) = crate::math::sin_cos(w * t);
+                let (sin, cos) = crate::math::sin_cos(harmonic_angle(w, phase, t));
                 [a * sin, a * w * cos, -a * w * w * sin, -a * w * w * w * cos]
             }
             RoadPiece::Linear { .. } => [self.value(t), self.slope(t), 0.0, 0.0],
@@ -74,6 +82,7 @@ impl RoadPiece {
             RoadPiece::Harmonic {
                 amplitude,
                 angular_frequency,
+                ..
             } => {
                 let (a, w) = (amplitude.abs(), angular_frequency.abs());
                 [a, a * w, a * w * w, a * w * w * w]
@@ -90,6 +99,14 @@ impl RoadPiece {
             RoadPiece::Linear { end, .. } => end,
         }
     }
+}
+
+/// The harmonic road's angle at t (rad): `ω t + φ`; `ω t` itself with no
+/// phase (the same bits as a road without one).
+#[inline(always)]
+pub fn harmonic_angle(angular_frequency: f64, phase: f64, t: f64) -> f64 {
+    let angle = angular_frequency * t;
+    if phase == 0.0 { angle } else { angle + phase }
 }
 
 /// The piece of the sampled profile `samples` whose interval holds `t`

@@ -7,6 +7,57 @@ use crate::error::{Error, Result};
 use std::f64::consts::PI;
 use std::sync::Arc;
 
+/// How a wheel of a vehicle sees a built-in road: the profile delayed (a
+/// rear wheel follows its front wheel by wheelbase / speed) and, on the
+/// harmonic road, a phase (a right track out of step with the left, which
+/// excites roll): `x_g(t) = profile(t − delay)`, the harmonic road
+/// `A sin(ω (t − delay) + phase)`. A random road's profile starts at 0 at
+/// `start_time + delay` and is 0 before.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct RoadShift {
+    /// The delay (s, ≥ 0).
+    pub delay: f64,
+    /// The harmonic road's phase (rad).
+    pub phase: f64,
+}
+
+impl RoadShift {
+    /// The road as it is.
+    pub const NONE: RoadShift = RoadShift {
+        delay: 0.0,
+        phase: 0.0,
+    };
+
+    /// Checks the shift for the road `spec`; the error names the FMU
+    /// variable (`road_delay`, `road_phase`).
+    pub fn validate(&self, spec: &RoadSpec) -> Result<()> {
+        finite("road_delay", self.delay)?;
+        finite("road_phase", self.phase)?;
+        if self.delay < 0.0 {
+            return Err(Error::InvalidParameter {
+                name: "road_delay",
+                value: self.delay,
+                reason: "must not be negative (a wheel sees the road after the wheel ahead of it)",
+            });
+        }
+        if self.delay != 0.0 && matches!(spec, RoadSpec::Input) {
+            return Err(Error::InvalidParameter {
+                name: "road_delay",
+                value: self.delay,
+                reason: "applies to the built-in roads; the input x_g (road = 0) is the road as the wheel sees it",
+            });
+        }
+        if self.phase != 0.0 && !matches!(spec, RoadSpec::Harmonic { .. }) {
+            return Err(Error::InvalidParameter {
+                name: "road_phase",
+                value: self.phase,
+                reason: "only the harmonic road (road = 1) has a phase",
+            });
+        }
+        Ok(())
+    }
+}
+
 /// Reference spatial frequency n0 of ISO 8608 (1/m).
 pub const REFERENCE_SPATIAL_FREQUENCY: f64 = 0.1;
 /// Time between the nodes of the ISO 8608 road (s). At 20 m/s this is a

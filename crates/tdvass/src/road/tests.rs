@@ -237,3 +237,126 @@ fn csv_file_is_read() {
     assert!(err.to_string().contains("line 3"), "{err}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// The roads a shift applies to: ISO 8608 class C at 20 m/s, the
+/// paper-compatible road and a sampled profile.
+fn shifted_roads() -> Vec<RoadSpec> {
+    let random = RandomRoad {
+        class: RoadClass::C,
+        speed: 20.0,
+        ..RandomRoad::default()
+    };
+    vec![
+        RoadSpec::Iso8608(random),
+        RoadSpec::PaperCompatible {
+            road: random,
+            sample_interval: 0.01,
+        },
+        RoadSpec::Samples(Arc::new(vec![
+            (0.0, 0.0),
+            (0.3, 0.02),
+            (0.7, -0.01),
+            (1.5, 0.005),
+        ])),
+    ]
+}
+
+#[test]
+fn a_delayed_road_is_the_road_later_and_a_random_one_zero_before() {
+    let (start, delay) = (0.25, 0.13);
+    for spec in shifted_roads() {
+        let mut road = Road::new(&spec, start).unwrap();
+        let shift = RoadShift { delay, phase: 0.0 };
+        let mut delayed = Road::with_shift(&spec, start, shift).unwrap();
+        for i in 0..4000 {
+            let t = start + i as f64 * 4.37e-4;
+            let (now, later) = (road.value(t), delayed.value(t + delay));
+            assert!(
+                (now - later).abs() <= 1e-12 * (1.0 + now.abs()),
+                "{spec:?} {t}: {now} {later}"
+            );
+        }
+        if !matches!(spec, RoadSpec::Samples(_)) {
+            let mut fresh = Road::with_shift(&spec, start, shift).unwrap();
+            for i in 0..130 {
+                let t = start + i as f64 * 1e-3;
+                assert_eq!(fresh.value(t), 0.0, "{spec:?} at {t}");
+                assert_eq!(fresh.piece(t).slope(t), 0.0);
+            }
+            assert_eq!(fresh.earliest_time(), f64::NEG_INFINITY);
+        }
+    }
+}
+
+#[test]
+fn the_shifted_harmonic_road_is_delayed_and_phased_and_unshifted_the_same_bits() {
+    let spec = RoadSpec::paper_harmonic();
+    let mut plain = Road::new(&spec, 0.0).unwrap();
+    let mut unshifted = Road::with_shift(&spec, 0.0, RoadShift::NONE).unwrap();
+    let (delay, phase) = (0.13, 0.9);
+    let mut shifted = Road::with_shift(&spec, 0.0, RoadShift { delay, phase }).unwrap();
+    for i in 0..1000 {
+        let t = i as f64 * 3.1e-3;
+        assert_eq!(plain.value(t).to_bits(), unshifted.value(t).to_bits());
+        let expected = 0.05 * (5.0 * (t - delay) + phase).sin();
+        let value = shifted.value(t);
+        assert!((value - expected).abs() < 1e-15, "{t}: {value} {expected}");
+        let rate = shifted.piece(t).slope(t);
+        let expected_rate = 0.25 * (5.0 * (t - delay) + phase).cos();
+        assert!(
+            (rate - expected_rate).abs() < 1e-14,
+            "{t}: {rate} {expected_rate}"
+        );
+    }
+}
+
+#[test]
+fn a_shift_that_does_not_apply_is_refused_by_name() {
+    let harmonic = RoadSpec::paper_harmonic();
+    let iso = shifted_roads().remove(0);
+    for (spec, shift, name) in [
+        (
+            &harmonic,
+            RoadShift {
+                delay: -0.1,
+                phase: 0.0,
+            },
+            "road_delay",
+        ),
+        (
+            &harmonic,
+            RoadShift {
+                delay: f64::NAN,
+                phase: 0.0,
+            },
+            "road_delay",
+        ),
+        (
+            &harmonic,
+            RoadShift {
+                delay: 0.0,
+                phase: f64::INFINITY,
+            },
+            "road_phase",
+        ),
+        (
+            &iso,
+            RoadShift {
+                delay: 0.1,
+                phase: 0.5,
+            },
+            "road_phase",
+        ),
+        (
+            &RoadSpec::Input,
+            RoadShift {
+                delay: 0.1,
+                phase: 0.0,
+            },
+            "road_delay",
+        ),
+    ] {
+        let e = Road::with_shift(spec, 0.0, shift).unwrap_err().to_string();
+        assert!(e.contains(name), "{e}");
+    }
+}

@@ -9,7 +9,7 @@ use crate::bytes::{ByteReader, ByteWriter};
 use crate::error::{Error, Result};
 use crate::metrics::Weights;
 use crate::model::{Body, Params, State, TireContact, Variant};
-use crate::road::RoadSpec;
+use crate::road::{RoadShift, RoadSpec};
 
 /// Default relative tolerance of every reported metric.
 pub const DEFAULT_TOLERANCE: f64 = 1e-6;
@@ -23,6 +23,10 @@ pub struct SimulationConfig {
     pub variant: Variant,
     /// The road.
     pub road: RoadSpec,
+    /// How the wheel sees the road ([`RoadShift`]: a delay, and on the
+    /// harmonic road a phase; none by default): a corner of a vehicle
+    /// behind another, or on the other track.
+    pub road_shift: RoadShift,
     /// Relative accuracy of every reported metric: it sets the internal
     /// step (see the `accuracy` module; [`DEFAULT_TOLERANCE`] by default).
     pub tolerance: f64,
@@ -112,7 +116,7 @@ impl Metrics {
 impl SimulationConfig {
     /// Writes the configuration: the parameters, the variant, the road,
     /// the solver's settings, the start, the weights, the metrics level,
-    /// the tire's contact law and the body.
+    /// the tire's contact law, the body and the road's shift.
     pub(super) fn write(&self, w: &mut ByteWriter) {
         self.params.write(w);
         w.u64(self.variant.code() as u64);
@@ -128,12 +132,14 @@ impl SimulationConfig {
         w.u64(self.metrics.code());
         w.u64(self.tire_contact.code() as u64);
         w.u64(self.body.code() as u64);
+        w.f64(self.road_shift.delay);
+        w.f64(self.road_shift.phase);
     }
 
     /// Reads what [`SimulationConfig::write`] wrote; the codes are
     /// checked here, the values by `Simulator::new`. Without `with_body`
     /// (the bytes of saved-state formats before 6) the body is the sprung
-    /// mass.
+    /// mass and the road is not shifted.
     pub(super) fn read(r: &mut ByteReader, with_body: bool) -> Result<SimulationConfig> {
         let params = Params::read(r)?;
         let variant = Variant::from_code(r.u64()? as i64)?;
@@ -155,16 +161,19 @@ impl SimulationConfig {
             .map_err(|e| Error::InvalidState(format!("metrics level: {e}")))?;
         let tire_contact = TireContact::from_code(i64::try_from(r.u64()?).unwrap_or(i64::MAX))
             .map_err(|e| Error::InvalidState(format!("tire contact: {e}")))?;
-        let body = if with_body {
-            Body::from_code(i64::try_from(r.u64()?).unwrap_or(i64::MAX))
-                .map_err(|e| Error::InvalidState(format!("body: {e}")))?
+        let (body, road_shift) = if with_body {
+            let body = Body::from_code(i64::try_from(r.u64()?).unwrap_or(i64::MAX))
+                .map_err(|e| Error::InvalidState(format!("body: {e}")))?;
+            let (delay, phase) = (r.f64()?, r.f64()?);
+            (body, RoadShift { delay, phase })
         } else {
-            Body::Mass
+            (Body::Mass, RoadShift::NONE)
         };
         Ok(SimulationConfig {
             params,
             variant,
             road,
+            road_shift,
             tolerance,
             max_internal_step,
             communication_step,
@@ -185,6 +194,7 @@ impl Default for SimulationConfig {
             params: Params::default(),
             variant: Variant::Tdvass,
             road: RoadSpec::paper_harmonic(),
+            road_shift: RoadShift::NONE,
             tolerance: DEFAULT_TOLERANCE,
             max_internal_step: 0.0,
             communication_step: 0.0,

@@ -28,7 +28,8 @@ use super::pieces::{self, Stretch};
 use super::system::{phase_rotation, rotate};
 use crate::bytes::{ByteReader, ByteWriter};
 use crate::error::{Error, Result};
-use crate::road::{Road, RoadPiece, RoadSpec};
+use crate::road::piece::harmonic_angle;
+use crate::road::{Road, RoadPiece};
 use nalgebra::Vector4;
 
 /// The harmonic road's phase `A [sin ω t_k, cos ω t_k]` at grid node k is
@@ -51,9 +52,9 @@ pub(super) struct Inputs {
     start_time: f64,
     /// x_t(t_0) (m): the delayed input before the start.
     initial_tire: f64,
-    /// The harmonic road's amplitude (m) and angular frequency (rad/s);
-    /// `None` for the other roads.
-    harmonic: Option<(f64, f64)>,
+    /// The harmonic road's amplitude (m), angular frequency (rad/s) and
+    /// phase (rad); `None` for the other roads.
+    harmonic: Option<(f64, f64, f64)>,
     /// [`phase_rotation`] over one step.
     rotation: [[f64; 2]; 2],
     /// The harmonic road's last phases (a cache of `sin_cos`).
@@ -69,16 +70,16 @@ impl Inputs {
     /// `(x_t, v_t) = initial_tire` on `grid`.
     pub(super) fn new(
         road: Road,
-        spec: &RoadSpec,
         grid: DelayGrid,
         start_time: f64,
         initial_tire: [f64; 2],
     ) -> Inputs {
-        let harmonic = match *spec {
-            RoadSpec::Harmonic {
+        let harmonic = match road.harmonic() {
+            Some(RoadPiece::Harmonic {
                 amplitude,
                 angular_frequency,
-            } => Some((amplitude, angular_frequency)),
+                phase,
+            }) => Some((amplitude, angular_frequency, phase)),
             _ => None,
         };
         Inputs {
@@ -88,7 +89,7 @@ impl Inputs {
             start_time,
             initial_tire: initial_tire[0],
             harmonic,
-            rotation: phase_rotation(harmonic.map_or(0.0, |(_, w)| w), grid.step),
+            rotation: phase_rotation(harmonic.map_or(0.0, |(_, w, _)| w), grid.step),
             phases: Phases::default(),
             phase: None,
         }
@@ -109,7 +110,7 @@ impl Inputs {
 
     /// The angular frequency ω of the harmonic road (0 for the others).
     pub(super) fn angular_frequency(&self) -> f64 {
-        self.harmonic.map_or(0.0, |(_, w)| w)
+        self.harmonic.map_or(0.0, |(_, w, _)| w)
     }
 
     /// The road piece in force from `t` on ([`pieces::piece_from`]).
@@ -215,10 +216,11 @@ impl Inputs {
     /// `A [sin ω t_k, cos ω t_k]` of the harmonic road, evaluated directly.
     #[inline]
     pub(super) fn exact_phase(&self, k: u64) -> [f64; 2] {
-        let Some((amplitude, angular_frequency)) = self.harmonic else {
+        let Some((amplitude, angular_frequency, phase)) = self.harmonic else {
             return [0.0; 2];
         };
-        let (sin, cos) = crate::math::sin_cos(angular_frequency * self.node_time(k));
+        let angle = harmonic_angle(angular_frequency, phase, self.node_time(k));
+        let (sin, cos) = crate::math::sin_cos(angle);
         [amplitude * sin, amplitude * cos]
     }
 
@@ -271,6 +273,7 @@ impl Inputs {
         let RoadPiece::Harmonic {
             amplitude,
             angular_frequency,
+            phase,
         } = *road
         else {
             return [0.0; 2];
@@ -286,7 +289,9 @@ impl Inputs {
                 .sin_cos(angular_frequency * self.grid.inner_delay());
             return [c * z0 + s * z1, c * z1 - s * z0];
         }
-        let (sin, cos) = self.phases.sin_cos(angular_frequency * t);
+        let (sin, cos) = self
+            .phases
+            .sin_cos(harmonic_angle(angular_frequency, phase, t));
         [amplitude * sin, amplitude * cos]
     }
 
@@ -300,8 +305,10 @@ impl Inputs {
             RoadPiece::Harmonic {
                 amplitude,
                 angular_frequency,
+                phase,
             } => {
-                let (sin, cos) = self.phases.sin_cos(angular_frequency * t);
+                let angle = harmonic_angle(angular_frequency, phase, t);
+                let (sin, cos) = self.phases.sin_cos(angle);
                 [amplitude * sin, amplitude * angular_frequency * cos]
             }
             RoadPiece::Linear { .. } => [piece.value(t), piece.slope(t)],

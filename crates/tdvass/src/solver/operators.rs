@@ -89,8 +89,10 @@ pub(super) fn road_input<const R: usize>(
         RoadPiece::Harmonic {
             amplitude,
             angular_frequency,
+            phase,
         } => {
-            let (sin, cos) = crate::math::sin_cos(angular_frequency * at);
+            let angle = crate::road::piece::harmonic_angle(angular_frequency, phase, at);
+            let (sin, cos) = crate::math::sin_cos(angle);
             harmonic * Vector2::new(amplitude * sin, amplitude * cos)
         }
     }

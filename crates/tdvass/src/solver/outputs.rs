@@ -213,6 +213,7 @@ fn stretch_keeps_contact(
     let RoadPiece::Harmonic {
         amplitude,
         angular_frequency,
+        phase,
     } = *piece
     else {
         return false;
@@ -229,7 +230,7 @@ fn stretch_keeps_contact(
     let amplitude = amplitude.abs();
     let sweep = (amplitude * angular_frequency).abs();
     let slack = 1e-9 * (limit.abs() + amplitude + xc[X_T].abs() + end.tire_magnitude)
-        + 8.0 * f64::EPSILON * amplitude * (angular_frequency * tc).abs();
+        + 8.0 * f64::EPSILON * amplitude * ((angular_frequency * tc).abs() + phase.abs());
     let road = z[0] - slack;
     let lower = (limit - (xc[X_T] - road)).min(limit - (end.tire_high - (road - sweep * length)));
     let rates = 2.0 * sweep + xc[V_T].abs() + end.tire_speed;

@@ -37,8 +37,9 @@ use crate::road::RoadState;
 /// lift-off count and the start of the flight in progress. Version 5 added
 /// the mode in force as one word ([`crate::model::dynamics::Mode`]);
 /// version 4 still loads (its flight in progress says the mode). Version 6
-/// added the body ([`crate::model::Body`]) to the configuration; versions
-/// 4 and 5 load with the sprung mass.
+/// added the body ([`crate::model::Body`]) and the road's shift
+/// ([`crate::road::RoadShift`]) to the configuration; versions 4 and 5 load
+/// with the sprung mass and the road as it is.
 pub const STATE_FORMAT_VERSION: u64 = 6;
 
 /// The oldest version read.

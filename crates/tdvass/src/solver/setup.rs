@@ -109,19 +109,13 @@ impl Simulator {
                 reason: "|start_time| must be at most 2^42 internal steps (the step the tolerance sets, max_internal_step, or less to divide tau) so that node times resolve the step",
             });
         }
-        let road = Road::new(&config.road, config.start_time)?;
+        let road = Road::with_shift(&config.road, config.start_time, config.road_shift)?;
         let mut initial = config.initial_state;
         if config.variant == Variant::Cs {
             initial[crate::model::X_H] = 0.0;
             initial[crate::model::V_H] = 0.0;
         }
-        let inputs = Inputs::new(
-            road,
-            &config.road,
-            grid,
-            config.start_time,
-            [initial[X_T], initial[V_T]],
-        );
+        let inputs = Inputs::new(road, grid, config.start_time, [initial[X_T], initial[V_T]]);
         let modes = Modes::new(&plant, &config, &grid, inputs.angular_frequency())?;
         let start_time = config.start_time;
         let mut sim = Simulator {

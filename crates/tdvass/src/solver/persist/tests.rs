@@ -474,13 +474,13 @@ fn last_node_until_is_bounded_where_node_times_do_not_resolve_steps() {
 }
 
 /// `bytes` (of `sim`) as format `version` (4 or 5) wrote them: without
-/// the configuration's body word (the last of the configuration).
+/// the configuration's body and road shift (its last three words).
 fn without_body(sim: &Simulator, bytes: &[u8], version: u64) -> Vec<u8> {
     let mut config = ByteWriter::default();
     sim.config.write(&mut config);
-    let body_at = 8 + config.bytes.len() - 8;
+    let body_at = 8 + config.bytes.len() - 24;
     let mut old = bytes[..body_at].to_vec();
-    old.extend(&bytes[body_at + 8..]);
+    old.extend(&bytes[body_at + 24..]);
     put(&mut old, 0, version);
     old
 }
@@ -519,7 +519,7 @@ fn a_corner_s_state_keeps_its_body_and_its_attachment() {
     let mut config = ByteWriter::default();
     sim.config.write(&mut config);
     let mut wrong = bytes.clone();
-    put(&mut wrong, config.bytes.len(), 7);
+    put(&mut wrong, config.bytes.len() - 16, 7);
     let e = Simulator::from_bytes(&wrong).unwrap_err().to_string();
     assert!(e.contains("body"), "{e}");
 }
