@@ -5,8 +5,10 @@
 //! exchanges the force and the attachment's motion every `dt`, it follows
 //! the quarter car to within an error that shrinks with `dt`.
 
-use tdvass::model::{Body, X_S, X_T};
+use tdvass::exchange::ModelExchange;
+use tdvass::model::{Body, V_H, V_S, V_T, X_H, X_S, X_T};
 use tdvass::road::{RandomRoad, RoadClass, RoadShift, RoadSpec};
+use tdvass::solver::INTEGRALS_AT;
 use tdvass::solver::{Metrics, SimulationConfig, Simulator};
 
 const DURATION: f64 = 2.0;
@@ -113,11 +115,6 @@ fn the_attachment_moves_at_its_velocity_and_bad_input_is_refused_by_name() {
     let mut quarter = Simulator::new(quarter_car_config()).unwrap();
     let e = quarter.set_body_input(0.0, 0.0).unwrap_err().to_string();
     assert!(e.contains("body"), "{e}");
-    let me = tdvass::exchange::ModelExchange::new(SimulationConfig {
-        body: Body::Attached,
-        ..quarter_car_config()
-    });
-    assert!(me.unwrap_err().to_string().contains("body"));
 }
 
 #[test]
@@ -152,4 +149,94 @@ fn a_wheel_behind_another_runs_the_same_course_later() {
         assert_eq!(front.grid().step, rear.grid().step);
         assert!((a - b).amax() <= 1e-12 * scale, "{t}: {a} {b}");
     }
+}
+
+/// A corner's Model Exchange and the quarter car's at the same plant
+/// state `x` (the corner's body coordinates from its input, its own
+/// `x_s`, `v_s` states something else).
+fn exchange_pair(tau: f64, x: [f64; 6]) -> (ModelExchange, ModelExchange) {
+    let mut params = quarter_car_config().params;
+    params.tau = tau;
+    let config = SimulationConfig {
+        params,
+        ..quarter_car_config()
+    };
+    let mut quarter = ModelExchange::new(config.clone()).unwrap();
+    let mut corner = ModelExchange::new(SimulationConfig {
+        body: Body::Attached,
+        ..config
+    })
+    .unwrap();
+    let mut states = *quarter.states();
+    states[..6].copy_from_slice(&x);
+    quarter.set_states(&states).unwrap();
+    states[X_S] = -0.37;
+    states[V_S] = 2.9;
+    corner.set_states(&states).unwrap();
+    corner.set_body_input(x[X_S], x[V_S]).unwrap();
+    (quarter, corner)
+}
+
+#[test]
+fn the_corner_s_model_exchange_is_the_quarter_car_s_under_a_point_mass() {
+    let x = [0.012, -0.31, 0.004, 0.52, -0.002, 0.17];
+    for tau in [0.0, 0.011] {
+        let (mut quarter, mut corner) = exchange_pair(tau, x);
+        let (dq, dc) = (
+            quarter.derivatives().unwrap(),
+            corner.derivatives().unwrap(),
+        );
+        // The absorber's and the wheel's rates, and the integrands of SDD
+        // and TDD, are the quarter car's to the bit; the attachment moves
+        // at its velocity; the body's acceleration is the force over m_s.
+        for i in [X_S, X_H, V_H, X_T, V_T, INTEGRALS_AT + 1, INTEGRALS_AT + 2] {
+            assert_eq!(dc[i].to_bits(), dq[i].to_bits(), "tau {tau}, state {i}");
+        }
+        assert_eq!(dc[V_S], 0.0);
+        let m_s = quarter.config().params.m_s;
+        let acceleration = corner.body_force() / m_s;
+        assert!(
+            (acceleration - dq[V_S]).abs() <= 1e-14 * dq[V_S].abs(),
+            "{acceleration} {}",
+            dq[V_S]
+        );
+        // The partials: the body's columns move to the attachment input.
+        let (jq, jc) = (quarter.jacobian(), corner.jacobian());
+        for i in [X_H, V_H, X_T, V_T, INTEGRALS_AT + 1] {
+            assert_eq!(
+                jc.body_input[i],
+                [jq.states[i][X_S], jq.states[i][V_S]],
+                "row {i}"
+            );
+            assert_eq!([jc.states[i][X_S], jc.states[i][V_S]], [0.0, 0.0]);
+            assert_eq!(jc.states[i][X_T], jq.states[i][X_T]);
+        }
+        assert_eq!(jq.body_input[V_T], [0.0, 0.0]);
+    }
+}
+
+#[test]
+fn a_corner_s_model_exchange_state_keeps_its_attachment() {
+    let (_, mut corner) = exchange_pair(0.011, [0.01, 0.0, 0.0, 0.0, 0.0, 0.0]);
+    let bytes = corner.to_bytes();
+    let (_, mut copy) = exchange_pair(0.011, [0.0; 6]);
+    copy.restore(&bytes).unwrap();
+    assert_eq!(copy.body_force().to_bits(), corner.body_force().to_bits());
+    assert_eq!(copy.derivatives().unwrap(), corner.derivatives().unwrap());
+    // A quarter car's state does not restore into a corner, nor the
+    // other way.
+    let (mut quarter, _) = exchange_pair(0.011, [0.0; 6]);
+    let e = quarter.restore(&bytes).unwrap_err().to_string();
+    assert!(e.contains("body attachment"), "{e}");
+    let e = copy.restore(&quarter.to_bytes()).unwrap_err().to_string();
+    assert!(e.contains("body attachment"), "{e}");
+    for (z, v, name) in [
+        (f64::NAN, 0.0, "body_displacement"),
+        (0.0, 1e9, "body_velocity"),
+    ] {
+        let e = corner.set_body_input(z, v).unwrap_err().to_string();
+        assert!(e.contains(name), "{e}");
+    }
+    let e = quarter.set_body_input(0.0, 0.0).unwrap_err().to_string();
+    assert!(e.contains("body"), "{e}");
 }

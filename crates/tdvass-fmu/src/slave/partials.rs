@@ -170,6 +170,7 @@ impl Slave {
             ExchangeUnknown::Derivative(i) => Gradient {
                 states: jacobian.states[i],
                 road_input: jacobian.road_input[i],
+                body_input: jacobian.body_input[i],
             },
             ExchangeUnknown::Output(id) => id.exchange_gradient(&outputs),
         });

@@ -14,7 +14,7 @@ use crate::model::dynamics::{
     CONTINUOUS_STATES, FILTER_STATES_AT, INTEGRALS_AT, Mode, SWITCHES, Switch, Switching,
     folded_delay, folded_feedback, mode_matrix,
 };
-use crate::model::{Plant, State, V_T, X_T};
+use crate::model::{Plant, State, V_S, V_T, X_S, X_T};
 use crate::road::Road;
 use crate::solver::SimulationConfig;
 use nalgebra::{Matrix6, SVector};
@@ -110,6 +110,10 @@ pub struct ModelExchange {
     pub(super) road: Road,
     /// The switching elements and their switch functions' constants.
     pub(super) switching: Switching,
+    /// A corner's body attachment `[x_s (m), v_s (m/s)]`, the input its
+    /// rates and outputs take the body's coordinates from
+    /// ([`crate::model::Body::Attached`]); `None` with the sprung mass.
+    pub(super) body_input: Option<[f64; 2]>,
     /// W (N).
     pub(super) static_load: f64,
     pub(super) time: f64,
@@ -131,9 +135,15 @@ pub struct ModelExchange {
 }
 
 impl ModelExchange {
-    /// The plant's state X (the first six continuous states).
+    /// The plant's state X: the first six continuous states, a corner's
+    /// body coordinates from its input.
     pub(super) fn plant_state(&self) -> State {
-        State::from_column_slice(&self.states[..6])
+        let mut x = State::from_column_slice(&self.states[..6]);
+        if let Some([displacement, velocity]) = self.body_input {
+            x[X_S] = displacement;
+            x[V_S] = velocity;
+        }
+        x
     }
 
     /// The W_k filter's state w.

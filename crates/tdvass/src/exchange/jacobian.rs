@@ -33,6 +33,9 @@ pub struct Jacobian {
     pub states: [[f64; CONTINUOUS_STATES]; CONTINUOUS_STATES],
     /// `∂ẋ_i/∂x_g` (0 unless the road is the input `x_g`).
     pub road_input: [f64; CONTINUOUS_STATES],
+    /// `∂ẋ_i/∂[x_s, v_s]` of a corner's body attachment (its input; 0 with
+    /// the sprung mass, whose `x_s`, `v_s` are states).
+    pub body_input: [[f64; 2]; CONTINUOUS_STATES],
 }
 
 /// The partials of one output with respect to the continuous states and
@@ -43,12 +46,15 @@ pub struct Gradient {
     pub states: [f64; CONTINUOUS_STATES],
     /// `∂y/∂x_g`.
     pub road_input: f64,
+    /// `∂y/∂[x_s, v_s]` of a corner's body attachment (its input).
+    pub body_input: [f64; 2],
 }
 
 impl Gradient {
     const ZERO: Gradient = Gradient {
         states: [0.0; CONTINUOUS_STATES],
         road_input: 0.0,
+        body_input: [0.0; 2],
     };
 
     /// The gradient of the continuous state `j` itself.
@@ -61,6 +67,17 @@ impl Gradient {
     fn scaled(mut self, factor: f64) -> Gradient {
         self.states.iter_mut().for_each(|v| *v *= factor);
         self.road_input *= factor;
+        self.body_input.iter_mut().for_each(|v| *v *= factor);
+        self
+    }
+
+    /// The partials with respect to a corner's body coordinates moved
+    /// from the states `x_s`, `v_s` to the attachment input they are read
+    /// from.
+    fn attached(mut self) -> Gradient {
+        self.body_input = [self.states[X_S], self.states[V_S]];
+        self.states[X_S] = 0.0;
+        self.states[V_S] = 0.0;
         self
     }
 
@@ -69,6 +86,9 @@ impl Gradient {
             *v += o;
         }
         self.road_input += other.road_input;
+        for (v, o) in self.body_input.iter_mut().zip(other.body_input) {
+            *v += o;
+        }
         self
     }
 }
@@ -138,7 +158,12 @@ impl ModelExchange {
         for k in 0..crate::comfort::WK_STATES {
             weighted.states[FILTER_STATES_AT + k] = self.wk.output_vector[k];
         }
-        [acceleration, deflection, tire, weighted]
+        let gradients = [acceleration, deflection, tire, weighted];
+        if self.body_input.is_some() {
+            gradients.map(Gradient::attached)
+        } else {
+            gradients
+        }
     }
 
     /// The exact partials of the derivatives at the current time and
@@ -187,11 +212,25 @@ impl ModelExchange {
             weighted.scaled(2.0 * aw),
             weighted.scaled(4.0 * aw * aw * aw),
         ];
+        let mut body_input = [[0.0; 2]; CONTINUOUS_STATES];
+        if self.body_input.is_some() {
+            // A corner's rates read the body's coordinates from its input.
+            for (row, partials) in states.iter_mut().zip(body_input.iter_mut()) {
+                *partials = [row[X_S], row[V_S]];
+                row[X_S] = 0.0;
+                row[V_S] = 0.0;
+            }
+        }
         for (k, g) in integrands.iter().enumerate() {
             states[INTEGRALS_AT + k] = g.states;
             road_input[INTEGRALS_AT + k] = g.road_input;
+            body_input[INTEGRALS_AT + k] = g.body_input;
         }
-        Jacobian { states, road_input }
+        Jacobian {
+            states,
+            road_input,
+            body_input,
+        }
     }
 
     /// The exact partials of the outputs at the current time and states

@@ -15,8 +15,12 @@
 //! ```
 //!
 //! (CS: `x_h`, `v_h` follow the wheel's derivatives, so they mirror it as
-//! the co-simulation reports them.) The outputs are computed from these
-//! states: RMS values `sqrt(∫y²/(t − t_0))`, J of Eq. (6), `RMS(a_w)`,
+//! the co-simulation reports them.) A corner of a vehicle
+//! ([`crate::model::Body::Attached`]) takes the body's coordinates `x_s`,
+//! `v_s` from its input ([`ModelExchange::set_body_input`]) wherever the
+//! rates, the partials and the outputs read them; its states `x_s`, `v_s`
+//! integrate the velocity given and nothing reads them. The outputs are
+//! computed from these states: RMS values `sqrt(∫y²/(t − t_0))`, J of Eq. (6), `RMS(a_w)`,
 //! `VDV = (∫a_w⁴)^{1/4}`, the dynamic tire load ratio `k_t RMS(TDD)/W`.
 //!
 //! **The delayed input** `x_t(t − tau)` comes from a [`DelayHistory`] of
@@ -82,13 +86,13 @@ pub use persist::EXCHANGE_FORMAT_VERSION;
 
 use crate::comfort::wk_state_space;
 use crate::error::{Error, Result};
-use crate::limits::DIVERGENCE_BOUNDS;
+use crate::limits::{Bound, DIVERGENCE_BOUNDS};
 use crate::metrics::time_averages;
 use crate::model::dynamics::{
     CONTINUOUS_STATES, FILTER_STATES_AT, INTEGRAL_NAMES, INTEGRALS_AT, Instant, Mode, SWITCHES,
     Switch, Switching, continuous_rates, flight_input, plant_rates, tire_load,
 };
-use crate::model::{Performance, Plant, STATE_NAMES, State, V_T, X_S, X_T};
+use crate::model::{Performance, Plant, STATE_NAMES, State, V_S, V_T, X_S, X_T};
 use crate::road::Road;
 use crate::solver::{
     ComfortValues, ContactLoss, MIN_RESOLVED_DELAY, Metrics, Outputs, RoadHolding,
@@ -125,13 +129,6 @@ impl ModelExchange {
     /// ([`Simulator::check_config`]).
     pub fn new(config: SimulationConfig) -> Result<ModelExchange> {
         let plant = Simulator::check_config(&config)?;
-        if config.body.is_attached() {
-            return Err(Error::InvalidSetting {
-                name: "body",
-                value: config.body.code() as i64,
-                reason: "Model Exchange takes the sprung mass (body = 0) only",
-            });
-        }
         let max_time = Self::time_bound(&config);
         if config.start_time.abs() > max_time {
             return Err(Error::InvalidTime {
@@ -171,6 +168,7 @@ impl ModelExchange {
             wk: wk_state_space(),
             road,
             switching,
+            body_input: config.body.is_attached().then_some([x[X_S], x[V_S]]),
             static_load,
             time: t0,
             states,
@@ -272,6 +270,44 @@ impl ModelExchange {
     /// Sets the weights of J from now on.
     pub fn set_weights(&mut self, weights: crate::metrics::Weights) {
         self.config.weights = weights;
+    }
+
+    /// Sets a corner's body attachment (only with
+    /// [`crate::model::Body::Attached`]): `x_s = displacement` (m),
+    /// `v_s = velocity` (m/s), which the rates and outputs take as the
+    /// body's coordinates from now on (the continuous states `x_s`, `v_s`
+    /// integrate the velocity given, and nothing reads them). Refused by
+    /// name when not finite or beyond the divergence bounds, or for the
+    /// sprung mass; a refused value changes nothing.
+    pub fn set_body_input(&mut self, displacement: f64, velocity: f64) -> Result<()> {
+        if self.body_input.is_none() {
+            return Err(Error::InvalidSetting {
+                name: "body",
+                value: self.config.body.code() as i64,
+                reason: "the body's attachment point is an input only of a corner (a body outside the model, body = 1)",
+            });
+        }
+        for (name, value, bound) in [
+            ("body_displacement", displacement, Bound::Displacement),
+            ("body_velocity", velocity, Bound::Velocity),
+        ] {
+            if !value.is_finite() {
+                return Err(Error::InvalidParameter {
+                    name,
+                    value,
+                    reason: "the body's attachment point must be finite",
+                });
+            }
+            crate::limits::check_value(bound, name, value)?;
+        }
+        self.body_input = Some([displacement, velocity]);
+        Ok(())
+    }
+
+    /// The suspension's force on the body (N) now
+    /// ([`crate::model::Plant::body_force`]): a corner's output.
+    pub fn body_force(&self) -> f64 {
+        self.plant.body_force(&self.plant_state())
     }
 
     /// Sets the external road input `x_g` (m; road = input only).
@@ -408,7 +444,7 @@ impl ModelExchange {
     /// Accepts the current point: a completed integrator step when
     /// `completed`, else an event.
     fn accept(&mut self, completed: bool) {
-        let x = &self.states;
+        let x = self.plant_state();
         let now = (self.time, x[X_T], x[V_T]);
         let sdd = (x[X_S] - x[X_T]).abs();
         self.discrete.max_suspension_deflection = self.discrete.max_suspension_deflection.max(sdd);

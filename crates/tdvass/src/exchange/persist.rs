@@ -6,6 +6,8 @@
 //! in it. Version 2 adds the floor, the latest time set and the master's
 //! completion habits; a state of version 1 still loads (its floor is the
 //! latest of its accepted time and what its history and road still hold).
+//! Version 3 adds a corner's body attachment (a tag, then its displacement
+//! and velocity) at the end.
 
 use super::history::{DelayHistory, HistoryPoint};
 use super::instance::{Delay, ModelExchange};
@@ -19,7 +21,11 @@ use crate::solver::CONTINUOUS_STATES;
 const MAX_ROAD_NODES: u64 = crate::limits::MAX_WORK_PER_CALL as u64;
 
 /// Version of the byte form; a saved state of a later version is refused.
-pub const EXCHANGE_FORMAT_VERSION: u32 = 2;
+/// Version 3 added a corner's body attachment (its input) at the end.
+pub const EXCHANGE_FORMAT_VERSION: u32 = 3;
+
+/// The first version with a corner's body attachment.
+const BODY_VERSION: u32 = 3;
 
 /// The first version with the floor and the completion habits.
 const FLOOR_VERSION: u32 = 2;
@@ -84,6 +90,14 @@ impl ModelExchange {
             Some(road) => {
                 w.u8(1);
                 road.write_nodes(&mut w);
+            }
+            None => w.u8(0),
+        }
+        match self.body_input {
+            Some([displacement, velocity]) => {
+                w.u8(1);
+                w.f64(displacement);
+                w.f64(velocity);
             }
             None => w.u8(0),
         }
@@ -196,6 +210,20 @@ impl ModelExchange {
                 "{kept} road nodes: a model keeps at most {MAX_ROAD_NODES}"
             )));
         }
+        let body_input = match (version >= BODY_VERSION).then(|| r.u8()).transpose()? {
+            Some(0) | None => None,
+            Some(_) => Some([r.f64()?, r.f64()?]),
+        };
+        if body_input.is_some() != self.body_input.is_some()
+            && (version >= BODY_VERSION || self.body_input.is_none())
+        {
+            return Err(invalid(
+                "a body attachment for a model without one, or none for a corner".into(),
+            ));
+        }
+        if body_input.is_some_and(|b| b.iter().any(|v| !v.is_finite())) {
+            return Err(invalid("the body attachment is not finite".into()));
+        }
         if !r.is_empty() {
             return Err(invalid(
                 "trailing bytes after the Model Exchange state".into(),
@@ -241,6 +269,11 @@ impl ModelExchange {
         self.latest = latest;
         self.completes = completes;
         self.states.copy_from_slice(&states);
+        if self.body_input.is_some() {
+            // A state before version 3 (never a corner's) keeps the body's
+            // coordinates in its states.
+            self.body_input = body_input.or(Some([states[0], states[1]]));
+        }
         self.discrete = discrete;
         self.delay = delay;
         self.road = restored_road;

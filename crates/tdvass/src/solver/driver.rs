@@ -382,7 +382,7 @@ impl Simulator {
     }
 
     /// Sets the body's attachment point from the current time on (only
-    /// with [`Body::Attached`], a corner): `x_s = displacement` (m) and
+    /// with [`crate::model::Body::Attached`], a corner): `x_s = displacement` (m) and
     /// `v_s = velocity` (m/s), moving at that velocity until the next
     /// change (the plant's body row, [`Plant::with_body`]). The current
     /// point is committed first (the RMS run closes there, as at a change
