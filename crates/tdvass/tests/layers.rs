@@ -26,7 +26,7 @@ const CRATE_LAYERS: layering::Layers = &[
     ("data", &["bytes", "model", "comfort", "road"]),
     ("checks", &["metrics", "limits"]),
     ("solver", &["solver"]),
-    ("exchange", &["exchange"]),
+    ("engines", &["exchange", "chassis"]),
     ("analysis", &["analysis"]),
     ("root", &["lib"]),
 ];

@@ -1,0 +1,468 @@
+//! The chassis of a vehicle on four corners: a rigid body in heave, pitch
+//! and roll (small angles, displacements from the static equilibrium,
+//! positive up), driven by the four corners' forces on it and giving the
+//! motion of their attachment points, with the ride-comfort measures at a
+//! seat point.
+//!
+//! **Geometry.** The corners sit at `x` ahead of the centre of gravity
+//! (`a` for the front axle, `−b` for the rear) and `y` to its left (half
+//! the track, `+` left, `−` right). A point `(x, y)` of the body is at
+//! `z + x θ + y φ` (heave z, pitch θ positive nose up, roll φ positive
+//! left side up).
+//!
+//! **Dynamics.** With the corners' forces `f_i` (N, positive up):
+//!
+//! ```text
+//! m z'' = Σ f_i,   I_θ θ'' = Σ x_i f_i,   I_φ φ'' = Σ y_i f_i
+//! ```
+//!
+//! The forces are linear in time between their changes
+//! ([`Chassis::set_forces`]: a value and a rate; a rate of 0 holds it), so
+//! the accelerations are too and the step is exact: for the generalized
+//! accelerations `α_0 + α_1 s`, `q(t + δ) = q + q' δ + α_0 δ²/2 + α_1 δ³/6`.
+//! With `I_θ = m a b` (the default) a force at one axle moves the other
+//! axle's points not at all: front and rear decouple, and each corner of a
+//! car whose two tracks see the same road carries `m b / (a + b) / 2` (the
+//! front) as a quarter car's body would. A rigid body cannot decouple left
+//! from right (four corners, three degrees of freedom).
+//!
+//! **Comfort** at the seat point `(seat_x, seat_y)`: its vertical
+//! acceleration `a_s = z'' + seat_x θ'' + seat_y φ''`, weighted by ISO
+//! 2631-1 W_k (`crate::comfort`, 8 states) exactly over each step (the
+//! exponential of the filter with the linear input), the running RMS of
+//! a_w and the vibration dose value `(∫ a_w⁴)^{1/4}`; and the running RMS
+//! of the heave, pitch and roll accelerations (exact: their squares are
+//! quadratics in time). The integrals of `a_w²` and `a_w⁴` are taken by
+//! 5-point Gauss–Legendre quadrature on the exact filter states inside
+//! each step (exact for polynomials of degree 9: at a step of 1 ms, some
+//! 1e-20 of the integral per step for a signal below 100 Hz).
+//!
+//! Layer: engines (docs/architecture.md), beside Model Exchange; it
+//! imports the crate's `comfort`, `error`, `metrics` and the solver's
+//! `expm`.
+
+use crate::comfort::{WK_STATES, WkStateSpace, wk_state_space};
+use crate::error::{Error, Result};
+use crate::metrics::weighted_averages;
+use crate::solver::expm::precise_exp;
+use nalgebra::{SMatrix, SVector};
+
+/// A corner of the vehicle.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Corner {
+    FrontLeft,
+    FrontRight,
+    RearLeft,
+    RearRight,
+}
+
+impl Corner {
+    /// The four, in the order of the force inputs: `fl`, `fr`, `rl`, `rr`.
+    pub const ALL: [Corner; 4] = [
+        Corner::FrontLeft,
+        Corner::FrontRight,
+        Corner::RearLeft,
+        Corner::RearRight,
+    ];
+
+    /// The name of its force input (`force_fl` …).
+    pub fn force_name(self) -> &'static str {
+        match self {
+            Corner::FrontLeft => "force_fl",
+            Corner::FrontRight => "force_fr",
+            Corner::RearLeft => "force_rl",
+            Corner::RearRight => "force_rr",
+        }
+    }
+
+    /// The short name (`fl`, `fr`, `rl`, `rr`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Corner::FrontLeft => "fl",
+            Corner::FrontRight => "fr",
+            Corner::RearLeft => "rl",
+            Corner::RearRight => "rr",
+        }
+    }
+}
+
+/// The chassis's parameters (the defaults are the paper's car: four times
+/// its 345 kg body, the centre of gravity midway between the axles, and
+/// the pitch inertia `m a b` that decouples front and rear).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ChassisParams {
+    /// m (kg).
+    pub mass: f64,
+    /// a (m): centre of gravity to the front axle.
+    pub a: f64,
+    /// b (m): centre of gravity to the rear axle.
+    pub b: f64,
+    /// Front track (m).
+    pub track_front: f64,
+    /// Rear track (m).
+    pub track_rear: f64,
+    /// I_θ (kg·m²).
+    pub pitch_inertia: f64,
+    /// I_φ (kg·m²): a mid-size sedan's, scaled to the mass.
+    pub roll_inertia: f64,
+    /// The seat point ahead of the centre of gravity (m).
+    pub seat_x: f64,
+    /// The seat point left of the centre of gravity (m).
+    pub seat_y: f64,
+}
+
+impl Default for ChassisParams {
+    fn default() -> Self {
+        let (mass, a, b) = (4.0 * 345.0, 1.3, 1.3);
+        ChassisParams {
+            mass,
+            a,
+            b,
+            track_front: 1.5,
+            track_rear: 1.5,
+            pitch_inertia: mass * a * b,
+            roll_inertia: 400.0,
+            seat_x: 0.3,
+            seat_y: 0.35,
+        }
+    }
+}
+
+impl ChassisParams {
+    /// Checks every parameter; the error names it.
+    pub fn validate(&self) -> Result<()> {
+        for (name, value) in [
+            ("mass", self.mass),
+            ("pitch_inertia", self.pitch_inertia),
+            ("roll_inertia", self.roll_inertia),
+            ("track_front", self.track_front),
+            ("track_rear", self.track_rear),
+        ] {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(Error::InvalidParameter {
+                    name,
+                    value,
+                    reason: "must be finite and positive",
+                });
+            }
+        }
+        for (name, value) in [("a", self.a), ("b", self.b)] {
+            if !(value.is_finite() && value >= 0.0) {
+                return Err(Error::InvalidParameter {
+                    name,
+                    value,
+                    reason: "must be finite and not negative",
+                });
+            }
+        }
+        if self.a + self.b <= 0.0 {
+            return Err(Error::InvalidParameter {
+                name: "b",
+                value: self.b,
+                reason: "the wheelbase a + b must be positive",
+            });
+        }
+        for (name, value) in [("seat_x", self.seat_x), ("seat_y", self.seat_y)] {
+            if !value.is_finite() {
+                return Err(Error::InvalidParameter {
+                    name,
+                    value,
+                    reason: "must be finite",
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// The attachment point of `corner`: `(x, y)` (m) from the centre of
+    /// gravity, ahead and to the left.
+    pub fn position(&self, corner: Corner) -> (f64, f64) {
+        match corner {
+            Corner::FrontLeft => (self.a, 0.5 * self.track_front),
+            Corner::FrontRight => (self.a, -0.5 * self.track_front),
+            Corner::RearLeft => (-self.b, 0.5 * self.track_rear),
+            Corner::RearRight => (-self.b, -0.5 * self.track_rear),
+        }
+    }
+
+    /// How a point `(x, y)` moves with `[z, θ, φ]`: `[1, x, y]`.
+    fn point(x: f64, y: f64) -> [f64; 3] {
+        [1.0, x, y]
+    }
+
+    /// The generalized accelerations `[z'', θ'', φ'']` of the corners'
+    /// forces `f`.
+    fn accelerations(&self, f: &[f64; 4]) -> [f64; 3] {
+        let mut generalized = [0.0; 3];
+        for (corner, force) in Corner::ALL.iter().zip(f) {
+            let (x, y) = self.position(*corner);
+            for (g, p) in generalized.iter_mut().zip(Self::point(x, y)) {
+                *g += p * force;
+            }
+        }
+        [
+            generalized[0] / self.mass,
+            generalized[1] / self.pitch_inertia,
+            generalized[2] / self.roll_inertia,
+        ]
+    }
+}
+
+/// Where the integrals of the chassis's time averages are kept.
+const HEAVE: usize = 0;
+const PITCH: usize = 1;
+const ROLL: usize = 2;
+const WEIGHTED_SQUARE: usize = 3;
+const WEIGHTED_FOURTH: usize = 4;
+
+/// The 5-point Gauss–Legendre nodes on `[0, 1]` and their weights.
+const GAUSS: [(f64, f64); 5] = [
+    (0.046_910_077_030_668_004, 0.118_463_442_528_094_54),
+    (0.230_765_344_947_158_45, 0.239_314_335_249_683_23),
+    (0.5, 0.284_444_444_444_444_45),
+    (0.769_234_655_052_841_6, 0.239_314_335_249_683_23),
+    (0.953_089_922_969_332, 0.118_463_442_528_094_54),
+];
+
+/// The W_k filter with a linear input: `[w; u; u']`.
+type FilterInput = SMatrix<f64, { WK_STATES + 2 }, { WK_STATES + 2 }>;
+
+/// The filter's exact maps over a step of one length: at the Gauss nodes
+/// and at its end.
+#[derive(Debug, Clone)]
+struct FilterStep {
+    length: f64,
+    nodes: [FilterInput; 5],
+    end: FilterInput,
+}
+
+/// The chassis's outputs at a time.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ChassisOutputs {
+    /// Time (s).
+    pub time: f64,
+    /// `[z (m), θ (rad), φ (rad)]`.
+    pub position: [f64; 3],
+    /// Their rates (m/s, rad/s).
+    pub rate: [f64; 3],
+    /// Their accelerations (m/s², rad/s²).
+    pub acceleration: [f64; 3],
+    /// The seat point's vertical acceleration (m/s²).
+    pub seat_acceleration: f64,
+    /// The running RMS of `[z'', θ'', φ'']` from the start.
+    pub rms_acceleration: [f64; 3],
+    /// The W_k-weighted seat acceleration a_w now (m/s²).
+    pub weighted_seat_acceleration: f64,
+    /// The running RMS of a_w (m/s²).
+    pub rms_weighted_seat_acceleration: f64,
+    /// The seat's vibration dose value `(∫ a_w⁴)^{1/4}` (m/s^1.75).
+    pub seat_vibration_dose_value: f64,
+}
+
+/// A chassis in motion (module documentation).
+#[derive(Debug, Clone)]
+pub struct Chassis {
+    params: ChassisParams,
+    wk: WkStateSpace,
+    start_time: f64,
+    time: f64,
+    /// `[z, θ, φ]` and their rates.
+    position: [f64; 3],
+    rate: [f64; 3],
+    /// The corners' forces now (N) and their rates (N/s).
+    forces: [f64; 4],
+    force_rates: [f64; 4],
+    /// The W_k filter's state at the seat.
+    filter: SVector<f64, WK_STATES>,
+    /// `∫ z''², ∫ θ''², ∫ φ''², ∫ a_w², ∫ a_w⁴` from the start.
+    integrals: [f64; 5],
+    /// The filter's maps over the last step length taken.
+    step: Option<Box<FilterStep>>,
+}
+
+impl Chassis {
+    /// A chassis at rest at its static equilibrium at `start_time`, the
+    /// forces 0.
+    pub fn new(params: ChassisParams, start_time: f64) -> Result<Chassis> {
+        params.validate()?;
+        if !start_time.is_finite() {
+            return Err(Error::InvalidTime {
+                name: "start_time",
+                value: start_time,
+                reason: "must be finite",
+            });
+        }
+        Ok(Chassis {
+            params,
+            wk: wk_state_space(),
+            start_time,
+            time: start_time,
+            position: [0.0; 3],
+            rate: [0.0; 3],
+            forces: [0.0; 4],
+            force_rates: [0.0; 4],
+            filter: SVector::zeros(),
+            integrals: [0.0; 5],
+            step: None,
+        })
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &ChassisParams {
+        &self.params
+    }
+
+    /// The time (s).
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// Sets the corners' forces on the body from now on (N, positive up,
+    /// in the order of [`Corner::ALL`]): `forces + rates (t − now)`. A
+    /// value or rate that is not finite is refused by name and changes
+    /// nothing.
+    pub fn set_forces(&mut self, forces: [f64; 4], rates: [f64; 4]) -> Result<()> {
+        for (corner, (&force, &rate)) in Corner::ALL.iter().zip(forces.iter().zip(&rates)) {
+            for (value, reason) in [
+                (force, "a corner's force must be finite"),
+                (rate, "the rate of a corner's force must be finite"),
+            ] {
+                if !value.is_finite() {
+                    return Err(Error::InvalidParameter {
+                        name: corner.force_name(),
+                        value,
+                        reason,
+                    });
+                }
+            }
+        }
+        self.forces = forces;
+        self.force_rates = rates;
+        Ok(())
+    }
+
+    /// Advances exactly to `t` (s, not before the current time) under the
+    /// forces set.
+    pub fn advance_to(&mut self, t: f64) -> Result<()> {
+        if !(t.is_finite() && t >= self.time) {
+            return Err(Error::InvalidTime {
+                name: "t_end",
+                value: t,
+                reason: "must be finite and not before the current time",
+            });
+        }
+        let delta = t - self.time;
+        if delta == 0.0 {
+            return Ok(());
+        }
+        let p = &self.params;
+        let alpha0 = p.accelerations(&self.forces);
+        let alpha1 = p.accelerations(&self.force_rates);
+        let (d2, d3) = (delta * delta / 2.0, delta * delta * delta / 6.0);
+        for k in 0..3 {
+            self.position[k] += self.rate[k] * delta + alpha0[k] * d2 + alpha1[k] * d3;
+            self.rate[k] += alpha0[k] * delta + alpha1[k] * d2;
+            // ∫ (α0 + α1 s)² ds over [0, δ].
+            self.integrals[HEAVE + k] += alpha0[k] * alpha0[k] * delta
+                + alpha0[k] * alpha1[k] * delta * delta
+                + alpha1[k] * alpha1[k] * delta * delta * delta / 3.0;
+        }
+        let seat = [1.0, p.seat_x, p.seat_y];
+        let dot = |v: &[f64; 3]| v[0] * seat[0] + v[1] * seat[1] + v[2] * seat[2];
+        let (u0, u1) = (dot(&alpha0), dot(&alpha1));
+        self.filter_step(delta, u0, u1);
+        for (force, rate) in self.forces.iter_mut().zip(&self.force_rates) {
+            *force += rate * delta;
+        }
+        self.time = t;
+        Ok(())
+    }
+
+    /// The W_k filter over `delta` with the input `u0 + u1 s`, and the
+    /// integrals of a_w² and a_w⁴ over it.
+    fn filter_step(&mut self, delta: f64, u0: f64, u1: f64) {
+        if self.step.as_ref().is_none_or(|s| s.length != delta) {
+            self.step = Some(Box::new(self.filter_maps(delta)));
+        }
+        let Some(step) = self.step.as_deref() else {
+            return;
+        };
+        let mut z = SVector::<f64, { WK_STATES + 2 }>::zeros();
+        z.fixed_rows_mut::<WK_STATES>(0).copy_from(&self.filter);
+        z[WK_STATES] = u0;
+        z[WK_STATES + 1] = u1;
+        let (mut square, mut fourth) = (0.0, 0.0);
+        for (map, (_, weight)) in step.nodes.iter().zip(GAUSS) {
+            let y = map * z;
+            let w = y.fixed_rows::<WK_STATES>(0).into_owned();
+            let a_w = self.wk.weighted_acceleration(&w, y[WK_STATES]);
+            square += weight * a_w * a_w;
+            fourth += weight * a_w * a_w * a_w * a_w;
+        }
+        self.integrals[WEIGHTED_SQUARE] += square * delta;
+        self.integrals[WEIGHTED_FOURTH] += fourth * delta;
+        let end = step.end * z;
+        self.filter = end.fixed_rows::<WK_STATES>(0).into_owned();
+    }
+
+    /// The filter's exact maps over a step of `delta`.
+    fn filter_maps(&self, delta: f64) -> FilterStep {
+        let mut m = FilterInput::zeros();
+        m.fixed_view_mut::<WK_STATES, WK_STATES>(0, 0)
+            .copy_from(&self.wk.state_matrix);
+        m.fixed_view_mut::<WK_STATES, 1>(0, WK_STATES)
+            .copy_from(&self.wk.input_vector);
+        m[(WK_STATES, WK_STATES + 1)] = 1.0;
+        FilterStep {
+            length: delta,
+            nodes: GAUSS.map(|(node, _)| precise_exp(&(m * (node * delta)))),
+            end: precise_exp(&(m * delta)),
+        }
+    }
+
+    /// The attachment point of `corner`: displacement (m) and velocity
+    /// (m/s), from the states alone.
+    pub fn attachment(&self, corner: Corner) -> (f64, f64) {
+        let (x, y) = self.params.position(corner);
+        let p = ChassisParams::point(x, y);
+        let along = |v: &[f64; 3]| p[0] * v[0] + p[1] * v[1] + p[2] * v[2];
+        (along(&self.position), along(&self.rate))
+    }
+
+    /// The outputs now.
+    pub fn outputs(&self) -> ChassisOutputs {
+        let p = &self.params;
+        let acceleration = p.accelerations(&self.forces);
+        let seat_acceleration =
+            acceleration[0] + p.seat_x * acceleration[1] + p.seat_y * acceleration[2];
+        let duration = self.time - self.start_time;
+        let rms = |integral: f64| {
+            if duration > 0.0 {
+                (integral.max(0.0) / duration).sqrt()
+            } else {
+                0.0
+            }
+        };
+        let (rms_weighted, dose) = weighted_averages(
+            self.integrals[WEIGHTED_SQUARE],
+            self.integrals[WEIGHTED_FOURTH],
+            duration,
+        );
+        ChassisOutputs {
+            time: self.time,
+            position: self.position,
+            rate: self.rate,
+            acceleration,
+            seat_acceleration,
+            rms_acceleration: [HEAVE, PITCH, ROLL].map(|k| rms(self.integrals[k])),
+            weighted_seat_acceleration: self
+                .wk
+                .weighted_acceleration(&self.filter, seat_acceleration),
+            rms_weighted_seat_acceleration: rms_weighted,
+            seat_vibration_dose_value: dose,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;

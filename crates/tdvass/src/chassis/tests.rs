@@ -1,0 +1,184 @@
+use super::*;
+
+#[test]
+fn with_the_default_pitch_inertia_front_and_rear_decouple() {
+    let p = ChassisParams::default();
+    // A force at the front axle, the same on both sides (no roll).
+    let accelerations = p.accelerations(&[100.0, 100.0, 0.0, 0.0]);
+    let at = |corner| {
+        let (x, y) = p.position(corner);
+        accelerations[0] + x * accelerations[1] + y * accelerations[2]
+    };
+    assert!(at(Corner::RearLeft).abs() < 1e-15 && at(Corner::RearRight).abs() < 1e-15);
+    // Each front corner carries a quarter of the mass: 345 kg.
+    assert!((at(Corner::FrontLeft) - 100.0 / 345.0).abs() < 1e-15);
+    // A force on one side rolls the body.
+    let one_side = p.accelerations(&[100.0, 0.0, 0.0, 0.0]);
+    assert!(one_side[2] > 0.0);
+}
+
+#[test]
+fn the_step_is_exact_for_forces_linear_in_time_however_it_is_split() {
+    let p = ChassisParams::default();
+    let (forces, rates) = ([120.0, -40.0, 75.0, 10.0], [300.0, 0.0, -50.0, 20.0]);
+    let mut whole = Chassis::new(p, 0.0).unwrap();
+    whole.set_forces(forces, rates).unwrap();
+    whole.advance_to(0.4).unwrap();
+    let mut split = Chassis::new(p, 0.0).unwrap();
+    split.set_forces(forces, rates).unwrap();
+    for i in 1..=37 {
+        split.advance_to(0.4 * i as f64 / 37.0).unwrap();
+    }
+    let alpha0 = p.accelerations(&forces);
+    let alpha1 = p.accelerations(&rates);
+    let t = 0.4;
+    for k in 0..3 {
+        let exact = alpha0[k] * t * t / 2.0 + alpha1[k] * t * t * t / 6.0;
+        let (a, b) = (whole.outputs().position[k], split.outputs().position[k]);
+        assert!(
+            (a - exact).abs() <= 1e-15 * exact.abs().max(1e-12),
+            "{k}: {a} {exact}"
+        );
+        assert!(
+            (b - exact).abs() <= 1e-13 * exact.abs().max(1e-12),
+            "{k}: {b} {exact}"
+        );
+        // ∫ (α0 + α1 s)² over [0, t], as an RMS.
+        let integral = alpha0[k] * alpha0[k] * t
+            + alpha0[k] * alpha1[k] * t * t
+            + alpha1[k] * alpha1[k] * t * t * t / 3.0;
+        let rms = (integral / t).sqrt();
+        let got = split.outputs().rms_acceleration[k];
+        assert!((got - rms).abs() <= 1e-13 * rms, "{k}: {got} {rms}");
+    }
+    // The forces went on along their rates.
+    assert!((whole.forces[0] - (120.0 + 300.0 * 0.4)).abs() < 1e-12);
+    let (z, v) = whole.attachment(Corner::RearRight);
+    let (x, y) = p.position(Corner::RearRight);
+    let o = whole.outputs();
+    assert!((z - (o.position[0] + x * o.position[1] + y * o.position[2])).abs() < 1e-15);
+    assert!((v - (o.rate[0] + x * o.rate[1] + y * o.rate[2])).abs() < 1e-15);
+}
+
+#[test]
+fn the_seat_filter_and_its_integrals_agree_with_a_fine_integration() {
+    // A seat acceleration that is a sum of held steps: the W_k filter
+    // stepped exactly, against RK4 at a hundredth of the step.
+    let p = ChassisParams::default();
+    let mut chassis = Chassis::new(p, 0.0).unwrap();
+    let wk = wk_state_space();
+    let mut w = SVector::<f64, WK_STATES>::zeros();
+    let (mut square, mut fourth) = (0.0, 0.0);
+    let h = 1e-3;
+    let sub = 100;
+    for step in 0..2000 {
+        let phase = step as f64 * h;
+        let f = 400.0 * (7.0 * phase).sin() + 150.0 * (31.0 * phase).cos();
+        chassis
+            .set_forces([f, 0.5 * f, -0.3 * f, 0.2 * f], [0.0; 4])
+            .unwrap();
+        chassis.advance_to((step + 1) as f64 * h).unwrap();
+        let seat = {
+            let a = p.accelerations(&[f, 0.5 * f, -0.3 * f, 0.2 * f]);
+            a[0] + p.seat_x * a[1] + p.seat_y * a[2]
+        };
+        let dt = h / sub as f64;
+        let rate = |w: &SVector<f64, WK_STATES>| wk.derivative(w, seat);
+        for _ in 0..sub {
+            let aw0 = wk.weighted_acceleration(&w, seat);
+            let k1 = rate(&w);
+            let k2 = rate(&(w + k1 * (dt / 2.0)));
+            let k3 = rate(&(w + k2 * (dt / 2.0)));
+            let k4 = rate(&(w + k3 * dt));
+            w += (k1 + k2 * 2.0 + k3 * 2.0 + k4) * (dt / 6.0);
+            let aw1 = wk.weighted_acceleration(&w, seat);
+            // Trapezoid on the fine grid.
+            square += 0.5 * dt * (aw0 * aw0 + aw1 * aw1);
+            fourth += 0.5 * dt * (aw0.powi(4) + aw1.powi(4));
+        }
+    }
+    let o = chassis.outputs();
+    let rms = (square / 2.0).sqrt();
+    let dose = fourth.sqrt().sqrt();
+    assert!(
+        (o.rms_weighted_seat_acceleration - rms).abs() < 1e-6 * rms,
+        "{} {rms}",
+        o.rms_weighted_seat_acceleration
+    );
+    assert!(
+        (o.seat_vibration_dose_value - dose).abs() < 1e-6 * dose,
+        "{} {dose}",
+        o.seat_vibration_dose_value
+    );
+    let fine = wk.weighted_acceleration(&w, o.seat_acceleration);
+    assert!((o.weighted_seat_acceleration - fine).abs() < 1e-9 * fine.abs().max(1.0));
+}
+
+#[test]
+fn bad_parameters_and_inputs_are_refused_by_name() {
+    for (params, name) in [
+        (
+            ChassisParams {
+                mass: 0.0,
+                ..ChassisParams::default()
+            },
+            "mass",
+        ),
+        (
+            ChassisParams {
+                pitch_inertia: -1.0,
+                ..ChassisParams::default()
+            },
+            "pitch_inertia",
+        ),
+        (
+            ChassisParams {
+                roll_inertia: f64::NAN,
+                ..ChassisParams::default()
+            },
+            "roll_inertia",
+        ),
+        (
+            ChassisParams {
+                track_rear: 0.0,
+                ..ChassisParams::default()
+            },
+            "track_rear",
+        ),
+        (
+            ChassisParams {
+                a: -0.1,
+                ..ChassisParams::default()
+            },
+            "a",
+        ),
+        (
+            ChassisParams {
+                seat_y: f64::INFINITY,
+                ..ChassisParams::default()
+            },
+            "seat_y",
+        ),
+    ] {
+        let e = Chassis::new(params, 0.0).unwrap_err().to_string();
+        assert!(e.contains(name), "{e}");
+    }
+    let mut chassis = Chassis::new(ChassisParams::default(), 0.0).unwrap();
+    let e = chassis
+        .set_forces([0.0, f64::NAN, 0.0, 0.0], [0.0; 4])
+        .unwrap_err();
+    assert!(e.to_string().contains("force_fr"), "{e}");
+    let e = chassis
+        .set_forces([0.0; 4], [0.0, 0.0, 0.0, f64::INFINITY])
+        .unwrap_err();
+    assert!(e.to_string().contains("force_rr"), "{e}");
+    chassis.advance_to(0.1).unwrap();
+    assert!(
+        chassis
+            .advance_to(0.05)
+            .unwrap_err()
+            .to_string()
+            .contains("t_end")
+    );
+    assert_eq!(chassis.outputs().position, [0.0; 3]);
+}
