@@ -82,6 +82,8 @@ pub(super) struct ModelArgs {
 
 impl ModelArgs {
     pub(super) fn params(&self) -> Params {
+        // A parameter without a command-line option keeps its default.
+        #[allow(clippy::needless_update)]
         Params {
             m_s: self.m_s,
             m_h: self.m_h,
@@ -93,6 +95,7 @@ impl ModelArgs {
             c_h: self.c_h,
             g: self.g,
             tau: self.tau,
+            ..Params::default()
         }
     }
 }

@@ -12,7 +12,7 @@ use super::history::{DelayHistory, Delayed};
 use crate::comfort::{WK_STATES, WkStateSpace};
 use crate::model::dynamics::{
     CONTINUOUS_STATES, FILTER_STATES_AT, INTEGRALS_AT, Mode, SWITCHES, Switch, Switching,
-    folded_delay, folded_feedback, mode_matrix,
+    folded_delay, folded_feedback,
 };
 use crate::model::{Plant, State, V_S, V_T, X_S, X_T};
 use crate::road::Road;
@@ -49,7 +49,7 @@ pub(super) enum Delay {
 /// The plant's matrices as the co-simulation's operators have them.
 #[derive(Debug, Clone, PartialEq)]
 pub(super) struct Matrices {
-    /// By [`Mode::index`], each mode's matrix ([`mode_matrix`]) of the
+    /// By [`Mode::index`], each mode's matrix ([`Switching::mode_matrix`]) of the
     /// contact matrix: A, with the feedback `g (x_t − tau v_t)` folded in
     /// where the delay is folded or there is no controller (as the
     /// co-simulation folds it).
@@ -60,14 +60,16 @@ pub(super) struct Matrices {
 
 impl Matrices {
     /// The matrices of `plant` for the delay `delay`.
-    pub(super) fn of(plant: &Plant, delay: &Delay) -> Matrices {
+    pub(super) fn of(plant: &Plant, delay: &Delay, switching: &Switching) -> Matrices {
         let (contact, feedback) = match delay {
             Delay::History(_) => (plant.a, plant.b),
             Delay::Folded(tau) => folded_feedback(plant, *tau),
             Delay::None => folded_feedback(plant, 0.0),
         };
         Matrices {
-            modes: std::array::from_fn(|i| mode_matrix(&contact, &plant.e, Mode::from_index(i))),
+            modes: std::array::from_fn(|i| {
+                switching.mode_matrix(&contact, &plant.e, Mode::from_index(i))
+            }),
             feedback,
         }
     }

@@ -163,7 +163,7 @@ impl ModelExchange {
         let mut states = [0.0; CONTINUOUS_STATES];
         states[..6].copy_from_slice(x.as_slice());
         let mut model = ModelExchange {
-            matrices: Matrices::of(&plant, &delay),
+            matrices: Matrices::of(&plant, &delay, &switching),
             plant,
             wk: wk_state_space(),
             road,
@@ -261,7 +261,7 @@ impl ModelExchange {
             ..self.config.params
         };
         let plant = Plant::new(params, self.config.variant)?.with_body(self.config.body);
-        self.matrices = Matrices::of(&plant, &self.delay);
+        self.matrices = Matrices::of(&plant, &self.delay, &self.switching);
         self.plant = plant;
         self.config.params = params;
         Ok(())

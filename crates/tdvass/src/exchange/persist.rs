@@ -10,7 +10,7 @@
 //! and velocity) at the end.
 
 use super::history::{DelayHistory, HistoryPoint};
-use super::instance::{Delay, ModelExchange};
+use super::instance::{Delay, HYSTERESIS, ModelExchange};
 use crate::bytes::{ByteReader, ByteWriter};
 use crate::error::{Error, Result};
 use crate::model::dynamics::SWITCHES;
@@ -21,7 +21,8 @@ use crate::solver::CONTINUOUS_STATES;
 const MAX_ROAD_NODES: u64 = crate::limits::MAX_WORK_PER_CALL as u64;
 
 /// Version of the byte form; a saved state of a later version is refused.
-/// Version 3 added a corner's body attachment (its input) at the end.
+/// Version 3 added the count of switching elements before their sides and
+/// a corner's body attachment (its input) at the end.
 pub const EXCHANGE_FORMAT_VERSION: u32 = 3;
 
 /// The first version with a corner's body attachment.
@@ -55,8 +56,10 @@ impl ModelExchange {
         w.u8(u8::from(completes_steps) | (u8::from(completed_once) << 1));
         w.f64s(&self.states);
         let d = &self.discrete;
-        // Each element's side (1 on its first) and hysteresis, in bit
-        // order (the tire's alone: the bytes of format 1).
+        // How many elements, then each element's side (1 on its first)
+        // and hysteresis, in bit order (before version 3: the tire's alone,
+        // without the count).
+        w.u8(SWITCHES.len() as u8);
         for (i, switch) in SWITCHES.into_iter().enumerate() {
             w.u8(u8::from(!d.sides.is(switch)));
             w.f64(d.hysteresis[i]);
@@ -153,9 +156,26 @@ impl ModelExchange {
             )));
         }
         let mut discrete = self.discrete;
+        let elements = if version >= BODY_VERSION {
+            usize::from(r.u8()?)
+        } else {
+            1
+        };
+        if elements > SWITCHES.len() {
+            return Err(invalid(format!(
+                "{elements} switching elements: this model has {}",
+                SWITCHES.len()
+            )));
+        }
         for (i, switch) in SWITCHES.into_iter().enumerate() {
-            discrete.sides = discrete.sides.with(switch, r.u8()? == 0);
-            discrete.hysteresis[i] = r.f64()?;
+            if i < elements {
+                discrete.sides = discrete.sides.with(switch, r.u8()? == 0);
+                discrete.hysteresis[i] = r.f64()?;
+            } else {
+                // An element the saved state did not have: its first law.
+                discrete.sides = discrete.sides.with(switch, false);
+                discrete.hysteresis[i] = HYSTERESIS * self.switching.scale(switch);
+            }
         }
         discrete.lift_off_count = r.u64()?;
         discrete.max_suspension_deflection = r.f64()?;

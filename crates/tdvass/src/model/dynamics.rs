@@ -9,7 +9,7 @@
 //!   ([`INTEGRAL_NAMES`]).
 //! - **The plant in a mode** ([`plant_rates`]): `Ẋ = A_m X + b u + e r_m`,
 //!   Eq. (2) in contact, and in flight the tire's force held at −W.
-//! - **The modes** ([`Mode`], [`mode_matrix`]): one bit per switching
+//! - **The modes** ([`Mode`], [`Switching::mode_matrix`]): one bit per switching
 //!   element of the list [`SWITCHES`] (today the unilateral tire).
 //! - **The tire** ([`contact_margin`], [`tire_load`], [`flight_matrix`]):
 //!   the margin `W/k_t − (x_t − x_g)` whose sign is the contact, the load
@@ -112,9 +112,10 @@ pub enum Switch {
 }
 
 impl Switch {
-    /// Whether the element switches at all under the tire law
-    /// `tire_contact`: the tire only when it is unilateral.
-    pub fn applies(self, tire_contact: TireContact) -> bool {
+    /// Whether the element switches at all with the parameters `params`
+    /// under the tire law `tire_contact`: the tire only when it is
+    /// unilateral.
+    pub fn applies(self, _params: &Params, tire_contact: TireContact) -> bool {
         match self {
             Switch::Tire => tire_contact.is_unilateral(),
         }
@@ -156,7 +157,7 @@ impl Switching {
             f64::INFINITY
         };
         Switching {
-            applies: SWITCHES.map(|switch| switch.applies(tire_contact)),
+            applies: SWITCHES.map(|switch| switch.applies(params, tire_contact)),
             tire_limit,
         }
     }
@@ -203,6 +204,23 @@ impl Switching {
         match switch {
             Switch::Tire => self.tire_limit,
         }
+    }
+
+    /// The plant matrix in `mode` for the matrix `contact` of every
+    /// element's first law (the plant's A, or the solver's with the
+    /// feedback folded in) and the road column `e`: each element in its
+    /// second law changes it by its law, with its constants (the tire in
+    /// flight: [`flight_matrix`]).
+    pub fn mode_matrix(&self, contact: &Matrix6<f64>, e: &State, mode: Mode) -> Matrix6<f64> {
+        let mut a = *contact;
+        for switch in SWITCHES {
+            if mode.is(switch) {
+                a = match switch {
+                    Switch::Tire => flight_matrix(&a, e),
+                };
+            }
+        }
+        a
     }
 
     /// The mode in force when the elements are on the sides `sides` (a bit
@@ -299,25 +317,16 @@ impl Mode {
         (0..Mode::COUNT).map(Mode::from_index)
     }
 
-    /// The modes a run under the tire law `tire_contact` can reach: those
-    /// whose every element in its second law applies
-    /// ([`Switch::applies`]).
-    pub fn reachable(tire_contact: TireContact) -> impl Iterator<Item = Mode> {
+    /// The modes a run with the elements `switching` can reach: those
+    /// whose every element in its second law switches
+    /// ([`Switching::applies`]).
+    pub fn reachable(switching: &Switching) -> impl Iterator<Item = Mode> + '_ {
         Mode::all().filter(move |mode| {
             SWITCHES
                 .iter()
-                .all(|&switch| !mode.is(switch) || switch.applies(tire_contact))
+                .zip(switching.applies)
+                .all(|(&switch, applies)| !mode.is(switch) || applies)
         })
-    }
-}
-
-/// The plant matrix in `mode` for the matrix `contact` of every element's
-/// first law: [`flight_matrix`] with the tire in flight.
-pub fn mode_matrix(contact: &Matrix6<f64>, e: &State, mode: Mode) -> Matrix6<f64> {
-    if mode.is(Switch::Tire) {
-        flight_matrix(contact, e)
-    } else {
-        *contact
     }
 }
 
@@ -459,16 +468,15 @@ mod tests {
         assert_eq!(every, [Mode::CONTACT, flight]);
         assert!(every.iter().all(|m| Mode::from_index(m.index()) == *m));
         // A bilateral tire never flies; a unilateral one reaches both.
-        let bilateral: Vec<Mode> = Mode::reachable(TireContact::Bilateral).collect();
-        let unilateral: Vec<Mode> = Mode::reachable(TireContact::Unilateral).collect();
-        assert_eq!(bilateral, [Mode::CONTACT]);
-        assert_eq!(unilateral, [Mode::CONTACT, flight]);
+        let of = |tire| Switching::of(&Params::default(), Variant::Tdvass, tire);
+        let (bilateral, unilateral) = (of(TireContact::Bilateral), of(TireContact::Unilateral));
+        let reached = |s: &Switching| Mode::reachable(s).collect::<Vec<Mode>>();
+        assert_eq!(reached(&bilateral), [Mode::CONTACT]);
+        assert_eq!(reached(&unilateral), [Mode::CONTACT, flight]);
         let plant = Plant::new(Params::default(), Variant::Tdvass).unwrap();
-        assert_eq!(mode_matrix(&plant.a, &plant.e, Mode::CONTACT), plant.a);
-        assert_eq!(
-            mode_matrix(&plant.a, &plant.e, flight),
-            flight_matrix(&plant.a, &plant.e)
-        );
+        let law = |mode| unilateral.mode_matrix(&plant.a, &plant.e, mode);
+        assert_eq!(law(Mode::CONTACT), plant.a);
+        assert_eq!(law(flight), flight_matrix(&plant.a, &plant.e));
     }
 
     #[test]

@@ -221,8 +221,11 @@ impl Params {
     }
 
     /// Reads what [`Params::write`] wrote (checked by [`Params::validate`]
-    /// where the configuration is).
-    pub(crate) fn read(r: &mut ByteReader) -> Result<Params> {
+    /// where the configuration is) in the saved-state format `version`:
+    /// a parameter added in a later format takes its default from the
+    /// bytes of an earlier one (every parameter is in every format read
+    /// today).
+    pub(crate) fn read(r: &mut ByteReader, _version: u64) -> Result<Params> {
         // Field initialisers run in the order written: that of
         // `named_values`.
         Ok(Params {

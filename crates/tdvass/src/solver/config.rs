@@ -137,11 +137,11 @@ impl SimulationConfig {
     }
 
     /// Reads what [`SimulationConfig::write`] wrote; the codes are
-    /// checked here, the values by `Simulator::new`. Without `with_body`
-    /// (the bytes of saved-state formats before 6) the body is the sprung
-    /// mass and the road is not shifted.
-    pub(super) fn read(r: &mut ByteReader, with_body: bool) -> Result<SimulationConfig> {
-        let params = Params::read(r)?;
+    /// checked here, the values by `Simulator::new`. `version` is the
+    /// saved-state format the bytes are of: before 6 the body is the
+    /// sprung mass and the road is not shifted.
+    pub(super) fn read(r: &mut ByteReader, version: u64) -> Result<SimulationConfig> {
+        let params = Params::read(r, version)?;
         let variant = Variant::from_code(r.u64()? as i64)?;
         let road = RoadSpec::read(r)?;
         let tolerance = r.f64()?;
@@ -161,7 +161,7 @@ impl SimulationConfig {
             .map_err(|e| Error::InvalidState(format!("metrics level: {e}")))?;
         let tire_contact = TireContact::from_code(i64::try_from(r.u64()?).unwrap_or(i64::MAX))
             .map_err(|e| Error::InvalidState(format!("tire contact: {e}")))?;
-        let (body, road_shift) = if with_body {
+        let (body, road_shift) = if version >= 6 {
             let body = Body::from_code(i64::try_from(r.u64()?).unwrap_or(i64::MAX))
                 .map_err(|e| Error::InvalidState(format!("body: {e}")))?;
             let (delay, phase) = (r.f64()?, r.f64()?);

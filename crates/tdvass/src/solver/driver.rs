@@ -187,8 +187,9 @@ impl Simulator {
                 reason: "must be finite and not before the current time",
             });
         }
-        let unilateral = self.config.tire_contact.is_unilateral();
-        // Switches of the tire contact made in the current step.
+        // An element may switch (the unilateral tire).
+        let switching = self.modes.grid_step.switching.any();
+        // Switches made in the current step.
         let mut switches = 0;
         loop {
             let k = self.trajectory.grid_index;
@@ -204,7 +205,7 @@ impl Simulator {
                     if self.whole_steps_view().whole_steps(last)? {
                         self.step_to_node_switching(&mut switches)?;
                     }
-                } else if unilateral {
+                } else if switching {
                     self.step_to_node_switching(&mut switches)?;
                 } else {
                     self.step_to_node()?;
@@ -219,7 +220,7 @@ impl Simulator {
                 if self.snaps(t_end, self.trajectory.committed_time) {
                     return self.finish_near_committed(t_end);
                 }
-                if unilateral && self.switch_by(k, t_end, &mut switches)? {
+                if switching && self.switch_by(k, t_end, &mut switches)? {
                     continue;
                 }
                 if self.defer(t_end, Kind::InsideStep) {
@@ -477,8 +478,7 @@ impl Simulator {
     /// ([`Self::set_gain`]) drops them (call it again after one).
     pub fn reserve(&mut self) {
         let in_force = self.trajectory.mode;
-        self.modes
-            .reserve(&self.plant, &self.grid, in_force, self.config.tire_contact);
+        self.modes.reserve(&self.plant, &self.grid, in_force);
         // The road keeps its nodes from the step before the committed
         // point to the end of the next step.
         self.inputs.road.reserve_window(4.0 * self.grid.step);

@@ -6,7 +6,7 @@
 //! matrix with any folded feedback, the whole step, its grid form, the
 //! partial steps' table) and, by [`Mode`], those of the others, which it
 //! puts in force at a switch ([`Modes::enter`]). A mode's matrix comes
-//! from the contact matrix by [`mode_matrix`]: a new switching element
+//! from the contact matrix by [`Switching::mode_matrix`](crate::model::dynamics::Switching::mode_matrix): a new switching element
 //! adds its law there, not here. It imports the configuration, the system
 //! and the step maps; nothing of the trajectory or the accumulators.
 
@@ -18,8 +18,7 @@ use super::linalg::infinity_norm;
 use super::operators::StepOperator;
 use super::system::FilterCoupling;
 use crate::error::{Error, Result};
-use crate::model::TireContact;
-use crate::model::dynamics::{Mode, Switching, folded_feedback, mode_matrix};
+use crate::model::dynamics::{Mode, Switching, folded_feedback};
 use crate::model::{Plant, State};
 use nalgebra::Matrix6;
 
@@ -152,23 +151,29 @@ impl Modes {
     /// The solver's plant matrix of `mode` (the feedback folded in as in
     /// force), `in_force` being the mode whose operators are in force: the
     /// matrix in force, a stored mode's, or one made from the contact
-    /// matrix ([`mode_matrix`]) while its operators are not.
+    /// matrix ([`Switching::mode_matrix`](crate::model::dynamics::Switching::mode_matrix)) while its operators are not.
     pub(super) fn mode_matrix(&self, mode: Mode, in_force: Mode, e: &State) -> Matrix6<f64> {
         if mode == in_force {
             return self.solver_matrix;
         }
         match &self.stored[mode.index()] {
             Some(stored) => stored.solver_matrix,
-            None => mode_matrix(&self.contact_matrix, e, mode),
+            None => self
+                .grid_step
+                .switching
+                .mode_matrix(&self.contact_matrix, e, mode),
         }
     }
 
-    /// The operators of `mode` ([`mode_matrix`] of the contact matrix):
+    /// The operators of `mode` ([`Switching::mode_matrix`](crate::model::dynamics::Switching::mode_matrix) of the contact matrix):
     /// in flight the tire's column of A gains the road column `e` of
     /// `plant`, whose input is then the constant −W/k_t.
     fn operators_of(&self, mode: Mode, plant: &Plant, h: f64) -> ModeOperators {
         let e = plant.e;
-        let a = mode_matrix(&self.contact_matrix, &e, mode);
+        let a = self
+            .grid_step
+            .switching
+            .mode_matrix(&self.contact_matrix, &e, mode);
         let (omega, b) = (self.angular_frequency, self.input_column);
         ModeOperators {
             solver_matrix_norm: infinity_norm(&a),
@@ -210,20 +215,15 @@ impl Modes {
     /// that stepping allocates nothing: the partial steps' maps of the
     /// mode in force (their table's entries, and the filter's table with
     /// the W_k filter: [`DenseOutput::reserve`]) and the operators of the
-    /// other modes a run under `tire_contact` can reach
+    /// other modes a run with its switching elements can reach
     /// ([`Mode::reachable`]) and their maps.
     /// Each is the same value whenever it is built (a cache of a function
     /// of the operators), so the results do not change.
-    pub(super) fn reserve(
-        &mut self,
-        plant: &Plant,
-        grid: &DelayGrid,
-        in_force: Mode,
-        tire_contact: TireContact,
-    ) {
+    pub(super) fn reserve(&mut self, plant: &Plant, grid: &DelayGrid, in_force: Mode) {
         let coupling = self.coupling.clone();
         self.dense_output(plant, grid).reserve(coupling.as_ref());
-        for mode in Mode::reachable(tire_contact) {
+        let switching = self.grid_step.switching;
+        for mode in Mode::reachable(&switching) {
             if mode == in_force {
                 continue;
             }

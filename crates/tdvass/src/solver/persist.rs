@@ -96,7 +96,7 @@ pub(super) fn from_bytes(bytes: &[u8]) -> Result<Simulator> {
             "state format version {version}: versions {OLDEST_FORMAT_VERSION} to {STATE_FORMAT_VERSION} are read"
         )));
     }
-    let config = SimulationConfig::read(&mut r, version >= 6)?;
+    let config = SimulationConfig::read(&mut r, version)?;
     let step_bound = read_step_bound(&mut r, &config)?;
     let mut sim = Simulator::with_step_bound(config, step_bound)?;
     sim.trajectory.read_points(&mut r)?;
@@ -107,7 +107,7 @@ pub(super) fn from_bytes(bytes: &[u8]) -> Result<Simulator> {
     sim.observers.holding = Holding::read(&mut r)?;
     sim.trajectory.read_mode(&mut r, version >= 5)?;
     let mode = sim.trajectory.mode;
-    if !Mode::reachable(sim.config.tire_contact).any(|reachable| reachable == mode) {
+    if !Mode::reachable(&sim.modes.grid_step.switching).any(|reachable| reachable == mode) {
         return Err(Error::InvalidState(format!(
             "mode {}: a run with this configuration cannot reach it (a flight in progress with the bilateral tire)",
             mode.index()

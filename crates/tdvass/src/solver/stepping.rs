@@ -221,10 +221,11 @@ impl Stepping<'_> {
 
     /// Node k + 1 by the whole-step map of the grid (the 2×2 solve folded
     /// in, as the whole-step loop takes it) from node k itself (time
-    /// `from`, state `x`), when the step lies in one road piece and the
-    /// wheel is on the road; `None` otherwise.
+    /// `from`, state `x`), when the step lies in one road piece and every
+    /// switching element is in its first law (the wheel on the road; the
+    /// grid's maps are that mode's); `None` otherwise.
     fn whole_step_from_node(&mut self, k: u64, from: f64, x: &State) -> Option<State> {
-        if from != self.inputs.node_time(k) || self.mode.is(Switch::Tire) {
+        if from != self.inputs.node_time(k) || self.mode != Mode::CONTACT {
             return None;
         }
         #[cfg(test)]

@@ -297,7 +297,8 @@ mod jacobian;
 mod order;
 
 /// The state of `model` in format version 1 (before the floor and the
-/// completion habits), rewritten from its version 2 bytes.
+/// completion habits, the count of switching elements and the body
+/// attachment), rewritten from its current bytes.
 fn version_1_bytes(model: &ModelExchange) -> Vec<u8> {
     use crate::bytes::{ByteReader, ByteWriter};
     let bytes = model.to_bytes();
@@ -314,6 +315,8 @@ fn version_1_bytes(model: &ModelExchange) -> Vec<u8> {
     r.u8().unwrap();
     r.u8().unwrap();
     w.f64s(&r.f64s(CONTINUOUS_STATES as u64).unwrap());
+    // Version 3's count of switching elements (the tire's alone before).
+    assert_eq!(r.u8().unwrap(), 1);
     w.u8(r.u8().unwrap());
     w.f64(r.f64().unwrap());
     w.u64(r.u64().unwrap());
@@ -388,4 +391,21 @@ fn both_engines_evaluate_the_same_right_hand_side() {
             }
         }
     }
+}
+
+#[test]
+fn a_state_with_more_switching_elements_than_the_model_has_is_refused() {
+    let c = config(Variant::Tdvass, 0.011, 5386.0, iso(RoadClass::C));
+    let mut model = ModelExchange::new(c).unwrap();
+    integrate(&mut model, 0.05, 1e-4, true);
+    let mut bytes = model.to_bytes();
+    // Magic, version, four times, two flags, the states' count and values.
+    let at = 4 + 4 + 4 * 8 + 2 + 8 + 8 * CONTINUOUS_STATES;
+    assert_eq!(
+        usize::from(bytes[at]),
+        crate::model::dynamics::SWITCHES.len()
+    );
+    bytes[at] += 1;
+    let e = model.restore(&bytes).unwrap_err().to_string();
+    assert!(e.contains("switching elements"), "{e}");
 }
