@@ -22,7 +22,7 @@
 
 use crate::error::{Error, Result};
 use crate::metrics::Weights;
-use crate::model::{Params, STATE_NAMES, State, Variant};
+use crate::model::{Body, Params, STATE_NAMES, State, Variant};
 use crate::road::RoadSpec;
 
 /// Displacement bound (m): beyond it a run is declared divergent, and no
@@ -121,6 +121,34 @@ impl Bound {
             Bound::Weight => "the numerical limit of the weights",
         }
     }
+}
+
+/// Checks a corner's body attachment `(displacement (m), velocity (m/s))`
+/// for the body `body`: an input only of a corner
+/// ([`crate::model::Body::Attached`]), finite and within the divergence
+/// bounds. The error names the variable and the value.
+pub fn check_body_input(body: Body, displacement: f64, velocity: f64) -> Result<()> {
+    if !body.is_attached() {
+        return Err(Error::InvalidSetting {
+            name: "body",
+            value: body.code() as i64,
+            reason: "the body's attachment point is an input only of a corner (a body outside the model, body = 1)",
+        });
+    }
+    for (name, value, bound) in [
+        ("body_displacement", displacement, Bound::Displacement),
+        ("body_velocity", velocity, Bound::Velocity),
+    ] {
+        if !value.is_finite() {
+            return Err(Error::InvalidParameter {
+                name,
+                value,
+                reason: "the body's attachment point must be finite",
+            });
+        }
+        check_value(bound, name, value)?;
+    }
+    Ok(())
 }
 
 /// Refuses a value of kind `bound` whose magnitude exceeds its limit;

@@ -86,7 +86,7 @@ pub use persist::EXCHANGE_FORMAT_VERSION;
 
 use crate::comfort::wk_state_space;
 use crate::error::{Error, Result};
-use crate::limits::{Bound, DIVERGENCE_BOUNDS};
+use crate::limits::DIVERGENCE_BOUNDS;
 use crate::metrics::time_averages;
 use crate::model::dynamics::{
     CONTINUOUS_STATES, FILTER_STATES_AT, INTEGRAL_NAMES, INTEGRALS_AT, Instant, Mode, SWITCHES,
@@ -280,26 +280,7 @@ impl ModelExchange {
     /// name when not finite or beyond the divergence bounds, or for the
     /// sprung mass; a refused value changes nothing.
     pub fn set_body_input(&mut self, displacement: f64, velocity: f64) -> Result<()> {
-        if self.body_input.is_none() {
-            return Err(Error::InvalidSetting {
-                name: "body",
-                value: self.config.body.code() as i64,
-                reason: "the body's attachment point is an input only of a corner (a body outside the model, body = 1)",
-            });
-        }
-        for (name, value, bound) in [
-            ("body_displacement", displacement, Bound::Displacement),
-            ("body_velocity", velocity, Bound::Velocity),
-        ] {
-            if !value.is_finite() {
-                return Err(Error::InvalidParameter {
-                    name,
-                    value,
-                    reason: "the body's attachment point must be finite",
-                });
-            }
-            crate::limits::check_value(bound, name, value)?;
-        }
+        crate::limits::check_body_input(self.config.body, displacement, velocity)?;
         self.body_input = Some([displacement, velocity]);
         Ok(())
     }

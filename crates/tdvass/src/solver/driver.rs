@@ -27,7 +27,6 @@ use super::system::Filter;
 use super::trajectory::Trajectory;
 use super::whole_steps;
 use crate::error::{Error, Result};
-use crate::limits::Bound;
 use crate::metrics::rms_values;
 use crate::metrics::{RmsValues, Weights};
 use crate::model::dynamics::Mode;
@@ -391,26 +390,7 @@ impl Simulator {
     /// and stays. A value that is not finite or beyond the divergence
     /// bounds is refused by name and changes nothing.
     pub fn set_body_input(&mut self, displacement: f64, velocity: f64) -> Result<()> {
-        if !self.config.body.is_attached() {
-            return Err(Error::InvalidSetting {
-                name: "body",
-                value: self.config.body.code() as i64,
-                reason: "the body's attachment point is an input only of a corner (a body outside the model, body = 1)",
-            });
-        }
-        for (name, value, bound) in [
-            ("body_displacement", displacement, Bound::Displacement),
-            ("body_velocity", velocity, Bound::Velocity),
-        ] {
-            if !value.is_finite() {
-                return Err(Error::InvalidParameter {
-                    name,
-                    value,
-                    reason: "the body's attachment point must be finite",
-                });
-            }
-            crate::limits::check_value(bound, name, value)?;
-        }
+        crate::limits::check_body_input(self.config.body, displacement, velocity)?;
         self.settle();
         let x = self.trajectory.current_state;
         if x[X_S].to_bits() == displacement.to_bits() && x[V_S].to_bits() == velocity.to_bits() {
