@@ -171,7 +171,8 @@ pub(super) struct Segment<'a> {
 /// before a state out of bounds, or before a step in which a switching
 /// element of the grid step's list may switch (its switch function, in
 /// the mode of every element's first law where the loop runs, may fall
-/// through 0: the unilateral tire may lift off) ([`SegmentEnd`]). `DELAY`: the delay is resolved on the grid;
+/// through 0: the unilateral tire may lift off) ([`SegmentEnd`]).
+/// `DELAY`: the delay is resolved on the grid;
 /// `BEFORE`: all the delayed nodes lie before the start; `FILTER`: the W_k
 /// filter steps along ([`FilterGridStep`]) and its `a_w²`, `a_w⁴` are
 /// summed like the RMS sums.
