@@ -620,7 +620,10 @@ mod tests {
         let xml = model_description_xml();
         let els = elements(&xml);
         let root = &els[0];
-        assert_eq!(root.attr("numberOfEventIndicators"), "1");
+        assert_eq!(
+            root.attr("numberOfEventIndicators"),
+            EVENT_INDICATORS.to_string()
+        );
         let top: Vec<&str> = els
             .iter()
             .filter(|e| e.parent == Some(0))

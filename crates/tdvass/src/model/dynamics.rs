@@ -113,9 +113,9 @@ pub enum Switch {
 
 impl Switch {
     /// Whether the element switches at all with the parameters `params`
-    /// under the tire law `tire_contact`: the tire only when it is
-    /// unilateral.
-    pub fn applies(self, _params: &Params, tire_contact: TireContact) -> bool {
+    /// of `variant` under the tire law `tire_contact`: the tire only when
+    /// it is unilateral.
+    pub fn applies(self, _params: &Params, _variant: Variant, tire_contact: TireContact) -> bool {
         match self {
             Switch::Tire => tire_contact.is_unilateral(),
         }
@@ -157,7 +157,7 @@ impl Switching {
             f64::INFINITY
         };
         Switching {
-            applies: SWITCHES.map(|switch| switch.applies(params, tire_contact)),
+            applies: SWITCHES.map(|switch| switch.applies(params, variant, tire_contact)),
             tire_limit,
         }
     }

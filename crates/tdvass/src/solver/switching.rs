@@ -89,17 +89,24 @@ impl Simulator {
         }
         *switches += 1;
         if *switches > MAX_SWITCHES_PER_STEP {
-            return Err(Error::Numerical {
-                what: "the unilateral tire (tire_contact = 1)",
-                reason: format!(
-                    "more than {MAX_SWITCHES_PER_STEP} switches between contact and flight in the internal step from {} s: the margin to W/k_t = {} m changes sign faster than a step of {} s resolves; use a tighter tolerance or a smaller max_internal_step, or the bilateral tire",
-                    self.grid_time(k),
-                    self.modes.grid_step.switching.tire_limit,
-                    self.grid.step
-                ),
-            });
+            return Err(self.too_many_switches(k, switch));
         }
         self.commit_switch(k, time, switch)
+    }
+
+    /// The error of more than [`MAX_SWITCHES_PER_STEP`] switches in grid
+    /// step k, the last one of `switch`: the element and why.
+    fn too_many_switches(&self, k: u64, switch: Switch) -> Error {
+        let (from, step) = (self.grid_time(k), self.grid.step);
+        match switch {
+            Switch::Tire => Error::Numerical {
+                what: "the unilateral tire (tire_contact = 1)",
+                reason: format!(
+                    "more than {MAX_SWITCHES_PER_STEP} switches between contact and flight in the internal step from {from} s: the margin to W/k_t = {} m changes sign faster than a step of {step} s resolves; use a tighter tolerance or a smaller max_internal_step, or the bilateral tire",
+                    self.modes.grid_step.switching.tire_limit,
+                ),
+            },
+        }
     }
 
     /// The tire's switch at `time` with state x: the end of the flight in
