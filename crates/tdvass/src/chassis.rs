@@ -34,8 +34,11 @@
 //! of the heave, pitch and roll accelerations (exact: their squares are
 //! quadratics in time). The integrals of `a_w²` and `a_w⁴` are taken by
 //! 5-point Gauss–Legendre quadrature on the exact filter states inside
-//! each step (exact for polynomials of degree 9: at a step of 1 ms, some
-//! 1e-20 of the integral per step for a signal below 100 Hz).
+//! each step: exact for polynomials of degree 9; for `a_w` a sine of
+//! frequency f, the error bound `δ^11 (5!)^4 / (11 (10!)^3) |(a_w²)^(10)|`
+//! is about 4e-12 of the step's integral at f = 100 Hz and δ = 1 ms
+//! (4e-9 for `a_w⁴`, whose frequency is twice as high), and 1e-10 of
+//! those at 10 Hz.
 //!
 //! Layer: engines (docs/architecture.md), beside Model Exchange; it
 //! imports the crate's `comfort`, `error`, `metrics` and the solver's
