@@ -121,17 +121,15 @@ fn the_attachment_moves_at_its_velocity_and_bad_input_is_refused_by_name() {
 fn a_wheel_behind_another_runs_the_same_course_later() {
     // From rest on a random road that is 0 until the delayed profile
     // starts, the system is time-invariant: the rear wheel's state at
-    // t + delay is the front wheel's at t. On the same grid, to rounding
-    // (measured 8e-15 of the largest state).
+    // t + delay is the front wheel's at t. Both choose the same step (the
+    // probe runs on the road as it is), the delay a multiple of it: to
+    // rounding (measured 8e-15 of the largest state).
     let front_config = SimulationConfig {
         road: RoadSpec::Iso8608(RandomRoad {
             class: RoadClass::D,
             speed: 20.0,
             ..RandomRoad::default()
         }),
-        // The same internal step for both (the tolerance's choice probes
-        // each road and may differ), a multiple of which the delay is.
-        max_internal_step: 5e-4,
         ..quarter_car_config()
     };
     let delay = 0.125;

@@ -97,7 +97,7 @@ use super::driver::Simulator;
 use super::grid::DelayGrid;
 use crate::error::{Error, Result};
 use crate::model::{Plant, V_H, V_S, V_T, X_H, X_S, X_T};
-use crate::road::{ISO_NODE_INTERVAL, RoadSpec};
+use crate::road::{ISO_NODE_INTERVAL, RoadShift, RoadSpec};
 use nalgebra::{Matrix6, Schur};
 
 pub use super::config::{
@@ -264,6 +264,20 @@ pub(super) fn choose(
     if matches!(config.road, RoadSpec::Input) {
         return Ok((choice, None));
     }
+    // A shift of the road (a wheel behind another, or on the other track)
+    // moves its profile in time and keeps its roughness: the probe runs on
+    // the road as it is, so that every wheel of a car gets the same step
+    // (its simulator is then not the run's).
+    let unshifted;
+    let probed = if config.road_shift == RoadShift::NONE {
+        config
+    } else {
+        unshifted = SimulationConfig {
+            road_shift: RoadShift::NONE,
+            ..config.clone()
+        };
+        &unshifted
+    };
     // What passed the probe, while a coarser step is tried.
     let mut accepted: Option<(f64, f64, Option<Box<Simulator>>)> = None;
     let mut pristine = None;
@@ -276,7 +290,7 @@ pub(super) fn choose(
             break;
         }
         choice.probe_rounds += 1;
-        let Some(probe) = probe(plant, config, coarse, fine)? else {
+        let Some(probe) = probe(plant, probed, coarse, fine)? else {
             break;
         };
         pristine = Some(probe.pristine);
@@ -311,7 +325,9 @@ pub(super) fn choose(
         pristine = kept;
     }
     choice.step_bound = ladder_step(base, n, config.max_internal_step);
-    let pristine = pristine.filter(|sim| sim.step_choice.step_bound == choice.step_bound);
+    let pristine = pristine.filter(|sim| {
+        sim.step_choice.step_bound == choice.step_bound && config.road_shift == RoadShift::NONE
+    });
     Ok((choice, pristine))
 }
 
