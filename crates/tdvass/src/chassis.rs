@@ -239,6 +239,22 @@ struct FilterStep {
     end: FilterInput,
 }
 
+/// The exact maps of the filter `wk` with a linear input over a step of
+/// `delta`.
+fn filter_maps(wk: &WkStateSpace, delta: f64) -> FilterStep {
+    let mut m = FilterInput::zeros();
+    m.fixed_view_mut::<WK_STATES, WK_STATES>(0, 0)
+        .copy_from(&wk.state_matrix);
+    m.fixed_view_mut::<WK_STATES, 1>(0, WK_STATES)
+        .copy_from(&wk.input_vector);
+    m[(WK_STATES, WK_STATES + 1)] = 1.0;
+    FilterStep {
+        length: delta,
+        nodes: GAUSS.map(|(node, _)| precise_exp(&(m * (node * delta)))),
+        end: precise_exp(&(m * delta)),
+    }
+}
+
 /// The chassis's outputs at a time.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ChassisOutputs {
@@ -384,11 +400,9 @@ impl Chassis {
     /// The W_k filter over `delta` with the input `u0 + u1 s`, and the
     /// integrals of a_w² and a_w⁴ over it.
     fn filter_step(&mut self, delta: f64, u0: f64, u1: f64) {
-        if self.step.as_ref().is_none_or(|s| s.length != delta) {
-            self.step = Some(Box::new(self.filter_maps(delta)));
-        }
-        let Some(step) = self.step.as_deref() else {
-            return;
+        let step: &FilterStep = match &mut self.step {
+            Some(step) if step.length == delta => step,
+            slot => slot.insert(Box::new(filter_maps(&self.wk, delta))),
         };
         let mut z = SVector::<f64, { WK_STATES + 2 }>::zeros();
         z.fixed_rows_mut::<WK_STATES>(0).copy_from(&self.filter);
@@ -406,21 +420,6 @@ impl Chassis {
         self.integrals[WEIGHTED_FOURTH] += fourth * delta;
         let end = step.end * z;
         self.filter = end.fixed_rows::<WK_STATES>(0).into_owned();
-    }
-
-    /// The filter's exact maps over a step of `delta`.
-    fn filter_maps(&self, delta: f64) -> FilterStep {
-        let mut m = FilterInput::zeros();
-        m.fixed_view_mut::<WK_STATES, WK_STATES>(0, 0)
-            .copy_from(&self.wk.state_matrix);
-        m.fixed_view_mut::<WK_STATES, 1>(0, WK_STATES)
-            .copy_from(&self.wk.input_vector);
-        m[(WK_STATES, WK_STATES + 1)] = 1.0;
-        FilterStep {
-            length: delta,
-            nodes: GAUSS.map(|(node, _)| precise_exp(&(m * (node * delta)))),
-            end: precise_exp(&(m * delta)),
-        }
     }
 
     /// The attachment point of `corner`: displacement (m) and velocity

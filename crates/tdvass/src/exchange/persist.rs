@@ -234,9 +234,8 @@ impl ModelExchange {
             Some(0) | None => None,
             Some(_) => Some([r.f64()?, r.f64()?]),
         };
-        if body_input.is_some() != self.body_input.is_some()
-            && (version >= BODY_VERSION || self.body_input.is_none())
-        {
+        // Before version 3 a corner's input is in its states (below).
+        if version >= BODY_VERSION && body_input.is_some() != self.body_input.is_some() {
             return Err(invalid(
                 "a body attachment for a model without one, or none for a corner".into(),
             ));

@@ -104,11 +104,7 @@ impl Road {
             } => RoadKind::Harmonic(RoadPiece::Harmonic {
                 amplitude: *amplitude,
                 angular_frequency: *angular_frequency,
-                phase: if delayed || shift.phase != 0.0 {
-                    shift.phase - angular_frequency * shift.delay
-                } else {
-                    0.0
-                },
+                phase: shift.phase - angular_frequency * shift.delay,
             }),
             RoadSpec::Iso8608(road) => {
                 // Exact Ornstein–Uhlenbeck transition over one node interval.
