@@ -51,7 +51,8 @@ pub struct Gradient {
 }
 
 impl Gradient {
-    const ZERO: Gradient = Gradient {
+    /// No dependence on anything.
+    pub const ZERO: Gradient = Gradient {
         states: [0.0; CONTINUOUS_STATES],
         road_input: 0.0,
         body_input: [0.0; 2],

@@ -519,6 +519,7 @@ impl ModelExchange {
             performance,
             road_displacement: road,
             control_force: self.config.params.effective_gain(self.config.variant) * delayed,
+            body_force: self.plant.body_force(&x),
             rms: averages.rms,
             objective: averages.objective,
             comfort: Some(ComfortValues {

@@ -53,6 +53,7 @@ pub(super) fn instantaneous(sim: &mut Simulator) -> Instantaneous {
             performance: outputs.performance,
             road_displacement: outputs.road_displacement,
             control_force: outputs.control_force,
+            body_force: outputs.body_force,
             dynamic_tire_load: outputs.dynamic_tire_load,
         },
         None => instantaneous_now(sim),
@@ -74,6 +75,7 @@ fn instantaneous_now(sim: &mut Simulator) -> Instantaneous {
         performance: Performance::at(&sim.plant, &x, road),
         road_displacement: road,
         control_force: sim.config.params.effective_gain(sim.config.variant) * delayed,
+        body_force: sim.plant.body_force(&x),
         dynamic_tire_load: sim.tire_load(k_t * (road - x[X_T])),
     }
 }
@@ -95,6 +97,7 @@ pub(super) fn outputs(sim: &mut Simulator) -> Outputs {
         performance,
         road_displacement: instant.road_displacement,
         control_force: instant.control_force,
+        body_force: instant.body_force,
         rms: averages.rms,
         objective: averages.objective,
         comfort: comfort_values(sim, &now, duration),
@@ -360,6 +363,7 @@ pub(super) fn output_derivatives(sim: &mut Simulator) -> OutputDerivatives {
         },
         road_displacement: road_rate,
         control_force: gain * delayed_rate,
+        body_force: sim.plant.body_force(&dx),
     }
 }
 

@@ -80,6 +80,11 @@ pub struct Outputs {
     pub road_displacement: f64,
     /// Control force `u = g x_t(t − tau)` (N).
     pub control_force: f64,
+    /// The suspension's force on the body at its attachment (N), positive
+    /// up, zero at the static equilibrium
+    /// ([`crate::model::Plant::body_force`]; with the sprung mass it is
+    /// `m_s BA`).
+    pub body_force: f64,
     /// Running RMS values from the start to now, as time averages
     /// `sqrt((1/(t − t_0)) ∫_{t_0}^{t} y² ds)` (0 at the start).
     pub rms: RmsValues,
@@ -166,6 +171,8 @@ pub struct Instantaneous {
     pub road_displacement: f64,
     /// Control force `u = g x_t(t − tau)` (N).
     pub control_force: f64,
+    /// The suspension's force on the body (N), as in [`Outputs`].
+    pub body_force: f64,
     /// The dynamic tire load `k_t (x_g − x_t)` (N; at least −W with the
     /// unilateral tire).
     pub dynamic_tire_load: f64,
@@ -182,6 +189,8 @@ pub struct OutputDerivatives {
     pub road_displacement: f64,
     /// du/dt.
     pub control_force: f64,
+    /// d/dt of the force on the body (N/s).
+    pub body_force: f64,
     /// d/dt of the running RMS values: `(y² − RMS²) / (2 RMS (t − t_0))`
     /// (0 at the start and where an RMS value is 0).
     pub rms: RmsValues,
