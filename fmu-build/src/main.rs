@@ -53,6 +53,7 @@ use std::process::{Command, ExitCode};
 use tdvass_describe::markdown::{BEGIN_MARKER, END_MARKER, splice_into};
 use tdvass_describe::markup::DIAGRAM_FILE;
 use tdvass_fmi2::MODEL_IDENTIFIER;
+use tdvass_fmu::Model;
 use tdvass_fmu::slave::Dialect;
 use tdvass_fmu::variables::FmiVersion;
 use zip::write::SimpleFileOptions;
@@ -113,9 +114,9 @@ impl Fmu {
                 checked_in: "modelDescription/modelDescription.xml",
                 description: tdvass_describe::fmi2::model_description_xml(),
                 documentation: tdvass_describe::fmi2::documentation_html(),
-                identity: format!("GUID {}", tdvass_fmi2::guid()),
+                identity: format!("GUID {}", tdvass_fmi2::guid(Model::QuarterCar)),
                 dialect: tdvass_fmi2::instance::FMI2_DIALECT,
-                token: tdvass_fmi2::guid(),
+                token: tdvass_fmi2::guid(Model::QuarterCar),
                 icon_entry: "model.png",
             },
             Fmu {
@@ -126,9 +127,12 @@ impl Fmu {
                 checked_in: "modelDescription/fmi3/modelDescription.xml",
                 description: tdvass_describe::fmi3::model_description_xml(),
                 documentation: tdvass_describe::fmi3::documentation_html(),
-                identity: format!("instantiationToken {}", tdvass_fmi3::instantiation_token()),
+                identity: format!(
+                    "instantiationToken {}",
+                    tdvass_fmi3::instantiation_token(Model::QuarterCar)
+                ),
                 dialect: tdvass_fmi3::instance::FMI3_DIALECT,
-                token: tdvass_fmi3::instantiation_token(),
+                token: tdvass_fmi3::instantiation_token(Model::QuarterCar),
                 icon_entry: "terminalsAndIcons/icon.png",
             },
         ]

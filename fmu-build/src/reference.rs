@@ -14,6 +14,7 @@ use quick_xml::events::{BytesDecl, Event};
 use std::cell::RefCell;
 use std::rc::Rc;
 use tdvass_describe::markup::{XmlResult, XmlWriter, finish, writer};
+use tdvass_fmu::Model;
 use tdvass_fmu::slave::{Dialect, Logger};
 use tdvass_fmu::variables::{Causality, VarType, Variable, variables_of};
 use tdvass_fmu::{
@@ -83,7 +84,7 @@ pub fn manifest_xml() -> String {
 /// The outputs of the reference results: every scalar Real (Float64)
 /// output of the FMI version, in the order of the variable table.
 pub fn outputs(dialect: &Dialect) -> Vec<&'static Variable> {
-    variables_of(dialect.version)
+    variables_of(Model::QuarterCar, dialect.version)
         .iter()
         .filter(|v| {
             v.causality == Causality::Output
@@ -128,7 +129,7 @@ pub fn results_csv(dialect: Dialect, token: String) -> Result<String, String> {
                 .push(format!("{} [{category}] {message}", status.name()))
         })
     };
-    let mut slave = Slave::new(dialect, token, Logger::new(sink, false));
+    let mut slave = Slave::new(dialect, Model::QuarterCar, token, Logger::new(sink, false));
     let outputs = outputs(&dialect);
     let vrs: Vec<u32> = outputs.iter().map(|v| v.vr).collect();
     let mut values = vec![0.0; vrs.len()];

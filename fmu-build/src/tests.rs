@@ -1,4 +1,5 @@
 use super::*;
+use tdvass_fmu::Model;
 
 #[test]
 fn host_platforms_use_the_folders_and_library_names_of_the_host() {
@@ -137,7 +138,10 @@ fn each_fmu_has_its_crate_archive_and_checked_in_description() {
     );
     assert!(fmi2.description.contains(r#"fmiVersion="2.0""#));
     assert!(fmi3.description.contains(r#"fmiVersion="3.0""#));
-    assert!(fmi3.identity.contains(&tdvass_fmi3::instantiation_token()));
+    assert!(
+        fmi3.identity
+            .contains(&tdvass_fmi3::instantiation_token(Model::QuarterCar))
+    );
     // The package names the library target that cargo builds.
     for fmu in [&fmi2, &fmi3] {
         let manifest = fs::read_to_string(

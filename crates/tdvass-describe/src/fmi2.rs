@@ -12,6 +12,7 @@ use quick_xml::events::{BytesText, Event};
 use tdvass::exchange::EVENT_INDICATORS;
 use tdvass::solver::CONTINUOUS_STATES;
 use tdvass_fmi2::FMI_VERSION;
+use tdvass_fmu::Model;
 use tdvass_fmu::variables::{
     Access, COMMON_VARIABLES, Causality, FmiVersion, Quantity, VarType, Variable,
 };
@@ -120,7 +121,7 @@ fn state_index(i: usize) -> usize {
 /// the continuous states it is computed from (`dependent`).
 fn output_dependencies(v: &Variable) -> (String, String) {
     let mut found: Vec<(usize, &str)> = v
-        .output_dependencies(FmiVersion::Fmi2)
+        .output_dependencies(Model::QuarterCar, FmiVersion::Fmi2)
         .into_iter()
         .map(|(known, kind)| {
             let index = index_of(known.name)
@@ -249,7 +250,7 @@ pub const CO_SIMULATION_CAPABILITIES: [(&str, &str); 9] = [
 
 /// The complete `modelDescription.xml`.
 pub fn model_description_xml() -> String {
-    let guid = guid();
+    let guid = guid(Model::QuarterCar);
     let event_indicators = EVENT_INDICATORS.to_string();
     let frame = DescriptionFrame {
         fmi_version: FMI_VERSION,
@@ -307,7 +308,7 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
         w,
         &format!(
             "modelIdentifier {MODEL_IDENTIFIER}, GUID {} (a hash of the variable names, value references, types, causalities and variabilities), version {}.",
-            guid(),
+            guid(Model::QuarterCar),
             env!("CARGO_PKG_VERSION")
         ),
     )?;
@@ -418,7 +419,7 @@ mod tests {
         let els = elements(&xml);
         let root = &els[0];
         assert_eq!(root.name, "fmiModelDescription");
-        assert_eq!(root.attr("guid"), guid());
+        assert_eq!(root.attr("guid"), guid(Model::QuarterCar));
         assert_eq!(root.attr("modelName"), "TDVASS");
         assert_eq!(root.attr("fmiVersion"), "2.0");
         let cs = els.iter().find(|e| e.name == "CoSimulation").unwrap();

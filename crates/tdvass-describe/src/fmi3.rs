@@ -15,6 +15,7 @@ use crate::markup::{DescriptionFrame, XmlResult, XmlWriter, model_description, n
 use tdvass::solver::CONTINUOUS_STATES;
 use tdvass_fmi3::types::{Fmi3Type, fmi3_type};
 use tdvass_fmi3::{FMI_VERSION, instantiation_token};
+use tdvass_fmu::Model;
 use tdvass_fmu::variables::{
     Access, Causality, Dimension, Enumeration, FMI3_VARIABLES, FmiVersion, Quantity, Variable,
     by_name,
@@ -91,7 +92,7 @@ fn value_text(v: &Variable, value: f64) -> String {
 
 /// The value reference of the variable called `name`.
 fn vr_of(name: &str) -> u32 {
-    by_name(FmiVersion::Fmi3, name)
+    by_name(Model::QuarterCar, FmiVersion::Fmi3, name)
         .unwrap_or_else(|| panic!("unknown variable `{name}`"))
         .vr
 }
@@ -122,7 +123,7 @@ fn dimension_attribute(dimension: &Dimension) -> (&'static str, String) {
 /// `fmi3GetVariableDependencies` returns.
 pub fn output_dependencies(v: &Variable) -> Vec<(u32, &'static str)> {
     let mut found: Vec<(u32, &str)> = v
-        .output_dependencies(FmiVersion::Fmi3)
+        .output_dependencies(Model::QuarterCar, FmiVersion::Fmi3)
         .into_iter()
         .map(|(known, kind)| (known.vr, kind.name()))
         .collect();
@@ -325,7 +326,7 @@ fn write_model_structure(w: &mut XmlWriter) -> XmlResult {
 
 /// The complete FMI 3.0 `modelDescription.xml`.
 pub fn model_description_xml() -> String {
-    let token = instantiation_token();
+    let token = instantiation_token(Model::QuarterCar);
     let frame = DescriptionFrame {
         fmi_version: FMI_VERSION,
         token: ("instantiationToken", &token),

@@ -12,6 +12,7 @@ use quick_xml::events::{BytesDecl, BytesText, Event};
 use std::io::Cursor;
 use tdvass::solver::CONTINUOUS_STATES;
 use tdvass::solver::DEFAULT_TOLERANCE;
+use tdvass_fmu::Model;
 use tdvass_fmu::variables::{Access, Causality, FmiVersion, UNITS, Variable, by_name};
 use tdvass_fmu::{
     DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, LOG_CATEGORIES, MODEL_IDENTIFIER,
@@ -251,7 +252,7 @@ fn legend_variables(names: &[&str]) -> String {
     names
         .iter()
         .map(|name| {
-            let v = by_name(FmiVersion::Fmi2, name)
+            let v = by_name(Model::QuarterCar, FmiVersion::Fmi2, name)
                 .unwrap_or_else(|| panic!("the legend names `{name}`, not a variable"));
             let unit = v.unit().map(|u| format!(" {u}")).unwrap_or_default();
             match v.start {

@@ -22,7 +22,7 @@ use tdvass_fmi2::ffi::{
 };
 use tdvass_fmi2::instance::{FMI2_COSIMULATION, InstantiateRequest};
 use tdvass_fmi2::variables::{Causality, FmiVersion, VarType, by_name, variables_of};
-use tdvass_fmi2::{Instance, Status};
+use tdvass_fmi2::{Instance, Model, Status};
 
 /// `fmi2OK`.
 const OK: i32 = 0;
@@ -40,7 +40,7 @@ enum Outputs {
 }
 
 fn vr(name: &str) -> u32 {
-    by_name(FmiVersion::Fmi2, name)
+    by_name(Model::QuarterCar, FmiVersion::Fmi2, name)
         .unwrap_or_else(|| panic!("no variable `{name}`"))
         .vr
 }
@@ -93,7 +93,7 @@ fn run(
         ]
         .map(vr)
         .to_vec(),
-        Outputs::AllReal => variables_of(FmiVersion::Fmi2)
+        Outputs::AllReal => variables_of(Model::QuarterCar, FmiVersion::Fmi2)
             .iter()
             .filter(|v| v.causality == Causality::Output && v.var_type() == VarType::Real)
             .map(|v| v.vr)
@@ -149,7 +149,7 @@ fn run(
 }
 
 fn main() -> Result<(), String> {
-    let guid = tdvass_fmi2::guid();
+    let guid = tdvass_fmi2::guid(Model::QuarterCar);
     // The default experiment (TDVASS on the harmonic road, 15 s of 1 ms
     // steps) weighs most, as it does in use; then points inside internal
     // steps, every output, the other variants and roads, the unilateral

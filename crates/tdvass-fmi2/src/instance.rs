@@ -99,7 +99,6 @@ impl Instance {
     /// refusal is logged through `logger` and returns `None`.
     pub fn instantiate(request: InstantiateRequest<'_>, logger: LogSink) -> Option<Instance> {
         let instantiation = Instantiation::new(FMI2_DIALECT, logger);
-        let expected = crate::guid();
         let name = instantiation.instance_name(request.instance_name)?;
         let model_exchange = match request.fmu_type {
             FMI2_COSIMULATION => false,
@@ -110,7 +109,8 @@ impl Instance {
                 ));
             }
         };
-        instantiation.token(request.guid, &expected)?;
+        let model = instantiation.model(request.guid)?;
+        instantiation.interface(model, model_exchange)?;
         let resource_path = match request.resource_location {
             None | Some("") => None,
             Some(uri) => match crate::uri::resource_path(uri) {
@@ -124,7 +124,7 @@ impl Instance {
         };
         let mut slave = instantiation.slave(
             &name,
-            expected,
+            model,
             request.logging_on,
             resource_path.as_deref(),
             "",
@@ -223,6 +223,7 @@ impl Drop for Instance {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::Model;
     use crate::variables::{FmiVersion, by_name};
     use std::cell::RefCell;
     use std::rc::Rc;
@@ -232,7 +233,7 @@ mod tests {
     fn new_instance(logging_on: bool) -> (Instance, Log) {
         let log: Log = Rc::default();
         let sink = log.clone();
-        let guid = crate::guid();
+        let guid = crate::guid(Model::QuarterCar);
         let instance = Instance::instantiate(
             InstantiateRequest {
                 instance_name: Some("test"),
@@ -248,12 +249,14 @@ mod tests {
     }
 
     fn vr(name: &str) -> u32 {
-        by_name(FmiVersion::Fmi2, name).unwrap().vr
+        by_name(Model::QuarterCar, FmiVersion::Fmi2, name)
+            .unwrap()
+            .vr
     }
 
     #[test]
     fn instantiate_refusals_are_logged() {
-        let guid = crate::guid();
+        let guid = crate::guid(Model::QuarterCar);
         let cases: [(InstantiateRequest, &str); 5] = [
             (
                 InstantiateRequest {

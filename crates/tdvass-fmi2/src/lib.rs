@@ -65,8 +65,8 @@ pub use instance::Instance;
 pub use states::Function;
 pub use tdvass_fmu::{
     COMMON_VARIABLES, DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, FmiError,
-    LOG_CATEGORIES, MODEL_IDENTIFIER, MODEL_NAME, Phase, Status, TIME_TOLERANCE, Variable, guards,
-    guid, snapshot, variables,
+    LOG_CATEGORIES, MODEL_IDENTIFIER, MODEL_NAME, Model, Phase, Status, TIME_TOLERANCE, Variable,
+    guards, guid, snapshot, variables,
 };
 
 /// `fmi2GetVersion`.

@@ -126,9 +126,9 @@ impl Instance {
         };
         let instantiation = Instantiation::new(dialect, logger);
         let refuse = |message: String| instantiation.refuse(&message);
-        let expected = crate::instantiation_token();
         let name = instantiation.instance_name(request.instance_name)?;
-        instantiation.token(request.instantiation_token, &expected)?;
+        let model = instantiation.model(request.instantiation_token)?;
+        instantiation.interface(model, request.model_exchange)?;
         if request.event_mode_used {
             return refuse(
                 "eventModeUsed = true, but this FMU has no event mode (hasEventMode = false)"
@@ -136,7 +136,7 @@ impl Instance {
             );
         }
         for &vr in request.required_intermediate_variables {
-            match by_vr(FmiVersion::Fmi3, vr) {
+            match by_vr(model, FmiVersion::Fmi3, vr) {
                 Some(v) if v.intermediate_update => {}
                 Some(v) => {
                     return refuse(format!(
@@ -175,7 +175,7 @@ impl Instance {
         };
         let mut slave = instantiation.slave(
             &name,
-            expected,
+            model,
             request.logging_on,
             resource_path.as_deref(),
             &details,
@@ -296,7 +296,7 @@ impl Instance {
         expected: ValueType,
         write: bool,
     ) -> Result<&'static Variable, FmiError> {
-        let var = by_vr(FmiVersion::Fmi3, vr).ok_or_else(|| {
+        let var = by_vr(self.slave.model(), FmiVersion::Fmi3, vr).ok_or_else(|| {
             FmiError::error(format!(
                 "unknown value reference {vr} (for a {})",
                 expected.name()
@@ -471,7 +471,8 @@ impl Instance {
     /// `x_g` where it feeds through, the continuous states it is computed
     /// from ([`Variable::output_dependencies`]).
     pub fn dependencies(&self, vr: u32) -> Result<Vec<(u32, DependencyKind)>, FmiError> {
-        let var = by_vr(FmiVersion::Fmi3, vr)
+        let model = self.slave.model();
+        let var = by_vr(model, FmiVersion::Fmi3, vr)
             .ok_or_else(|| FmiError::error(format!("unknown value reference {vr}")))?;
         if var.causality != Causality::Output {
             return Err(FmiError::error(format!(
@@ -480,7 +481,7 @@ impl Instance {
             )));
         }
         let mut found: Vec<(u32, DependencyKind)> = var
-            .output_dependencies(FmiVersion::Fmi3)
+            .output_dependencies(model, FmiVersion::Fmi3)
             .into_iter()
             .map(|(known, kind)| (known.vr, kind))
             .collect();

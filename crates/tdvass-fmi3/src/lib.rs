@@ -42,7 +42,7 @@ pub use tdvass_fmu::{
 /// `fmi3GetVersion`.
 pub const FMI_VERSION: &str = "3.0";
 
-/// The `instantiationToken` of this FMU.
-pub fn instantiation_token() -> String {
-    tdvass_fmu::variables::instantiation_token()
+/// The `instantiationToken` of `model`'s FMU.
+pub fn instantiation_token(model: tdvass_fmu::Model) -> String {
+    tdvass_fmu::variables::instantiation_token(model)
 }

@@ -138,11 +138,13 @@ impl Fmi3Type {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use tdvass_fmu::Model;
     use tdvass_fmu::variables::{FMI3_VARIABLES, FmiVersion, by_name};
 
     #[test]
     fn every_variable_has_the_type_the_interface_names() {
-        let type_of = |name: &str| fmi3_type(by_name(FmiVersion::Fmi3, name).unwrap());
+        let type_of =
+            |name: &str| fmi3_type(by_name(Model::QuarterCar, FmiVersion::Fmi3, name).unwrap());
         assert_eq!(type_of("variant"), Fmi3Type::Enumeration);
         assert_eq!(type_of("road"), Fmi3Type::Enumeration);
         assert_eq!(type_of("road_class"), Fmi3Type::Enumeration);

@@ -3,8 +3,50 @@
 
 /// The `modelIdentifier` (shared library base name) of the FMUs.
 pub const MODEL_IDENTIFIER: &str = "tdvass";
-/// The `modelName` of the FMUs.
+/// The `modelName` of the quarter car's FMUs ([`Model::name`] names
+/// each model).
 pub const MODEL_NAME: &str = "TDVASS";
+
+/// A model the library serves. Every FMU carries the same library; the
+/// token of its model description (the GUID, the instantiation token)
+/// picks the model at instantiation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Model {
+    /// The paper's quarter car: the suspension under its sprung mass m_s,
+    /// on its own road (`tdvass.fmu`).
+    QuarterCar,
+    /// The suspension of one corner of a vehicle: the quarter car without
+    /// its body, whose attachment point's motion is an input and which
+    /// returns the force on the body (`tdvass-corner.fmu`).
+    Corner,
+}
+
+impl Model {
+    /// Every model, the quarter car first.
+    pub const ALL: [Model; 2] = [Model::QuarterCar, Model::Corner];
+
+    /// The `modelName`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Model::QuarterCar => MODEL_NAME,
+            Model::Corner => "TDVASS corner",
+        }
+    }
+
+    /// The FMU's file name without the FMI version's suffix and `.fmu`.
+    pub fn fmu_stem(self) -> &'static str {
+        match self {
+            Model::QuarterCar => "tdvass",
+            Model::Corner => "tdvass-corner",
+        }
+    }
+
+    /// Whether the model offers Model Exchange (the corner is a
+    /// Co-Simulation model: its body's motion comes from another FMU).
+    pub fn offers_model_exchange(self) -> bool {
+        self == Model::QuarterCar
+    }
+}
 /// `DefaultExperiment` start time (s).
 pub const DEFAULT_START_TIME: f64 = 0.0;
 /// `DefaultExperiment` stop time (s).

@@ -18,9 +18,10 @@
 //! - **Outputs** ([`non_finite_output`]): a last line of defence; a
 //!   non-finite output is never handed out.
 
+use crate::defaults::Model;
 use crate::error::FmiError;
 use crate::settings::Settings;
-use crate::variables::{Access, COMMON_VARIABLES, FMI3_VARIABLES, Variable};
+use crate::variables::{Access, FmiVersion, Variable, variables_of};
 use tdvass::limits::Bound;
 use tdvass::road::RoadType;
 use tdvass::solver::Outputs;
@@ -49,7 +50,7 @@ pub fn check_input_slope(value: f64) -> Result<(), FmiError> {
 
 /// Every single-value limit of `settings`.
 pub fn check_values(settings: &Settings) -> Result<(), FmiError> {
-    for v in FMI3_VARIABLES {
+    for v in variables_of(settings.model, FmiVersion::Fmi3) {
         match v.access {
             Access::Real { get, .. } => check_variable(v, get(settings))?,
             Access::Integer { get, .. } => check_variable(v, get(settings) as f64)?,
@@ -62,7 +63,7 @@ pub fn check_values(settings: &Settings) -> Result<(), FmiError> {
 /// The library's rate limit for the parameters of `s` in its variant (an
 /// invalid code, refused elsewhere, counts as every part present).
 pub fn check_rates(s: &Settings) -> Result<(), FmiError> {
-    Ok(tdvass::limits::check_rates(&s.params, s.variant().ok())?)
+    Ok(tdvass::limits::check_rates(&s.params(), s.variant().ok())?)
 }
 
 /// Most internal steps plus road breakpoints in one step (2^22).
@@ -132,15 +133,18 @@ pub fn non_finite_state(state: &tdvass::model::State) -> Option<(&'static str, f
         .map(|(value, name)| (name, *value))
 }
 
-/// The first output of `outputs` that is not finite, with its value.
-pub fn non_finite_output(outputs: &Outputs) -> Option<(&'static str, f64)> {
-    COMMON_VARIABLES.iter().find_map(|v| match v.access {
-        Access::Output(id) => {
-            let value = id.value(outputs);
-            (!value.is_finite()).then_some((v.name, value))
-        }
-        _ => None,
-    })
+/// The first output of `model` in `outputs` that is not finite, with its
+/// value.
+pub fn non_finite_output(model: Model, outputs: &Outputs) -> Option<(&'static str, f64)> {
+    variables_of(model, FmiVersion::Fmi2)
+        .iter()
+        .find_map(|v| match v.access {
+            Access::Output(id) => {
+                let value = id.value(outputs);
+                (!value.is_finite()).then_some((v.name, value))
+            }
+            _ => None,
+        })
 }
 
 #[cfg(test)]
@@ -149,7 +153,7 @@ mod tests {
 
     #[test]
     fn defaults_are_within_the_limits() {
-        let s = Settings::start_values();
+        let s = Settings::start_values(Model::QuarterCar);
         check_values(&s).unwrap();
         check_rates(&s).unwrap();
         check_step_work(&s, 1e-4, 15.0, "fmi2DoStep").unwrap();
@@ -157,8 +161,10 @@ mod tests {
 
     #[test]
     fn limits_name_variable_and_value() {
-        let var =
-            |name| crate::variables::by_name(crate::variables::FmiVersion::Fmi3, name).unwrap();
+        let var = |name| {
+            crate::variables::by_name(Model::QuarterCar, crate::variables::FmiVersion::Fmi3, name)
+                .unwrap()
+        };
         let e = check_variable(var("x_s_start"), -2e3).unwrap_err().message;
         assert!(e.contains("`x_s_start`") && e.contains("-2000"), "{e}");
         let e = check_variable(var("w_tdd"), 1e300).unwrap_err().message;
@@ -172,7 +178,7 @@ mod tests {
             "{e}"
         );
         // The table maps its variables onto the library's kinds of value.
-        let bounded: Vec<_> = FMI3_VARIABLES
+        let bounded: Vec<_> = variables_of(Model::QuarterCar, FmiVersion::Fmi3)
             .iter()
             .filter_map(|v| v.bound.map(|b| (v.name, b)))
             .collect();
@@ -192,19 +198,19 @@ mod tests {
         ];
         assert_eq!(bounded, expected);
         check_variable(var("m_s"), 1e300).unwrap();
-        let mut s = Settings::start_values();
+        let mut s = Settings::start_values(Model::QuarterCar);
         s.params.k_s = 1e300;
         let e = check_rates(&s).unwrap_err().message;
         assert!(
             e.contains("`k_s` = ") && e.contains(&1e300.to_string()),
             "{e}"
         );
-        let mut s = Settings::start_values();
+        let mut s = Settings::start_values(Model::QuarterCar);
         s.params.m_h = 1e-300;
         assert!(check_rates(&s).unwrap_err().message.contains("m_h"));
         s.variant = 1;
         check_rates(&s).unwrap();
-        let mut s = Settings::start_values();
+        let mut s = Settings::start_values(Model::QuarterCar);
         s.params.g = -1e13;
         assert!(check_rates(&s).is_err());
         s.variant = 2;
@@ -213,7 +219,7 @@ mod tests {
 
     #[test]
     fn work_per_step() {
-        let mut s = Settings::start_values();
+        let mut s = Settings::start_values(Model::QuarterCar);
         assert!(check_step_work(&s, 1e-4, 1e9, "fmi2DoStep").is_err());
         assert!(check_step_work(&s, 1e-12, 0.01, "fmi2DoStep").is_err());
         assert!(check_time_resolution("startTime", -4.3e42, 1e-4).is_err());

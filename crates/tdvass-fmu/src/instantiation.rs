@@ -8,9 +8,10 @@
 //! how each passes its resources).
 
 use crate::Slave;
-use crate::defaults::MODEL_NAME;
+use crate::defaults::Model;
 use crate::error::Status;
 use crate::slave::{Dialect, LogSink, Logger};
+use crate::variables::{model_of_token, token};
 use std::path::Path;
 
 /// One call of the instantiation function, before the instance exists.
@@ -46,41 +47,70 @@ impl Instantiation {
         }
     }
 
-    /// The token the master passed, refused when NULL or not `expected`
-    /// (the model description and the binary are then from different
-    /// builds).
-    pub fn token(&self, given: Option<&str>, expected: &str) -> Option<()> {
+    /// The model whose token the master passed, refused when NULL or the
+    /// token of no model of this library (the model description and the
+    /// binary are then from different builds).
+    pub fn model(&self, given: Option<&str>) -> Option<Model> {
         let d = &self.dialect;
-        match given {
-            None => self.refuse(&format!("{} is NULL", d.token_argument)),
-            Some(t) if t != expected => self.refuse(&format!(
-                "{} {t} does not match this FMU's {} {expected} (modelDescription.xml and binary are from different builds)",
-                d.given_token, d.own_token
-            )),
-            Some(_) => Some(()),
+        let given = match given {
+            None => return self.refuse(&format!("{} is NULL", d.token_argument)),
+            Some(given) => given,
+        };
+        if let Some(model) = model_of_token(d.version, given) {
+            return Some(model);
         }
+        let known: Vec<String> = Model::ALL
+            .iter()
+            .map(|&m| format!("{} ({})", token(m, d.version), m.name()))
+            .collect();
+        self.refuse(&format!(
+            "{} {given} does not match this FMU's {} {}, the models this binary serves (modelDescription.xml and binary are from different builds)",
+            d.given_token,
+            d.own_token,
+            known.join(" or ")
+        ))
     }
 
-    /// The slave of the instance `name`, which checks `token` in FMU states
+    /// Refuses a Model Exchange instance of a model that offers
+    /// Co-Simulation only.
+    pub fn interface(&self, model: Model, model_exchange: bool) -> Option<()> {
+        if model_exchange && !model.offers_model_exchange() {
+            return self.refuse(&format!(
+                "the {} model offers Co-Simulation only: its model description declares no Model Exchange",
+                model.name()
+            ));
+        }
+        Some(())
+    }
+
+    /// The slave of the instance `name` of `model`, which checks the
+    /// model's token in FMU states
     /// and logs events when `logging_on`; logs the instantiation with its
     /// resources and the front-end's `details` (appended as they are).
     pub fn slave(
         self,
         name: &str,
-        token: String,
+        model: Model,
         logging_on: bool,
         resource_path: Option<&Path>,
         details: &str,
     ) -> Slave {
+        let token = token(model, self.dialect.version);
         let resources = resource_path
             .map(|p| format!("at {}", p.display()))
             .unwrap_or_else(|| "not given".into());
         let message = format!(
-            "{}: instance `{name}` of {MODEL_NAME} ({} {token}), resources {resources}{details}",
+            "{}: instance `{name}` of {} ({} {token}), resources {resources}{details}",
             self.function(),
+            model.name(),
             self.dialect.own_token
         );
-        let slave = Slave::new(self.dialect, token, Logger::new(self.logger, logging_on));
+        let slave = Slave::new(
+            self.dialect,
+            model,
+            token,
+            Logger::new(self.logger, logging_on),
+        );
         slave.logger().log(Status::Ok, &message);
         slave
     }

@@ -75,7 +75,7 @@ pub mod variables;
 
 pub use defaults::{
     DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, LOG_CATEGORIES, MODEL_IDENTIFIER,
-    MODEL_NAME, TIME_TOLERANCE,
+    MODEL_NAME, Model, TIME_TOLERANCE,
 };
 pub use error::{FmiError, Status};
 pub use phase::Phase;

@@ -30,6 +30,8 @@ pub enum OutputId {
     TireDeflection,
     RoadDisplacement,
     ControlForce,
+    /// The corner's force on the body ([`Outputs::body_force`]).
+    BodyForce,
     RmsBodyAcceleration,
     RmsSuspensionDeflection,
     RmsTireDeflection,
@@ -85,6 +87,8 @@ pub enum Known {
 pub struct Linearization {
     /// Row `v_s` of A: BA = row · X.
     pub body_acceleration_row: [f64; 6],
+    /// The force on the body = row · X ([`tdvass::model::Plant::body_force_row`]).
+    pub body_force_row: [f64; 6],
     /// CS reports `x_h = x_t`, `v_h = v_t`.
     pub conventional: bool,
     /// `road = 0`: the applied road is the input.
@@ -113,6 +117,7 @@ impl OutputId {
             | OutputId::SuspensionDeflection
             | OutputId::TireDeflection
             | OutputId::ControlForce
+            | OutputId::BodyForce
             | OutputId::DynamicTireLoad
             | OutputId::MaxSuspensionDeflection => PLANT,
             OutputId::RoadDisplacement => 0..0,
@@ -136,6 +141,7 @@ impl OutputId {
             OutputId::TireDeflection => o.performance.tire_deflection,
             OutputId::RoadDisplacement => o.road_displacement,
             OutputId::ControlForce => o.control_force,
+            OutputId::BodyForce => o.body_force,
             OutputId::RmsBodyAcceleration => o.rms.body_acceleration,
             OutputId::RmsSuspensionDeflection => o.rms.suspension_deflection,
             OutputId::RmsTireDeflection => o.rms.tire_deflection,
@@ -169,6 +175,7 @@ impl OutputId {
                 | OutputId::TireDeflection
                 | OutputId::RoadDisplacement
                 | OutputId::ControlForce
+                | OutputId::BodyForce
                 | OutputId::DynamicTireLoad
         )
     }
@@ -184,6 +191,7 @@ impl OutputId {
             OutputId::TireDeflection => Some(instant.performance.tire_deflection),
             OutputId::RoadDisplacement => Some(instant.road_displacement),
             OutputId::ControlForce => Some(instant.control_force),
+            OutputId::BodyForce => Some(instant.body_force),
             OutputId::DynamicTireLoad => Some(instant.dynamic_tire_load),
             _ => None,
         }
@@ -226,6 +234,7 @@ impl OutputId {
             OutputId::TireDeflection => d.performance.tire_deflection,
             OutputId::RoadDisplacement => d.road_displacement,
             OutputId::ControlForce => d.control_force,
+            OutputId::BodyForce => d.body_force,
             OutputId::RmsBodyAcceleration => d.rms.body_acceleration,
             OutputId::RmsSuspensionDeflection => d.rms.suspension_deflection,
             OutputId::RmsTireDeflection => d.rms.tire_deflection,
@@ -257,6 +266,8 @@ impl OutputId {
             OutputId::TireDeflection => p.tire_deflection,
             OutputId::RoadDisplacement => p.road_displacement,
             OutputId::ControlForce => p.control_force,
+            // Only the corner has it, and it has no Model Exchange.
+            OutputId::BodyForce => Gradient::ZERO,
             OutputId::RmsBodyAcceleration => p.rms_body_acceleration,
             OutputId::RmsSuspensionDeflection => p.rms_suspension_deflection,
             OutputId::RmsTireDeflection => p.rms_tire_deflection,
@@ -288,6 +299,7 @@ impl OutputId {
                 indicator(source == j)
             }
             (OutputId::BodyAcceleration, Known::State(j)) => lin.body_acceleration_row[j],
+            (OutputId::BodyForce, Known::State(j)) => lin.body_force_row[j],
             (OutputId::SuspensionDeflection, Known::State(j)) => {
                 indicator(j == X_S) - indicator(j == X_T)
             }

@@ -4,16 +4,19 @@
 //! [`SimulationConfig`]. Start values come from the one variable table
 //! ([`crate::variables`], which reads and writes these settings).
 
+use crate::defaults::Model;
 use tdvass::TireContact;
 use tdvass::metrics::Weights;
-use tdvass::model::{Params, State, Variant};
-use tdvass::road::{RandomRoad, RoadClass, RoadSpec, RoadType};
+use tdvass::model::{Body, Params, STANDARD_GRAVITY, State, Variant};
+use tdvass::road::{RandomRoad, RoadClass, RoadShift, RoadSpec, RoadType};
 use tdvass::solver::{DEFAULT_TOLERANCE, Metrics, SimulationConfig};
 
 /// Every setting of an instance: the parameters and the input. Start values
 /// come from the variable table ([`Settings::start_values`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Settings {
+    /// The model these settings are of (no variable: the token chose it).
+    pub model: Model,
     /// `variant` code: 1 CS, 2 PVASS, 3 TDVASS.
     pub variant: i32,
     /// The physical and controller parameters (Table 1, g, tau).
@@ -48,13 +51,24 @@ pub struct Settings {
     pub intermediate_update_interval: f64,
     /// FMI 3.0: how many rightmost roots `rightmost_roots` lists.
     pub root_count: i32,
+    /// The corner: its share W_c of the body's weight (N), which stands
+    /// for the quarter car's `m_s = W_c / g0` ([`Settings::params`]).
+    pub static_load: f64,
+    /// The corner: the built-in road delayed by this (s).
+    pub road_delay: f64,
+    /// The corner: the harmonic road's phase (rad).
+    pub road_phase: f64,
+    /// The corner: the body's attachment point's displacement (m).
+    pub body_displacement: f64,
+    /// The corner: the body's attachment point's velocity (m/s).
+    pub body_velocity: f64,
 }
 
 impl Settings {
     /// Every value zero (codes 0, no weights), the default tolerance: what
     /// the table's start values ([`Settings::start_values`], in
     /// [`crate::variables`]) are written over.
-    pub fn zeroed() -> Settings {
+    pub fn zeroed(model: Model) -> Settings {
         let zero_params = Params {
             m_s: 0.0,
             m_h: 0.0,
@@ -68,6 +82,7 @@ impl Settings {
             tau: 0.0,
         };
         Settings {
+            model,
             variant: 0,
             params: zero_params,
             road: 0,
@@ -91,12 +106,42 @@ impl Settings {
             x_g: 0.0,
             intermediate_update_interval: 0.0,
             root_count: 0,
+            static_load: 0.0,
+            road_delay: 0.0,
+            road_phase: 0.0,
+            body_displacement: 0.0,
+            body_velocity: 0.0,
         }
     }
 
-    /// The physical parameters.
+    /// The physical parameters; the corner's `m_s` is `static_load / g0`
+    /// (it sets the tire's static load and nothing else,
+    /// [`tdvass::model::Body::Attached`]).
     pub fn params(&self) -> Params {
-        self.params
+        match self.model {
+            Model::QuarterCar => self.params,
+            Model::Corner => Params {
+                m_s: self.static_load / STANDARD_GRAVITY,
+                ..self.params
+            },
+        }
+    }
+
+    /// What carries the suspension: the quarter car's own mass, or the
+    /// corner's body outside the model.
+    pub fn body(&self) -> Body {
+        match self.model {
+            Model::QuarterCar => Body::Mass,
+            Model::Corner => Body::Attached,
+        }
+    }
+
+    /// The corner's body attachment point `(displacement, velocity)`;
+    /// `None` for the quarter car.
+    pub fn body_input(&self) -> Option<(f64, f64)> {
+        self.body()
+            .is_attached()
+            .then_some((self.body_displacement, self.body_velocity))
     }
 
     /// The variant (`variant` code checked).
@@ -168,14 +213,17 @@ impl Settings {
             params: self.params(),
             variant: self.variant()?,
             road: self.road_spec()?,
-            road_shift: tdvass::road::RoadShift::NONE,
+            road_shift: RoadShift {
+                delay: self.road_delay,
+                phase: self.road_phase,
+            },
             tolerance: self.tolerance,
             max_internal_step: self.max_internal_step,
             // The internal step divides the DefaultExperiment stepSize: a
             // master stepping by it meets internal nodes only.
             communication_step: crate::defaults::DEFAULT_STEP_SIZE,
             tire_contact: self.tire_contact()?,
-            body: tdvass::model::Body::Mass,
+            body: self.body(),
             start_time,
             initial_state: State::from(self.initial_state),
             weights: self.weights(),

@@ -5,6 +5,7 @@
 //! `Result<_, FmiError>`. Function names in log messages come from the
 //! front-end's [`Dialect`].
 
+use crate::defaults::Model;
 use crate::error::{FmiError, Status};
 use crate::guards;
 use crate::phase::Phase;
@@ -102,14 +103,14 @@ impl fmt::Display for CallName {
 }
 
 impl Slave {
-    /// A slave at its start values, speaking `dialect`; serialized states
-    /// carry (and must match) `token`.
-    pub fn new(dialect: Dialect, token: String, logger: Logger) -> Slave {
+    /// A slave of `model` at its start values, speaking `dialect`;
+    /// serialized states carry (and must match) `token`.
+    pub fn new(dialect: Dialect, model: Model, token: String, logger: Logger) -> Slave {
         Slave {
             dialect,
             token,
             logger,
-            state: SlaveState::default(),
+            state: SlaveState::new(Engine::CoSimulation(None), model),
             fmu_states: HashMap::new(),
             spectrum: None,
             read_plan: values::ReadPlan::default(),
@@ -123,6 +124,11 @@ impl Slave {
             prefix: self.dialect.prefix,
             function,
         }
+    }
+
+    /// The model the instance is of.
+    pub fn model(&self) -> Model {
+        self.state.settings.model
     }
 
     /// The settings.
@@ -270,10 +276,15 @@ impl Slave {
         if m.settings.road_is_input() {
             sim.set_road_input(m.settings.x_g, m.input_slope)?;
         }
+        // The corner's body attachment, like the road input, is applied to
+        // the simulation (the configuration does not depend on inputs).
+        if let Some((displacement, velocity)) = m.settings.body_input() {
+            sim.set_body_input(displacement, velocity)?;
+        }
         // Stepping, the getters and the setters allocate nothing from here
         // on (docs/fmu.md, "Real-time").
         sim.reserve();
-        if let Some((name, value)) = guards::non_finite_output(&sim.outputs()) {
+        if let Some((name, value)) = guards::non_finite_output(m.settings.model, &sim.outputs()) {
             return Err(FmiError::error(format!(
                 "the settings give a non-finite initial output `{name}` = {value}"
             )));
@@ -358,7 +369,7 @@ impl Slave {
     /// history, road generator, RMS accumulators, stop time all reset). FMU
     /// states handed out stay valid.
     pub fn reset(&mut self) -> Result<Status, FmiError> {
-        self.state = SlaveState::new(self.state.engine.emptied());
+        self.state = SlaveState::new(self.state.engine.emptied(), self.model());
         self.event(format_args!(
             "{}: back to the start values",
             self.call("Reset")

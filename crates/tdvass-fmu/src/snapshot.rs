@@ -26,11 +26,12 @@
 //! consistency of the settings with the simulator: truncated, corrupted or
 //! foreign bytes give an error, never a panic.
 
+use crate::defaults::Model;
 use crate::error::FmiError;
 use crate::phase::Phase;
 use crate::settings::Settings;
 use crate::state::{Engine, SlaveState};
-use crate::variables::{Access, FMI3_VARIABLES, FmiVersion, by_vr};
+use crate::variables::{Access, FmiVersion, by_vr, variables_of};
 use tdvass::bytes::{ByteReader, ByteWriter};
 use tdvass::exchange::ModelExchange;
 use tdvass::solver::Simulator;
@@ -147,7 +148,7 @@ impl<'a> Reader<'a> {
 fn encode_payload(model: &SlaveState) -> Vec<u8> {
     let mut w = ByteWriter::default();
     w.u8(model.phase.code());
-    let settings: Vec<_> = FMI3_VARIABLES
+    let settings: Vec<_> = variables_of(model.settings.model, FmiVersion::Fmi3)
         .iter()
         .filter_map(|v| match v.access {
             Access::Real { get, .. } => Some((v.vr, get(&model.settings).to_bits())),
@@ -198,9 +199,9 @@ fn encode_payload(model: &SlaveState) -> Vec<u8> {
     w.bytes
 }
 
-fn decode_settings(r: &mut Reader) -> Result<Settings, FmiError> {
-    let mut settings = Settings::start_values();
-    let expected: Vec<_> = FMI3_VARIABLES
+fn decode_settings(r: &mut Reader, model: Model) -> Result<Settings, FmiError> {
+    let mut settings = Settings::start_values(model);
+    let expected: Vec<_> = variables_of(model, FmiVersion::Fmi3)
         .iter()
         .filter(|v| matches!(v.access, Access::Real { .. } | Access::Integer { .. }))
         .collect();
@@ -216,7 +217,7 @@ fn decode_settings(r: &mut Reader) -> Result<Settings, FmiError> {
         let vr = r.u32("a value reference")?;
         let bits = r.u64("a setting")?;
         let position = expected.iter().position(|v| v.vr == vr);
-        let (Some(i), Some(var)) = (position, by_vr(FmiVersion::Fmi3, vr)) else {
+        let (Some(i), Some(var)) = (position, by_vr(model, FmiVersion::Fmi3, vr)) else {
             return Err(invalid(format_args!(
                 "unknown setting value reference {vr}"
             )));
@@ -254,13 +255,13 @@ fn decode_settings(r: &mut Reader) -> Result<Settings, FmiError> {
     Ok(settings)
 }
 
-fn decode_payload(bytes: &[u8]) -> Result<SlaveState, FmiError> {
+fn decode_payload(bytes: &[u8], model: Model) -> Result<SlaveState, FmiError> {
     let mut r = Reader::new(bytes);
     let code = r.u8("the phase")?;
     let phase = Phase::from_code(code)
         .filter(|s| *s != Phase::Fatal)
         .ok_or_else(|| invalid(format_args!("phase code {code}")))?;
-    let mut settings = decode_settings(&mut r)?;
+    let mut settings = decode_settings(&mut r, model)?;
     let input_slope = r.finite("the input slope")?;
     let input_pending = r.flag("input pending")?;
     let input_slope_given = r.flag("input slope given")?;
@@ -359,7 +360,9 @@ fn decode_payload(bytes: &[u8]) -> Result<SlaveState, FmiError> {
                 "simulator time {now} s (committed {committed} s) does not fit its start {start_time} s and internal step {step} s"
             )));
         }
-        if let Some((name, value)) = crate::guards::non_finite_output(&sim.outputs()) {
+        if let Some((name, value)) =
+            crate::guards::non_finite_output(settings.model, &sim.outputs())
+        {
             return Err(invalid(format_args!("output `{name}` = {value}")));
         }
     }
@@ -400,8 +403,8 @@ pub fn serialize(model: &SlaveState, guid: &str) -> Vec<u8> {
     w.bytes
 }
 
-/// Reads what [`serialize`] wrote, for the FMU with `guid`.
-pub fn deserialize(bytes: &[u8], guid: &str) -> Result<SlaveState, FmiError> {
+/// Reads what [`serialize`] wrote, for the FMU with `guid` of `model`.
+pub fn deserialize(bytes: &[u8], guid: &str, model: Model) -> Result<SlaveState, FmiError> {
     let mut r = Reader::new(bytes);
     if bytes.len() < MAGIC.len() || &bytes[..MAGIC.len()] != MAGIC {
         return Err(invalid(format_args!(
@@ -442,7 +445,7 @@ pub fn deserialize(bytes: &[u8], guid: &str) -> Result<SlaveState, FmiError> {
             "checksum mismatch (stored {checksum:08x}, computed {actual:08x})"
         )));
     }
-    decode_payload(payload)
+    decode_payload(payload, model)
 }
 
 #[cfg(test)]
@@ -479,9 +482,9 @@ mod tests {
     #[test]
     fn round_trip_is_exact() {
         let model = running_model();
-        let bytes = serialize(&model, &guid());
-        let back = deserialize(&bytes, &guid()).unwrap();
-        assert_eq!(serialize(&back, &guid()), bytes);
+        let bytes = serialize(&model, &guid(Model::QuarterCar));
+        let back = deserialize(&bytes, &guid(Model::QuarterCar), Model::QuarterCar).unwrap();
+        assert_eq!(serialize(&back, &guid(Model::QuarterCar)), bytes);
         assert_eq!(back.phase, Phase::StepComplete);
         assert_eq!(back.stop_time, Some(15.0));
         let (mut a, mut b) = (simulator(model), simulator(back));
@@ -489,7 +492,12 @@ mod tests {
         b.advance_to(0.5).unwrap();
         assert_eq!(a.outputs(), b.outputs());
         let fresh = SlaveState::default();
-        let back = deserialize(&serialize(&fresh, &guid()), &guid()).unwrap();
+        let back = deserialize(
+            &serialize(&fresh, &guid(Model::QuarterCar)),
+            &guid(Model::QuarterCar),
+            Model::QuarterCar,
+        )
+        .unwrap();
         assert!(back.engine.simulator().is_none());
         assert_eq!(back.settings, fresh.settings);
     }
@@ -516,10 +524,10 @@ mod tests {
         model.engine = Engine::CoSimulation(Some(Box::new(sim)));
         model.phase = Phase::StepComplete;
         model.last_successful_time = t;
-        let bytes = serialize(&model, &guid());
-        let back = deserialize(&bytes, &guid()).unwrap();
+        let bytes = serialize(&model, &guid(Model::QuarterCar));
+        let back = deserialize(&bytes, &guid(Model::QuarterCar), Model::QuarterCar).unwrap();
         assert_eq!(back.settings.tire_contact, 1);
-        assert_eq!(serialize(&back, &guid()), bytes);
+        assert_eq!(serialize(&back, &guid(Model::QuarterCar)), bytes);
         let (mut a, mut b) = (simulator(model), simulator(back));
         assert!(b.in_flight());
         a.advance_to(1.5).unwrap();
@@ -529,9 +537,13 @@ mod tests {
         // The setting is checked like every other one.
         let mut bad = SlaveState::default();
         bad.settings.tire_contact = 2;
-        let e = deserialize(&serialize(&bad, &guid()), &guid())
-            .unwrap_err()
-            .message;
+        let e = deserialize(
+            &serialize(&bad, &guid(Model::QuarterCar)),
+            &guid(Model::QuarterCar),
+            Model::QuarterCar,
+        )
+        .unwrap_err()
+        .message;
         assert!(e.contains("tire_contact") && e.contains('2'), "{e}");
     }
 
@@ -547,16 +559,16 @@ mod tests {
         sim.advance_to(end).unwrap();
         assert!(sim.time() < sim.committed_time());
         model.last_successful_time = end;
-        let bytes = serialize(&model, &guid());
-        let back = deserialize(&bytes, &guid()).unwrap();
-        assert_eq!(serialize(&back, &guid()), bytes);
+        let bytes = serialize(&model, &guid(Model::QuarterCar));
+        let back = deserialize(&bytes, &guid(Model::QuarterCar), Model::QuarterCar).unwrap();
+        assert_eq!(serialize(&back, &guid(Model::QuarterCar)), bytes);
     }
 
     #[test]
     fn envelope_errors() {
-        let g = guid();
+        let g = guid(Model::QuarterCar);
         let bytes = serialize(&running_model(), &g);
-        let err = |b: &[u8]| deserialize(b, &g).unwrap_err().message;
+        let err = |b: &[u8]| deserialize(b, &g, Model::QuarterCar).unwrap_err().message;
         assert!(err(&[]).contains("magic"));
         assert!(err(b"TDVASSF").contains("magic"));
         assert!(err(b"something else entirely").contains("magic"));
@@ -573,10 +585,14 @@ mod tests {
             assert!(err(&other).contains(&format!("format version {version}")));
         }
         assert!(
-            deserialize(&bytes, "{00000000-0000-0000-0000-000000000000}")
-                .unwrap_err()
-                .message
-                .contains("GUID")
+            deserialize(
+                &bytes,
+                "{00000000-0000-0000-0000-000000000000}",
+                Model::QuarterCar
+            )
+            .unwrap_err()
+            .message
+            .contains("GUID")
         );
         let mut long = bytes.clone();
         long.push(0);
@@ -588,13 +604,16 @@ mod tests {
 
     #[test]
     fn every_single_bit_flip_is_detected() {
-        let g = guid();
+        let g = guid(Model::QuarterCar);
         let bytes = serialize(&running_model(), &g);
         let mut flipped = bytes.clone();
         for i in 0..bytes.len() {
             for bit in 0..8 {
                 flipped[i] ^= 1 << bit;
-                assert!(deserialize(&flipped, &g).is_err(), "byte {i} bit {bit}");
+                assert!(
+                    deserialize(&flipped, &g, Model::QuarterCar).is_err(),
+                    "byte {i} bit {bit}"
+                );
                 flipped[i] ^= 1 << bit;
             }
         }
@@ -602,7 +621,7 @@ mod tests {
 
     #[test]
     fn consistent_checksum_but_bad_content_is_refused() {
-        let g = guid();
+        let g = guid(Model::QuarterCar);
         let model = running_model();
         let mut payload = encode_payload(&model);
         // A negative mass (m_s is the second setting: phase byte, count, then vr/value pairs).
@@ -616,7 +635,9 @@ mod tests {
         w.u64(payload.len() as u64);
         w.u32(crc32(&payload));
         w.raw(&payload);
-        let e = deserialize(&w.bytes, &g).unwrap_err().message;
+        let e = deserialize(&w.bytes, &g, Model::QuarterCar)
+            .unwrap_err()
+            .message;
         assert!(e.contains("m_s") && e.contains("-1"), "{e}");
     }
 }

@@ -3,6 +3,7 @@
 //! the slave and the byte format of FMU states ([`crate::snapshot`]), which
 //! both use it.
 
+use crate::defaults::Model;
 use crate::phase::Phase;
 use crate::settings::Settings;
 use tdvass::exchange::ModelExchange;
@@ -123,12 +124,12 @@ pub struct SlaveState {
 }
 
 impl SlaveState {
-    /// A freshly instantiated model of the kind `engine` says: start
+    /// A freshly instantiated `model` of the kind `engine` says: start
     /// values, no simulation.
-    pub fn new(engine: Engine) -> SlaveState {
+    pub fn new(engine: Engine, model: Model) -> SlaveState {
         SlaveState {
             phase: Phase::Instantiated,
-            settings: Settings::start_values(),
+            settings: Settings::start_values(model),
             input_slope: 0.0,
             input_pending: false,
             input_slope_given: false,
@@ -146,8 +147,8 @@ impl SlaveState {
 }
 
 impl Default for SlaveState {
-    /// A Co-Simulation instance's.
+    /// A Co-Simulation instance's of the quarter car.
     fn default() -> Self {
-        SlaveState::new(Engine::CoSimulation(None))
+        SlaveState::new(Engine::CoSimulation(None), Model::QuarterCar)
     }
 }

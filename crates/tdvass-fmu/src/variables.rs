@@ -20,6 +20,7 @@
 //! declaration of every variable (about 500 lines of data), and splitting it
 //! would scatter what must be read, and changed, in one place.
 
+use crate::defaults::Model;
 use crate::error::FmiError;
 use crate::outputs::{IntegerOutputId, OutputId};
 use crate::settings::Settings;
@@ -520,6 +521,10 @@ pub struct Variable {
     /// The library's numerical limit on its magnitude, by the kind of value
     /// it is ([`tdvass::limits::Bound`]; `None`: its range alone).
     pub bound: Option<Bound>,
+    /// Only the quarter car has it: the corner ([`Model::Corner`]) leaves
+    /// it out, or declares its own of the same name and value reference
+    /// in [`CORNER_ADDITIONS`].
+    pub quarter_car_only: bool,
 }
 
 impl Variable {
@@ -572,6 +577,7 @@ impl Variable {
     /// for the other variables.
     pub fn output_dependencies(
         &self,
+        model: Model,
         version: FmiVersion,
     ) -> Vec<(&'static Variable, DependencyKind)> {
         let states = match self.access {
@@ -580,12 +586,14 @@ impl Variable {
             _ => return Vec::new(),
         };
         let inputs = self.feedthrough.iter().map(|name| {
-            let input = by_name(version, name)
+            let input = by_name(model, version, name)
                 .unwrap_or_else(|| panic!("unknown feedthrough input `{name}`"));
             (input, DependencyKind::Fixed)
         });
-        let states = states.map(|i| {
-            let state = variables_of(version)
+        // A model without Model Exchange has no continuous states to
+        // depend on: its outputs depend on the inputs alone.
+        let states = states.filter(|_| model.offers_model_exchange()).map(|i| {
+            let state = variables_of(model, version)
                 .iter()
                 .find(|v| v.state_index() == Some(i))
                 .unwrap_or_else(|| panic!("no variable of continuous state {i}"));
@@ -619,40 +627,77 @@ impl Variable {
         self.bound = Some(bound);
         self
     }
-}
 
-/// The variables of `version`, in `ModelVariables` order:
-/// [`COMMON_VARIABLES`] for FMI 2.0, [`FMI3_VARIABLES`] for FMI 3.0.
-pub fn variables_of(version: FmiVersion) -> &'static [Variable] {
-    match version {
-        FmiVersion::Fmi2 => COMMON_VARIABLES,
-        FmiVersion::Fmi3 => FMI3_VARIABLES,
+    const fn quarter_car(mut self) -> Variable {
+        self.quarter_car_only = true;
+        self
     }
 }
 
-/// Looks a variable of `version` up by value reference: in constant time
-/// through a table built at the first lookup (a getter asks for every
-/// value reference of every call), the same variable as a search of
-/// [`variables_of`] would find.
-pub fn by_vr(version: FmiVersion, vr: u32) -> Option<&'static Variable> {
-    match vr_table(version).get(vr as usize) {
-        Some(found) => *found,
-        None => variables_of(version).iter().find(|v| v.vr == vr),
-    }
-}
-
-/// The variables of `version` by value reference (the first of each, as a
-/// search finds it), for the references below the largest one in use
-/// (at most 4096); built at the first lookup.
-fn vr_table(version: FmiVersion) -> &'static [Option<&'static Variable>] {
-    static TABLES: [std::sync::OnceLock<Vec<Option<&'static Variable>>>; 2] =
+/// The variables of `model` in `version`, in `ModelVariables` order: for
+/// the quarter car [`COMMON_VARIABLES`] (FMI 2.0) and [`FMI3_VARIABLES`]
+/// (FMI 3.0); for the corner the table's variables it shares (neither the
+/// quarter car's own nor Model Exchange's, which the corner does not
+/// offer), then [`CORNER_ADDITIONS`], then the FMI 3.0 additions (built
+/// at the first call).
+pub fn variables_of(model: Model, version: FmiVersion) -> &'static [Variable] {
+    static CORNER: [std::sync::OnceLock<Vec<Variable>>; 2] =
         [std::sync::OnceLock::new(), std::sync::OnceLock::new()];
-    let slot = match version {
+    match (model, version) {
+        (Model::QuarterCar, FmiVersion::Fmi2) => COMMON_VARIABLES,
+        (Model::QuarterCar, FmiVersion::Fmi3) => FMI3_VARIABLES,
+        (Model::Corner, _) => CORNER[slot(version)].get_or_init(|| {
+            let shared = |v: &&Variable| !v.quarter_car_only && v.causality != Causality::Local;
+            COMMON_VARIABLES
+                .iter()
+                .filter(shared)
+                .chain(CORNER_ADDITIONS)
+                .chain(
+                    FMI3_VARIABLES[COMMON_VARIABLES.len()..]
+                        .iter()
+                        .filter(shared),
+                )
+                .filter(|v| v.is_in(version))
+                .copied()
+                .collect()
+        }),
+    }
+}
+
+/// The index of `version` among the FMI versions.
+fn slot(version: FmiVersion) -> usize {
+    match version {
         FmiVersion::Fmi2 => 0,
         FmiVersion::Fmi3 => 1,
+    }
+}
+
+/// Looks a variable of `model` in `version` up by value reference: in
+/// constant time through a table built at the first lookup (a getter asks
+/// for every value reference of every call), the same variable as a
+/// search of [`variables_of`] would find.
+pub fn by_vr(model: Model, version: FmiVersion, vr: u32) -> Option<&'static Variable> {
+    match vr_table(model, version).get(vr as usize) {
+        Some(found) => *found,
+        None => variables_of(model, version).iter().find(|v| v.vr == vr),
+    }
+}
+
+/// The variables of `model` in `version` by value reference (the first of
+/// each, as a search finds it), for the references below the largest one
+/// in use (at most 4096); built at the first lookup.
+fn vr_table(model: Model, version: FmiVersion) -> &'static [Option<&'static Variable>] {
+    type Lookup = std::sync::OnceLock<Vec<Option<&'static Variable>>>;
+    static TABLES: [[Lookup; 2]; 2] = [
+        [Lookup::new(), Lookup::new()],
+        [Lookup::new(), Lookup::new()],
+    ];
+    let model_slot = match model {
+        Model::QuarterCar => 0,
+        Model::Corner => 1,
     };
-    TABLES[slot].get_or_init(|| {
-        let variables = variables_of(version);
+    TABLES[model_slot][slot(version)].get_or_init(|| {
+        let variables = variables_of(model, version);
         let len = variables
             .iter()
             .map(|v| v.vr as usize + 1)
@@ -669,9 +714,9 @@ fn vr_table(version: FmiVersion) -> &'static [Option<&'static Variable>] {
     })
 }
 
-/// The variable of `version` ([`variables_of`]) called `name`.
-pub fn by_name(version: FmiVersion, name: &str) -> Option<&'static Variable> {
-    variables_of(version).iter().find(|v| v.name == name)
+/// The variable of `model` in `version` ([`variables_of`]) called `name`.
+pub fn by_name(model: Model, version: FmiVersion, name: &str) -> Option<&'static Variable> {
+    variables_of(model, version).iter().find(|v| v.name == name)
 }
 
 macro_rules! real {
@@ -721,6 +766,7 @@ const fn parameter(
         intermediate_update: false,
         fmi3_only: false,
         bound: None,
+        quarter_car_only: false,
     }
 }
 
@@ -751,6 +797,7 @@ const fn output(
         intermediate_update: true,
         fmi3_only: false,
         bound: None,
+        quarter_car_only: false,
     }
 }
 
@@ -780,6 +827,7 @@ const fn local_state(
         intermediate_update: false,
         fmi3_only: false,
         bound: None,
+        quarter_car_only: false,
     }
 }
 
@@ -823,6 +871,7 @@ const fn calculated(
         intermediate_update: false,
         fmi3_only: false,
         bound: None,
+        quarter_car_only: false,
     }
 }
 
@@ -848,6 +897,189 @@ const TIRE_LOAD_DEPENDENCIES: &[&str] = &[
     "x_g",
 ];
 const ROAD_DEPENDENCIES: &[&str] = &["road", "road_amplitude", "road_angular_frequency", "x_g"];
+
+/// What the corner's tire load and lift-offs depend on initially (its
+/// static load, the road as it sees it, the tire law, the wheel).
+const CORNER_TIRE_LOAD_DEPENDENCIES: &[&str] = &[
+    "variant",
+    "static_load",
+    "m_h",
+    "m_t",
+    "k_t",
+    "road",
+    "road_amplitude",
+    "road_angular_frequency",
+    "road_delay",
+    "road_phase",
+    "tire_contact",
+    "x_t_start",
+    "x_g",
+];
+
+/// An input of the corner's body attachment point (its value and slope
+/// held over a step like `x_g`'s).
+const fn body_input(
+    name: &'static str,
+    vr: u32,
+    quantity: Quantity,
+    access: Access,
+    bound: Bound,
+    description: &'static str,
+) -> Variable {
+    Variable {
+        name,
+        vr,
+        causality: Causality::Input,
+        variability: Variability::Continuous,
+        quantity,
+        display_unit: None,
+        start: Some(0.0),
+        range: Range::Finite,
+        access,
+        description,
+        feedthrough: &[],
+        initial_dependencies: &[],
+        enumeration: None,
+        dimensions: &[],
+        intermediate_update: true,
+        fmi3_only: false,
+        bound: Some(bound),
+        quarter_car_only: false,
+    }
+}
+
+/// The corner's own variables ([`Model::Corner`]): its static load, the
+/// road as this wheel sees it, the body's attachment point and the force
+/// on it, and its own declarations of the outputs whose dependencies name
+/// the body (the quarter car's of the same name and value reference are
+/// [`Variable::quarter_car_only`]). They follow the shared variables in
+/// the corner's `ModelVariables`.
+pub const CORNER_ADDITIONS: &[Variable] = &[
+    parameter(
+        "static_load",
+        140,
+        Fixed,
+        Q::Force,
+        345.0 * tdvass::model::STANDARD_GRAVITY,
+        Range::Positive,
+        real!(static_load),
+        "This corner's share W_c of the body's weight (N, > 0; default 345 kg g0, the paper's body): with the corner's own masses it sets the tire's static load W = W_c + (m_h + m_t) g0 (CS: W_c + m_t g0), hence the unilateral tire's lift-off and the tire load ratio",
+    ),
+    parameter(
+        "road_delay",
+        141,
+        Fixed,
+        Q::Time,
+        0.0,
+        Range::AtLeast(0.0),
+        real!(road_delay),
+        "The built-in road (road = 1, 2, 3) as this wheel sees it: the profile delayed by this (s, >= 0; a rear wheel: wheelbase / speed). A random road starts at road_delay after the start time; must be 0 with road = 0",
+    ),
+    parameter(
+        "road_phase",
+        142,
+        Fixed,
+        Q::Dimensionless,
+        0.0,
+        Range::Finite,
+        real!(road_phase),
+        "Harmonic road only (rad): x_g = road_amplitude sin(road_angular_frequency (t - road_delay) + road_phase) (a right track out of phase with the left excites roll)",
+    ),
+    body_input(
+        "body_displacement",
+        143,
+        Q::Length,
+        real!(body_displacement),
+        Bound::Displacement,
+        "The body's attachment point: its displacement from the static equilibrium, positive up; over a communication step it moves at body_velocity",
+    ),
+    body_input(
+        "body_velocity",
+        144,
+        Q::Velocity,
+        real!(body_velocity),
+        Bound::Velocity,
+        "The body's attachment point: its velocity, positive up (held over a communication step)",
+    ),
+    output(
+        "body_force",
+        145,
+        Q::Force,
+        OutputId::BodyForce,
+        "The force of the suspension on the body at the attachment point (spring and damper; positive up, zero at the static equilibrium); depends directly on body_displacement and body_velocity",
+        &["body_displacement", "body_velocity"],
+        &[
+            "variant",
+            "k_s",
+            "c_s",
+            "k_h",
+            "c_h",
+            "body_displacement",
+            "body_velocity",
+            "x_h_start",
+            "v_h_start",
+            "x_t_start",
+            "v_t_start",
+        ],
+    ),
+    output(
+        "suspension_deflection",
+        38,
+        Q::Length,
+        OutputId::SuspensionDeflection,
+        "Suspension dynamic deflection SDD = body_displacement - x_t",
+        &["body_displacement"],
+        &["body_displacement", "x_t_start"],
+    ),
+    output(
+        "dynamic_tire_load",
+        56,
+        Q::Force,
+        OutputId::DynamicTireLoad,
+        "Dynamic tire load k_t (x_g - x_t) = -k_t TDD (no tire damping); below minus the static load W the tire would leave the road (tire_contact = 1: it never goes below, the wheel flies)",
+        &["x_g"],
+        CORNER_TIRE_LOAD_DEPENDENCIES,
+    ),
+    output(
+        "rms_dynamic_tire_load_ratio",
+        57,
+        Q::Dimensionless,
+        OutputId::RmsDynamicTireLoadRatio,
+        "Running RMS of the dynamic tire load over the static load W = static_load + (m_h + m_t) g0, CS static_load + m_t g0; at most 1/3 keeps the contact with 3-sigma confidence",
+        &[],
+        &[],
+    ),
+    Variable {
+        name: "lift_off_count",
+        vr: 61,
+        causality: Causality::Output,
+        variability: Variability::Discrete,
+        quantity: Q::Dimensionless,
+        display_unit: None,
+        start: None,
+        range: Range::Computed,
+        access: Access::IntegerOutput(IntegerOutputId::LiftOffCount),
+        description: "Number of lift-offs since the start time (a start without contact counts one): tire_contact = 1, the switches from contact to flight; tire_contact = 0, the times the dynamic tire load went below minus the static load",
+        feedthrough: &[],
+        initial_dependencies: CORNER_TIRE_LOAD_DEPENDENCIES,
+        enumeration: None,
+        dimensions: &[],
+        intermediate_update: false,
+        fmi3_only: false,
+        bound: None,
+        quarter_car_only: false,
+    },
+    output(
+        "max_suspension_deflection",
+        59,
+        Q::Length,
+        OutputId::MaxSuspensionDeflection,
+        "Running maximum of |SDD| (suspension working space used), located inside the internal steps from the dense output (within the tolerance)",
+        &[],
+        &["body_displacement", "x_t_start"],
+    )
+    .display("mm"),
+];
 
 /// How many variables both versions have: the FMI 3.0 additions follow
 /// them at the end of [`TABLE`].
@@ -889,7 +1121,8 @@ const TABLE: &[Variable] = &[
         Range::Positive,
         real!(params.m_s),
         "Body (sprung) mass (> 0)",
-    ),
+    )
+    .quarter_car(),
     parameter(
         "m_h",
         3,
@@ -1095,7 +1328,8 @@ const TABLE: &[Variable] = &[
         real!(weights.body_acceleration),
         "Weight z1 of RMS(BA) in the objective J (Eq. 6; tunable)",
     )
-    .bounded(Bound::Weight),
+    .bounded(Bound::Weight)
+    .quarter_car(),
     parameter(
         "w_sdd",
         22,
@@ -1106,7 +1340,8 @@ const TABLE: &[Variable] = &[
         real!(weights.suspension_deflection),
         "Weight z2 of RMS(SDD) in the objective J (Eq. 6; tunable)",
     )
-    .bounded(Bound::Weight),
+    .bounded(Bound::Weight)
+    .quarter_car(),
     parameter(
         "w_tdd",
         23,
@@ -1117,7 +1352,8 @@ const TABLE: &[Variable] = &[
         real!(weights.tire_deflection),
         "Weight z3 of RMS(TDD) in the objective J (Eq. 6, TDD in m; tunable)",
     )
-    .bounded(Bound::Weight),
+    .bounded(Bound::Weight)
+    .quarter_car(),
     parameter(
         "input_extrapolation",
         48,
@@ -1138,7 +1374,8 @@ const TABLE: &[Variable] = &[
         real!(initial_state[0]),
         "Initial body displacement (also the history before the start)",
     )
-    .bounded(Bound::Displacement),
+    .bounded(Bound::Displacement)
+    .quarter_car(),
     parameter(
         "v_s_start",
         25,
@@ -1149,7 +1386,8 @@ const TABLE: &[Variable] = &[
         real!(initial_state[1]),
         "Initial body velocity",
     )
-    .bounded(Bound::Velocity),
+    .bounded(Bound::Velocity)
+    .quarter_car(),
     parameter(
         "x_h_start",
         26,
@@ -1212,6 +1450,7 @@ const TABLE: &[Variable] = &[
         intermediate_update: true,
         fmi3_only: false,
         bound: Some(Bound::Displacement),
+        quarter_car_only: false,
     },
     output(
         "x_s",
@@ -1221,7 +1460,8 @@ const TABLE: &[Variable] = &[
         "Body displacement",
         &[],
         &["x_s_start"],
-    ),
+    )
+    .quarter_car(),
     output(
         "v_s",
         32,
@@ -1230,7 +1470,8 @@ const TABLE: &[Variable] = &[
         "Body velocity",
         &[],
         &["v_s_start"],
-    ),
+    )
+    .quarter_car(),
     output(
         "x_h",
         33,
@@ -1286,7 +1527,8 @@ const TABLE: &[Variable] = &[
             "x_t_start",
             "v_t_start",
         ],
-    ),
+    )
+    .quarter_car(),
     output(
         "suspension_deflection",
         38,
@@ -1295,7 +1537,8 @@ const TABLE: &[Variable] = &[
         "Suspension dynamic deflection SDD = x_s - x_t",
         &[],
         &["x_s_start", "x_t_start"],
-    ),
+    )
+    .quarter_car(),
     output(
         "tire_deflection",
         39,
@@ -1338,7 +1581,8 @@ const TABLE: &[Variable] = &[
         "Running RMS of BA from the start time t0 to now, the time average sqrt(integral of BA^2 dt / (t - t0)): 0 at t0, continuous in t, independent of the internal grid. Model Exchange: from the integral state the master integrates",
         &[],
         &[],
-    ),
+    )
+    .quarter_car(),
     output(
         "rms_suspension_deflection",
         43,
@@ -1366,21 +1610,24 @@ const TABLE: &[Variable] = &[
         "Objective J = w_ba RMS(BA) + w_sdd RMS(SDD) + w_tdd RMS(TDD) (Eq. 6, TDD in m) from the running RMS values (Model Exchange: from the integral states)",
         &[],
         &[],
-    ),
+    )
+    .quarter_car(),
     calculated(
         "spectral_abscissa",
         46,
         Q::Rate,
         Calculated::SpectralAbscissa,
         "Real part of the rightmost characteristic root at the current (g, tau)",
-    ),
+    )
+    .quarter_car(),
     calculated(
         "stable",
         47,
         Q::Dimensionless,
         Calculated::Stable,
         "spectral_abscissa < 0 (asymptotically stable)",
-    ),
+    )
+    .quarter_car(),
     output(
         "weighted_body_acceleration",
         53,
@@ -1389,7 +1636,8 @@ const TABLE: &[Variable] = &[
         "ISO 2631-1 W_k frequency-weighted body acceleration a_w(t): BA through the standard's filter (band limits 0.4 and 100 Hz, acceleration-velocity transition 12.5 Hz, upward step 2.37/3.35 Hz), integrated exactly with the plant; the filter starts from rest at t0",
         &[],
         &[],
-    ),
+    )
+    .quarter_car(),
     output(
         "rms_weighted_body_acceleration",
         54,
@@ -1398,7 +1646,8 @@ const TABLE: &[Variable] = &[
         "Running RMS of a_w, the time average sqrt(integral of a_w^2 dt / (t - t0)): ISO 2631-1's a_w; below 0.315 m/s2 not uncomfortable, 0.315-0.63 a little uncomfortable, 0.5-1 fairly uncomfortable, 0.8-1.6 uncomfortable, 1.25-2.5 very uncomfortable, above 2 extremely uncomfortable. Model Exchange: from the integral state",
         &[],
         &[],
-    ),
+    )
+    .quarter_car(),
     output(
         "vibration_dose_value",
         55,
@@ -1407,7 +1656,8 @@ const TABLE: &[Variable] = &[
         "ISO 2631-1 vibration dose value VDV = (integral of a_w^4 dt from t0)^(1/4). Model Exchange: from the integral state",
         &[],
         &[],
-    ),
+    )
+    .quarter_car(),
     output(
         "dynamic_tire_load",
         56,
@@ -1417,7 +1667,8 @@ const TABLE: &[Variable] = &[
         &["x_g"],
         // tire_contact = 1 bounds it below by minus the static load.
         TIRE_LOAD_DEPENDENCIES,
-    ),
+    )
+    .quarter_car(),
     output(
         "rms_dynamic_tire_load_ratio",
         57,
@@ -1426,7 +1677,8 @@ const TABLE: &[Variable] = &[
         "Running RMS of the dynamic tire load over the static load (m_s + m_h + m_t) g0, CS (m_s + m_t) g0, g0 = 9.80665 m/s2; at most 1/3 keeps the contact with 3-sigma confidence. Model Exchange: from the integral state of TDD^2",
         &[],
         &[],
-    ),
+    )
+    .quarter_car(),
     output(
         "contact_loss_time",
         58,
@@ -1455,6 +1707,7 @@ const TABLE: &[Variable] = &[
         intermediate_update: false,
         fmi3_only: false,
         bound: None,
+        quarter_car_only: true,
     },
     output(
         "max_suspension_deflection",
@@ -1465,7 +1718,8 @@ const TABLE: &[Variable] = &[
         &[],
         &["x_s_start", "x_t_start"],
     )
-    .display("mm"),
+    .display("mm")
+    .quarter_car(),
     // Model Exchange: the continuous states that are not outputs, then
     // the derivatives of all of them (x_s ... v_t and contact_loss_time
     // are outputs and states).
@@ -1742,6 +1996,7 @@ const TABLE: &[Variable] = &[
         intermediate_update: false,
         fmi3_only: true,
         bound: None,
+        quarter_car_only: true,
     },
     Variable {
         dimensions: &[Dimension::Structural("root_count"), Dimension::Fixed(2)],
@@ -1753,6 +2008,7 @@ const TABLE: &[Variable] = &[
             Calculated::RightmostRoots,
             "FMI 3.0: the root_count rightmost characteristic roots as (real, imaginary) pairs, rightmost first",
         )
+    .quarter_car()
     },
     Variable {
         name: "time",
@@ -1772,6 +2028,7 @@ const TABLE: &[Variable] = &[
         intermediate_update: false,
         fmi3_only: true,
         bound: None,
+        quarter_car_only: false,
     },
 ];
 
@@ -1798,11 +2055,25 @@ fn guid_format(text: &str) -> String {
     )
 }
 
-/// The GUID of an interface: a hash of every variable's name, value
-/// reference, type, causality and variability, formatted
+/// The first line of the text a token hashes: the quarter car's as it has
+/// always been, so that its GUID and instantiation token stay the same.
+fn token_header(model: Model, version: &str) -> String {
+    match model {
+        Model::QuarterCar => format!("tdvass FMI {version} Co-Simulation interface\n"),
+        Model::Corner => format!("tdvass corner FMI {version} Co-Simulation interface\n"),
+    }
+}
+
+/// The GUID of `model`'s FMI 2.0 interface: a hash of every variable's
+/// name, value reference, type, causality and variability, formatted
 /// `{xxxxxxxx-xxxx-xxxx-xxxx-xxxxxxxxxxxx}`.
-pub fn guid_of(variables: &[Variable]) -> String {
-    let mut text = String::from("tdvass FMI 2.0 Co-Simulation interface\n");
+pub fn guid(model: Model) -> String {
+    guid_of(model, variables_of(model, FmiVersion::Fmi2))
+}
+
+/// The GUID of `model` with the FMI 2.0 variables `variables`.
+pub fn guid_of(model: Model, variables: &[Variable]) -> String {
+    let mut text = token_header(model, "2.0");
     for v in variables {
         text.push_str(&format!(
             "{}\t{}\t{}\t{}\t{}\n",
@@ -1816,11 +2087,11 @@ pub fn guid_of(variables: &[Variable]) -> String {
     guid_format(&text)
 }
 
-/// The FMI 3.0 `instantiationToken`: like [`guid_of`], over every variable
-/// of FMI 3.0, with the enumeration types and array dimensions.
-pub fn instantiation_token() -> String {
-    let mut text = String::from("tdvass FMI 3.0 Co-Simulation interface\n");
-    for v in FMI3_VARIABLES {
+/// The FMI 3.0 `instantiationToken` of `model`: like [`guid`], over every
+/// variable of FMI 3.0, with the enumeration types and array dimensions.
+pub fn instantiation_token(model: Model) -> String {
+    let mut text = token_header(model, "3.0");
+    for v in variables_of(model, FmiVersion::Fmi3) {
         text.push_str(&format!(
             "{}\t{}\t{}\t{}\t{}\t{}\t{:?}\n",
             v.name,
@@ -1835,17 +2106,27 @@ pub fn instantiation_token() -> String {
     guid_format(&text)
 }
 
-/// The GUID of this FMU.
-pub fn guid() -> String {
-    guid_of(COMMON_VARIABLES)
+/// The token of `model` in `version` (its GUID or instantiation token).
+pub fn token(model: Model, version: FmiVersion) -> String {
+    match version {
+        FmiVersion::Fmi2 => guid(model),
+        FmiVersion::Fmi3 => instantiation_token(model),
+    }
+}
+
+/// The model whose token in `version` is `given`, if any.
+pub fn model_of_token(version: FmiVersion, given: &str) -> Option<Model> {
+    Model::ALL
+        .into_iter()
+        .find(|&model| token(model, version) == given)
 }
 
 impl Settings {
-    /// The settings with every start value of [`FMI3_VARIABLES`] (the
-    /// table's; the FMI 2.0 table is a subset with the same starts).
-    pub fn start_values() -> Settings {
-        let mut s = Settings::zeroed();
-        for v in FMI3_VARIABLES {
+    /// The settings of `model` with every start value of its FMI 3.0
+    /// variables (FMI 2.0's are a subset with the same starts).
+    pub fn start_values(model: Model) -> Settings {
+        let mut s = Settings::zeroed(model);
+        for v in variables_of(model, FmiVersion::Fmi3) {
             match (v.access, v.start) {
                 (Access::Real { set, .. }, Some(start)) => set(&mut s, start),
                 (Access::Integer { set, .. }, Some(start)) => set(&mut s, start as i32),

@@ -8,6 +8,7 @@ use crate::markup::{
 };
 use tdvass_fmi3::instantiation_token;
 use tdvass_fmi3::types::{Fmi3Type, fmi3_type};
+use tdvass_fmu::Model;
 use tdvass_fmu::variables::{Causality, Dimension, FMI3_VARIABLES, Variable};
 use tdvass_fmu::{
     DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, LOG_CATEGORIES, MODEL_IDENTIFIER,
@@ -91,7 +92,7 @@ fn write_introduction(w: &mut XmlWriter) -> XmlResult {
         w,
         &format!(
             "modelIdentifier {MODEL_IDENTIFIER}, instantiationToken {} (a hash of the variable names, value references, types, causalities, variabilities, enumeration types and array dimensions), version {}.",
-            instantiation_token(),
+            instantiation_token(Model::QuarterCar),
             env!("CARGO_PKG_VERSION")
         ),
     )?;

@@ -2,6 +2,7 @@ use super::*;
 use crate::parsed::{Element, elements};
 use std::collections::{HashMap, HashSet};
 use tdvass_fmu::LOG_CATEGORIES;
+use tdvass_fmu::Model;
 use tdvass_fmu::variables::{
     COMMON_VARIABLES, Initial, ROAD_CLASS_ITEMS, ROAD_ITEMS, TIRE_CONTACT_ITEMS, VARIANT_ITEMS,
 };
@@ -25,7 +26,10 @@ fn root_co_simulation_and_experiment() {
     assert_eq!(root.name, "fmiModelDescription");
     assert_eq!(root.attr("fmiVersion"), "3.0");
     assert_eq!(root.attr("modelName"), "TDVASS");
-    assert_eq!(root.attr("instantiationToken"), instantiation_token());
+    assert_eq!(
+        root.attr("instantiationToken"),
+        instantiation_token(Model::QuarterCar)
+    );
     assert_eq!(root.attr("variableNamingConvention"), "flat");
     assert!(root.get("guid").is_none());
     let top: Vec<&str> = children(&els, "fmiModelDescription")
@@ -462,7 +466,9 @@ fn model_structure_lists_outputs_and_initial_unknowns_by_value_reference() {
     }
 
     let by_vr = |vr: u32| FMI3_VARIABLES.iter().find(|v| v.vr == vr).unwrap();
-    let x_g = by_name(FmiVersion::Fmi3, "x_g").unwrap().vr;
+    let x_g = by_name(Model::QuarterCar, FmiVersion::Fmi3, "x_g")
+        .unwrap()
+        .vr;
     for o in &outputs {
         let deps = vr_list_of(o.attr("dependencies"));
         let kinds: Vec<&str> = o
@@ -486,7 +492,11 @@ fn model_structure_lists_outputs_and_initial_unknowns_by_value_reference() {
         let listed: Vec<(u32, &str)> = deps.iter().copied().zip(kinds).collect();
         assert_eq!(listed, output_dependencies(v));
     }
-    let vr_of = |name: &str| by_name(FmiVersion::Fmi3, name).unwrap().vr;
+    let vr_of = |name: &str| {
+        by_name(Model::QuarterCar, FmiVersion::Fmi3, name)
+            .unwrap()
+            .vr
+    };
     let output = |name: &str| {
         outputs
             .iter()
@@ -503,7 +513,7 @@ fn model_structure_lists_outputs_and_initial_unknowns_by_value_reference() {
         .iter()
         .find(|e| {
             e.attr("valueReference")
-                == by_name(FmiVersion::Fmi3, "tire_deflection")
+                == by_name(Model::QuarterCar, FmiVersion::Fmi3, "tire_deflection")
                     .unwrap()
                     .vr
                     .to_string()
@@ -541,15 +551,18 @@ fn model_structure_lists_outputs_and_initial_unknowns_by_value_reference() {
         .iter()
         .find(|e| {
             e.attr("valueReference")
-                == by_name(FmiVersion::Fmi3, "rightmost_roots")
+                == by_name(Model::QuarterCar, FmiVersion::Fmi3, "rightmost_roots")
                     .unwrap()
                     .vr
                     .to_string()
         })
         .unwrap();
     assert!(
-        vr_list_of(roots.attr("dependencies"))
-            .contains(&by_name(FmiVersion::Fmi3, "root_count").unwrap().vr)
+        vr_list_of(roots.attr("dependencies")).contains(
+            &by_name(Model::QuarterCar, FmiVersion::Fmi3, "root_count")
+                .unwrap()
+                .vr
+        )
     );
 }
 
@@ -564,7 +577,7 @@ fn documentation_describes_every_variable_and_capability() {
     for (flag, _) in MODEL_EXCHANGE_CAPABILITIES {
         assert!(html.contains(&format!("<td>{flag}</td>")), "{flag}");
     }
-    assert!(html.contains(&instantiation_token()));
+    assert!(html.contains(&instantiation_token(Model::QuarterCar)));
     assert!(html.contains("<td>time</td>"));
     for v in FMI3_VARIABLES {
         assert!(html.contains(&format!("<td>{}</td>", v.name)), "{}", v.name);

@@ -1,9 +1,9 @@
 use super::*;
-use crate::{FMI_VERSION, TYPES_PLATFORM};
+use crate::{FMI_VERSION, Model, TYPES_PLATFORM};
 
 #[test]
 fn panics_are_caught_and_make_the_instance_fatal() {
-    let guid = crate::guid();
+    let guid = crate::guid(Model::QuarterCar);
     let instance = Instance::instantiate(
         InstantiateRequest {
             instance_name: Some("p"),

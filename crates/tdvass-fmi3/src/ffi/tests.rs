@@ -3,11 +3,14 @@
 //! from the callback), early return, the types of the values, FMU states.
 
 use super::*;
+use tdvass_fmu::Model;
 use tdvass_fmu::pointers::c_string;
 use tdvass_fmu::variables::{FmiVersion, by_name};
 
 fn vr(name: &str) -> u32 {
-    by_name(FmiVersion::Fmi3, name).unwrap().vr
+    by_name(Model::QuarterCar, FmiVersion::Fmi3, name)
+        .unwrap()
+        .vr
 }
 
 /// What the intermediate-update callback sees and does.
@@ -70,7 +73,7 @@ fn start(
     enums: &[(&str, i64)],
     reals: &[(&str, f64)],
 ) -> fmi3Instance {
-    let token = c_string(&crate::instantiation_token());
+    let token = c_string(&crate::instantiation_token(Model::QuarterCar));
     let environment = master
         .as_ref()
         .map(|m| *m as *const Master as *mut c_void)
@@ -361,7 +364,7 @@ fn enumerations_are_int64_and_other_types_are_refused() {
 
 #[test]
 fn rightmost_roots_is_a_root_count_by_two_array() {
-    let token = c_string(&crate::instantiation_token());
+    let token = c_string(&crate::instantiation_token(Model::QuarterCar));
     // SAFETY: valid strings, no callbacks.
     let instance = unsafe {
         fmi3InstantiateCoSimulation(
@@ -467,7 +470,7 @@ fn serialized_states_of_the_fmi2_fmu_are_refused_and_own_states_restore() {
     // The FMI 2.0 FMU writes the same format under its GUID: refused here.
     let fmi2 = tdvass_fmu::snapshot::serialize(
         &tdvass_fmu::slave::SlaveState::default(),
-        &tdvass_fmu::guid(),
+        &tdvass_fmu::guid(Model::QuarterCar),
     );
     let mut foreign: fmi3FMUState = std::ptr::null_mut();
     // SAFETY: the bytes above; an out-pointer to a local.

@@ -92,7 +92,7 @@ impl Slave {
         if let Some(handle) = reuse {
             self.owned(handle)?;
         }
-        let model = snapshot::deserialize(bytes, &self.token)?;
+        let model = snapshot::deserialize(bytes, &self.token, self.model())?;
         if model.engine.is_model_exchange() != self.state.engine.is_model_exchange()
             && model.phase.is_simulating()
         {

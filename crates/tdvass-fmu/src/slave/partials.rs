@@ -8,7 +8,7 @@ use crate::error::{FmiError, Status};
 use crate::outputs::{Known, Linearization, OutputId};
 use crate::variables::{Access, Causality, Variable, by_vr};
 use tdvass::exchange::Gradient;
-use tdvass::model::{V_S, Variant};
+use tdvass::model::{V_S, Variant, X_S};
 use tdvass::solver::CONTINUOUS_STATES;
 
 /// A known of Model Exchange's partials: a continuous state or the input.
@@ -39,12 +39,16 @@ impl Slave {
         let known: Vec<Known> = knowns
             .iter()
             .map(|&vr| {
-                let var = by_vr(self.dialect.version, vr).ok_or_else(|| FmiError::error(format!("unknown value reference {vr}")))?;
-                match var.access {
-                    Access::Real { .. } if var.causality == Causality::Input => Ok(Known::RoadInput),
-                    Access::Output(OutputId::State(i)) => Ok(Known::State(i)),
+                let var = by_vr(self.model(), self.dialect.version, vr).ok_or_else(|| FmiError::error(format!("unknown value reference {vr}")))?;
+                match (var.access, var.name) {
+                    // The corner's body attachment is the plant's body
+                    // coordinates, set from outside.
+                    (Access::Real { .. }, "body_displacement") => Ok(Known::State(X_S)),
+                    (Access::Real { .. }, "body_velocity") => Ok(Known::State(V_S)),
+                    (Access::Real { .. }, _) if var.causality == Causality::Input => Ok(Known::RoadInput),
+                    (Access::Output(OutputId::State(i)), _) => Ok(Known::State(i)),
                     _ => Err(FmiError::error(format!(
-                        "`{}` is not a known of the directional derivative (only the input x_g and the states x_s, v_s, x_h, v_h, x_t, v_t)",
+                        "`{}` is not a known of the directional derivative (only the inputs and the states x_s, v_s, x_h, v_h, x_t, v_t)",
                         var.name
                     ))),
                 }
@@ -53,7 +57,7 @@ impl Slave {
         let outputs: Vec<OutputId> = unknowns
             .iter()
             .map(|&vr| {
-                let var = by_vr(self.dialect.version, vr)
+                let var = by_vr(self.model(), self.dialect.version, vr)
                     .ok_or_else(|| FmiError::error(format!("unknown value reference {vr}")))?;
                 match var.access {
                     Access::Output(id) => Ok(id),
@@ -129,9 +133,9 @@ impl Slave {
         unknowns: &[u32],
         knowns: &[u32],
     ) -> Result<Vec<f64>, FmiError> {
-        let version = self.dialect.version;
+        let (model, version) = (self.model(), self.dialect.version);
         let lookup = |vr: u32| {
-            by_vr(version, vr)
+            by_vr(model, version, vr)
                 .ok_or_else(|| FmiError::error(format!("unknown value reference {vr}")))
         };
         let known: Vec<ExchangeKnown> = knowns
@@ -221,8 +225,13 @@ impl Slave {
         let params = sim.config().params;
         let instantaneous_control = (!sim.grid().resolves_delay() && variant.has_control())
             .then_some((params.effective_gain(variant), params.tau));
+        let mut body_force_row = [0.0; 6];
+        for (j, r) in body_force_row.iter_mut().enumerate() {
+            *r = plant.body_force_row[j];
+        }
         Ok(Linearization {
             body_acceleration_row: row,
+            body_force_row,
             conventional: variant == Variant::Cs,
             road_is_input: self.state.settings.road_is_input(),
             // In flight the dynamic tire load is the constant −W.

@@ -124,6 +124,11 @@ impl Slave {
             self.state.previous_input = Some((now, settings.x_g));
         }
         self.state.input_pending = false;
+        // The corner's body attachment point as last set: it moves at its
+        // velocity from here (setting it unchanged commits nothing).
+        if let Some((displacement, velocity)) = settings.body_input() {
+            sim.set_body_input(displacement, velocity)?;
+        }
         let advanced = sim.advance_to(until);
         // The lift-offs up to where the simulation stopped, whatever the
         // outcome.
@@ -276,7 +281,8 @@ impl Slave {
 
     /// `SetRealInputDerivatives`: order 1 of `x_g` sets the slope used
     /// from the current communication point on (until `x_g` or the slope is
-    /// set again). Higher orders are ignored with `Warning`.
+    /// set again). Higher orders, and the derivatives of the corner's body
+    /// inputs, are ignored with `Warning`.
     pub fn set_real_input_derivatives(
         &mut self,
         vrs: &[u32],
@@ -285,6 +291,7 @@ impl Slave {
     ) -> Result<Status, FmiError> {
         let mut slope = None;
         let mut ignored = Vec::new();
+        let mut body_ignored = Vec::new();
         for ((&vr, &order), &value) in vrs.iter().zip(orders).zip(values) {
             let var = self.variable(vr, VarType::Real)?;
             if var.causality != Causality::Input {
@@ -305,7 +312,11 @@ impl Slave {
                     var.name
                 )));
             }
-            if order == 1 {
+            if var.name != "x_g" {
+                // The corner's attachment moves at `body_velocity` over a
+                // step; a body input's derivative adds nothing to it.
+                body_ignored.push(var.name);
+            } else if order == 1 {
                 guards::check_input_slope(value)?;
                 slope = Some(value);
             } else {
@@ -317,8 +328,16 @@ impl Slave {
             self.state.input_slope_given = true;
             self.state.input_pending = true;
         }
-        if ignored.is_empty() {
+        if !body_ignored.is_empty() {
+            self.warning(format_args!(
+                "{}: the derivatives of {body_ignored:?} are ignored: the body's attachment point moves at body_velocity from body_displacement over each communication step",
+                self.call(self.dialect.set_input_derivatives)
+            ));
+        }
+        if ignored.is_empty() && body_ignored.is_empty() {
             Ok(Status::Ok)
+        } else if ignored.is_empty() {
+            Ok(Status::Warning)
         } else {
             self.warning(format_args!(
                 "{}: derivative orders {ignored:?} of `x_g` ignored (the input is extrapolated linearly)",
@@ -340,7 +359,7 @@ impl Slave {
         };
         let derivatives = sim.output_derivatives();
         for ((&vr, &order), value) in vrs.iter().zip(orders).zip(values.iter_mut()) {
-            let var = by_vr(self.dialect.version, vr)
+            let var = by_vr(self.model(), self.dialect.version, vr)
                 .ok_or_else(|| FmiError::error(format!("unknown value reference {vr}")))?;
             let id = match var.access {
                 Access::Output(id) => id,

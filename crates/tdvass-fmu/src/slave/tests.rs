@@ -43,11 +43,21 @@ pub(crate) fn new_slave(logging_on: bool) -> (Slave, Log) {
         Box::new(move |s, c, m| sink.borrow_mut().push((s, c.into(), m.into()))),
         logging_on,
     );
-    (Slave::new(TEST_DIALECT, crate::guid(), logger), log)
+    (
+        Slave::new(
+            TEST_DIALECT,
+            Model::QuarterCar,
+            crate::variables::guid(Model::QuarterCar),
+            logger,
+        ),
+        log,
+    )
 }
 
 fn vr(name: &str) -> u32 {
-    by_name(FmiVersion::Fmi3, name).unwrap().vr
+    by_name(Model::QuarterCar, FmiVersion::Fmi3, name)
+        .unwrap()
+        .vr
 }
 
 fn start(s: &mut Slave) {
@@ -314,7 +324,7 @@ fn model_structure_dependencies_are_the_nonzero_partials() {
             e.message
         );
         assert!(
-            by_name(FmiVersion::Fmi3, "lift_off_count")
+            by_name(Model::QuarterCar, FmiVersion::Fmi3, "lift_off_count")
                 .unwrap()
                 .feedthrough
                 .is_empty()
@@ -733,3 +743,5 @@ fn a_model_exchange_state_round_trips_and_stays_with_its_interface() {
             .contains("a Model Exchange state cannot be restored into a Co-Simulation instance")
     );
 }
+
+mod corner;

@@ -77,7 +77,7 @@ impl Slave {
     }
 
     pub(super) fn variable(&self, vr: u32, ty: VarType) -> Result<&'static Variable, FmiError> {
-        let var = by_vr(self.dialect.version, vr).ok_or_else(|| {
+        let var = by_vr(self.model(), self.dialect.version, vr).ok_or_else(|| {
             FmiError::error(format!(
                 "unknown value reference {vr} (for a {})",
                 ty.as_str()
@@ -104,7 +104,7 @@ impl Slave {
             Engine::CoSimulation(Some(sim)) => sim.outputs(),
             _ => self.build_simulator()?.outputs(),
         };
-        match guards::non_finite_output(&outputs) {
+        match guards::non_finite_output(self.model(), &outputs) {
             None => Ok(outputs),
             Some((name, value)) => Err(FmiError::error(format!(
                 "output `{name}` = {value} is not finite at t = {} s",
@@ -136,6 +136,7 @@ impl Slave {
                 performance: o.performance,
                 road_displacement: o.road_displacement,
                 control_force: o.control_force,
+                body_force: o.body_force,
                 dynamic_tire_load: o.dynamic_tire_load,
             });
         }
@@ -213,7 +214,7 @@ impl Slave {
             .iter()
             .map(|d| match d {
                 Dimension::Fixed(n) => *n as usize,
-                Dimension::Structural(name) => match by_name(FmiVersion::Fmi3, name)
+                Dimension::Structural(name) => match by_name(self.model(), FmiVersion::Fmi3, name)
                     .map(|v| v.access)
                 {
                     Some(Access::Integer { get, .. }) => get(&self.state.settings).max(0) as usize,

@@ -69,7 +69,8 @@ fn interface_of_the_spec_is_present() {
         ]
     };
     for (name, causality, ty) in spec {
-        let v = by_name(FmiVersion::Fmi3, name).unwrap_or_else(|| panic!("{name} missing"));
+        let v = by_name(Model::QuarterCar, FmiVersion::Fmi3, name)
+            .unwrap_or_else(|| panic!("{name} missing"));
         assert_eq!(v.causality, causality, "{name}");
         assert_eq!(v.var_type(), ty, "{name}");
     }
@@ -80,7 +81,7 @@ fn interface_of_the_spec_is_present() {
         .collect();
     assert_eq!(tunable, ["g", "w_ba", "w_sdd", "w_tdd"]);
     assert_eq!(
-        by_name(FmiVersion::Fmi3, "tire_deflection")
+        by_name(Model::QuarterCar, FmiVersion::Fmi3, "tire_deflection")
             .unwrap()
             .display_unit,
         Some("mm")
@@ -100,7 +101,7 @@ fn start_values_are_admissible_and_match_the_library_defaults() {
             _ => assert!(v.start.is_none(), "{} is calculated", v.name),
         }
     }
-    let s = Settings::start_values();
+    let s = Settings::start_values(Model::QuarterCar);
     let config = s.to_config(0.0).unwrap();
     // The library's defaults, with every metric computed (the FMU's level)
     // and the internal step dividing the DefaultExperiment stepSize.
@@ -132,7 +133,7 @@ fn table_ranges_are_the_ones_the_model_enforces() {
         f64::NEG_INFINITY,
     ];
     for (name, _) in Params::default().named_values() {
-        let variable = by_name(FmiVersion::Fmi3, name)
+        let variable = by_name(Model::QuarterCar, FmiVersion::Fmi3, name)
             .unwrap_or_else(|| panic!("`{name}` is not in the table"));
         for probe in probes {
             let mut params = Params::default();
@@ -160,7 +161,7 @@ fn table_ranges_are_the_ones_the_model_enforces() {
 
 #[test]
 fn every_variable_is_readable_and_settings_round_trip() {
-    let mut s = Settings::start_values();
+    let mut s = Settings::start_values(Model::QuarterCar);
     for (i, v) in FMI3_VARIABLES.iter().enumerate() {
         match v.access {
             Access::Real { get, set } => {
@@ -211,7 +212,7 @@ fn every_variable_is_readable_and_settings_round_trip() {
 #[test]
 fn tire_contact_codes_are_the_library_codes() {
     use tdvass::TireContact;
-    let v = by_name(FmiVersion::Fmi3, "tire_contact").unwrap();
+    let v = by_name(Model::QuarterCar, FmiVersion::Fmi3, "tire_contact").unwrap();
     assert_eq!(v.variability, Fixed);
     assert_eq!(v.start, Some(TireContact::default().code() as f64));
     let items = v.enumeration.unwrap().items;
@@ -227,7 +228,7 @@ fn tire_contact_codes_are_the_library_codes() {
             "{code}"
         );
     }
-    let mut s = Settings::start_values();
+    let mut s = Settings::start_values(Model::QuarterCar);
     for contact in TireContact::ALL {
         s.tire_contact = contact.code();
         assert_eq!(s.to_config(0.0).unwrap().tire_contact, contact);
@@ -248,12 +249,15 @@ fn units_and_dependencies_are_declared() {
         }
         for dep in v.feedthrough {
             assert_eq!(
-                by_name(FmiVersion::Fmi3, dep).unwrap().causality,
+                by_name(Model::QuarterCar, FmiVersion::Fmi3, dep)
+                    .unwrap()
+                    .causality,
                 Causality::Input
             );
         }
         for dep in v.initial_dependencies {
-            let known = by_name(FmiVersion::Fmi3, dep).unwrap_or_else(|| panic!("{dep}"));
+            let known = by_name(Model::QuarterCar, FmiVersion::Fmi3, dep)
+                .unwrap_or_else(|| panic!("{dep}"));
             assert!(matches!(
                 known.causality,
                 Causality::Input | Causality::Parameter
@@ -279,30 +283,31 @@ fn range_checks_name_variable_and_value() {
 
 #[test]
 fn guid_is_stable_and_tracks_the_interface() {
-    let g = guid();
-    assert_eq!(g, guid());
+    let g = guid(Model::QuarterCar);
+    assert_eq!(g, guid(Model::QuarterCar));
     assert_eq!(g.len(), 38);
     assert!(g.starts_with('{') && g.ends_with('}'));
     let mut changed: Vec<Variable> = COMMON_VARIABLES.to_vec();
     changed[3].vr = 999;
-    assert_ne!(guid_of(&changed), g);
+    assert_ne!(guid_of(Model::QuarterCar, &changed), g);
     let mut renamed: Vec<Variable> = COMMON_VARIABLES.to_vec();
     renamed[0].name = "variant2";
-    assert_ne!(guid_of(&renamed), g);
+    assert_ne!(guid_of(Model::QuarterCar, &renamed), g);
     let mut retuned: Vec<Variable> = COMMON_VARIABLES.to_vec();
     retuned[1].variability = Tunable;
-    assert_ne!(guid_of(&retuned), g);
+    assert_ne!(guid_of(Model::QuarterCar, &retuned), g);
     // Descriptions and start values are not part of the interface.
     let mut described: Vec<Variable> = COMMON_VARIABLES.to_vec();
     described[1].description = "another text";
     described[1].start = Some(1.0);
-    assert_eq!(guid_of(&described), g);
+    assert_eq!(guid_of(Model::QuarterCar, &described), g);
 }
 
 #[test]
 fn partials_of_the_outputs() {
     let lin = Linearization {
         body_acceleration_row: [1.0, 2.0, 3.0, 4.0, 5.0, 6.0],
+        body_force_row: [-1.0, -2.0, -3.0, -4.0, -5.0, -6.0],
         conventional: true,
         road_is_input: true,
         tire_stiffness: 7.0,
@@ -326,6 +331,8 @@ fn partials_of_the_outputs() {
         OutputId::BodyAcceleration.partial(Known::State(V_H), &lin),
         4.0
     );
+    assert_eq!(OutputId::BodyForce.partial(Known::State(V_H), &lin), -4.0);
+    assert_eq!(OutputId::BodyForce.partial(Known::RoadInput, &lin), 0.0);
     assert_eq!(
         OutputId::TireDeflection.partial(Known::RoadInput, &lin),
         -1.0
@@ -356,15 +363,18 @@ fn the_fmi3_additions_follow_the_common_variables() {
 
 #[test]
 fn the_value_reference_table_finds_what_a_search_finds() {
-    for version in [FmiVersion::Fmi2, FmiVersion::Fmi3] {
-        let largest = variables_of(version).iter().map(|v| v.vr).max().unwrap();
-        for vr in (0..=largest + 10).chain([u32::MAX]) {
-            let searched = variables_of(version).iter().find(|v| v.vr == vr);
-            assert_eq!(
-                by_vr(version, vr).map(|v| v.name),
-                searched.map(|v| v.name),
-                "{version:?} {vr}"
-            );
+    for model in Model::ALL {
+        for version in [FmiVersion::Fmi2, FmiVersion::Fmi3] {
+            let variables = variables_of(model, version);
+            let largest = variables.iter().map(|v| v.vr).max().unwrap();
+            for vr in (0..=largest + 10).chain([u32::MAX]) {
+                let searched = variables.iter().find(|v| v.vr == vr);
+                assert_eq!(
+                    by_vr(model, version, vr).map(|v| v.name),
+                    searched.map(|v| v.name),
+                    "{model:?} {version:?} {vr}"
+                );
+            }
         }
     }
 }
