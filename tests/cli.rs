@@ -488,9 +488,13 @@ fn cli_defaults_are_the_library_defaults_and_the_fmu_start_values() {
         let cli = run[name]
             .as_f64()
             .unwrap_or_else(|| panic!("`{name}` missing in {run}"));
-        let fmu = tdvass_fmu::variables::by_name(tdvass_fmu::variables::FmiVersion::Fmi3, name)
-            .and_then(|v| v.start)
-            .unwrap_or_else(|| panic!("no FMU start value for `{name}`"));
+        let fmu = tdvass_fmu::variables::by_name(
+            tdvass_fmu::Model::QuarterCar,
+            tdvass_fmu::variables::FmiVersion::Fmi3,
+            name,
+        )
+        .and_then(|v| v.start)
+        .unwrap_or_else(|| panic!("no FMU start value for `{name}`"));
         assert_eq!(
             cli, library,
             "`{name}`: CLI default against Params::default()"
@@ -514,22 +518,33 @@ fn cli_defaults_are_the_library_defaults_and_the_fmu_start_values() {
         let cli = run[name]
             .as_f64()
             .unwrap_or_else(|| panic!("`{name}` missing in {run}"));
-        let fmu = tdvass_fmu::variables::by_name(tdvass_fmu::variables::FmiVersion::Fmi3, name)
-            .and_then(|v| v.start)
-            .unwrap();
+        let fmu = tdvass_fmu::variables::by_name(
+            tdvass_fmu::Model::QuarterCar,
+            tdvass_fmu::variables::FmiVersion::Fmi3,
+            name,
+        )
+        .and_then(|v| v.start)
+        .unwrap();
         assert_eq!(
             cli, fmu,
             "`{name}`: CLI default against the FMU start value"
         );
     }
-    let seed = tdvass_fmu::variables::by_name(tdvass_fmu::variables::FmiVersion::Fmi3, "road_seed")
-        .and_then(|v| v.start)
-        .unwrap();
+    let seed = tdvass_fmu::variables::by_name(
+        tdvass_fmu::Model::QuarterCar,
+        tdvass_fmu::variables::FmiVersion::Fmi3,
+        "road_seed",
+    )
+    .and_then(|v| v.start)
+    .unwrap();
     assert_eq!(run["road_seed"].as_f64(), Some(seed));
     // The tire: the library's default, and the item of the FMU's start code.
-    let contact =
-        tdvass_fmu::variables::by_name(tdvass_fmu::variables::FmiVersion::Fmi3, "tire_contact")
-            .unwrap();
+    let contact = tdvass_fmu::variables::by_name(
+        tdvass_fmu::Model::QuarterCar,
+        tdvass_fmu::variables::FmiVersion::Fmi3,
+        "tire_contact",
+    )
+    .unwrap();
     let start = contact.start.unwrap() as i32;
     let item = contact
         .enumeration
@@ -559,10 +574,13 @@ fn the_cli_refuses_the_runaway_inputs_the_fmu_refuses_with_the_same_message() {
         let cli = failure(&["simulate", "--duration", "0.01", flag, &text]);
         let mut slave = tdvass_fmu::Slave::new(
             FMI2_DIALECT,
-            tdvass_fmu::guid(),
+            tdvass_fmu::Model::QuarterCar,
+            tdvass_fmu::guid(tdvass_fmu::Model::QuarterCar),
             Logger::new(Box::new(|_, _, _| {}), false),
         );
-        let vr = by_name(FmiVersion::Fmi3, name).unwrap().vr;
+        let vr = by_name(tdvass_fmu::Model::QuarterCar, FmiVersion::Fmi3, name)
+            .unwrap()
+            .vr;
         // The FMU refuses the value when it is set, or the settings when
         // the simulation is built.
         let fmu = slave

@@ -51,7 +51,7 @@ pub fn callbacks() -> fmi2CallbackFunctions {
 
 /// The GUID as a C string.
 pub fn guid() -> std::ffi::CString {
-    std::ffi::CString::new(tdvass_fmi2::guid()).unwrap()
+    std::ffi::CString::new(tdvass_fmi2::guid(tdvass_fmi2::Model::QuarterCar)).unwrap()
 }
 
 /// A Co-Simulation instance (NULL if refused).

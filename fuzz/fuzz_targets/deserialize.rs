@@ -20,7 +20,7 @@ use tdvass_fmi2::snapshot;
 
 /// `payload` behind a valid header of this FMU.
 fn envelope(payload: &[u8]) -> Vec<u8> {
-    let guid = tdvass_fmi2::guid();
+    let guid = tdvass_fmi2::guid(tdvass_fmi2::Model::QuarterCar);
     let mut out = Vec::with_capacity(payload.len() + 64);
     out.extend_from_slice(snapshot::MAGIC);
     out.extend_from_slice(&snapshot::FORMAT_VERSION.to_le_bytes());
@@ -131,7 +131,7 @@ fuzz_target!(|data: &[u8]| {
         unsafe {
             assert_eq!(check(fmi2SetFMUstate(c, state)), OK);
         }
-        let model = snapshot::deserialize(&bytes, &tdvass_fmi2::guid()).expect("accepted above");
+        let model = snapshot::deserialize(&bytes, &tdvass_fmi2::guid(tdvass_fmi2::Model::QuarterCar), tdvass_fmi2::Model::QuarterCar).expect("accepted above");
         if let Some(exchange) = model.engine.exchange() {
             assert_outputs_finite(c);
             model_exchange_steps(c, exchange.time(), steps);
