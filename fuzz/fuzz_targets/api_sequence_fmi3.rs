@@ -398,7 +398,10 @@ unsafe fn free_slot(slot: Slot) {
 }
 
 fuzz_target!(|data: &[u8]| {
-    let token = std::ffi::CString::new(tdvass_fmi3::instantiation_token(tdvass_fmi2::Model::QuarterCar)).unwrap();
+    let token = std::ffi::CString::new(tdvass_fmi3::instantiation_token(
+        tdvass_fmi2::Model::QuarterCar,
+    ))
+    .unwrap();
     let fmi2_guid = tdvass_fmi2::guid(tdvass_fmi2::Model::QuarterCar);
     let mut b = Bytes::new(data);
     let mut slots: [Option<Slot>; 2] = [None, None];
@@ -715,7 +718,9 @@ fuzz_target!(|data: &[u8]| {
                                     }
                                     1 => {
                                         // The FMI 2.0 FMU's header: same format, its GUID.
-                                        let token = tdvass_fmi3::instantiation_token(tdvass_fmi2::Model::QuarterCar);
+                                        let token = tdvass_fmi3::instantiation_token(
+                                            tdvass_fmi2::Model::QuarterCar,
+                                        );
                                         if token.len() == fmi2_guid.len()
                                             && let Some(at) = bytes
                                                 .windows(token.len())

@@ -131,7 +131,12 @@ fuzz_target!(|data: &[u8]| {
         unsafe {
             assert_eq!(check(fmi2SetFMUstate(c, state)), OK);
         }
-        let model = snapshot::deserialize(&bytes, &tdvass_fmi2::guid(tdvass_fmi2::Model::QuarterCar), tdvass_fmi2::Model::QuarterCar).expect("accepted above");
+        let model = snapshot::deserialize(
+            &bytes,
+            &tdvass_fmi2::guid(tdvass_fmi2::Model::QuarterCar),
+            tdvass_fmi2::Model::QuarterCar,
+        )
+        .expect("accepted above");
         if let Some(exchange) = model.engine.exchange() {
             assert_outputs_finite(c);
             model_exchange_steps(c, exchange.time(), steps);
