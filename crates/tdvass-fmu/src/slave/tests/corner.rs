@@ -142,7 +142,7 @@ fn the_static_load_sets_the_tire_load_ratio() {
 }
 
 #[test]
-fn bad_body_inputs_and_a_model_exchange_corner_are_refused() {
+fn bad_body_inputs_are_refused() {
     let mut s = started_corner(&[]);
     for (name, bad) in [
         ("body_displacement", f64::NAN),
@@ -236,4 +236,29 @@ fn the_quarter_car_is_a_corner_under_a_point_mass() {
     let (coarse, fine) = (error_at(1e-3), error_at(2.5e-4));
     assert!(fine < 1e-2, "{fine}");
     assert!(fine < coarse / 3.0, "{coarse} -> {fine}");
+}
+
+#[test]
+fn the_token_picks_the_model_and_a_model_exchange_corner_is_refused() {
+    use crate::instantiation::Instantiation;
+    let log: Log = Rc::default();
+    let sink = log.clone();
+    let instantiation = Instantiation::new(
+        TEST_DIALECT,
+        Box::new(move |s, c, m| sink.borrow_mut().push((s, c.into(), m.into()))),
+    );
+    for model in Model::ALL {
+        assert_eq!(instantiation.model(Some(&guid(model))), Some(model));
+    }
+    assert_eq!(instantiation.interface(Model::QuarterCar, true), Some(()));
+    assert_eq!(instantiation.interface(Model::Corner, false), Some(()));
+    assert_eq!(instantiation.interface(Model::Corner, true), None);
+    assert_eq!(instantiation.model(Some("{0}")), None);
+    let messages: Vec<String> = log.borrow().iter().map(|(_, _, m)| m.clone()).collect();
+    assert!(messages[0].contains("Co-Simulation only"), "{messages:?}");
+    assert!(
+        messages[1].contains(&guid(Model::QuarterCar))
+            && messages[1].contains(&guid(Model::Corner)),
+        "{messages:?}"
+    );
 }
