@@ -1,8 +1,11 @@
 //! The one table of FMU variables (a long file on purpose: one declaration
 //! per variable, read as one list): [`COMMON_VARIABLES`], the variables of
 //! both FMI versions (all of FMI 2.0's), and [`FMI3_VARIABLES`], the same
-//! followed by the FMI 3.0 additions. [`variables_of`] gives a version's,
-//! and [`by_vr`] and [`by_name`] search it.
+//! followed by the FMI 3.0 additions: the quarter car's. The corner
+//! ([`Model::Corner`]) has the table's variables that are not
+//! [`Variable::quarter_car_only`] (and none of Model Exchange), then
+//! [`CORNER_ADDITIONS`]. [`variables_of`] gives a model's in a version, and
+//! [`by_vr`] and [`by_name`] search it.
 //!
 //! Each variable is declared once: name, value reference, causality,
 //! variability, physical quantity (hence type definition and unit), display
