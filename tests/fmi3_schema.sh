@@ -3,8 +3,9 @@
 # of the standard (modelica/fmi-standard, release v3.0.2) with xmllint.
 #
 #   tests/fmi3_schema.sh            the checked-in modelDescription/fmi3/modelDescription.xml
-#                                   and, when it was built, the one inside
-#                                   target/fmu/tdvass-fmi3.fmu
+#                                   and modelDescription/corner/fmi3/modelDescription.xml
+#                                   and, when they were built, the ones inside
+#                                   target/fmu/tdvass-fmi3.fmu and tdvass-corner-fmi3.fmu
 #   tests/fmi3_schema.sh FILE...    these files
 #
 # The schema is taken from FMI3_SCHEMA_DIR (a directory holding
@@ -35,14 +36,16 @@ fi
 files=("$@")
 scratch=""
 if [ ${#files[@]} -eq 0 ]; then
-    files=(modelDescription/fmi3/modelDescription.xml)
-    fmu="$target/fmu/tdvass-fmi3.fmu"
-    if [ -f "$fmu" ]; then
-        scratch="$(mktemp -d)"
-        trap 'rm -rf "$scratch"' EXIT
-        python3 -c 'import sys, zipfile; sys.stdout.buffer.write(zipfile.ZipFile(sys.argv[1]).read("modelDescription.xml"))' \
-            "$fmu" >"$scratch/modelDescription.xml"
-        files+=("$scratch/modelDescription.xml")
-    fi
+    files=(modelDescription/fmi3/modelDescription.xml modelDescription/corner/fmi3/modelDescription.xml)
+    scratch="$(mktemp -d)"
+    trap 'rm -rf "$scratch"' EXIT
+    for name in tdvass-fmi3 tdvass-corner-fmi3; do
+        fmu="$target/fmu/$name.fmu"
+        if [ -f "$fmu" ]; then
+            python3 -c 'import sys, zipfile; sys.stdout.buffer.write(zipfile.ZipFile(sys.argv[1]).read("modelDescription.xml"))' \
+                "$fmu" >"$scratch/$name.xml"
+            files+=("$scratch/$name.xml")
+        fi
+    done
 fi
 xmllint --noout --schema "$schema" "${files[@]}"

@@ -1,7 +1,12 @@
-//! Builds the FMI 2.0 FMU `target/fmu/tdvass.fmu` and the FMI 3.0 FMU
-//! `target/fmu/tdvass-fmi3.fmu`, and refreshes the checked-in
-//! `modelDescription/modelDescription.xml` (FMI 2.0) and
-//! `modelDescription/fmi3/modelDescription.xml` (FMI 3.0). The build's
+//! Builds the quarter car's FMI 2.0 FMU `target/fmu/tdvass.fmu` and FMI 3.0
+//! FMU `target/fmu/tdvass-fmi3.fmu`, the corner's
+//! (`tdvass_fmu::Model::Corner`: the suspension of one corner of a vehicle,
+//! Co-Simulation only) `target/fmu/tdvass-corner.fmu` and
+//! `target/fmu/tdvass-corner-fmi3.fmu`, and refreshes the checked-in
+//! `modelDescription/modelDescription.xml` (FMI 2.0),
+//! `modelDescription/fmi3/modelDescription.xml` (FMI 3.0) and the corner's
+//! `modelDescription/corner/modelDescription.xml` and
+//! `modelDescription/corner/fmi3/modelDescription.xml`. The build's
 //! steps stay in this one file, in the order they run (a long file on
 //! purpose).
 //!
@@ -12,8 +17,11 @@
 //! cargo run --release -p fmu-build -- --no-profile   # the host, without the profile (quicker)
 //! ```
 //!
-//! Each FMU carries the shared library of its own crate (`tdvass-fmi2`,
-//! `tdvass-fmi3`) under the model identifier. Without a flag that is the
+//! Each FMU carries the shared library of its FMI version's crate
+//! (`tdvass-fmi2`, `tdvass-fmi3`) under the model identifier; the quarter
+//! car's and the corner's FMU of a version carry the same library, built
+//! once (the token of the model description picks the model at
+//! instantiation). Without a flag that is the
 //! library of the host (Linux x86-64: `binaries/linux64/tdvass.so` and
 //! `binaries/x86_64-linux/tdvass.so`, Windows x86-64: `binaries/win64/tdvass.dll`
 //! and `binaries/x86_64-windows/tdvass.dll`, macOS: `binaries/darwin64/tdvass.dylib`
@@ -22,8 +30,8 @@
 //! the Linux libraries (x86-64 and aarch64) with zig as the linker, through
 //! cargo-zigbuild and its glibc-versioned targets, so that they need no glibc
 //! newer than [`GLIBC_FLOOR`], and cross-builds the Windows x86-64 library
-//! with MinGW-w64 (`.cargo/config.toml`); the FMI 2.0 FMU packs linux64 and
-//! win64, the FMI 3.0 FMU `x86_64-linux`, `x86_64-windows` and
+//! with MinGW-w64 (`.cargo/config.toml`); the FMI 2.0 FMUs pack linux64 and
+//! win64, the FMI 3.0 FMUs `x86_64-linux`, `x86_64-windows` and
 //! `aarch64-linux`. FMI 2.0 names no aarch64 platform, so its aarch64
 //! library stays in `target/aarch64-unknown-linux-gnu/release/` (tests run
 //! it). A missing Rust target, cross toolchain or zig stops the build before
@@ -38,7 +46,7 @@
 //!
 //! The descriptions and documentation come from `tdvass-describe`
 //! ([`tdvass_describe::fmi2`], [`tdvass_describe::fmi3`]), generated from
-//! the variable table; the FMU libraries carry none of that code. Besides them each FMU carries the icon
+//! the variable table of each model; the FMU libraries carry none of that code. Besides them each FMU carries the icon
 //! (`fmu-build/assets/icon.png`, drawn by `tools/draw_icon.py`: `model.png`
 //! in FMI 2.0, `terminalsAndIcons/icon.png` in FMI 3.0, and
 //! `documentation/diagram.png` in both) and the reference results of its
@@ -73,9 +81,12 @@ const ICON: &[u8] = include_bytes!("../assets/icon.png");
 /// The FMU reference, whose variable table is generated.
 const VARIABLE_TABLE_DOC: &str = "docs/fmu.md";
 
-/// One FMU of the build: its crate, its archive and its generated files.
+/// One FMU of the build: its model, its crate, its archive and its
+/// generated files.
 #[derive(Debug, Clone)]
 struct Fmu {
+    /// The model the FMU's description declares (its token picks it).
+    model: Model,
     version: FmiVersion,
     /// The cargo package whose shared library the FMU carries.
     package: &'static str,
@@ -103,39 +114,69 @@ struct Fmu {
 }
 
 impl Fmu {
-    /// Both FMUs, FMI 2.0 first.
-    fn all() -> [Fmu; 2] {
+    /// Every FMU: the quarter car's FMI 2.0 and FMI 3.0 FMUs, then the
+    /// corner's.
+    fn all() -> [Fmu; 4] {
         [
-            Fmu {
-                version: FmiVersion::Fmi2,
+            Fmu::new(Model::QuarterCar, FmiVersion::Fmi2),
+            Fmu::new(Model::QuarterCar, FmiVersion::Fmi3),
+            Fmu::new(Model::Corner, FmiVersion::Fmi2),
+            Fmu::new(Model::Corner, FmiVersion::Fmi3),
+        ]
+    }
+
+    /// The FMU of `model` in `version`.
+    fn new(model: Model, version: FmiVersion) -> Fmu {
+        let (file_name, checked_in) = match (model, version) {
+            (Model::QuarterCar, FmiVersion::Fmi2) => {
+                ("tdvass.fmu", "modelDescription/modelDescription.xml")
+            }
+            (Model::QuarterCar, FmiVersion::Fmi3) => (
+                "tdvass-fmi3.fmu",
+                "modelDescription/fmi3/modelDescription.xml",
+            ),
+            (Model::Corner, FmiVersion::Fmi2) => (
+                "tdvass-corner.fmu",
+                "modelDescription/corner/modelDescription.xml",
+            ),
+            (Model::Corner, FmiVersion::Fmi3) => (
+                "tdvass-corner-fmi3.fmu",
+                "modelDescription/corner/fmi3/modelDescription.xml",
+            ),
+        };
+        match version {
+            FmiVersion::Fmi2 => Fmu {
+                model,
+                version,
                 package: "tdvass-fmi2",
                 library: "tdvass_fmi2",
-                file_name: "tdvass.fmu",
-                checked_in: "modelDescription/modelDescription.xml",
-                description: tdvass_describe::fmi2::model_description_xml(),
-                documentation: tdvass_describe::fmi2::documentation_html(),
-                identity: format!("GUID {}", tdvass_fmi2::guid(Model::QuarterCar)),
+                file_name,
+                checked_in,
+                description: tdvass_describe::fmi2::model_description_xml(model),
+                documentation: tdvass_describe::fmi2::documentation_html(model),
+                identity: format!("GUID {}", tdvass_fmi2::guid(model)),
                 dialect: tdvass_fmi2::instance::FMI2_DIALECT,
-                token: tdvass_fmi2::guid(Model::QuarterCar),
+                token: tdvass_fmi2::guid(model),
                 icon_entry: "model.png",
             },
-            Fmu {
-                version: FmiVersion::Fmi3,
+            FmiVersion::Fmi3 => Fmu {
+                model,
+                version,
                 package: "tdvass-fmi3",
                 library: "tdvass_fmi3",
-                file_name: "tdvass-fmi3.fmu",
-                checked_in: "modelDescription/fmi3/modelDescription.xml",
-                description: tdvass_describe::fmi3::model_description_xml(),
-                documentation: tdvass_describe::fmi3::documentation_html(),
+                file_name,
+                checked_in,
+                description: tdvass_describe::fmi3::model_description_xml(model),
+                documentation: tdvass_describe::fmi3::documentation_html(model),
                 identity: format!(
                     "instantiationToken {}",
-                    tdvass_fmi3::instantiation_token(Model::QuarterCar)
+                    tdvass_fmi3::instantiation_token(model)
                 ),
                 dialect: tdvass_fmi3::instance::FMI3_DIALECT,
-                token: tdvass_fmi3::instantiation_token(Model::QuarterCar),
+                token: tdvass_fmi3::instantiation_token(model),
                 icon_entry: "terminalsAndIcons/icon.png",
             },
-        ]
+        }
     }
 
     /// `FMI 2.0` or `FMI 3.0`, for messages.
@@ -145,6 +186,28 @@ impl Fmu {
             FmiVersion::Fmi3 => "FMI 3.0",
         }
     }
+
+    /// The model and the version (`TDVASS corner FMI 3.0`), for messages.
+    fn title(&self) -> String {
+        format!("{} {}", self.model.name(), self.label())
+    }
+}
+
+/// The shared libraries the FMUs carry: each package once (the first FMU
+/// that names it), with the indices in `fmus` of every FMU that carries
+/// its library.
+fn libraries(fmus: &[Fmu]) -> Vec<(&Fmu, Vec<usize>)> {
+    let mut out: Vec<(&Fmu, Vec<usize>)> = Vec::new();
+    for (i, fmu) in fmus.iter().enumerate() {
+        match out
+            .iter_mut()
+            .find(|(first, _)| first.package == fmu.package)
+        {
+            Some((_, carriers)) => carriers.push(i),
+            None => out.push((fmu, vec![i])),
+        }
+    }
+    out
 }
 
 type Result<T> = std::result::Result<T, String>;
@@ -550,7 +613,8 @@ fn profile_tool_required(platforms: &[Platform], profile: Profiling) -> bool {
 /// Builds the library of `fmu` for `platform` (release, library only) and
 /// returns its bytes, checked to be machine code of that platform. Each
 /// crate is built by a cargo run of its own, so that the FMI 2.0 library is
-/// built exactly as without the FMI 3.0 one.
+/// built exactly as without the FMI 3.0 one; once per platform, whatever
+/// the number of FMUs that carry it ([`libraries`]).
 fn build_library(
     root: &Path,
     platform: &Platform,
@@ -718,7 +782,7 @@ fn check_only(root: &Path, fmus: &[Fmu]) -> Result<()> {
         eprintln!(
             "fmu-build: {} is up to date ({} {})",
             fmu.checked_in,
-            fmu.label(),
+            fmu.title(),
             fmu.identity
         );
     }
@@ -796,8 +860,8 @@ fn build(root: &Path, fmus: &[Fmu], platforms: &[Platform], profile: Profiling) 
     // stops before the long part.
     let mut results = Vec::new();
     for fmu in fmus {
-        let csv = reference::results_csv(fmu.dialect, fmu.token.clone())
-            .map_err(|e| format!("the reference results of the {} FMU: {e}", fmu.label()))?;
+        let csv = reference::results_csv(fmu.model, fmu.dialect, fmu.token.clone())
+            .map_err(|e| format!("the reference results of the {} FMU: {e}", fmu.title()))?;
         results.push(csv);
     }
     // Every library is built before anything is packed: a failed build
@@ -816,12 +880,17 @@ fn build(root: &Path, fmus: &[Fmu], platforms: &[Platform], profile: Profiling) 
         } else {
             None
         };
-        for (fmu, packed) in fmus.iter().zip(binaries.iter_mut()) {
+        // Each library once; the FMUs of its version carry the same bytes.
+        for (fmu, carriers) in libraries(fmus) {
             let bytes = build_library(root, platform, fmu, zig.as_ref(), trained.as_ref())?;
             match platform.fmu_entry(fmu.version) {
-                Some(entry) => packed.push((entry, bytes)),
+                Some(entry) => {
+                    for &i in &carriers {
+                        binaries[i].push((entry.clone(), bytes.clone()));
+                    }
+                }
                 None => eprintln!(
-                    "fmu-build: {} library (not in the {} FMU): {}",
+                    "fmu-build: {} library (not in the {} FMUs): {}",
                     platform.label,
                     fmu.label(),
                     platform
@@ -861,7 +930,7 @@ fn build(root: &Path, fmus: &[Fmu], platforms: &[Platform], profile: Profiling) 
                 .map(|(name, _)| name.as_str())
                 .collect::<Vec<_>>()
                 .join(", "),
-            fmu.label(),
+            fmu.title(),
             fmu.identity
         );
     }

@@ -3,12 +3,17 @@
 //! names `tdvass_out.csv` beside it, the outputs of the default experiment.
 //!
 //! The results are computed here, at build time, by the same slave the FMU's
-//! shared library wraps ([`tdvass_fmu::Slave`], in the FMI version's
-//! dialect), driven as a master drives the FMU: the start values of the
-//! variable table, the DefaultExperiment's start and stop time and
-//! tolerance, and communication steps of [`OUTPUT_INTERVAL`] from
+//! shared library wraps ([`tdvass_fmu::Slave`], of the FMU's model, in the
+//! FMI version's dialect), driven as a master drives the FMU: the start
+//! values of the variable table, the DefaultExperiment's start and stop
+//! time and tolerance, and communication steps of [`OUTPUT_INTERVAL`] from
 //! `start + k·interval` to `start + (k+1)·interval`. Every output is written
 //! in Rust's shortest representation that reads back to the same `f64`.
+//!
+//! The corner's ([`Model::Corner`]) inputs stay at their start values too:
+//! the body's attachment point at rest at the static equilibrium
+//! (`body_displacement` = `body_velocity` = 0), so that its results are the
+//! suspension under a fixed body on the default harmonic road.
 
 use quick_xml::events::{BytesDecl, Event};
 use std::cell::RefCell;
@@ -82,9 +87,9 @@ pub fn manifest_xml() -> String {
 }
 
 /// The outputs of the reference results: every scalar Real (Float64)
-/// output of the FMI version, in the order of the variable table.
-pub fn outputs(dialect: &Dialect) -> Vec<&'static Variable> {
-    variables_of(Model::QuarterCar, dialect.version)
+/// output of `model` in the FMI version, in the order of its variables.
+pub fn outputs(model: Model, dialect: &Dialect) -> Vec<&'static Variable> {
+    variables_of(model, dialect.version)
         .iter()
         .filter(|v| {
             v.causality == Causality::Output
@@ -116,11 +121,11 @@ pub fn step_count() -> usize {
     ((DEFAULT_STOP_TIME - DEFAULT_START_TIME) / OUTPUT_INTERVAL).round() as usize
 }
 
-/// The reference results of the FMU speaking `dialect` whose serialized
-/// states carry `token`, as CSV: a header `time,<output>,...` and one row per
-/// communication point from the start to the stop time. Any status other
-/// than OK, and any message the slave logs, is an error.
-pub fn results_csv(dialect: Dialect, token: String) -> Result<String, String> {
+/// The reference results of the FMU of `model` speaking `dialect` whose
+/// serialized states carry `token`, as CSV: a header `time,<output>,...`
+/// and one row per communication point from the start to the stop time.
+/// Any status other than OK, and any message the slave logs, is an error.
+pub fn results_csv(model: Model, dialect: Dialect, token: String) -> Result<String, String> {
     let log: Rc<RefCell<Vec<String>>> = Rc::default();
     let sink = {
         let log = Rc::clone(&log);
@@ -129,8 +134,8 @@ pub fn results_csv(dialect: Dialect, token: String) -> Result<String, String> {
                 .push(format!("{} [{category}] {message}", status.name()))
         })
     };
-    let mut slave = Slave::new(dialect, Model::QuarterCar, token, Logger::new(sink, false));
-    let outputs = outputs(&dialect);
+    let mut slave = Slave::new(dialect, model, token, Logger::new(sink, false));
+    let outputs = outputs(model, &dialect);
     let vrs: Vec<u32> = outputs.iter().map(|v| v.vr).collect();
     let mut values = vec![0.0; vrs.len()];
     let mut csv = String::from("time");

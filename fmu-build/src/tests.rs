@@ -117,7 +117,7 @@ fn all_platforms_pack_linux64_and_win64_for_fmi2_and_all_three_for_fmi3() {
 
 #[test]
 fn each_fmu_has_its_crate_archive_and_checked_in_description() {
-    let [fmi2, fmi3] = Fmu::all();
+    let [fmi2, fmi3, corner2, corner3] = Fmu::all();
     assert_eq!(
         (fmi2.package, fmi2.library, fmi2.file_name, fmi2.checked_in),
         (
@@ -136,14 +136,77 @@ fn each_fmu_has_its_crate_archive_and_checked_in_description() {
             "modelDescription/fmi3/modelDescription.xml"
         )
     );
-    assert!(fmi2.description.contains(r#"fmiVersion="2.0""#));
-    assert!(fmi3.description.contains(r#"fmiVersion="3.0""#));
+    assert_eq!(
+        (
+            corner2.package,
+            corner2.library,
+            corner2.file_name,
+            corner2.checked_in
+        ),
+        (
+            "tdvass-fmi2",
+            "tdvass_fmi2",
+            "tdvass-corner.fmu",
+            "modelDescription/corner/modelDescription.xml"
+        )
+    );
+    assert_eq!(
+        (
+            corner3.package,
+            corner3.library,
+            corner3.file_name,
+            corner3.checked_in
+        ),
+        (
+            "tdvass-fmi3",
+            "tdvass_fmi3",
+            "tdvass-corner-fmi3.fmu",
+            "modelDescription/corner/fmi3/modelDescription.xml"
+        )
+    );
+    let models: Vec<(Model, FmiVersion)> =
+        Fmu::all().iter().map(|f| (f.model, f.version)).collect();
+    assert_eq!(
+        models,
+        [
+            (Model::QuarterCar, FmiVersion::Fmi2),
+            (Model::QuarterCar, FmiVersion::Fmi3),
+            (Model::Corner, FmiVersion::Fmi2),
+            (Model::Corner, FmiVersion::Fmi3),
+        ]
+    );
+    for fmu in Fmu::all() {
+        // The archive is named after the model's stem.
+        let suffix = match fmu.version {
+            FmiVersion::Fmi2 => "",
+            FmiVersion::Fmi3 => "-fmi3",
+        };
+        assert_eq!(
+            fmu.file_name,
+            format!("{}{suffix}.fmu", fmu.model.fmu_stem())
+        );
+        let version = match fmu.version {
+            FmiVersion::Fmi2 => r#"fmiVersion="2.0""#,
+            FmiVersion::Fmi3 => r#"fmiVersion="3.0""#,
+        };
+        assert!(fmu.description.contains(version), "{}", fmu.title());
+        assert!(
+            fmu.description
+                .contains(&format!(r#"modelName="{}""#, fmu.model.name())),
+            "{}",
+            fmu.title()
+        );
+        assert!(fmu.identity.contains(&fmu.token), "{}", fmu.title());
+    }
     assert!(
         fmi3.identity
             .contains(&tdvass_fmi3::instantiation_token(Model::QuarterCar))
     );
+    // Four checked-in copies, each its own file.
+    let copies: std::collections::HashSet<&str> = Fmu::all().iter().map(|f| f.checked_in).collect();
+    assert_eq!(copies.len(), 4);
     // The package names the library target that cargo builds.
-    for fmu in [&fmi2, &fmi3] {
+    for fmu in [&fmi2, &fmi3, &corner2, &corner3] {
         let manifest = fs::read_to_string(
             workspace_root()
                 .join("crates")
@@ -262,8 +325,11 @@ fn each_fmu_carries_the_icon_the_diagram_and_the_reference_results() {
     let size = tdvass_describe::markup::DIAGRAM_SIZE_PX;
     assert_eq!(png_size(ICON), Some((size, size)));
     assert_eq!(png_size(b"not a png"), None);
-    let [fmi2, fmi3] = Fmu::all();
-    for (fmu, icon) in [(&fmi2, "model.png"), (&fmi3, "terminalsAndIcons/icon.png")] {
+    for fmu in &Fmu::all() {
+        let icon = match fmu.version {
+            FmiVersion::Fmi2 => "model.png",
+            FmiVersion::Fmi3 => "terminalsAndIcons/icon.png",
+        };
         let entries = fixed_entries(fmu, "time\n0\n");
         let names: Vec<&str> = entries.iter().map(|(n, _)| n.as_str()).collect();
         assert_eq!(
@@ -301,11 +367,17 @@ fn each_fmu_carries_the_icon_the_diagram_and_the_reference_results() {
         ] {
             assert!(page.contains(&format!("<td>{symbol}</td>")), "{symbol}");
         }
-        assert!(page.contains("m_s (start 345 kg)"), "{}", fmu.label());
+        // The body is the quarter car's own; the corner's is outside, its
+        // weight on the corner the static load.
+        let body = match fmu.model {
+            Model::QuarterCar => "m_s (start 345 kg)",
+            Model::Corner => "static_load (start 3383.29425 N)",
+        };
+        assert!(page.contains(body), "{}", fmu.title());
         assert!(
             page.contains("control_force (output, N)"),
             "{}",
-            fmu.label()
+            fmu.title()
         );
         assert!(page.contains(&reference::csv_entry()), "{}", fmu.label());
         assert!(
@@ -361,13 +433,13 @@ fn numbers_are_written_in_their_shortest_round_trip_form() {
 /// a slave stepped the same way; and the FMI 2.0 and 3.0 slaves agree.
 #[test]
 fn reference_results_are_the_default_experiment_of_each_fmu() {
-    let [fmi2, fmi3] = Fmu::all();
-    let csv2 = reference::results_csv(fmi2.dialect, fmi2.token.clone()).unwrap();
-    let csv3 = reference::results_csv(fmi3.dialect, fmi3.token.clone()).unwrap();
+    let [fmi2, fmi3, _, _] = Fmu::all();
+    let csv2 = reference::results_csv(fmi2.model, fmi2.dialect, fmi2.token.clone()).unwrap();
+    let csv3 = reference::results_csv(fmi3.model, fmi3.dialect, fmi3.token.clone()).unwrap();
     for (fmu, csv) in [(&fmi2, &csv2), (&fmi3, &csv3)] {
         let mut lines = csv.lines();
         let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-        let outputs = reference::outputs(&fmu.dialect);
+        let outputs = reference::outputs(fmu.model, &fmu.dialect);
         assert_eq!(header[0], "time");
         assert_eq!(header.len(), outputs.len() + 1);
         for name in [
@@ -400,28 +472,184 @@ fn reference_results_are_the_default_experiment_of_each_fmu() {
         assert!((rows[300][ba] - 0.3068).abs() < 1.5e-4, "{}", rows[300][ba]);
     }
     // The columns both versions have carry the same numbers.
-    let table = |csv: &str| -> Vec<Vec<String>> {
-        let mut columns: Vec<Vec<String>> = Vec::new();
-        for line in csv.lines() {
-            for (i, cell) in line.split(',').enumerate() {
-                if columns.len() <= i {
-                    columns.push(Vec::new());
-                }
-                columns[i].push(cell.to_string());
+    assert_columns_agree(&csv2, &csv3);
+    // Deterministic.
+    assert_eq!(
+        csv2,
+        reference::results_csv(fmi2.model, fmi2.dialect, fmi2.token.clone()).unwrap()
+    );
+}
+
+/// The columns of `csv` by header, each with its cells as written.
+fn columns(csv: &str) -> Vec<Vec<String>> {
+    let mut columns: Vec<Vec<String>> = Vec::new();
+    for line in csv.lines() {
+        for (i, cell) in line.split(',').enumerate() {
+            if columns.len() <= i {
+                columns.push(Vec::new());
             }
+            columns[i].push(cell.to_string());
         }
-        columns
-    };
-    let (t2, t3) = (table(&csv2), table(&csv3));
+    }
+    columns
+}
+
+/// Every column of the FMI 2.0 results is in the FMI 3.0 ones, cell for
+/// cell.
+fn assert_columns_agree(csv2: &str, csv3: &str) {
+    let (t2, t3) = (columns(csv2), columns(csv3));
     for column in &t2 {
         let other = t3.iter().find(|c| c[0] == column[0]);
         assert_eq!(Some(column), other, "{}", column[0]);
     }
-    // Deterministic.
+}
+
+/// The corner's reference results: its own outputs (the body force, not
+/// the body's), a corner slave under a body fixed at the static
+/// equilibrium on the default harmonic road; both versions agree.
+#[test]
+fn the_corner_reference_results_are_the_suspension_under_a_fixed_body() {
+    let [_, _, corner2, corner3] = Fmu::all();
+    let csv2 =
+        reference::results_csv(corner2.model, corner2.dialect, corner2.token.clone()).unwrap();
+    let csv3 =
+        reference::results_csv(corner3.model, corner3.dialect, corner3.token.clone()).unwrap();
+    for (fmu, csv) in [(&corner2, &csv2), (&corner3, &csv3)] {
+        let mut lines = csv.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let outputs = reference::outputs(Model::Corner, &fmu.dialect);
+        assert_eq!(header[0], "time");
+        assert_eq!(header.len(), outputs.len() + 1);
+        let names: Vec<&str> = outputs.iter().map(|v| v.name).collect();
+        assert_eq!(header[1..], names[..]);
+        for name in [
+            "body_force",
+            "x_t",
+            "suspension_deflection",
+            "tire_deflection",
+        ] {
+            assert!(header.contains(&name), "{name} in {header:?}");
+        }
+        for name in ["x_s", "body_acceleration", "objective"] {
+            assert!(!header.contains(&name), "{name} in {header:?}");
+        }
+        let rows: Vec<Vec<f64>> = lines
+            .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+            .collect();
+        assert_eq!(rows.len(), 301);
+        assert!(rows.iter().all(|r| r.len() == header.len()));
+        assert_eq!(rows[300][0], 15.0);
+        let column = |name: &str| header.iter().position(|h| *h == name).unwrap();
+        // From rest at the static equilibrium: no force at the start; the
+        // harmonic road moves the wheel, and the suspension pulls on the
+        // fixed body.
+        let (force, x_t, sdd) = (
+            column("body_force"),
+            column("x_t"),
+            column("suspension_deflection"),
+        );
+        assert_eq!(rows[0][force], 0.0);
+        assert_eq!(rows[0][x_t], 0.0);
+        assert!(rows.iter().any(|r| r[x_t].abs() > 1e-3));
+        assert!(rows.iter().any(|r| r[force].abs() > 1.0));
+        assert!(rows.iter().all(|r| r.iter().all(|x| x.is_finite())));
+        // The body is fixed: SDD = 0 - x_t.
+        for r in &rows {
+            assert_eq!(r[sdd], -r[x_t]);
+        }
+    }
+    assert_columns_agree(&csv2, &csv3);
+}
+
+/// The corner's FMUs carry the quarter car's library of their version
+/// (built once, the same bytes under the same entry) with their own model
+/// description, documentation and reference results.
+#[test]
+fn the_corner_fmus_carry_the_quarter_cars_library_with_their_own_description() {
+    let fmus = Fmu::all();
+    // One library per package, packed into both FMUs of its version.
+    let built: Vec<(&str, Vec<usize>)> = libraries(&fmus)
+        .into_iter()
+        .map(|(fmu, carriers)| (fmu.package, carriers))
+        .collect();
     assert_eq!(
-        csv2,
-        reference::results_csv(fmi2.dialect, fmi2.token.clone()).unwrap()
+        built,
+        [("tdvass-fmi2", vec![0, 2]), ("tdvass-fmi3", vec![1, 3])]
     );
+    let host = host_platform(std::env::consts::OS, std::env::consts::ARCH).unwrap();
+    let out_dir =
+        std::env::temp_dir().join(format!("fmu-build-test-corner-{}", std::process::id()));
+    fs::create_dir_all(&out_dir).unwrap();
+    for (quarter_car, corner) in [(&fmus[0], &fmus[2]), (&fmus[1], &fmus[3])] {
+        assert_eq!(corner.model, Model::Corner);
+        assert_eq!(quarter_car.model, Model::QuarterCar);
+        assert_eq!(
+            (corner.version, corner.package, corner.library),
+            (
+                quarter_car.version,
+                quarter_car.package,
+                quarter_car.library
+            )
+        );
+        assert_eq!(corner.icon_entry, quarter_car.icon_entry);
+        assert_eq!(
+            corner.token,
+            tdvass_fmu::variables::token(Model::Corner, corner.version)
+        );
+        assert_ne!(corner.token, quarter_car.token);
+        // Its own description: Co-Simulation only, the same model identifier.
+        let description = &corner.description;
+        assert!(description.contains(r#"modelName="TDVASS corner""#));
+        assert!(description.contains(&corner.token));
+        assert!(!description.contains("<ModelExchange"));
+        assert!(description.contains(r#"<CoSimulation modelIdentifier="tdvass""#));
+        assert!(!corner.documentation.contains(&quarter_car.token));
+        assert!(corner.documentation.contains(&corner.token));
+        // The archive: the same entries as the quarter car's, the library
+        // bytes as given.
+        let library = b"the library of both".to_vec();
+        let entry = host.fmu_entry(corner.version).unwrap();
+        let binaries = vec![(entry.clone(), library.clone())];
+        let path = pack(
+            &out_dir, corner, &binaries, "time
+0
+",
+        )
+        .unwrap();
+        assert_eq!(path, out_dir.join(corner.file_name));
+        let mut archive = ZipArchive::new(fs::File::open(&path).unwrap()).unwrap();
+        let mut names: Vec<String> = archive
+            .file_names()
+            .map(|n| n.unwrap().into_owned())
+            .collect();
+        names.sort();
+        let mut expected: Vec<String> = fixed_entries(quarter_car, "")
+            .into_iter()
+            .map(|(name, _)| name)
+            .chain(["modelDescription.xml".to_string(), entry.clone()])
+            .collect();
+        expected.sort();
+        assert_eq!(names, expected, "{}", corner.title());
+        let read = |archive: &mut ZipArchive<fs::File>, name: &str| {
+            let mut bytes = Vec::new();
+            archive
+                .by_name(name)
+                .unwrap()
+                .read_to_end(&mut bytes)
+                .unwrap();
+            bytes
+        };
+        assert_eq!(read(&mut archive, &entry), library);
+        assert_eq!(
+            read(&mut archive, "modelDescription.xml"),
+            corner.description.as_bytes()
+        );
+        assert_eq!(
+            read(&mut archive, "documentation/index.html"),
+            corner.documentation.as_bytes()
+        );
+    }
+    fs::remove_dir_all(&out_dir).unwrap();
 }
 
 #[test]

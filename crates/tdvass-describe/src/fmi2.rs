@@ -1,8 +1,11 @@
 //! The FMI 2.0 `modelDescription.xml` and `documentation/index.html`,
 //! generated from the variable table with quick-xml (no markup is written
 //! by hand, so every value is escaped). The output is deterministic: no
-//! timestamps.
+//! timestamps. Each model ([`Model`]) has its own: the quarter car's with
+//! Model Exchange beside Co-Simulation, the corner's Co-Simulation only
+//! ([`Model::offers_model_exchange`]).
 
+use crate::corner::{CornerPage, corner_page};
 use crate::markup::{
     DescriptionFrame, MODEL_DESCRIPTION, REFERENCE_RESULTS, TIRE_CONTACT, XmlResult, XmlWriter,
     diagram, html_page, list, model_description, model_exchange_text, number, paragraph,
@@ -14,7 +17,7 @@ use tdvass::solver::CONTINUOUS_STATES;
 use tdvass_fmi2::FMI_VERSION;
 use tdvass_fmu::Model;
 use tdvass_fmu::variables::{
-    Access, COMMON_VARIABLES, Causality, FmiVersion, Quantity, VarType, Variable,
+    Access, Causality, FmiVersion, Quantity, VarType, Variable, variables_of,
 };
 use tdvass_fmu::{
     DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, MODEL_IDENTIFIER, MODEL_NAME, guid,
@@ -54,7 +57,7 @@ fn write_type_definitions(w: &mut XmlWriter) -> XmlResult {
     Ok(())
 }
 
-fn write_variable(w: &mut XmlWriter, v: &Variable) -> XmlResult {
+fn write_variable(w: &mut XmlWriter, model: Model, v: &Variable) -> XmlResult {
     let vr = v.vr.to_string();
     let mut element = w
         .create_element("ScalarVariable")
@@ -86,7 +89,7 @@ fn write_variable(w: &mut XmlWriter, v: &Variable) -> XmlResult {
             attributes.push(("start", start));
         }
         if let Access::StateDerivative(i) = v.access {
-            attributes.push(("derivative", state_index(i).to_string()));
+            attributes.push(("derivative", state_index(model, i).to_string()));
         }
         w.create_element(v.var_type().as_str())
             .with_attributes(attributes.iter().map(|(k, v)| (*k, v.as_str())))
@@ -96,10 +99,10 @@ fn write_variable(w: &mut XmlWriter, v: &Variable) -> XmlResult {
     Ok(())
 }
 
-/// The 1-based index of the variable called `name` in FMI 2.0's
+/// The 1-based index of the variable of `model` called `name` in FMI 2.0's
 /// `ModelVariables`, by which `ModelStructure` refers to it.
-fn index_of(name: &str) -> Option<usize> {
-    COMMON_VARIABLES
+fn index_of(model: Model, name: &str) -> Option<usize> {
+    variables_of(model, FmiVersion::Fmi2)
         .iter()
         .position(|v| v.name == name)
         .map(|i| i + 1)
@@ -108,8 +111,8 @@ fn index_of(name: &str) -> Option<usize> {
 /// The 1-based index of continuous state `i`'s variable: a local
 /// ([`Access::ContinuousState`]) or an output (`x_s` .. `v_t`,
 /// `contact_loss_time`); the `derivative` attribute of `der(...)`.
-fn state_index(i: usize) -> usize {
-    COMMON_VARIABLES
+fn state_index(model: Model, i: usize) -> usize {
+    variables_of(model, FmiVersion::Fmi2)
         .iter()
         .position(|v| v.state_index() == Some(i))
         .map(|p| p + 1)
@@ -117,14 +120,15 @@ fn state_index(i: usize) -> usize {
 }
 
 /// An output's `dependencies` (1-based indices, ascending) and their
-/// `dependenciesKind`: the input `x_g` where it feeds through (`fixed`),
-/// the continuous states it is computed from (`dependent`).
-fn output_dependencies(v: &Variable) -> (String, String) {
+/// `dependenciesKind`: the inputs it feeds through (`fixed`: `x_g`, the
+/// corner's body inputs), the continuous states it is computed from
+/// (`dependent`; a model with Model Exchange only).
+fn output_dependencies(model: Model, v: &Variable) -> (String, String) {
     let mut found: Vec<(usize, &str)> = v
-        .output_dependencies(Model::QuarterCar, FmiVersion::Fmi2)
+        .output_dependencies(model, FmiVersion::Fmi2)
         .into_iter()
         .map(|(known, kind)| {
-            let index = index_of(known.name)
+            let index = index_of(model, known.name)
                 .unwrap_or_else(|| panic!("unknown dependency `{}`", known.name));
             (index, kind.name())
         })
@@ -137,10 +141,10 @@ fn output_dependencies(v: &Variable) -> (String, String) {
     )
 }
 
-fn indices(names: &[&str]) -> String {
+fn indices(model: Model, names: &[&str]) -> String {
     let mut idx: Vec<usize> = names
         .iter()
-        .map(|n| index_of(n).unwrap_or_else(|| panic!("unknown dependency `{n}`")))
+        .map(|n| index_of(model, n).unwrap_or_else(|| panic!("unknown dependency `{n}`")))
         .collect();
     idx.sort_unstable();
     idx.iter()
@@ -149,15 +153,18 @@ fn indices(names: &[&str]) -> String {
         .join(" ")
 }
 
-fn write_model_structure(w: &mut XmlWriter) -> XmlResult {
+/// `ModelStructure`: the outputs, the derivatives (a model with Model
+/// Exchange only) and the initial unknowns.
+fn write_model_structure(w: &mut XmlWriter, model: Model) -> XmlResult {
+    let variables = variables_of(model, FmiVersion::Fmi2);
     w.create_element("ModelStructure")
         .write_inner_content(|w| {
             w.create_element("Outputs").write_inner_content(|w| {
-                for (i, v) in COMMON_VARIABLES.iter().enumerate() {
+                for (i, v) in variables.iter().enumerate() {
                     if v.causality != Causality::Output {
                         continue;
                     }
-                    let (dependencies, kinds) = output_dependencies(v);
+                    let (dependencies, kinds) = output_dependencies(model, v);
                     let mut unknown = w
                         .create_element("Unknown")
                         .with_attribute(("index", (i + 1).to_string().as_str()))
@@ -172,22 +179,24 @@ fn write_model_structure(w: &mut XmlWriter) -> XmlResult {
             // In the order of the continuous states (FMI 2.0: the order of
             // the Unknowns is that of fmi2GetContinuousStates); each depends
             // on every known (no `dependencies`).
-            w.create_element("Derivatives").write_inner_content(|w| {
-                for i in 0..CONTINUOUS_STATES {
-                    let index = COMMON_VARIABLES
-                        .iter()
-                        .position(|v| matches!(v.access, Access::StateDerivative(j) if j == i))
-                        .expect("every state has a derivative")
-                        + 1;
-                    w.create_element("Unknown")
-                        .with_attribute(("index", index.to_string().as_str()))
-                        .write_empty()?;
-                }
-                Ok(())
-            })?;
+            if model.offers_model_exchange() {
+                w.create_element("Derivatives").write_inner_content(|w| {
+                    for i in 0..CONTINUOUS_STATES {
+                        let index = variables
+                            .iter()
+                            .position(|v| matches!(v.access, Access::StateDerivative(j) if j == i))
+                            .expect("every state has a derivative")
+                            + 1;
+                        w.create_element("Unknown")
+                            .with_attribute(("index", index.to_string().as_str()))
+                            .write_empty()?;
+                    }
+                    Ok(())
+                })?;
+            }
             w.create_element("InitialUnknowns")
                 .write_inner_content(|w| {
-                    for (i, v) in COMMON_VARIABLES.iter().enumerate() {
+                    for (i, v) in variables.iter().enumerate() {
                         let unknown = w
                             .create_element("Unknown")
                             .with_attribute(("index", (i + 1).to_string().as_str()));
@@ -205,7 +214,7 @@ fn write_model_structure(w: &mut XmlWriter) -> XmlResult {
                                 unknown
                                     .with_attribute((
                                         "dependencies",
-                                        indices(v.initial_dependencies).as_str(),
+                                        indices(model, v.initial_dependencies).as_str(),
                                     ))
                                     .write_empty()?;
                             }
@@ -248,30 +257,38 @@ pub const CO_SIMULATION_CAPABILITIES: [(&str, &str); 9] = [
     ("providesDirectionalDerivative", "true"),
 ];
 
-/// The complete `modelDescription.xml`.
-pub fn model_description_xml() -> String {
-    let guid = guid(Model::QuarterCar);
+/// The complete `modelDescription.xml` of `model`: with `ModelExchange`
+/// and `numberOfEventIndicators` when the model offers Model Exchange.
+pub fn model_description_xml(model: Model) -> String {
+    let guid = guid(model);
     let event_indicators = EVENT_INDICATORS.to_string();
+    let model_exchange = model.offers_model_exchange();
+    let event_indicators = [("numberOfEventIndicators", event_indicators.as_str())];
     let frame = DescriptionFrame {
         fmi_version: FMI_VERSION,
+        model,
         token: ("guid", &guid),
         co_simulation: &CO_SIMULATION_CAPABILITIES,
-        model_exchange: &MODEL_EXCHANGE_CAPABILITIES,
-        root: &[("numberOfEventIndicators", &event_indicators)],
+        model_exchange: model_exchange.then_some(&MODEL_EXCHANGE_CAPABILITIES[..]),
+        root: if model_exchange {
+            &event_indicators
+        } else {
+            &[]
+        },
     };
     model_description(frame, write_type_definitions, |w| {
         w.create_element("ModelVariables")
             .write_inner_content(|w| {
-                for (i, v) in COMMON_VARIABLES.iter().enumerate() {
+                for (i, v) in variables_of(model, FmiVersion::Fmi2).iter().enumerate() {
                     w.write_event(Event::Comment(BytesText::new(&format!(
                         " index {} ",
                         i + 1
                     ))))?;
-                    write_variable(w, v)?;
+                    write_variable(w, model, v)?;
                 }
                 Ok(())
             })?;
-        write_model_structure(w)
+        write_model_structure(w, model)
     })
 }
 
@@ -292,9 +309,26 @@ fn variable_row(v: &Variable) -> Vec<String> {
     ]
 }
 
-/// The complete `documentation/index.html`.
-pub fn documentation_html() -> String {
-    html_page(&format!("{MODEL_NAME} FMU"), write_body)
+/// The complete `documentation/index.html` of `model`'s FMU.
+pub fn documentation_html(model: Model) -> String {
+    match model {
+        Model::QuarterCar => html_page(&format!("{MODEL_NAME} FMU"), write_body),
+        Model::Corner => corner_page(&CornerPage {
+            version: "FMI 2.0",
+            identity: format!(
+                "GUID {} (a hash of the variable names, value references, types, causalities and variabilities)",
+                guid(model)
+            ),
+            type_header: "type",
+            rows: variables_of(model, FmiVersion::Fmi2)
+                .iter()
+                .map(variable_row)
+                .collect(),
+            after_variables: &|_| Ok(()),
+            co_simulation: &CO_SIMULATION_CAPABILITIES,
+            specification: "Functional Mock-up Interface for Model Exchange and Co-Simulation, version 2.0.",
+        }),
+    }
 }
 
 fn write_body(w: &mut XmlWriter) -> XmlResult {
@@ -314,7 +348,7 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
     )?;
 
     text_element(w, "h2", "The model")?;
-    diagram(w)?;
+    diagram(w, Model::QuarterCar)?;
     paragraph(
         w,
         "State X = [x_s, v_s, x_h, v_h, x_t, v_t]: body, annular absorber and wheel displacements and velocities. The plant is dX/dt = A X + b x_t(t - tau) + e x_g(t) (Eq. 2 of the paper): the body (m_s) sits on the absorber through k_s, c_s; the absorber (m_h) on the wheel through k_h, c_h; the wheel (m_t) on the road through k_t. TDVASS adds the control force u = g x_t(t - tau), acting with -u on the absorber and +u on the wheel. PVASS is the same structure with g = 0; CS is the conventional 2-DOF quarter car (body on wheel through k_s, c_s), for which x_h and v_h mirror x_t and v_t.",
@@ -345,7 +379,10 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
     )?;
 
     text_element(w, "h2", "Variables")?;
-    let rows: Vec<Vec<String>> = COMMON_VARIABLES.iter().map(variable_row).collect();
+    let rows: Vec<Vec<String>> = variables_of(Model::QuarterCar, FmiVersion::Fmi2)
+        .iter()
+        .map(variable_row)
+        .collect();
     variable_table(w, "type", &rows)?;
     paragraph(
         w,
@@ -382,7 +419,10 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
     text_element(w, "h2", "Model Exchange")?;
     paragraph(
         w,
-        &model_exchange_text("fmi2Instantiate with fmi2ModelExchange", COMMON_VARIABLES),
+        &model_exchange_text(
+            "fmi2Instantiate with fmi2ModelExchange",
+            variables_of(Model::QuarterCar, FmiVersion::Fmi2),
+        ),
     )?;
     let capabilities: Vec<String> = MODEL_EXCHANGE_CAPABILITIES
         .iter()
@@ -412,10 +452,11 @@ fn write_body(w: &mut XmlWriter) -> XmlResult {
 mod tests {
     use super::*;
     use crate::parsed::elements;
+    use tdvass_fmu::variables::COMMON_VARIABLES;
 
     #[test]
     fn model_description_has_every_variable() {
-        let xml = model_description_xml();
+        let xml = model_description_xml(Model::QuarterCar);
         let els = elements(&xml);
         let root = &els[0];
         assert_eq!(root.name, "fmiModelDescription");
@@ -473,7 +514,7 @@ mod tests {
 
     #[test]
     fn model_structure_lists_outputs_derivatives_and_initial_unknowns() {
-        let xml = model_description_xml();
+        let xml = model_description_xml(Model::QuarterCar);
         let els = elements(&xml);
         let at = |name: &str| els.iter().position(|e| e.name == name).unwrap();
         let (outputs_at, derivatives_at, initial_at) =
@@ -519,7 +560,7 @@ mod tests {
         }
         // The outputs depend on the input x_g where it feeds through
         // (fixed) and on the continuous states they are computed from.
-        let x_g = index_of("x_g").unwrap();
+        let x_g = index_of(Model::QuarterCar, "x_g").unwrap();
         for o in &outputs {
             let deps: Vec<usize> = o
                 .attr("dependencies")
@@ -544,12 +585,12 @@ mod tests {
             }
         }
         let output = |name: &str| {
-            let index = index_of(name).unwrap().to_string();
+            let index = index_of(Model::QuarterCar, name).unwrap().to_string();
             outputs.iter().find(|e| e.attr("index") == index).unwrap()
         };
         let plant: Vec<usize> = ["x_s", "v_s", "x_h", "v_h", "x_t", "v_t"]
             .iter()
-            .map(|n| index_of(n).unwrap())
+            .map(|n| index_of(Model::QuarterCar, n).unwrap())
             .collect();
         let mut expected: Vec<usize> = plant.iter().copied().chain([x_g]).collect();
         expected.sort_unstable();
@@ -559,11 +600,11 @@ mod tests {
             listed(output("tire_deflection").attr("dependencies")),
             expected
         );
-        let x_s = index_of("x_s").unwrap().to_string();
+        let x_s = index_of(Model::QuarterCar, "x_s").unwrap().to_string();
         assert_eq!(output("x_s").attr("dependencies"), x_s);
         assert_eq!(
             output("rms_tire_deflection").attr("dependencies"),
-            index_of("integral_tire_deflection_squared")
+            index_of(Model::QuarterCar, "integral_tire_deflection_squared")
                 .unwrap()
                 .to_string()
         );
@@ -596,18 +637,22 @@ mod tests {
             assert_eq!(der.name, format!("der({})", state.name));
             assert_eq!(state.variability.as_str(), "continuous");
         }
-        let named = |name: &str| typed(index_of(name).unwrap());
+        let named = |name: &str| typed(index_of(Model::QuarterCar, name).unwrap());
         assert_eq!(
             named("der(x_s)").attr("derivative"),
-            index_of("x_s").unwrap().to_string()
+            index_of(Model::QuarterCar, "x_s").unwrap().to_string()
         );
         assert_eq!(
             named("der(wk_filter_1)").attr("derivative"),
-            index_of("wk_filter_1").unwrap().to_string()
+            index_of(Model::QuarterCar, "wk_filter_1")
+                .unwrap()
+                .to_string()
         );
         assert_eq!(
             named("der(contact_loss_time)").attr("derivative"),
-            index_of("contact_loss_time").unwrap().to_string()
+            index_of(Model::QuarterCar, "contact_loss_time")
+                .unwrap()
+                .to_string()
         );
         // Only the derivatives have the attribute.
         let with_derivative = (1..=vars.len())
@@ -618,7 +663,7 @@ mod tests {
 
     #[test]
     fn model_exchange_beside_co_simulation() {
-        let xml = model_description_xml();
+        let xml = model_description_xml(Model::QuarterCar);
         let els = elements(&xml);
         let root = &els[0];
         assert_eq!(
@@ -660,7 +705,7 @@ mod tests {
 
     #[test]
     fn documentation_describes_every_variable() {
-        let html = documentation_html();
+        let html = documentation_html(Model::QuarterCar);
         assert!(html.starts_with("<!DOCTYPE html>"));
         elements(html.trim_start_matches("<!DOCTYPE html>"));
         for v in COMMON_VARIABLES {
@@ -677,7 +722,141 @@ mod tests {
 
     #[test]
     fn output_is_deterministic() {
-        assert_eq!(model_description_xml(), model_description_xml());
-        assert_eq!(documentation_html(), documentation_html());
+        for model in Model::ALL {
+            assert_eq!(model_description_xml(model), model_description_xml(model));
+            assert_eq!(documentation_html(model), documentation_html(model));
+        }
+    }
+
+    /// The corner's description: Co-Simulation only, its own name, GUID
+    /// and variables, and a ModelStructure that refers to them.
+    #[test]
+    fn the_corner_is_described_without_model_exchange() {
+        let model = Model::Corner;
+        let xml = model_description_xml(model);
+        let els = elements(&xml);
+        let root = &els[0];
+        assert_eq!(root.name, "fmiModelDescription");
+        assert_eq!(root.attr("fmiVersion"), "2.0");
+        assert_eq!(root.attr("modelName"), "TDVASS corner");
+        assert_eq!(root.attr("modelName"), model.name());
+        assert_eq!(root.attr("guid"), guid(Model::Corner));
+        assert_eq!(
+            root.attr("guid"),
+            tdvass_fmu::variables::guid(Model::Corner)
+        );
+        assert_ne!(root.attr("guid"), guid(Model::QuarterCar));
+        assert_eq!(root.attr("description"), crate::markup::CORNER_DESCRIPTION);
+        assert_eq!(root.get("numberOfEventIndicators"), None);
+        let top: Vec<&str> = els
+            .iter()
+            .filter(|e| e.parent == Some(0))
+            .map(|e| e.name.as_str())
+            .collect();
+        assert_eq!(
+            top,
+            [
+                "CoSimulation",
+                "UnitDefinitions",
+                "TypeDefinitions",
+                "LogCategories",
+                "DefaultExperiment",
+                "ModelVariables",
+                "ModelStructure"
+            ]
+        );
+        assert!(!els.iter().any(|e| e.name == "ModelExchange"));
+        let cs = els.iter().find(|e| e.name == "CoSimulation").unwrap();
+        assert_eq!(cs.attr("modelIdentifier"), MODEL_IDENTIFIER);
+        assert_eq!(cs.attributes.len(), 1 + CO_SIMULATION_CAPABILITIES.len());
+
+        let variables = variables_of(model, FmiVersion::Fmi2);
+        let vars: Vec<_> = els.iter().filter(|e| e.name == "ScalarVariable").collect();
+        assert_eq!(vars.len(), variables.len());
+        for (v, el) in variables.iter().zip(&vars) {
+            assert_eq!(el.attr("name"), v.name);
+            assert_eq!(el.attr("valueReference"), v.vr.to_string());
+            assert_eq!(el.attr("causality"), v.causality.as_str());
+            assert_ne!(v.causality, Causality::Local, "{}", v.name);
+        }
+        assert!(!els.iter().any(|e| e.get("derivative").is_some()));
+
+        // ModelStructure: the outputs and initial unknowns, no derivatives;
+        // every dependency an index of an existing variable.
+        let structure = els.iter().position(|e| e.name == "ModelStructure").unwrap();
+        let parts: Vec<&str> = els
+            .iter()
+            .filter(|e| e.parent == Some(structure))
+            .map(|e| e.name.as_str())
+            .collect();
+        assert_eq!(parts, ["Outputs", "InitialUnknowns"]);
+        let unknowns_of = |part: &str| -> Vec<&crate::parsed::Element> {
+            let at = els.iter().position(|e| e.name == part).unwrap();
+            els.iter().filter(|e| e.parent == Some(at)).collect()
+        };
+        let listed =
+            |s: &str| -> Vec<usize> { s.split_whitespace().map(|i| i.parse().unwrap()).collect() };
+        let outputs = unknowns_of("Outputs");
+        let expected: Vec<String> = variables
+            .iter()
+            .enumerate()
+            .filter(|(_, v)| v.causality == Causality::Output)
+            .map(|(i, _)| (i + 1).to_string())
+            .collect();
+        let indices: Vec<&str> = outputs.iter().map(|e| e.attr("index")).collect();
+        assert_eq!(indices, expected);
+        for unknown in outputs.iter().chain(&unknowns_of("InitialUnknowns")) {
+            let deps = listed(unknown.attr("dependencies"));
+            assert!(deps.windows(2).all(|w| w[0] < w[1]), "ascending");
+            for d in deps {
+                assert!(
+                    (1..=variables.len()).contains(&d),
+                    "{:?}",
+                    unknown.attributes
+                );
+            }
+        }
+        for o in &outputs {
+            let deps = listed(o.attr("dependencies"));
+            let kinds: Vec<&str> = o
+                .get("dependenciesKind")
+                .unwrap_or("")
+                .split_whitespace()
+                .collect();
+            assert_eq!(deps.len(), kinds.len(), "{:?}", o.attributes);
+            // No continuous states to depend on: the inputs alone.
+            for d in deps {
+                assert_eq!(variables[d - 1].causality, Causality::Input);
+            }
+        }
+        let index = |name: &str| index_of(model, name).unwrap();
+        let body_force = outputs
+            .iter()
+            .find(|e| e.attr("index") == index("body_force").to_string())
+            .unwrap();
+        assert_eq!(
+            listed(body_force.attr("dependencies")),
+            [index("body_displacement"), index("body_velocity")]
+        );
+        assert_eq!(body_force.attr("dependenciesKind"), "fixed fixed");
+    }
+
+    #[test]
+    fn the_corner_documentation_describes_its_variables() {
+        let html = documentation_html(Model::Corner);
+        assert!(html.starts_with("<!DOCTYPE html>"));
+        elements(html.trim_start_matches("<!DOCTYPE html>"));
+        assert!(html.contains("<title>TDVASS corner FMI 2.0 FMU</title>"));
+        assert!(html.contains("TDVASS corner: FMI 2.0 FMU (Co-Simulation)"));
+        assert!(html.contains(&guid(Model::Corner)));
+        assert!(html.contains("Co-Simulation only in this version"));
+        for v in variables_of(Model::Corner, FmiVersion::Fmi2) {
+            assert!(html.contains(&format!("<td>{}</td>", v.name)), "{}", v.name);
+        }
+        for (flag, _) in CO_SIMULATION_CAPABILITIES {
+            assert!(html.contains(&format!("<td>{flag}</td>")), "{flag}");
+        }
+        assert!(html.contains("body_force (output, N)"));
+        assert!(!html.contains("m_s (start"));
     }
 }

@@ -10,6 +10,12 @@
 //! Model Exchange's continuous states, their derivatives and the event
 //! indicator are variables of the table too ([`Access::ContinuousState`],
 //! [`Access::StateDerivative`], [`Access::EventIndicator`]).
+//!
+//! Each model ([`Model`]) has its own description, from its variables
+//! ([`variables_of`]): the quarter car's with Model Exchange, the corner's
+//! Co-Simulation only ([`Model::offers_model_exchange`]: no
+//! `ModelExchange` element, no `ContinuousStateDerivative` or
+//! `EventIndicator` in `ModelStructure`).
 
 use crate::markup::{DescriptionFrame, XmlResult, XmlWriter, model_description, number};
 use tdvass::solver::CONTINUOUS_STATES;
@@ -17,8 +23,8 @@ use tdvass_fmi3::types::{Fmi3Type, fmi3_type};
 use tdvass_fmi3::{FMI_VERSION, instantiation_token};
 use tdvass_fmu::Model;
 use tdvass_fmu::variables::{
-    Access, Causality, Dimension, Enumeration, FMI3_VARIABLES, FmiVersion, Quantity, Variable,
-    by_name,
+    Access, Causality, Dimension, Enumeration, FmiVersion, Quantity, Variable, by_name,
+    variables_of,
 };
 
 /// The attributes of the `ModelExchange` element after `modelIdentifier`:
@@ -37,18 +43,19 @@ pub const MODEL_EXCHANGE_CAPABILITIES: [(&str, &str); 8] = [
     ("providesEvaluateDiscreteStates", "false"),
 ];
 
-/// The value reference of continuous state `i`'s variable.
-pub fn state_vr(i: usize) -> u32 {
-    FMI3_VARIABLES
+/// The value reference of continuous state `i`'s variable of `model`.
+pub fn state_vr(model: Model, i: usize) -> u32 {
+    variables_of(model, FmiVersion::Fmi3)
         .iter()
         .find(|v| v.state_index() == Some(i))
         .map(|v| v.vr)
         .unwrap_or_else(|| panic!("no variable of continuous state {i}"))
 }
 
-/// The value reference of the derivative of continuous state `i`.
-pub fn derivative_vr(i: usize) -> u32 {
-    FMI3_VARIABLES
+/// The value reference of the derivative of continuous state `i` of
+/// `model` (a model with Model Exchange).
+pub fn derivative_vr(model: Model, i: usize) -> u32 {
+    variables_of(model, FmiVersion::Fmi3)
         .iter()
         .find(|v| matches!(v.access, Access::StateDerivative(j) if j == i))
         .map(|v| v.vr)
@@ -90,17 +97,20 @@ fn value_text(v: &Variable, value: f64) -> String {
     }
 }
 
-/// The value reference of the variable called `name`.
-fn vr_of(name: &str) -> u32 {
-    by_name(Model::QuarterCar, FmiVersion::Fmi3, name)
+/// The value reference of the variable of `model` called `name`.
+fn vr_of(model: Model, name: &str) -> u32 {
+    by_name(model, FmiVersion::Fmi3, name)
         .unwrap_or_else(|| panic!("unknown variable `{name}`"))
         .vr
 }
 
-/// The enumeration types of the table, each once, in table order.
-pub fn enumerations() -> Vec<&'static Enumeration> {
+/// The enumeration types of `model`'s variables, each once, in table order.
+pub fn enumerations(model: Model) -> Vec<&'static Enumeration> {
     let mut out: Vec<&'static Enumeration> = Vec::new();
-    for e in FMI3_VARIABLES.iter().filter_map(|v| v.enumeration) {
+    for e in variables_of(model, FmiVersion::Fmi3)
+        .iter()
+        .filter_map(|v| v.enumeration)
+    {
         if !out.iter().any(|known| known.type_name == e.type_name) {
             out.push(e);
         }
@@ -110,20 +120,21 @@ pub fn enumerations() -> Vec<&'static Enumeration> {
 
 /// The `(name, value)` of the `Dimension` element of `dimension`:
 /// `start` for a fixed size, `valueReference` of the structural parameter.
-fn dimension_attribute(dimension: &Dimension) -> (&'static str, String) {
+fn dimension_attribute(model: Model, dimension: &Dimension) -> (&'static str, String) {
     match dimension {
         Dimension::Fixed(size) => ("start", size.to_string()),
-        Dimension::Structural(name) => ("valueReference", vr_of(name).to_string()),
+        Dimension::Structural(name) => ("valueReference", vr_of(model, name).to_string()),
     }
 }
 
-/// The value references an output depends on (the input `x_g` where it
-/// feeds through, the continuous states it is computed from) with their
+/// The value references an output of `model` depends on (the inputs it
+/// feeds through: `x_g`, the corner's body inputs; the continuous states
+/// it is computed from, a model with Model Exchange only) with their
 /// `dependenciesKind`, by ascending value reference: what
 /// `fmi3GetVariableDependencies` returns.
-pub fn output_dependencies(v: &Variable) -> Vec<(u32, &'static str)> {
+pub fn output_dependencies(model: Model, v: &Variable) -> Vec<(u32, &'static str)> {
     let mut found: Vec<(u32, &str)> = v
-        .output_dependencies(Model::QuarterCar, FmiVersion::Fmi3)
+        .output_dependencies(model, FmiVersion::Fmi3)
         .into_iter()
         .map(|(known, kind)| (known.vr, kind.name()))
         .collect();
@@ -133,17 +144,21 @@ pub fn output_dependencies(v: &Variable) -> Vec<(u32, &'static str)> {
 
 /// The value references an initial unknown depends on in initialization
 /// mode: the table's initial dependencies and, for an array, the
-/// structural parameters that size it; ascending.
-pub fn initial_dependencies(v: &Variable) -> Vec<u32> {
+/// structural parameters that size it; ascending (value references of
+/// `model`).
+pub fn initial_dependencies(model: Model, v: &Variable) -> Vec<u32> {
     let structural = v.dimensions.iter().filter_map(|d| match d {
         Dimension::Structural(name) => Some(*name),
         Dimension::Fixed(_) => None,
     });
-    sorted_vrs(v.initial_dependencies.iter().copied().chain(structural))
+    sorted_vrs(
+        model,
+        v.initial_dependencies.iter().copied().chain(structural),
+    )
 }
 
-fn sorted_vrs<'a>(names: impl Iterator<Item = &'a str>) -> Vec<u32> {
-    let mut vrs: Vec<u32> = names.map(vr_of).collect();
+fn sorted_vrs<'a>(model: Model, names: impl Iterator<Item = &'a str>) -> Vec<u32> {
+    let mut vrs: Vec<u32> = names.map(|name| vr_of(model, name)).collect();
     vrs.sort_unstable();
     vrs.dedup();
     vrs
@@ -166,7 +181,7 @@ fn is_initial_unknown(v: &Variable) -> bool {
     )
 }
 
-fn write_type_definitions(w: &mut XmlWriter) -> XmlResult {
+fn write_type_definitions(w: &mut XmlWriter, model: Model) -> XmlResult {
     w.create_element("TypeDefinitions")
         .write_inner_content(|w| {
             for q in Quantity::TYPED {
@@ -177,7 +192,7 @@ fn write_type_definitions(w: &mut XmlWriter) -> XmlResult {
                     .with_attribute(("unit", unit))
                     .write_empty()?;
             }
-            for e in enumerations() {
+            for e in enumerations(model) {
                 w.create_element("EnumerationType")
                     .with_attribute(("name", e.type_name))
                     .write_inner_content(|w| {
@@ -196,8 +211,9 @@ fn write_type_definitions(w: &mut XmlWriter) -> XmlResult {
     Ok(())
 }
 
-/// The attributes of the variable element of `v`, in the order written.
-fn variable_attributes(v: &Variable) -> Vec<(&'static str, String)> {
+/// The attributes of the variable element of `v` (of `model`), in the
+/// order written.
+fn variable_attributes(model: Model, v: &Variable) -> Vec<(&'static str, String)> {
     let mut attributes: Vec<(&'static str, String)> = vec![
         ("name", v.name.into()),
         ("valueReference", v.vr.to_string()),
@@ -238,13 +254,13 @@ fn variable_attributes(v: &Variable) -> Vec<(&'static str, String)> {
         attributes.push(("intermediateUpdate", "true".into()));
     }
     if let Access::StateDerivative(i) = v.access {
-        attributes.push(("derivative", state_vr(i).to_string()));
+        attributes.push(("derivative", state_vr(model, i).to_string()));
     }
     attributes
 }
 
-fn write_variable(w: &mut XmlWriter, v: &Variable) -> XmlResult {
-    let attributes = variable_attributes(v);
+fn write_variable(w: &mut XmlWriter, model: Model, v: &Variable) -> XmlResult {
+    let attributes = variable_attributes(model, v);
     let element = w
         .create_element(fmi3_type(v).as_str())
         .with_attributes(attributes.iter().map(|(k, v)| (*k, v.as_str())));
@@ -253,7 +269,7 @@ fn write_variable(w: &mut XmlWriter, v: &Variable) -> XmlResult {
     } else {
         element.write_inner_content(|w| {
             for d in v.dimensions {
-                let (key, value) = dimension_attribute(d);
+                let (key, value) = dimension_attribute(model, d);
                 w.create_element("Dimension")
                     .with_attribute((key, value.as_str()))
                     .write_empty()?;
@@ -264,15 +280,19 @@ fn write_variable(w: &mut XmlWriter, v: &Variable) -> XmlResult {
     Ok(())
 }
 
-fn write_model_structure(w: &mut XmlWriter) -> XmlResult {
+/// `ModelStructure`: the outputs, the derivatives (a model with Model
+/// Exchange only), the initial unknowns and the event indicators (Model
+/// Exchange's variables).
+fn write_model_structure(w: &mut XmlWriter, model: Model) -> XmlResult {
+    let variables = variables_of(model, FmiVersion::Fmi3);
     w.create_element("ModelStructure")
         .write_inner_content(|w| {
-            for v in FMI3_VARIABLES
+            for v in variables
                 .iter()
                 .filter(|v| v.causality == Causality::Output)
             {
                 let (dependencies, kinds): (Vec<u32>, Vec<&str>) =
-                    output_dependencies(v).into_iter().unzip();
+                    output_dependencies(model, v).into_iter().unzip();
                 let kinds = kinds.join(" ");
                 let mut unknown = w
                     .create_element("Output")
@@ -286,12 +306,20 @@ fn write_model_structure(w: &mut XmlWriter) -> XmlResult {
             // In the order of the continuous states (that of
             // fmi3GetContinuousStates); each depends on every known (no
             // `dependencies`).
-            for i in 0..CONTINUOUS_STATES {
+            let states = if model.offers_model_exchange() {
+                CONTINUOUS_STATES
+            } else {
+                0
+            };
+            for i in 0..states {
                 w.create_element("ContinuousStateDerivative")
-                    .with_attribute(("valueReference", derivative_vr(i).to_string().as_str()))
+                    .with_attribute((
+                        "valueReference",
+                        derivative_vr(model, i).to_string().as_str(),
+                    ))
                     .write_empty()?;
             }
-            for v in FMI3_VARIABLES.iter().filter(|v| is_initial_unknown(v)) {
+            for v in variables.iter().filter(|v| is_initial_unknown(v)) {
                 let unknown = w
                     .create_element("InitialUnknown")
                     .with_attribute(("valueReference", v.vr.to_string().as_str()));
@@ -304,14 +332,15 @@ fn write_model_structure(w: &mut XmlWriter) -> XmlResult {
                         unknown
                             .with_attribute((
                                 "dependencies",
-                                vr_list(&initial_dependencies(v)).as_str(),
+                                vr_list(&initial_dependencies(model, v)).as_str(),
                             ))
                             .write_empty()?;
                     }
                 }
             }
-            // Continuous Float64 variables, never InitialUnknowns.
-            for v in FMI3_VARIABLES
+            // Continuous Float64 variables, never InitialUnknowns (a model
+            // without Model Exchange has none).
+            for v in variables
                 .iter()
                 .filter(|v| matches!(v.access, Access::EventIndicator(_)))
             {
@@ -324,26 +353,34 @@ fn write_model_structure(w: &mut XmlWriter) -> XmlResult {
     Ok(())
 }
 
-/// The complete FMI 3.0 `modelDescription.xml`.
-pub fn model_description_xml() -> String {
-    let token = instantiation_token(Model::QuarterCar);
+/// The complete FMI 3.0 `modelDescription.xml` of `model`: with
+/// `ModelExchange` when the model offers it.
+pub fn model_description_xml(model: Model) -> String {
+    let token = instantiation_token(model);
     let frame = DescriptionFrame {
         fmi_version: FMI_VERSION,
+        model,
         token: ("instantiationToken", &token),
         co_simulation: &CO_SIMULATION_CAPABILITIES,
-        model_exchange: &MODEL_EXCHANGE_CAPABILITIES,
+        model_exchange: model
+            .offers_model_exchange()
+            .then_some(&MODEL_EXCHANGE_CAPABILITIES[..]),
         root: &[],
     };
-    model_description(frame, write_type_definitions, |w| {
-        w.create_element("ModelVariables")
-            .write_inner_content(|w| {
-                for v in FMI3_VARIABLES {
-                    write_variable(w, v)?;
-                }
-                Ok(())
-            })?;
-        write_model_structure(w)
-    })
+    model_description(
+        frame,
+        |w| write_type_definitions(w, model),
+        |w| {
+            w.create_element("ModelVariables")
+                .write_inner_content(|w| {
+                    for v in variables_of(model, FmiVersion::Fmi3) {
+                        write_variable(w, model, v)?;
+                    }
+                    Ok(())
+                })?;
+            write_model_structure(w, model)
+        },
+    )
 }
 
 mod documentation;

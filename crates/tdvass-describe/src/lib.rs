@@ -13,7 +13,14 @@
 //!   description and its unit definitions, numbers, text elements,
 //!   paragraphs, lists, tables, the model's diagram with its legend, and
 //!   the HTML page around a body.
-//! - [`markdown`]: the variable table as Markdown for docs/fmu.md.
+//! - [`markdown`]: the variable table as Markdown for docs/fmu.md (the
+//!   quarter car's).
+//! - `corner`: the corner's documentation page, which both versions
+//!   write from what differs between them.
+//!
+//! Every model the library serves ([`tdvass_fmu::Model`]: the quarter car,
+//! the corner) has its own model description and page in each version;
+//! the corner's has no Model Exchange.
 //!
 //! Every document is written with quick-xml (no markup by hand, so every
 //! value is escaped) and is deterministic: no timestamps.
@@ -34,6 +41,7 @@
 
 #![forbid(unsafe_code)]
 
+mod corner;
 pub mod fmi2;
 pub mod fmi3;
 pub mod markdown;

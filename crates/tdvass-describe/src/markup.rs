@@ -5,7 +5,8 @@
 //! what the pages say of Model Exchange, numbers,
 //! elements with text, paragraphs, lists, tables, the model's diagram with
 //! the legend of its symbols, and the HTML page around a body (quick-xml,
-//! never written by hand).
+//! never written by hand). Each model ([`Model`]) has its own name, one-line
+//! description and legend of the diagram.
 
 use quick_xml::Writer;
 use quick_xml::events::{BytesDecl, BytesText, Event};
@@ -16,7 +17,6 @@ use tdvass_fmu::Model;
 use tdvass_fmu::variables::{Access, Causality, FmiVersion, UNITS, Variable, by_name};
 use tdvass_fmu::{
     DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, LOG_CATEGORIES, MODEL_IDENTIFIER,
-    MODEL_NAME,
 };
 
 /// A writer of XML (or HTML) into memory.
@@ -24,8 +24,20 @@ pub type XmlWriter = Writer<Cursor<Vec<u8>>>;
 /// What writing into memory returns.
 pub type XmlResult = std::io::Result<()>;
 
-/// One-line description of the model.
+/// One-line description of the quarter car ([`Model::QuarterCar`]).
 pub const MODEL_DESCRIPTION: &str = "Quarter-car suspension with an annular vibration-absorbing structure and time-delay feedback of the tire displacement (TDVASS), with the conventional (CS) and uncontrolled absorber (PVASS) suspensions for comparison";
+
+/// One-line description of the corner ([`Model::Corner`]).
+pub const CORNER_DESCRIPTION: &str = "One corner of a vehicle: the TDVASS suspension (annular absorber, time-delay feedback of the wheel displacement; CS and PVASS for comparison) and its wheel and tire, without the body: the body's attachment point's motion is an input and the force on the body an output";
+
+/// The one-line description of `model`: the `description` attribute of
+/// its model description and the first paragraph of its page.
+pub fn description(model: Model) -> &'static str {
+    match model {
+        Model::QuarterCar => MODEL_DESCRIPTION,
+        Model::Corner => CORNER_DESCRIPTION,
+    }
+}
 
 /// The style sheet of the documentation pages.
 const STYLE: &str = "body{font-family:sans-serif;max-width:70em;margin:auto;padding:1em}table{border-collapse:collapse}td,th{border:1px solid #bbb;padding:0.2em 0.5em;text-align:left;vertical-align:top}figure{margin:1em 0}";
@@ -43,7 +55,8 @@ pub const DIAGRAM_SIZE_PX: u32 = 320;
 
 /// The symbols of the diagram: symbol, meaning, and the FMU variables that
 /// carry it (their start values and units are taken from the variable
-/// table).
+/// table). The quarter car's; the corner's replaces some rows
+/// ([`CORNER_LEGEND`], [`legend`]).
 pub const DIAGRAM_LEGEND: &[(&str, &str, &[&str])] = &[
     ("m_s", "body (sprung) mass", &["m_s"]),
     (
@@ -85,12 +98,57 @@ pub const DIAGRAM_LEGEND: &[(&str, &str, &[&str])] = &[
     ),
 ];
 
+/// The rows of [`DIAGRAM_LEGEND`] that the corner ([`Model::Corner`])
+/// replaces: its body is outside the FMU, its road is delayed and shifted.
+pub const CORNER_LEGEND: &[(&str, &str, &[&str])] = &[
+    (
+        "m_s",
+        "the body (sprung mass), not part of the corner: its attachment point's displacement and velocity are inputs, the force of k_s and c_s on it is the output; static_load is its weight on this corner",
+        &[
+            "static_load",
+            "body_displacement",
+            "body_velocity",
+            "body_force",
+        ],
+    ),
+    (
+        "x_g",
+        "road displacement under the tire: the input x_g when road = 0, else the road model's as this wheel sees it (delayed by road_delay; the harmonic road also shifted by road_phase); reported as road_displacement",
+        &["x_g", "road_displacement", "road_delay", "road_phase"],
+    ),
+    (
+        "x_s, x_h, x_t",
+        "displacements of the body's attachment point, absorber and wheel from the static equilibrium, positive upwards (x_s is the input body_displacement)",
+        &["body_displacement", "x_h", "x_t"],
+    ),
+];
+
+/// The legend of the diagram on `model`'s page: [`DIAGRAM_LEGEND`], for
+/// the corner with the rows of [`CORNER_LEGEND`] in place of the
+/// quarter car's of the same symbol.
+pub fn legend(model: Model) -> Vec<(&'static str, &'static str, &'static [&'static str])> {
+    DIAGRAM_LEGEND
+        .iter()
+        .map(|row| match model {
+            Model::QuarterCar => *row,
+            Model::Corner => CORNER_LEGEND
+                .iter()
+                .find(|own| own.0 == row.0)
+                .copied()
+                .unwrap_or(*row),
+        })
+        .collect()
+}
+
 /// What the model description of one FMI version states in the frame
 /// every version shares ([`model_description`]).
 #[derive(Debug, Clone, Copy)]
 pub struct DescriptionFrame<'a> {
     /// `fmiVersion`.
     pub fmi_version: &'a str,
+    /// The model described: its `modelName` ([`Model::name`]) and
+    /// `description` ([`description`]).
+    pub model: Model,
     /// The attribute that identifies the interface, after `modelName`:
     /// `("guid", ...)` or `("instantiationToken", ...)`.
     pub token: (&'a str, &'a str),
@@ -98,15 +156,16 @@ pub struct DescriptionFrame<'a> {
     /// `modelIdentifier`, in the order written.
     pub co_simulation: &'a [(&'a str, &'a str)],
     /// The attributes of the `ModelExchange` element after
-    /// `modelIdentifier`, in the order written.
-    pub model_exchange: &'a [(&'a str, &'a str)],
+    /// `modelIdentifier`, in the order written; `None`: no `ModelExchange`
+    /// element (a model without it, [`Model::offers_model_exchange`]).
+    pub model_exchange: Option<&'a [(&'a str, &'a str)]>,
     /// Attributes of the root element after `variableNamingConvention`
     /// (FMI 2.0: `numberOfEventIndicators`).
     pub root: &'a [(&'a str, &'a str)],
 }
 
 /// A complete `modelDescription.xml`: the XML declaration, the root
-/// element, `ModelExchange`, `CoSimulation`, `UnitDefinitions`, then the version's
+/// element, `ModelExchange` (if any), `CoSimulation`, `UnitDefinitions`, then the version's
 /// `TypeDefinitions` (`write_type_definitions`), `LogCategories`,
 /// `DefaultExperiment`, then the version's `ModelVariables` and
 /// `ModelStructure` (`write_model`).
@@ -121,19 +180,21 @@ pub fn model_description(
         let tool = format!("tdvass fmu-build {}", env!("CARGO_PKG_VERSION"));
         w.create_element("fmiModelDescription")
             .with_attribute(("fmiVersion", frame.fmi_version))
-            .with_attribute(("modelName", MODEL_NAME))
+            .with_attribute(("modelName", frame.model.name()))
             .with_attribute(frame.token)
-            .with_attribute(("description", MODEL_DESCRIPTION))
+            .with_attribute(("description", description(frame.model)))
             .with_attribute(("version", env!("CARGO_PKG_VERSION")))
             .with_attribute(("license", "MIT"))
             .with_attribute(("generationTool", tool.as_str()))
             .with_attribute(("variableNamingConvention", "flat"))
             .with_attributes(frame.root.iter().copied())
             .write_inner_content(|w| {
-                w.create_element("ModelExchange")
-                    .with_attribute(("modelIdentifier", MODEL_IDENTIFIER))
-                    .with_attributes(frame.model_exchange.iter().copied())
-                    .write_empty()?;
+                if let Some(model_exchange) = frame.model_exchange {
+                    w.create_element("ModelExchange")
+                        .with_attribute(("modelIdentifier", MODEL_IDENTIFIER))
+                        .with_attributes(model_exchange.iter().copied())
+                        .write_empty()?;
+                }
                 w.create_element("CoSimulation")
                     .with_attribute(("modelIdentifier", MODEL_IDENTIFIER))
                     .with_attributes(frame.co_simulation.iter().copied())
@@ -246,13 +307,13 @@ pub fn variable_table(w: &mut XmlWriter, type_header: &str, rows: &[Vec<String>]
     )
 }
 
-/// The variables of a legend row, with their start values and units
-/// (`m_s (start 345 kg)`, `x_s (output, m)`).
-fn legend_variables(names: &[&str]) -> String {
+/// The variables of `model` of a legend row, with their start values and
+/// units (`m_s (start 345 kg)`, `x_s (output, m)`).
+fn legend_variables(model: Model, names: &[&str]) -> String {
     names
         .iter()
         .map(|name| {
-            let v = by_name(Model::QuarterCar, FmiVersion::Fmi2, name)
+            let v = by_name(model, FmiVersion::Fmi2, name)
                 .unwrap_or_else(|| panic!("the legend names `{name}`, not a variable"));
             let unit = v.unit().map(|u| format!(" {u}")).unwrap_or_default();
             match v.start {
@@ -271,8 +332,8 @@ fn legend_variables(names: &[&str]) -> String {
 }
 
 /// The model's diagram ([`DIAGRAM_FILE`] beside the page) and the legend of
-/// its symbols.
-pub fn diagram(w: &mut XmlWriter) -> XmlResult {
+/// its symbols ([`legend`]) with `model`'s variables.
+pub fn diagram(w: &mut XmlWriter, model: Model) -> XmlResult {
     let size = DIAGRAM_SIZE_PX.to_string();
     w.create_element("figure").write_inner_content(|w| {
         w.create_element("img")
@@ -287,16 +348,23 @@ pub fn diagram(w: &mut XmlWriter) -> XmlResult {
         text_element(
             w,
             "figcaption",
-            "The quarter car with the annular absorber and the delayed feedback u = g x_t(t - tau).",
+            match model {
+                Model::QuarterCar => {
+                    "The quarter car with the annular absorber and the delayed feedback u = g x_t(t - tau)."
+                }
+                Model::Corner => {
+                    "The quarter car with the annular absorber and the delayed feedback u = g x_t(t - tau): the corner is all of it but the body m_s, whose attachment point's motion is its input."
+                }
+            },
         )
     })?;
-    let rows: Vec<Vec<String>> = DIAGRAM_LEGEND
+    let rows: Vec<Vec<String>> = legend(model)
         .iter()
         .map(|(symbol, meaning, names)| {
             vec![
                 symbol.to_string(),
                 meaning.to_string(),
-                legend_variables(names),
+                legend_variables(model, names),
             ]
         })
         .collect();

@@ -901,6 +901,35 @@ const TIRE_LOAD_DEPENDENCIES: &[&str] = &[
 ];
 const ROAD_DEPENDENCIES: &[&str] = &["road", "road_amplitude", "road_angular_frequency", "x_g"];
 
+/// The lift-off counter (an Integer output, discrete: it changes at
+/// communication points, not inside a step), of the model whose initial
+/// tire load depends on `initial_dependencies`.
+const fn lift_off_count(
+    description: &'static str,
+    initial_dependencies: &'static [&'static str],
+) -> Variable {
+    Variable {
+        name: "lift_off_count",
+        vr: 61,
+        causality: Causality::Output,
+        variability: Variability::Discrete,
+        quantity: Q::Dimensionless,
+        display_unit: None,
+        start: None,
+        range: Range::Computed,
+        access: Access::IntegerOutput(IntegerOutputId::LiftOffCount),
+        description,
+        feedthrough: &[],
+        initial_dependencies,
+        enumeration: None,
+        dimensions: &[],
+        intermediate_update: false,
+        fmi3_only: false,
+        bound: None,
+        quarter_car_only: false,
+    }
+}
+
 /// What the corner's tire load and lift-offs depend on initially (its
 /// static load, the road as it sees it, the tire law, the wheel).
 const CORNER_TIRE_LOAD_DEPENDENCIES: &[&str] = &[
@@ -915,6 +944,28 @@ const CORNER_TIRE_LOAD_DEPENDENCIES: &[&str] = &[
     "road_delay",
     "road_phase",
     "tire_contact",
+    "x_t_start",
+    "x_g",
+];
+
+/// What the road as the corner's wheel sees it depends on initially.
+const CORNER_ROAD_DEPENDENCIES: &[&str] = &[
+    "road",
+    "road_amplitude",
+    "road_angular_frequency",
+    "road_delay",
+    "road_phase",
+    "x_g",
+];
+
+/// What the corner's tire deflection depends on initially (the wheel and
+/// the road as it sees it).
+const CORNER_TIRE_DEFLECTION_DEPENDENCIES: &[&str] = &[
+    "road",
+    "road_amplitude",
+    "road_angular_frequency",
+    "road_delay",
+    "road_phase",
     "x_t_start",
     "x_g",
 ];
@@ -1035,6 +1086,25 @@ pub const CORNER_ADDITIONS: &[Variable] = &[
         &["body_displacement", "x_t_start"],
     ),
     output(
+        "tire_deflection",
+        39,
+        Q::Length,
+        OutputId::TireDeflection,
+        "Tire dynamic displacement TDD = x_t - x_g",
+        &["x_g"],
+        CORNER_TIRE_DEFLECTION_DEPENDENCIES,
+    )
+    .display("mm"),
+    output(
+        "road_displacement",
+        40,
+        Q::Length,
+        OutputId::RoadDisplacement,
+        "Road displacement x_g actually applied (the built-in road as this wheel sees it: delayed by road_delay, shifted by road_phase)",
+        &["x_g"],
+        CORNER_ROAD_DEPENDENCIES,
+    ),
+    output(
         "dynamic_tire_load",
         56,
         Q::Force,
@@ -1052,26 +1122,10 @@ pub const CORNER_ADDITIONS: &[Variable] = &[
         &[],
         &[],
     ),
-    Variable {
-        name: "lift_off_count",
-        vr: 61,
-        causality: Causality::Output,
-        variability: Variability::Discrete,
-        quantity: Q::Dimensionless,
-        display_unit: None,
-        start: None,
-        range: Range::Computed,
-        access: Access::IntegerOutput(IntegerOutputId::LiftOffCount),
-        description: "Number of lift-offs since the start time (a start without contact counts one): tire_contact = 1, the switches from contact to flight; tire_contact = 0, the times the dynamic tire load went below minus the static load",
-        feedthrough: &[],
-        initial_dependencies: CORNER_TIRE_LOAD_DEPENDENCIES,
-        enumeration: None,
-        dimensions: &[],
-        intermediate_update: false,
-        fmi3_only: false,
-        bound: None,
-        quarter_car_only: false,
-    },
+    lift_off_count(
+        "Number of lift-offs since the start time (a start without contact counts one): tire_contact = 1, the switches from contact to flight; tire_contact = 0, the times the dynamic tire load went below minus the static load",
+        CORNER_TIRE_LOAD_DEPENDENCIES,
+    ),
     output(
         "max_suspension_deflection",
         59,
@@ -1557,7 +1611,8 @@ const TABLE: &[Variable] = &[
             "x_g",
         ],
     )
-    .display("mm"),
+    .display("mm")
+    .quarter_car(),
     output(
         "road_displacement",
         40,
@@ -1566,7 +1621,8 @@ const TABLE: &[Variable] = &[
         "Road displacement x_g actually applied",
         &["x_g"],
         ROAD_DEPENDENCIES,
-    ),
+    )
+    .quarter_car(),
     output(
         "control_force",
         41,
@@ -1691,27 +1747,11 @@ const TABLE: &[Variable] = &[
         &[],
         &[],
     ),
-    Variable {
-        name: "lift_off_count",
-        vr: 61,
-        causality: Causality::Output,
-        variability: Variability::Discrete,
-        quantity: Q::Dimensionless,
-        display_unit: None,
-        start: None,
-        range: Range::Computed,
-        access: Access::IntegerOutput(IntegerOutputId::LiftOffCount),
-        description: "Number of lift-offs since the start time (a start without contact counts one): tire_contact = 1, the switches from contact to flight; tire_contact = 0, the times the dynamic tire load went below minus the static load. Model Exchange: counted at the events of the indicator contact_indicator",
-        feedthrough: &[],
-        initial_dependencies: TIRE_LOAD_DEPENDENCIES,
-        enumeration: None,
-        dimensions: &[],
-        // Discrete: it changes at communication points, not inside a step.
-        intermediate_update: false,
-        fmi3_only: false,
-        bound: None,
-        quarter_car_only: true,
-    },
+    lift_off_count(
+        "Number of lift-offs since the start time (a start without contact counts one): tire_contact = 1, the switches from contact to flight; tire_contact = 0, the times the dynamic tire load went below minus the static load. Model Exchange: counted at the events of the indicator contact_indicator",
+        TIRE_LOAD_DEPENDENCIES,
+    )
+    .quarter_car(),
     output(
         "max_suspension_deflection",
         59,

@@ -1,7 +1,9 @@
 //! `documentation/index.html` of the FMI 3.0 FMU, generated from the one
-//! variable table and the declarations of the model description.
+//! variable table and the declarations of the model description: the
+//! quarter car's, and the corner's shorter page ([`crate::corner`]).
 
 use super::{CO_SIMULATION_CAPABILITIES, MODEL_EXCHANGE_CAPABILITIES, enumerations, value_text};
+use crate::corner::{CornerPage, corner_page};
 use crate::markup::{
     MODEL_DESCRIPTION, REFERENCE_RESULTS, TIRE_CONTACT, XmlResult, XmlWriter, diagram, html_page,
     list, model_exchange_text, paragraph, table, text_element, unit_text, variable_table,
@@ -9,7 +11,9 @@ use crate::markup::{
 use tdvass_fmi3::instantiation_token;
 use tdvass_fmi3::types::{Fmi3Type, fmi3_type};
 use tdvass_fmu::Model;
-use tdvass_fmu::variables::{Causality, Dimension, FMI3_VARIABLES, Variable};
+use tdvass_fmu::variables::{
+    Causality, Dimension, FMI3_VARIABLES, FmiVersion, Variable, variables_of,
+};
 use tdvass_fmu::{
     DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, LOG_CATEGORIES, MODEL_IDENTIFIER,
     MODEL_NAME,
@@ -65,9 +69,26 @@ fn variable_row(v: &Variable) -> Vec<String> {
     ]
 }
 
-/// The complete `documentation/index.html` of the FMI 3.0 FMU.
-pub fn documentation_html() -> String {
-    html_page(&format!("{MODEL_NAME} FMI 3.0 FMU"), write_body)
+/// The complete `documentation/index.html` of `model`'s FMI 3.0 FMU.
+pub fn documentation_html(model: Model) -> String {
+    match model {
+        Model::QuarterCar => html_page(&format!("{MODEL_NAME} FMI 3.0 FMU"), write_body),
+        Model::Corner => corner_page(&CornerPage {
+            version: "FMI 3.0",
+            identity: format!(
+                "instantiationToken {} (a hash of the variable names, value references, types, causalities, variabilities, enumeration types and array dimensions)",
+                instantiation_token(model)
+            ),
+            type_header: "FMI 3.0 type",
+            rows: variables_of(model, FmiVersion::Fmi3)
+                .iter()
+                .map(variable_row)
+                .collect(),
+            after_variables: &|w| write_enumerations(w, model),
+            co_simulation: &CO_SIMULATION_CAPABILITIES,
+            specification: "Functional Mock-up Interface Specification, version 3.0.",
+        }),
+    }
 }
 
 /// The page: the introduction, then one function per part.
@@ -107,7 +128,7 @@ fn write_introduction(w: &mut XmlWriter) -> XmlResult {
 /// The model: its diagram, equations, tire and integration.
 fn write_model(w: &mut XmlWriter) -> XmlResult {
     text_element(w, "h2", "The model")?;
-    diagram(w)?;
+    diagram(w, Model::QuarterCar)?;
     paragraph(
         w,
         "State X = [x_s, v_s, x_h, v_h, x_t, v_t]: body, annular absorber and wheel displacements and velocities. The plant is dX/dt = A X + b x_t(t - tau) + e x_g(t) (Eq. 2 of the paper). TDVASS feeds the delayed wheel displacement back as the control force u = g x_t(t - tau); PVASS is the same structure with g = 0; CS is the conventional 2-DOF quarter car, for which x_h and v_h mirror x_t and v_t. The outputs are the states, BA = d2x_s/dt2, SDD = x_s - x_t, TDD = x_t - x_g, their running RMS values from the start time and the objective J (Eq. 6).",
@@ -131,13 +152,38 @@ fn write_variables(w: &mut XmlWriter) -> XmlResult {
         "Parameters are fixed (settable before the end of initialization) unless tunable. Values outside the range, NaN or infinite are refused with fmi3Error naming the variable and value. The independent variable time is read with fmi3GetFloat64 and never set; it starts at the startTime of fmi3EnterInitializationMode.",
     )?;
 
+    write_enumerations(w, Model::QuarterCar)?;
+
+    text_element(w, "h3", "Arrays")?;
+    for v in FMI3_VARIABLES.iter().filter(|v| !v.dimensions.is_empty()) {
+        paragraph(
+            w,
+            &format!(
+                "{}: {}, serialized row-major (the last index varies fastest). {}",
+                v.name,
+                type_text(v),
+                v.description
+            ),
+        )?;
+    }
+    paragraph(
+        w,
+        "A structural parameter that sizes an array can only be changed in Configuration Mode (fmi3EnterConfigurationMode after instantiation); its start value is the size an importer that ignores structural parameters sees.",
+    )?;
+
+    Ok(())
+}
+
+/// The enumeration types of `model`'s variables: for each, the variables
+/// of that type and a table of its items.
+fn write_enumerations(w: &mut XmlWriter, model: Model) -> XmlResult {
     text_element(w, "h3", "Enumerations")?;
     paragraph(
         w,
         "Read and written with fmi3GetInt64 and fmi3SetInt64; the item values are the integer codes of the FMI 2.0 FMU.",
     )?;
-    for e in enumerations() {
-        let users: Vec<&str> = FMI3_VARIABLES
+    for e in enumerations(model) {
+        let users: Vec<&str> = variables_of(model, FmiVersion::Fmi3)
             .iter()
             .filter(|v| v.enumeration.is_some_and(|u| u.type_name == e.type_name))
             .map(|v| v.name)
@@ -160,24 +206,6 @@ fn write_variables(w: &mut XmlWriter) -> XmlResult {
             .collect();
         table(w, &["item", "value", "meaning"], &rows)?;
     }
-
-    text_element(w, "h3", "Arrays")?;
-    for v in FMI3_VARIABLES.iter().filter(|v| !v.dimensions.is_empty()) {
-        paragraph(
-            w,
-            &format!(
-                "{}: {}, serialized row-major (the last index varies fastest). {}",
-                v.name,
-                type_text(v),
-                v.description
-            ),
-        )?;
-    }
-    paragraph(
-        w,
-        "A structural parameter that sizes an array can only be changed in Configuration Mode (fmi3EnterConfigurationMode after instantiation); its start value is the size an importer that ignores structural parameters sees.",
-    )?;
-
     Ok(())
 }
 

@@ -4,7 +4,8 @@ use std::collections::{HashMap, HashSet};
 use tdvass_fmu::LOG_CATEGORIES;
 use tdvass_fmu::Model;
 use tdvass_fmu::variables::{
-    COMMON_VARIABLES, Initial, ROAD_CLASS_ITEMS, ROAD_ITEMS, TIRE_CONTACT_ITEMS, VARIANT_ITEMS,
+    COMMON_VARIABLES, FMI3_VARIABLES, Initial, ROAD_CLASS_ITEMS, ROAD_ITEMS, TIRE_CONTACT_ITEMS,
+    VARIANT_ITEMS,
 };
 
 /// The children of the first element called `parent`.
@@ -21,7 +22,7 @@ fn vr_list_of(text: &str) -> Vec<u32> {
 
 #[test]
 fn root_co_simulation_and_experiment() {
-    let els = elements(&model_description_xml());
+    let els = elements(&model_description_xml(Model::QuarterCar));
     let root = &els[0];
     assert_eq!(root.name, "fmiModelDescription");
     assert_eq!(root.attr("fmiVersion"), "3.0");
@@ -98,7 +99,7 @@ fn root_co_simulation_and_experiment() {
 
 #[test]
 fn every_variable_has_the_values_of_the_table() {
-    let els = elements(&model_description_xml());
+    let els = elements(&model_description_xml(Model::QuarterCar));
     let vars = children(&els, "ModelVariables");
     assert_eq!(vars.len(), FMI3_VARIABLES.len());
     // Exactly one independent variable: a Float64 in s without start or
@@ -162,7 +163,7 @@ fn every_variable_has_the_values_of_the_table() {
 
 #[test]
 fn enumerations_types_and_units_are_declared() {
-    let els = elements(&model_description_xml());
+    let els = elements(&model_description_xml(Model::QuarterCar));
     let types = children(&els, "TypeDefinitions");
     let units: HashMap<&str, usize> = els
         .iter()
@@ -193,7 +194,7 @@ fn enumerations_types_and_units_are_declared() {
         }
     }
     assert_eq!(
-        enumerations()
+        enumerations(Model::QuarterCar)
             .iter()
             .map(|e| e.type_name)
             .collect::<Vec<_>>(),
@@ -266,7 +267,7 @@ fn enumerations_types_and_units_are_declared() {
 
 #[test]
 fn arrays_have_their_dimensions() {
-    let els = elements(&model_description_xml());
+    let els = elements(&model_description_xml(Model::QuarterCar));
     let at = |name: &str| {
         els.iter()
             .position(|e| e.parent.is_some() && e.get("name") == Some(name))
@@ -318,7 +319,7 @@ fn arrays_have_their_dimensions() {
 
 #[test]
 fn model_structure_lists_outputs_and_initial_unknowns_by_value_reference() {
-    let els = elements(&model_description_xml());
+    let els = elements(&model_description_xml(Model::QuarterCar));
     let structure = children(&els, "ModelStructure");
     let outputs: Vec<&Element> = structure
         .iter()
@@ -374,7 +375,7 @@ fn model_structure_lists_outputs_and_initial_unknowns_by_value_reference() {
             .unwrap();
         let state = by_vr_any(element.attr("derivative"));
         assert_eq!(state.state_index(), Some(i));
-        assert_eq!(state_vr(i), state.vr);
+        assert_eq!(state_vr(Model::QuarterCar, i), state.vr);
         assert_eq!(der.name, format!("der({})", state.name));
         assert_eq!(state.variability.as_str(), "continuous");
     }
@@ -390,14 +391,17 @@ fn model_structure_lists_outputs_and_initial_unknowns_by_value_reference() {
             .unwrap()
             .attr("derivative")
     };
-    assert_eq!(derivative_of("der(x_s)"), vr_of("x_s").to_string());
+    assert_eq!(
+        derivative_of("der(x_s)"),
+        vr_of(Model::QuarterCar, "x_s").to_string()
+    );
     assert_eq!(
         derivative_of("der(wk_filter_1)"),
-        vr_of("wk_filter_1").to_string()
+        vr_of(Model::QuarterCar, "wk_filter_1").to_string()
     );
     assert_eq!(
         derivative_of("der(contact_loss_time)"),
-        vr_of("contact_loss_time").to_string()
+        vr_of(Model::QuarterCar, "contact_loss_time").to_string()
     );
     // One continuous Float64 variable per event indicator.
     assert_eq!(indicators.len(), tdvass::exchange::EVENT_INDICATORS);
@@ -490,7 +494,7 @@ fn model_structure_lists_outputs_and_initial_unknowns_by_value_reference() {
         assert!(deps.windows(2).all(|w| w[0] < w[1]), "ascending");
         let v = by_vr(o.attr("valueReference").parse().unwrap());
         let listed: Vec<(u32, &str)> = deps.iter().copied().zip(kinds).collect();
-        assert_eq!(listed, output_dependencies(v));
+        assert_eq!(listed, output_dependencies(Model::QuarterCar, v));
     }
     let vr_of = |name: &str| {
         by_name(Model::QuarterCar, FmiVersion::Fmi3, name)
@@ -545,7 +549,7 @@ fn model_structure_lists_outputs_and_initial_unknowns_by_value_reference() {
             );
         }
         let v = by_vr(u.attr("valueReference").parse().unwrap());
-        assert_eq!(deps, initial_dependencies(v));
+        assert_eq!(deps, initial_dependencies(Model::QuarterCar, v));
     }
     let roots = initial
         .iter()
@@ -568,7 +572,7 @@ fn model_structure_lists_outputs_and_initial_unknowns_by_value_reference() {
 
 #[test]
 fn documentation_describes_every_variable_and_capability() {
-    let html = documentation_html();
+    let html = documentation_html(Model::QuarterCar);
     assert!(html.starts_with("<!DOCTYPE html>"));
     elements(html.trim_start_matches("<!DOCTYPE html>"));
     assert!(html.contains("FMI 3.0 FMU (Co-Simulation and Model Exchange)"));
@@ -582,7 +586,7 @@ fn documentation_describes_every_variable_and_capability() {
     for v in FMI3_VARIABLES {
         assert!(html.contains(&format!("<td>{}</td>", v.name)), "{}", v.name);
     }
-    for e in enumerations() {
+    for e in enumerations(Model::QuarterCar) {
         for item in e.items {
             assert!(
                 html.contains(&format!("<td>{}</td>", item.name)),
@@ -600,8 +604,170 @@ fn documentation_describes_every_variable_and_capability() {
 
 #[test]
 fn output_is_deterministic() {
-    assert_eq!(model_description_xml(), model_description_xml());
-    assert_eq!(documentation_html(), documentation_html());
+    for model in Model::ALL {
+        assert_eq!(model_description_xml(model), model_description_xml(model));
+        assert_eq!(documentation_html(model), documentation_html(model));
+    }
+}
+
+/// The corner's description: Co-Simulation only, its own name, token and
+/// variables, and a ModelStructure of outputs and initial unknowns that
+/// refers to them.
+#[test]
+fn the_corner_is_described_without_model_exchange() {
+    let model = Model::Corner;
+    let els = elements(&model_description_xml(model));
+    let root = &els[0];
+    assert_eq!(root.attr("fmiVersion"), "3.0");
+    assert_eq!(root.attr("modelName"), "TDVASS corner");
+    assert_eq!(root.attr("modelName"), model.name());
+    assert_eq!(
+        root.attr("instantiationToken"),
+        instantiation_token(Model::Corner)
+    );
+    assert_eq!(
+        root.attr("instantiationToken"),
+        tdvass_fmu::variables::instantiation_token(Model::Corner)
+    );
+    assert_ne!(
+        root.attr("instantiationToken"),
+        instantiation_token(Model::QuarterCar)
+    );
+    assert_eq!(root.attr("description"), crate::markup::CORNER_DESCRIPTION);
+    let top: Vec<&str> = children(&els, "fmiModelDescription")
+        .iter()
+        .map(|e| e.name.as_str())
+        .collect();
+    assert_eq!(
+        top,
+        [
+            "CoSimulation",
+            "UnitDefinitions",
+            "TypeDefinitions",
+            "LogCategories",
+            "DefaultExperiment",
+            "ModelVariables",
+            "ModelStructure"
+        ]
+    );
+    assert!(!els.iter().any(|e| e.name == "ModelExchange"));
+    let cs = els.iter().find(|e| e.name == "CoSimulation").unwrap();
+    assert_eq!(cs.attr("modelIdentifier"), "tdvass");
+    for (flag, value) in CO_SIMULATION_CAPABILITIES {
+        assert_eq!(cs.attr(flag), value, "{flag}");
+    }
+
+    let variables = variables_of(model, FmiVersion::Fmi3);
+    let vars = children(&els, "ModelVariables");
+    assert_eq!(vars.len(), variables.len());
+    for (v, el) in variables.iter().zip(&vars) {
+        assert_eq!(el.name, fmi3_type(v).as_str(), "{}", v.name);
+        assert_eq!(el.attr("name"), v.name);
+        assert_eq!(el.attr("valueReference"), v.vr.to_string());
+        assert_eq!(el.attr("causality"), v.causality.as_str());
+        assert!(el.get("derivative").is_none(), "{}", v.name);
+    }
+    assert_eq!(
+        vars.iter()
+            .filter(|e| e.get("causality") == Some("independent"))
+            .count(),
+        1
+    );
+    // Every declared type is defined.
+    let declared: HashSet<&str> = children(&els, "TypeDefinitions")
+        .iter()
+        .map(|t| t.attr("name"))
+        .collect();
+    for v in &vars {
+        if let Some(name) = v.get("declaredType") {
+            assert!(declared.contains(name), "{name}");
+        }
+    }
+    assert_eq!(
+        enumerations(model)
+            .iter()
+            .map(|e| e.type_name)
+            .collect::<Vec<_>>(),
+        ["Variant", "Road", "RoadClass", "TireContact"]
+    );
+
+    // ModelStructure: outputs and initial unknowns only.
+    let structure = children(&els, "ModelStructure");
+    for e in &structure {
+        assert!(
+            e.name == "Output" || e.name == "InitialUnknown",
+            "{}",
+            e.name
+        );
+    }
+    let vrs: HashSet<u32> = variables.iter().map(|v| v.vr).collect();
+    let by_vr = |vr: u32| variables.iter().find(|v| v.vr == vr).unwrap();
+    let outputs: Vec<&&Element> = structure.iter().filter(|e| e.name == "Output").collect();
+    let expected: Vec<String> = variables
+        .iter()
+        .filter(|v| v.causality == Causality::Output)
+        .map(|v| v.vr.to_string())
+        .collect();
+    let listed: Vec<&str> = outputs.iter().map(|e| e.attr("valueReference")).collect();
+    assert_eq!(listed, expected);
+    for unknown in &structure {
+        let deps = vr_list_of(unknown.get("dependencies").unwrap_or(""));
+        assert!(deps.windows(2).all(|w| w[0] < w[1]), "ascending");
+        for d in &deps {
+            assert!(vrs.contains(d), "{:?}", unknown.attributes);
+        }
+        let v = by_vr(unknown.attr("valueReference").parse().unwrap());
+        if unknown.name == "Output" {
+            // No continuous states to depend on: the inputs alone.
+            for d in &deps {
+                assert_eq!(by_vr(*d).causality, Causality::Input, "{}", v.name);
+            }
+            let kinds: Vec<&str> = unknown
+                .get("dependenciesKind")
+                .unwrap_or("")
+                .split_whitespace()
+                .collect();
+            let pairs: Vec<(u32, &str)> = deps.iter().copied().zip(kinds).collect();
+            assert_eq!(pairs, output_dependencies(model, v));
+        } else {
+            assert_eq!(deps, initial_dependencies(model, v));
+        }
+    }
+    let vr = |name: &str| vr_of(model, name);
+    let body_force = outputs
+        .iter()
+        .find(|e| e.attr("valueReference") == vr("body_force").to_string())
+        .unwrap();
+    assert_eq!(
+        vr_list_of(body_force.attr("dependencies")),
+        [vr("body_displacement"), vr("body_velocity")]
+    );
+    assert_eq!(body_force.attr("dependenciesKind"), "fixed fixed");
+}
+
+#[test]
+fn the_corner_documentation_describes_its_variables_and_enumerations() {
+    let html = documentation_html(Model::Corner);
+    assert!(html.starts_with("<!DOCTYPE html>"));
+    elements(html.trim_start_matches("<!DOCTYPE html>"));
+    assert!(html.contains("<title>TDVASS corner FMI 3.0 FMU</title>"));
+    assert!(html.contains("TDVASS corner: FMI 3.0 FMU (Co-Simulation)"));
+    assert!(html.contains("Co-Simulation only in this version"));
+    assert!(html.contains(&instantiation_token(Model::Corner)));
+    for v in variables_of(Model::Corner, FmiVersion::Fmi3) {
+        assert!(html.contains(&format!("<td>{}</td>", v.name)), "{}", v.name);
+    }
+    for e in enumerations(Model::Corner) {
+        for item in e.items {
+            assert!(
+                html.contains(&format!("<td>{}</td>", item.name)),
+                "{}",
+                item.name
+            );
+        }
+    }
+    assert!(!html.contains("fmi3InstantiateModelExchange"));
+    assert!(html.contains("body_force (output, N)"));
 }
 
 /// The variable of a value reference given as text.
