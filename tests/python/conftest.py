@@ -1,4 +1,5 @@
-"""Fixtures for the fmpy tests of the built FMU (target/fmu/tdvass.fmu).
+"""Fixtures for the fmpy tests of the built FMUs (target/fmu/tdvass.fmu, and
+the corner's tdvass-corner.fmu and tdvass-corner-fmi3.fmu).
 
 Nothing is built here: run `cargo run --release -p fmu-build` first.
 """
@@ -11,7 +12,7 @@ from fmpy import extract, read_model_description
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from fmu_helpers import Slave, fmu_path  # noqa: E402
+from fmu_helpers import Slave, corner_fmi3_path, corner_path, fmu_path  # noqa: E402
 
 
 @pytest.fixture(scope="session")
@@ -20,6 +21,24 @@ def fmu_file() -> Path:
     if not path.is_file():
         pytest.fail(f"{path} not found; build it with `cargo run --release -p fmu-build`")
     return path
+
+
+def built(path: Path) -> Path:
+    if not path.is_file():
+        pytest.fail(f"{path} not found; build it with `cargo run --release -p fmu-build`")
+    return path
+
+
+@pytest.fixture(scope="session")
+def corner_file() -> Path:
+    """The corner's FMI 2.0 FMU (Co-Simulation)."""
+    return built(corner_path())
+
+
+@pytest.fixture(scope="session")
+def corner_fmi3_file() -> Path:
+    """The corner's FMI 3.0 FMU (Co-Simulation)."""
+    return built(corner_fmi3_path())
 
 
 @pytest.fixture(scope="session")

@@ -57,6 +57,16 @@ def fmu_path() -> Path:
     return target_dir / "fmu" / "tdvass.fmu"
 
 
+def corner_path() -> Path:
+    """The corner's FMI 2.0 FMU, next to the quarter car's: tdvass-corner.fmu."""
+    return fmu_path().with_name("tdvass-corner.fmu")
+
+
+def corner_fmi3_path() -> Path:
+    """The corner's FMI 3.0 FMU, next to the quarter car's: tdvass-corner-fmi3.fmu."""
+    return fmu_path().with_name("tdvass-corner-fmi3.fmu")
+
+
 _STATUS = ["OK", "WARNING", "DISCARD", "ERROR", "FATAL", "PENDING"]
 _captures: dict = {}
 
