@@ -33,6 +33,15 @@ def fmu_file() -> Path:
     return path
 
 
+@pytest.fixture(params=sorted(interop.CORNER_FMUS))
+def corner_file(request) -> Path:
+    """Each of the corner's FMUs, by file name."""
+    path = interop.fmu_path().with_name(request.param)
+    if not path.is_file():
+        pytest.fail(f"{path} not found; build it with `cargo run --release -p fmu-build`")
+    return path
+
+
 @pytest.fixture(scope="session")
 def fmpy_reference(fmu_file):
     """fmpy.simulate_fmu of each experiment: name -> (times, rows), memoized."""

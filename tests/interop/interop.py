@@ -213,6 +213,11 @@ def fmi3_path() -> Path:
     return fmu_path().with_name("tdvass-fmi3.fmu")
 
 
+# The corner's FMUs (Co-Simulation only), built next to the quarter car's:
+# file name -> FMI version.
+CORNER_FMUS = {"tdvass-corner.fmu": "2.0", "tdvass-corner-fmi3.fmu": "3.0"}
+
+
 def replay3(fmu: Path, experiment: Experiment, times, outputs=OUTPUTS) -> np.ndarray:
     """fmpy's FMU3Slave (FMI 3.0 FMU) stepped through `times` after 0, with
     the experiment's start values (Enumerations by their integer codes) and,
