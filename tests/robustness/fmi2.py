@@ -8,6 +8,10 @@ built FMU (``binaries/linux64/tdvass.so`` of ``target/fmu/tdvass.fmu``):
 - otherwise ``<target>/fmu/tdvass.fmu``, where ``<target>`` is
   ``$CARGO_TARGET_DIR`` or ``<repo>/target``.
 
+The corner's FMU (``tdvass-corner.fmu`` next to it) carries the same
+library: an ``Instance(lib, fmu=corner_fmu_file())`` is a corner, its GUID
+and value references read from the corner's description.
+
 Every function takes raw ctypes arguments, so that the tests can pass NULL
 pointers, wrong lengths and out-of-range values. The logger is a
 ``CFUNCTYPE`` with the fixed part of ``fmi2CallbackLogger``'s signature: the
@@ -105,8 +109,13 @@ def fmu_file() -> Path:
     return Path(override) if override else target_dir() / "fmu" / "tdvass.fmu"
 
 
-def model_description() -> str:
-    with zipfile.ZipFile(fmu_file()) as z:
+def corner_fmu_file() -> Path:
+    """The corner's FMU, next to the quarter car's."""
+    return fmu_file().with_name("tdvass-corner.fmu")
+
+
+def model_description(fmu: Path | None = None) -> str:
+    with zipfile.ZipFile(fmu or fmu_file()) as z:
         return z.read("modelDescription.xml").decode()
 
 
@@ -124,9 +133,9 @@ def library_path() -> Path:
     return out
 
 
-def variables() -> dict[str, tuple[int, str, str, str]]:
+def variables(fmu: Path | None = None) -> dict[str, tuple[int, str, str, str]]:
     """name -> (value reference, type, causality, variability) from modelDescription.xml."""
-    xml = model_description()
+    xml = model_description(fmu)
     found = {}
     pattern = re.compile(
         r'<ScalarVariable\s+name="([^"]+)"\s+valueReference="(\d+)"([^>]*)>\s*<(Real|Integer|Boolean|String)',
@@ -144,8 +153,8 @@ def variables() -> dict[str, tuple[int, str, str, str]]:
     return found
 
 
-def guid() -> str:
-    return re.search(r'guid="([^"]+)"', model_description()).group(1)
+def guid(fmu: Path | None = None) -> str:
+    return re.search(r'guid="([^"]+)"', model_description(fmu)).group(1)
 
 
 _SIGNATURES = {
@@ -276,14 +285,17 @@ DEFAULT = object()
 
 
 class Instance:
-    """One instance: thin methods that return the raw fmi2Status."""
+    """One instance: thin methods that return the raw fmi2Status. ``fmu``:
+    the FMU whose description gives the GUID and the value references (the
+    quarter car's by default)."""
 
     def __init__(self, lib, name: bytes | None = b"robust", fmu_type=CO_SIMULATION, guid_=DEFAULT,
-                 resources: bytes | None = b"file:///tmp/resources", logging_on=0, log: Log | None = None):
+                 resources: bytes | None = b"file:///tmp/resources", logging_on=0, log: Log | None = None,
+                 fmu: Path | None = None):
         self.lib = lib
         self.log = log or Log()
-        self.vr = {k: v[0] for k, v in variables().items()}
-        g = guid().encode() if guid_ is DEFAULT else guid_
+        self.vr = {k: v[0] for k, v in variables(fmu).items()}
+        g = guid(fmu).encode() if guid_ is DEFAULT else guid_
         self.c = lib.fmi2Instantiate(name, fmu_type, g, resources, byref(self.log.callbacks), 0, logging_on)
         self.time = 0.0
 

@@ -11,7 +11,9 @@ built FMU (``binaries/x86_64-linux/tdvass.so`` of
   ``$CARGO_TARGET_DIR`` or ``<repo>/target``.
 
 The instantiation token and the value references are read from the FMU's
-modelDescription.xml. Every function takes raw ctypes arguments, so that
+modelDescription.xml. The corner's FMU (``tdvass-corner-fmi3.fmu`` next to
+it) carries the same library: an ``Instance(lib, fmu=corner_fmu_file())`` is
+a corner. Every function takes raw ctypes arguments, so that
 the tests can pass NULL pointers, wrong lengths and out-of-range values.
 ``fmi3Boolean`` is a C ``bool`` (one byte): ``c_bool``.
 """
@@ -68,8 +70,13 @@ def fmu_file() -> Path:
     return Path(override) if override else target_dir() / "fmu" / "tdvass-fmi3.fmu"
 
 
-def model_description() -> str:
-    with zipfile.ZipFile(fmu_file()) as z:
+def corner_fmu_file() -> Path:
+    """The corner's FMU, next to the quarter car's."""
+    return fmu_file().with_name("tdvass-corner-fmi3.fmu")
+
+
+def model_description(fmu: Path | None = None) -> str:
+    with zipfile.ZipFile(fmu or fmu_file()) as z:
         return z.read("modelDescription.xml").decode()
 
 
@@ -87,9 +94,9 @@ def library_path() -> Path:
     return out
 
 
-def variables() -> dict[str, tuple[int, str, str, str]]:
+def variables(fmu: Path | None = None) -> dict[str, tuple[int, str, str, str]]:
     """name -> (value reference, type, causality, variability) from modelDescription.xml."""
-    xml = model_description()
+    xml = model_description(fmu)
     variables_xml = xml[xml.index("<ModelVariables>") :]
     found = {}
     for kind, attributes in re.findall(r"<(Float64|Int32|Int64|UInt64|Boolean|Enumeration)\s([^>]*)>",
@@ -107,8 +114,8 @@ def variables() -> dict[str, tuple[int, str, str, str]]:
     return found
 
 
-def instantiation_token() -> str:
-    return re.search(r'instantiationToken="([^"]+)"', model_description()).group(1)
+def instantiation_token(fmu: Path | None = None) -> str:
+    return re.search(r'instantiationToken="([^"]+)"', model_description(fmu)).group(1)
 
 
 def exported_functions() -> list[str]:
@@ -259,22 +266,25 @@ class Instance:
     called from the FMU's intermediateUpdate callback; it returns whether to
     ask for an early return. Exceptions raised inside it are kept in
     ``callback_errors`` (ctypes would only print them).
+
+    ``fmu``: the FMU whose description gives the instantiation token and the
+    value references (the quarter car's by default).
     """
 
     _all: dict[int, Instance] = {}
 
     def __init__(self, lib, name: bytes | None = b"robust", token=DEFAULT, resources: bytes | None = None,
                  logging_on=False, early_return=False, intermediate=None, required=(), event_mode=False,
-                 log: Log | None = None, model_exchange=False):
+                 log: Log | None = None, model_exchange=False, fmu: Path | None = None):
         self.lib = lib
         self.log = log or Log()
-        self.vars = variables()
+        self.vars = variables(fmu)
         self.vr = {k: v[0] for k, v in self.vars.items()}
         self.intermediate = intermediate
         self.callback_errors: list[BaseException] = []
         self.updates: list[float] = []
         Instance._all[self.log.key] = self
-        t = instantiation_token().encode() if token is DEFAULT else token
+        t = instantiation_token(fmu).encode() if token is DEFAULT else token
         self._callback = INTERMEDIATE_UPDATE(Instance._intermediate) if intermediate else None
         required = list(required)
         self.model_exchange = model_exchange

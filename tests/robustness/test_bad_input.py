@@ -428,6 +428,87 @@ def test_bad_combination_is_refused_at_initialization(init_mode, name, value, re
     assert init_mode.exit() == OK
 
 
+# The corner's FMU (tdvass-corner.fmu, the same library under the corner's
+# GUID): its own parameters and body inputs.
+CORNER_BAD_VALUES = [
+    ("body_displacement", NAN, "must be finite"),
+    ("body_displacement", INF, "must be finite"),
+    ("body_displacement", -INF, "must be finite"),
+    ("body_displacement", 1e6, "exceeds 1e3"),
+    ("body_velocity", NAN, "must be finite"),
+    ("body_velocity", -INF, "must be finite"),
+    ("body_velocity", 1e7, "exceeds 1e6"),
+    ("static_load", 0.0, "must be > 0"),
+    ("static_load", -3383.29425, "must be > 0"),
+    ("static_load", NAN, "must be finite"),
+    ("static_load", INF, "must be finite"),
+    ("road_delay", -1e-3, "must be >= 0"),
+    ("road_delay", NAN, "must be finite"),
+    ("road_phase", INF, "must be finite"),
+]
+
+
+@pytest.fixture
+def corner_init_mode(make):
+    inst = make(fmu=fmi2.corner_fmu_file())
+    assert inst.ok, inst.log.last()
+    assert inst.setup(0.0, 15.0) == OK and inst.enter() == OK
+    return inst
+
+
+@pytest.mark.parametrize("name, value, reason", CORNER_BAD_VALUES, ids=[f"{n}={v}" for n, v, _ in CORNER_BAD_VALUES])
+def test_corner_bad_value_is_refused_naming_variable_and_value(corner_init_mode, name, value, reason):
+    inst = corner_init_mode
+    before = inst.snapshot()
+    assert inst.set(**{name: value}) == ERROR
+    message = last_error(inst)
+    assert message.startswith(f"fmi2SetReal: invalid value {rust(value)} for `{name}`: "), message
+    assert reason in message, message
+    assert inst.snapshot() == before
+    assert inst.machine_state() == "initializationMode"
+    assert inst.exit() == OK  # nothing was applied
+    assert inst.get("static_load", "road_delay", "road_phase", "body_displacement", "body_velocity") == \
+        [3383.29425, 0.0, 0.0, 0.0, 0.0]
+
+
+@pytest.mark.parametrize("name, value", [("body_displacement", NAN), ("body_velocity", INF),
+                                         ("body_displacement", -1e4)])
+def test_corner_bad_body_input_while_stepping(make, name, value):
+    """Refused in stepComplete too: nothing changes, and the instance steps on."""
+    inst = make(fmu=fmi2.corner_fmu_file())
+    inst.initialize(stop=15.0)
+    assert inst.set(body_displacement=0.01, body_velocity=0.1) == OK
+    assert inst.step(0.01) == OK
+    before = inst.snapshot()
+    assert inst.set(**{name: value}) == ERROR
+    assert f"invalid value {rust(value)} for `{name}`" in last_error(inst)
+    assert inst.snapshot() == before
+    assert inst.step(0.01) == OK
+    assert all(math.isfinite(v) for v in inst.get("body_force", "x_t", "suspension_deflection"))
+
+
+# Admissible alone, refused when the corner's simulation is built.
+CORNER_BAD_AT_INITIALIZATION = [
+    pytest.param({"road": 0, "road_delay": 0.1}, "road_delay", "applies to the built-in roads", id="road_delay, road=0"),
+    pytest.param({"static_load": 1e-7}, "static_load", "exceeds the numerical limit", id="static_load=1e-7",
+                 marks=pytest.mark.xfail(strict=True, reason="product: the message names `m_s`, a quarter-car "
+                                         "variable the corner does not have, instead of `static_load`")),
+]
+
+
+@pytest.mark.parametrize("values, name, reason", CORNER_BAD_AT_INITIALIZATION)
+def test_corner_bad_combination_is_refused_at_initialization(corner_init_mode, values, name, reason):
+    inst = corner_init_mode
+    assert inst.set(**values) == OK
+    assert inst.exit() == ERROR
+    message = last_error(inst)
+    assert message.startswith("fmi2ExitInitializationMode: invalid "), message
+    assert f"`{name}`" in message and reason in message, message
+    assert inst.machine_state() == "initializationMode"
+    assert inst.set(road=1, road_delay=0.0, static_load=3383.29425) == OK
+    assert inst.exit() == OK
+
+
 def test_tuning_the_gain_beyond_the_limit_while_simulating(initialized):
     inst = initialized()
     assert inst.set(g=1e13) == ERROR

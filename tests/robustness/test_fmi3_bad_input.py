@@ -616,6 +616,75 @@ def test_bad_combination_is_refused_at_initialization(init_mode):
     assert init_mode.exit() == OK
 
 
+# The corner's FMU (tdvass-corner-fmi3.fmu, the same library under the
+# corner's instantiation token): its own parameters and body inputs.
+CORNER_BAD_VALUES = [
+    ("body_displacement", NAN, "must be finite"),
+    ("body_displacement", -INF, "must be finite"),
+    ("body_displacement", 1e6, "exceeds 1e3"),
+    ("body_velocity", NAN, "must be finite"),
+    ("body_velocity", INF, "must be finite"),
+    ("body_velocity", -1e7, "exceeds 1e6"),
+    ("static_load", 0.0, "must be > 0"),
+    ("static_load", -1.0, "must be > 0"),
+    ("static_load", NAN, "must be finite"),
+    ("road_delay", -1e-3, "must be >= 0"),
+    ("road_delay", INF, "must be finite"),
+    ("road_phase", NAN, "must be finite"),
+]
+
+
+@pytest.fixture
+def corner_init_mode(make3):
+    inst = make3(fmu=fmi3.corner_fmu_file())
+    assert inst.ok, inst.log.last()
+    assert inst.enter(0.0, 15.0) == OK
+    return inst
+
+
+@pytest.mark.parametrize("name, value, reason", CORNER_BAD_VALUES, ids=[f"{n}={v}" for n, v, _ in CORNER_BAD_VALUES])
+def test_corner_bad_value_is_refused_naming_variable_and_value(corner_init_mode, name, value, reason):
+    inst = corner_init_mode
+    before = inst.snapshot()
+    assert inst.set_values("fmi3SetFloat64", [inst.vr[name]], [value]) == ERROR
+    message = last_error(inst)
+    assert message.startswith(f"fmi3SetFloat64: invalid value {rust(value)} for `{name}`: "), message
+    assert reason in message, message
+    assert inst.snapshot() == before
+    assert inst.machine_state() == "Initialization Mode"
+    assert inst.exit() == OK  # nothing was applied
+    assert inst.get("static_load", "road_delay", "road_phase", "body_displacement", "body_velocity") == \
+        [3383.29425, 0.0, 0.0, 0.0, 0.0]
+
+
+@pytest.mark.parametrize("name, value", [("body_displacement", NAN), ("body_velocity", -INF),
+                                         ("body_velocity", 1e7)])
+def test_corner_bad_body_input_in_step_mode(make3, name, value):
+    """Refused in Step Mode too: nothing changes, and the instance steps on."""
+    inst = make3(fmu=fmi3.corner_fmu_file())
+    inst.initialize(stop=15.0)
+    assert inst.set(body_displacement=0.01, body_velocity=0.1) == OK
+    assert inst.step(0.01) == OK
+    before = inst.snapshot()
+    assert inst.set(**{name: value}) == ERROR
+    assert f"invalid value {rust(value)} for `{name}`" in last_error(inst)
+    assert inst.snapshot() == before
+    assert inst.step(0.01) == OK
+    assert all(math.isfinite(v) for v in inst.get("body_force", "x_t", "suspension_deflection"))
+
+
+def test_corner_road_delay_with_the_input_road_is_refused_at_initialization(corner_init_mode):
+    inst = corner_init_mode
+    assert inst.set(road=0, road_delay=0.1) == OK
+    assert inst.exit() == ERROR
+    message = last_error(inst)
+    assert message.startswith("fmi3ExitInitializationMode: invalid "), message
+    assert "`road_delay`" in message and "applies to the built-in roads" in message, message
+    assert inst.machine_state() == "Initialization Mode"
+    assert inst.set(road_delay=0.0) == OK
+    assert inst.exit() == OK
+
+
 def test_derivatives_with_a_huge_seed(initialized3):
     inst = initialized3()
     assert inst.step(0.3) == OK
