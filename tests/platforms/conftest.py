@@ -72,6 +72,9 @@ def target_dir() -> Path:
 WORK = target_dir() / "platforms"
 FMU = target_dir() / "fmu" / "tdvass.fmu"
 FMU3 = target_dir() / "fmu" / "tdvass-fmi3.fmu"
+# The corner's FMUs (Co-Simulation only) carry the same libraries.
+CORNER = target_dir() / "fmu" / "tdvass-corner.fmu"
+CORNER3 = target_dir() / "fmu" / "tdvass-corner-fmi3.fmu"
 INCLUDE = HERE.parent / "include"  # fmi3_types.h
 BUILD_HINT = "build it with `cargo run --release -p fmu-build -- --all-platforms`"
 

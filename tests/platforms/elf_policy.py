@@ -151,9 +151,10 @@ def check_fmu(fmu: Path) -> list[Report]:
 
 def default_libraries() -> list[Path]:
     sys.path.insert(0, str(Path(__file__).resolve().parent))
-    from conftest import FMU, FMU3, target_dir
+    from conftest import CORNER, CORNER3, FMU, FMU3, target_dir
 
-    return [FMU, FMU3, target_dir() / "aarch64-unknown-linux-gnu" / "release" / "libtdvass_fmi2.so"]
+    return [FMU, FMU3, CORNER, CORNER3,
+            target_dir() / "aarch64-unknown-linux-gnu" / "release" / "libtdvass_fmi2.so"]
 
 
 def main(argv: list[str]) -> int:
