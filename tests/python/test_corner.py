@@ -317,7 +317,7 @@ def point_mass_errors(make_corner, corner_fmu, quarter_car, h):
     x_ref, rms_ref = quarter_car
     x_t, rms = corner_under_a_point_mass(make_corner(), start_of(md, "static_load") / G0, h)
     assert len(x_t) == len(x_ref)
-    return np.abs(x_t - x_ref).max() / np.abs(x_ref).max(), abs(rms - rms_ref) / rms_ref
+    return float(np.abs(x_t - x_ref).max() / np.abs(x_ref).max()), abs(rms - rms_ref) / rms_ref
 
 
 def test_corner_under_a_point_mass_converges_to_the_quarter_car(make_corner, corner_fmu, quarter_car):
@@ -325,7 +325,8 @@ def test_corner_under_a_point_mass_converges_to_the_quarter_car(make_corner, cor
     errors (the Jacobi master holds the force over each step)."""
     coarse = point_mass_errors(make_corner, corner_fmu, quarter_car, 1e-3)
     fine = point_mass_errors(make_corner, corner_fmu, quarter_car, 5e-4)
-    print(f"\n{corner_fmu[1].fmiVersion}: relative errors (x_t, RMS SDD): h = 1 ms {coarse}, h = 0.5 ms {fine}")
+    print(f"\nFMI {corner_fmu[1].fmiVersion} corner + point mass, relative errors (x_t, RMS SDD): "
+          f"h = 1 ms {coarse[0]:.3g}, {coarse[1]:.3g}; h = 0.5 ms {fine[0]:.3g}, {fine[1]:.3g}")
     for name, c, f in zip(QUARTER_CAR_OUTPUTS, coarse, fine):
         assert 0.0 < c < 1e-2, (name, c)
         assert f < 0.7 * c, (name, c, f)
