@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # Two builds of the same sources give byte-identical FMUs.
 #
-# Builds both FMUs again with `fmu-build --all-platforms`, from a copy of the
+# Builds the FMUs again with `fmu-build --all-platforms`, from a copy of the
 # sources at another path into a fresh target directory (so that neither the
 # checkout's location nor anything left in target/ can reach the bytes), and
-# compares them with <target>/fmu/tdvass.fmu and tdvass-fmi3.fmu, and the FMI
-# 2.0 aarch64 library, byte for byte. Run it after
+# compares them with <target>/fmu/tdvass.fmu, tdvass-fmi3.fmu,
+# tdvass-corner.fmu and tdvass-corner-fmi3.fmu, and the FMI 2.0 aarch64
+# library, byte for byte. Run it after
 # `cargo run --release -p fmu-build -- --all-platforms`; a difference names
 # the archive entries that differ. Takes a few minutes (every platform's
 # libraries are built from scratch).
@@ -14,6 +15,7 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 target="${CARGO_TARGET_DIR:-$root/target}"
 case "$target" in /*) ;; *) target="$root/$target" ;; esac
 first=("$target/fmu/tdvass.fmu" "$target/fmu/tdvass-fmi3.fmu"
+    "$target/fmu/tdvass-corner.fmu" "$target/fmu/tdvass-corner-fmi3.fmu"
     "$target/aarch64-unknown-linux-gnu/release/libtdvass_fmi2.so")
 for file in "${first[@]}"; do
     [ -f "$file" ] || {
@@ -29,13 +31,14 @@ mkdir "$work/src"
 (cd "$root" && git ls-files -z --cached --others --exclude-standard | tar --null -T - -cf -) |
     tar -xf - -C "$work/src"
 ln -s "$root/.venv" "$work/src/.venv"
-echo "reproducible_fmus: building both FMUs again in $work" >&2
+echo "reproducible_fmus: building the FMUs again in $work" >&2
 (cd "$work/src" && CARGO_TARGET_DIR="$work/target" cargo run --release -p fmu-build -- --all-platforms) \
     >"$work/build.log" 2>&1 || {
     tail -n 40 "$work/build.log" >&2
     exit 1
 }
 second=("$work/target/fmu/tdvass.fmu" "$work/target/fmu/tdvass-fmi3.fmu"
+    "$work/target/fmu/tdvass-corner.fmu" "$work/target/fmu/tdvass-corner-fmi3.fmu"
     "$work/target/aarch64-unknown-linux-gnu/release/libtdvass_fmi2.so")
 failed=0
 for i in "${!first[@]}"; do
