@@ -2,10 +2,12 @@
 # Validates the FMI 3.0 model descriptions against the official XML schema
 # of the standard (modelica/fmi-standard, release v3.0.2) with xmllint.
 #
-#   tests/fmi3_schema.sh            the checked-in modelDescription/fmi3/modelDescription.xml
-#                                   and modelDescription/corner/fmi3/modelDescription.xml
+#   tests/fmi3_schema.sh            the checked-in modelDescription/fmi3/modelDescription.xml,
+#                                   modelDescription/corner/fmi3/modelDescription.xml
+#                                   and modelDescription/chassis/fmi3/modelDescription.xml
 #                                   and, when they were built, the ones inside
-#                                   target/fmu/tdvass-fmi3.fmu and tdvass-corner-fmi3.fmu
+#                                   target/fmu/tdvass-fmi3.fmu, tdvass-corner-fmi3.fmu
+#                                   and tdvass-chassis-fmi3.fmu
 #   tests/fmi3_schema.sh FILE...    these files
 #
 # The schema is taken from FMI3_SCHEMA_DIR (a directory holding
@@ -36,10 +38,11 @@ fi
 files=("$@")
 scratch=""
 if [ ${#files[@]} -eq 0 ]; then
-    files=(modelDescription/fmi3/modelDescription.xml modelDescription/corner/fmi3/modelDescription.xml)
+    files=(modelDescription/fmi3/modelDescription.xml modelDescription/corner/fmi3/modelDescription.xml
+        modelDescription/chassis/fmi3/modelDescription.xml)
     scratch="$(mktemp -d)"
     trap 'rm -rf "$scratch"' EXIT
-    for name in tdvass-fmi3 tdvass-corner-fmi3; do
+    for name in tdvass-fmi3 tdvass-corner-fmi3 tdvass-chassis-fmi3; do
         fmu="$target/fmu/$name.fmu"
         if [ -f "$fmu" ]; then
             python3 -c 'import sys, zipfile; sys.stdout.buffer.write(zipfile.ZipFile(sys.argv[1]).read("modelDescription.xml"))' \

@@ -2,11 +2,16 @@
 //! FMU `target/fmu/tdvass-fmi3.fmu`, the corner's
 //! (`tdvass_fmu::Model::Corner`: the suspension of one corner of a vehicle,
 //! Co-Simulation only) `target/fmu/tdvass-corner.fmu` and
-//! `target/fmu/tdvass-corner-fmi3.fmu`, and refreshes the checked-in
+//! `target/fmu/tdvass-corner-fmi3.fmu`, and the chassis's
+//! (`tdvass_fmu::Model::Chassis`: the body of a vehicle on four corners,
+//! Co-Simulation only) `target/fmu/tdvass-chassis.fmu` and
+//! `target/fmu/tdvass-chassis-fmi3.fmu`, and refreshes the checked-in
 //! `modelDescription/modelDescription.xml` (FMI 2.0),
-//! `modelDescription/fmi3/modelDescription.xml` (FMI 3.0) and the corner's
+//! `modelDescription/fmi3/modelDescription.xml` (FMI 3.0), the corner's
 //! `modelDescription/corner/modelDescription.xml` and
-//! `modelDescription/corner/fmi3/modelDescription.xml`. The build's
+//! `modelDescription/corner/fmi3/modelDescription.xml` and the chassis's
+//! `modelDescription/chassis/modelDescription.xml` and
+//! `modelDescription/chassis/fmi3/modelDescription.xml`. The build's
 //! steps stay in this one file, in the order they run (a long file on
 //! purpose).
 //!
@@ -18,10 +23,10 @@
 //! ```
 //!
 //! Each FMU carries the shared library of its FMI version's crate
-//! (`tdvass-fmi2`, `tdvass-fmi3`) under the model identifier; the quarter
-//! car's and the corner's FMU of a version carry the same library, built
-//! once (the token of the model description picks the model at
-//! instantiation). Without a flag that is the
+//! (`tdvass-fmi2`, `tdvass-fmi3`) under the model identifier; the three
+//! models' FMUs of a version carry the same library, built once (the token
+//! of the model description picks the model at instantiation). Without a
+//! flag that is the
 //! library of the host (Linux x86-64: `binaries/linux64/tdvass.so` and
 //! `binaries/x86_64-linux/tdvass.so`, Windows x86-64: `binaries/win64/tdvass.dll`
 //! and `binaries/x86_64-windows/tdvass.dll`, macOS: `binaries/darwin64/tdvass.dylib`
@@ -49,7 +54,8 @@
 //! the variable table of each model; the FMU libraries carry none of that code. Besides them each FMU carries the icon
 //! (`fmu-build/assets/icon.png`, drawn by `tools/draw_icon.py`: `model.png`
 //! in FMI 2.0, `terminalsAndIcons/icon.png` in FMI 3.0, and
-//! `documentation/diagram.png` in both) and the reference results of its
+//! `documentation/diagram.png` in both; the chassis's page shows it too,
+//! with a legend of the chassis's own symbols) and the reference results of its
 //! default experiment ([`mod@reference`], FMI-LS-REF). Every entry is written
 //! in a fixed order with a fixed time stamp and mode, so that two builds of
 //! the same sources give byte-identical FMUs.
@@ -69,12 +75,13 @@ use zip::{CompressionMethod, DateTime, ZipArchive, ZipWriter};
 
 mod pgo;
 mod reference;
+mod system;
 mod zig;
 
 use zig::GLIBC_FLOOR;
 use zig::ZigTools;
 
-/// The icon of both FMUs and the diagram of their documentation, drawn by
+/// The icon of every FMU and the diagram of its documentation, drawn by
 /// `tools/draw_icon.py`.
 const ICON: &[u8] = include_bytes!("../assets/icon.png");
 
@@ -115,13 +122,15 @@ struct Fmu {
 
 impl Fmu {
     /// Every FMU: the quarter car's FMI 2.0 and FMI 3.0 FMUs, then the
-    /// corner's.
-    fn all() -> [Fmu; 4] {
+    /// corner's, then the chassis's.
+    fn all() -> [Fmu; 6] {
         [
             Fmu::new(Model::QuarterCar, FmiVersion::Fmi2),
             Fmu::new(Model::QuarterCar, FmiVersion::Fmi3),
             Fmu::new(Model::Corner, FmiVersion::Fmi2),
             Fmu::new(Model::Corner, FmiVersion::Fmi3),
+            Fmu::new(Model::Chassis, FmiVersion::Fmi2),
+            Fmu::new(Model::Chassis, FmiVersion::Fmi3),
         ]
     }
 
@@ -142,6 +151,14 @@ impl Fmu {
             (Model::Corner, FmiVersion::Fmi3) => (
                 "tdvass-corner-fmi3.fmu",
                 "modelDescription/corner/fmi3/modelDescription.xml",
+            ),
+            (Model::Chassis, FmiVersion::Fmi2) => (
+                "tdvass-chassis.fmu",
+                "modelDescription/chassis/modelDescription.xml",
+            ),
+            (Model::Chassis, FmiVersion::Fmi3) => (
+                "tdvass-chassis-fmi3.fmu",
+                "modelDescription/chassis/fmi3/modelDescription.xml",
             ),
         };
         match version {
@@ -920,6 +937,7 @@ fn build(root: &Path, fmus: &[Fmu], platforms: &[Platform], profile: Profiling) 
             refreshed.push(copy.path);
         }
     }
+    let car = write_full_car(&out_dir, fmus)?;
     for ((fmu, packed), path) in fmus.iter().zip(&binaries).zip(&written) {
         eprintln!(
             "fmu-build: wrote {} ({} bytes; {}; {} {})",
@@ -934,6 +952,13 @@ fn build(root: &Path, fmus: &[Fmu], platforms: &[Platform], profile: Profiling) 
             fmu.identity
         );
     }
+    for path in &car {
+        eprintln!(
+            "fmu-build: wrote {} ({} bytes; the full car)",
+            path.display(),
+            fs::metadata(path).map(|m| m.len()).unwrap_or(0)
+        );
+    }
     eprintln!(
         "fmu-build: refreshed: {}",
         if refreshed.is_empty() {
@@ -943,6 +968,59 @@ fn build(root: &Path, fmus: &[Fmu], platforms: &[Platform], profile: Profiling) 
         }
     );
     Ok(())
+}
+
+/// The assembled car beside the FMUs in `out_dir` ([`system`]): the SSP
+/// archive `full-car.ssp` (its `SystemStructure.ssd` and, under
+/// `resources/`, the corner's and the chassis's FMI 2.0 FMUs, which
+/// libcosim and ecos import), and libcosim's `full-car/OspSystemStructure.xml`
+/// (fixed step) and `full-car/OspSystemStructure_ecco.xml` (ECCO), whose
+/// simulators are the FMUs in `out_dir`. Returns the paths written.
+fn write_full_car(out_dir: &Path, fmus: &[Fmu]) -> Result<Vec<PathBuf>> {
+    let file_of = |model| {
+        fmus.iter()
+            .find(|f| f.model == model && f.version == FmiVersion::Fmi2)
+            .map(|f| f.file_name)
+            .ok_or(format!("the full car needs the FMI 2.0 FMU of {model:?}"))
+    };
+    let (corner, chassis) = (file_of(Model::Corner)?, file_of(Model::Chassis)?);
+    let read = |name: &str| {
+        let path = out_dir.join(name);
+        fs::read(&path).map_err(|e| format!("cannot read {}: {e}", path.display()))
+    };
+    let (corner_bytes, chassis_bytes) = (read(corner)?, read(chassis)?);
+    let ssd = system::system_structure_description(corner, chassis);
+    let resource = |name: &str| format!("{}/{name}", system::SSP_RESOURCES);
+    let (corner_entry, chassis_entry) = (resource(corner), resource(chassis));
+    let entries: Vec<(&str, &[u8], u32)> = vec![
+        ("SystemStructure.ssd", ssd.as_bytes(), 0o644),
+        (corner_entry.as_str(), &corner_bytes, 0o644),
+        (chassis_entry.as_str(), &chassis_bytes, 0o644),
+    ];
+    let ssp = out_dir.join(format!("{}.ssp", system::SYSTEM_NAME));
+    let partial = out_dir.join(format!("{}.ssp.partial", system::SYSTEM_NAME));
+    write_fmu(&partial, &entries)?;
+    check_fmu(&partial, &entries)?;
+    fs::rename(&partial, &ssp).map_err(|e| {
+        format!(
+            "cannot rename {} to {}: {e}",
+            partial.display(),
+            ssp.display()
+        )
+    })?;
+    let folder = out_dir.join(system::SYSTEM_NAME);
+    fs::create_dir_all(&folder).map_err(|e| format!("cannot create {}: {e}", folder.display()))?;
+    let mut written = vec![ssp];
+    for (name, ecco) in [
+        ("OspSystemStructure.xml", false),
+        ("OspSystemStructure_ecco.xml", true),
+    ] {
+        let path = folder.join(name);
+        fs::write(&path, system::osp_system_structure(corner, chassis, ecco))
+            .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+        written.push(path);
+    }
+    Ok(written)
 }
 
 /// The flag that builds the libraries without a profile ([`pgo`]).

@@ -14,6 +14,10 @@
 //! the body's attachment point at rest at the static equilibrium
 //! (`body_displacement` = `body_velocity` = 0), so that its results are the
 //! suspension under a fixed body on the default harmonic road.
+//!
+//! The chassis's ([`Model::Chassis`]) forces stay at their start values
+//! (0): it rests at its static equilibrium, and every column of its
+//! results is 0.
 
 use quick_xml::events::{BytesDecl, Event};
 use std::cell::RefCell;

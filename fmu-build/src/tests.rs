@@ -117,7 +117,7 @@ fn all_platforms_pack_linux64_and_win64_for_fmi2_and_all_three_for_fmi3() {
 
 #[test]
 fn each_fmu_has_its_crate_archive_and_checked_in_description() {
-    let [fmi2, fmi3, corner2, corner3] = Fmu::all();
+    let [fmi2, fmi3, corner2, corner3, chassis2, chassis3] = Fmu::all();
     assert_eq!(
         (fmi2.package, fmi2.library, fmi2.file_name, fmi2.checked_in),
         (
@@ -164,6 +164,34 @@ fn each_fmu_has_its_crate_archive_and_checked_in_description() {
             "modelDescription/corner/fmi3/modelDescription.xml"
         )
     );
+    assert_eq!(
+        (
+            chassis2.package,
+            chassis2.library,
+            chassis2.file_name,
+            chassis2.checked_in
+        ),
+        (
+            "tdvass-fmi2",
+            "tdvass_fmi2",
+            "tdvass-chassis.fmu",
+            "modelDescription/chassis/modelDescription.xml"
+        )
+    );
+    assert_eq!(
+        (
+            chassis3.package,
+            chassis3.library,
+            chassis3.file_name,
+            chassis3.checked_in
+        ),
+        (
+            "tdvass-fmi3",
+            "tdvass_fmi3",
+            "tdvass-chassis-fmi3.fmu",
+            "modelDescription/chassis/fmi3/modelDescription.xml"
+        )
+    );
     let models: Vec<(Model, FmiVersion)> =
         Fmu::all().iter().map(|f| (f.model, f.version)).collect();
     assert_eq!(
@@ -173,6 +201,8 @@ fn each_fmu_has_its_crate_archive_and_checked_in_description() {
             (Model::QuarterCar, FmiVersion::Fmi3),
             (Model::Corner, FmiVersion::Fmi2),
             (Model::Corner, FmiVersion::Fmi3),
+            (Model::Chassis, FmiVersion::Fmi2),
+            (Model::Chassis, FmiVersion::Fmi3),
         ]
     );
     for fmu in Fmu::all() {
@@ -202,11 +232,11 @@ fn each_fmu_has_its_crate_archive_and_checked_in_description() {
         fmi3.identity
             .contains(&tdvass_fmi3::instantiation_token(Model::QuarterCar))
     );
-    // Four checked-in copies, each its own file.
+    // Six checked-in copies, each its own file.
     let copies: std::collections::HashSet<&str> = Fmu::all().iter().map(|f| f.checked_in).collect();
-    assert_eq!(copies.len(), 4);
+    assert_eq!(copies.len(), 6);
     // The package names the library target that cargo builds.
-    for fmu in [&fmi2, &fmi3, &corner2, &corner3] {
+    for fmu in [&fmi2, &fmi3, &corner2, &corner3, &chassis2, &chassis3] {
         let manifest = fs::read_to_string(
             workspace_root()
                 .join("crates")
@@ -355,7 +385,7 @@ fn each_fmu_carries_the_icon_the_diagram_and_the_reference_results() {
             "{}",
             fmu.label()
         );
-        for symbol in [
+        let suspension = [
             "m_s",
             "k_s, c_s",
             "m_h",
@@ -364,21 +394,42 @@ fn each_fmu_carries_the_icon_the_diagram_and_the_reference_results() {
             "k_t",
             "x_g",
             "u = g x_t(t - tau)",
-        ] {
+        ];
+        // ("m" is a unit on every page.)
+        let chassis = [
+            "I_theta, I_phi",
+            "a, b",
+            "z, theta, phi",
+            "f_fl, f_fr, f_rl, f_rr",
+            "z + x theta + y phi",
+        ];
+        // The chassis's legend is its own: none of the suspension's symbols.
+        let (own, other) = match fmu.model {
+            Model::Chassis => (&chassis[..], &suspension[..]),
+            Model::QuarterCar | Model::Corner => (&suspension[..], &chassis[..]),
+        };
+        for symbol in own {
             assert!(page.contains(&format!("<td>{symbol}</td>")), "{symbol}");
         }
+        for symbol in other {
+            assert!(
+                !page.contains(&format!("<td>{symbol}</td>")),
+                "{symbol} on the page of the {}",
+                fmu.title()
+            );
+        }
         // The body is the quarter car's own; the corner's is outside, its
-        // weight on the corner the static load.
-        let body = match fmu.model {
-            Model::QuarterCar => "m_s (start 345 kg)",
-            Model::Corner => "static_load (start 3383.29425 N)",
+        // weight on the corner the static load; the chassis is the body.
+        let (body, force) = match fmu.model {
+            Model::QuarterCar => ("m_s (start 345 kg)", "control_force (output, N)"),
+            Model::Corner => (
+                "static_load (start 3383.29425 N)",
+                "control_force (output, N)",
+            ),
+            Model::Chassis => ("mass (start 1380 kg)", "force_fl (input, N)"),
         };
         assert!(page.contains(body), "{}", fmu.title());
-        assert!(
-            page.contains("control_force (output, N)"),
-            "{}",
-            fmu.title()
-        );
+        assert!(page.contains(force), "{}", fmu.title());
         assert!(page.contains(&reference::csv_entry()), "{}", fmu.label());
         assert!(
             page.contains(&format!("every {} s", reference::OUTPUT_INTERVAL)),
@@ -433,7 +484,7 @@ fn numbers_are_written_in_their_shortest_round_trip_form() {
 /// a slave stepped the same way; and the FMI 2.0 and 3.0 slaves agree.
 #[test]
 fn reference_results_are_the_default_experiment_of_each_fmu() {
-    let [fmi2, fmi3, _, _] = Fmu::all();
+    let [fmi2, fmi3, ..] = Fmu::all();
     let csv2 = reference::results_csv(fmi2.model, fmi2.dialect, fmi2.token.clone()).unwrap();
     let csv3 = reference::results_csv(fmi3.model, fmi3.dialect, fmi3.token.clone()).unwrap();
     for (fmu, csv) in [(&fmi2, &csv2), (&fmi3, &csv3)] {
@@ -509,7 +560,7 @@ fn assert_columns_agree(csv2: &str, csv3: &str) {
 /// equilibrium on the default harmonic road; both versions agree.
 #[test]
 fn the_corner_reference_results_are_the_suspension_under_a_fixed_body() {
-    let [_, _, corner2, corner3] = Fmu::all();
+    let [_, _, corner2, corner3, ..] = Fmu::all();
     let csv2 =
         reference::results_csv(corner2.model, corner2.dialect, corner2.token.clone()).unwrap();
     let csv3 =
@@ -561,62 +612,117 @@ fn the_corner_reference_results_are_the_suspension_under_a_fixed_body() {
     assert_columns_agree(&csv2, &csv3);
 }
 
-/// The corner's FMUs carry the quarter car's library of their version
-/// (built once, the same bytes under the same entry) with their own model
-/// description, documentation and reference results.
+/// The chassis's reference results: its own outputs, a chassis slave
+/// under the start values of the forces (0), at rest at its static
+/// equilibrium throughout; both versions agree.
 #[test]
-fn the_corner_fmus_carry_the_quarter_cars_library_with_their_own_description() {
+fn the_chassis_reference_results_are_the_body_at_rest() {
+    let [.., chassis2, chassis3] = Fmu::all();
+    let csv2 =
+        reference::results_csv(chassis2.model, chassis2.dialect, chassis2.token.clone()).unwrap();
+    let csv3 =
+        reference::results_csv(chassis3.model, chassis3.dialect, chassis3.token.clone()).unwrap();
+    for (fmu, csv) in [(&chassis2, &csv2), (&chassis3, &csv3)] {
+        assert_eq!(fmu.model, Model::Chassis);
+        let mut lines = csv.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let outputs = reference::outputs(Model::Chassis, &fmu.dialect);
+        let names: Vec<&str> = outputs.iter().map(|v| v.name).collect();
+        assert_eq!(header[0], "time");
+        assert_eq!(header[1..], names[..]);
+        for name in [
+            "displacement_fl",
+            "velocity_rr",
+            "heave",
+            "pitch",
+            "roll",
+            "heave_acceleration",
+            "weighted_seat_acceleration",
+            "seat_vibration_dose_value",
+        ] {
+            assert!(header.contains(&name), "{name} in {header:?}");
+        }
+        for name in ["x_s", "body_force", "objective"] {
+            assert!(!header.contains(&name), "{name} in {header:?}");
+        }
+        let rows: Vec<Vec<f64>> = lines
+            .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+            .collect();
+        assert_eq!(rows.len(), 301);
+        assert_eq!(rows[300][0], 15.0);
+        // No force, no motion: every output is 0 at every point.
+        for row in &rows {
+            assert_eq!(row.len(), header.len());
+            assert!(row[1..].iter().all(|&x| x == 0.0), "{row:?}");
+        }
+    }
+    assert_columns_agree(&csv2, &csv3);
+}
+
+/// The corner's and the chassis's FMUs carry the quarter car's library of
+/// their version (built once, the same bytes under the same entry) with
+/// their own model description, documentation and reference results.
+#[test]
+fn the_component_fmus_carry_the_quarter_cars_library_with_their_own_description() {
     let fmus = Fmu::all();
-    // One library per package, packed into both FMUs of its version.
+    // One library per package, packed into every FMU of its version.
     let built: Vec<(&str, Vec<usize>)> = libraries(&fmus)
         .into_iter()
         .map(|(fmu, carriers)| (fmu.package, carriers))
         .collect();
     assert_eq!(
         built,
-        [("tdvass-fmi2", vec![0, 2]), ("tdvass-fmi3", vec![1, 3])]
+        [
+            ("tdvass-fmi2", vec![0, 2, 4]),
+            ("tdvass-fmi3", vec![1, 3, 5])
+        ]
     );
     let host = host_platform(std::env::consts::OS, std::env::consts::ARCH).unwrap();
     let out_dir =
-        std::env::temp_dir().join(format!("fmu-build-test-corner-{}", std::process::id()));
+        std::env::temp_dir().join(format!("fmu-build-test-component-{}", std::process::id()));
     fs::create_dir_all(&out_dir).unwrap();
-    for (quarter_car, corner) in [(&fmus[0], &fmus[2]), (&fmus[1], &fmus[3])] {
-        assert_eq!(corner.model, Model::Corner);
+    for (quarter_car, component) in [
+        (&fmus[0], &fmus[2]),
+        (&fmus[1], &fmus[3]),
+        (&fmus[0], &fmus[4]),
+        (&fmus[1], &fmus[5]),
+    ] {
+        assert!(matches!(component.model, Model::Corner | Model::Chassis));
         assert_eq!(quarter_car.model, Model::QuarterCar);
         assert_eq!(
-            (corner.version, corner.package, corner.library),
+            (component.version, component.package, component.library),
             (
                 quarter_car.version,
                 quarter_car.package,
                 quarter_car.library
             )
         );
-        assert_eq!(corner.icon_entry, quarter_car.icon_entry);
+        assert_eq!(component.icon_entry, quarter_car.icon_entry);
         assert_eq!(
-            corner.token,
-            tdvass_fmu::variables::token(Model::Corner, corner.version)
+            component.token,
+            tdvass_fmu::variables::token(component.model, component.version)
         );
-        assert_ne!(corner.token, quarter_car.token);
+        assert_ne!(component.token, quarter_car.token);
         // Its own description: Co-Simulation only, the same model identifier.
-        let description = &corner.description;
-        assert!(description.contains(r#"modelName="TDVASS corner""#));
-        assert!(description.contains(&corner.token));
+        let description = &component.description;
+        assert!(description.contains(&format!(r#"modelName="{}""#, component.model.name())));
+        assert!(description.contains(&component.token));
         assert!(!description.contains("<ModelExchange"));
         assert!(description.contains(r#"<CoSimulation modelIdentifier="tdvass""#));
-        assert!(!corner.documentation.contains(&quarter_car.token));
-        assert!(corner.documentation.contains(&corner.token));
+        assert!(!component.documentation.contains(&quarter_car.token));
+        assert!(component.documentation.contains(&component.token));
         // The archive: the same entries as the quarter car's, the library
         // bytes as given.
         let library = b"the library of both".to_vec();
-        let entry = host.fmu_entry(corner.version).unwrap();
+        let entry = host.fmu_entry(component.version).unwrap();
         let binaries = vec![(entry.clone(), library.clone())];
         let path = pack(
-            &out_dir, corner, &binaries, "time
+            &out_dir, component, &binaries, "time
 0
 ",
         )
         .unwrap();
-        assert_eq!(path, out_dir.join(corner.file_name));
+        assert_eq!(path, out_dir.join(component.file_name));
         let mut archive = ZipArchive::new(fs::File::open(&path).unwrap()).unwrap();
         let mut names: Vec<String> = archive
             .file_names()
@@ -629,7 +735,7 @@ fn the_corner_fmus_carry_the_quarter_cars_library_with_their_own_description() {
             .chain(["modelDescription.xml".to_string(), entry.clone()])
             .collect();
         expected.sort();
-        assert_eq!(names, expected, "{}", corner.title());
+        assert_eq!(names, expected, "{}", component.title());
         let read = |archive: &mut ZipArchive<fs::File>, name: &str| {
             let mut bytes = Vec::new();
             archive
@@ -642,11 +748,11 @@ fn the_corner_fmus_carry_the_quarter_cars_library_with_their_own_description() {
         assert_eq!(read(&mut archive, &entry), library);
         assert_eq!(
             read(&mut archive, "modelDescription.xml"),
-            corner.description.as_bytes()
+            component.description.as_bytes()
         );
         assert_eq!(
             read(&mut archive, "documentation/index.html"),
-            corner.documentation.as_bytes()
+            component.documentation.as_bytes()
         );
     }
     fs::remove_dir_all(&out_dir).unwrap();

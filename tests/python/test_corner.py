@@ -232,12 +232,6 @@ def test_body_force_follows_the_body_inputs_in_initialization_mode(make_corner, 
     assert force == pytest.approx(attachment_force(k_s, c_s, -0.015, 0.3, x_h, v_h), rel=1e-14)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="product: after initialization a body input set with fmi2SetReal/fmi3SetFloat64 reaches "
-    "body_force and suspension_deflection only at the next doStep (the slave applies it in "
-    "advance_within_step), although the description declares them directly dependent on it",
-)
 @pytest.mark.parametrize("variant", [1, 3], ids=["CS", "TDVASS"])
 def test_body_force_follows_the_body_inputs_at_a_communication_point(make_corner, corner_fmu, variant):
     _, md, _ = corner_fmu
@@ -435,12 +429,6 @@ def test_a_negative_road_delay_is_refused(make_corner):
     assert "`road_delay`" in message and "must be >= 0" in message, message
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="product: a tiny positive static_load (1e-7 N) is refused at exitInitializationMode as "
-    "`k_s` over `m_s` exceeding the numerical limit, naming m_s, which the corner does not have "
-    "(and whose rate does not enter a corner's dynamics)",
-)
 def test_a_tiny_static_load_is_named_if_refused(make_corner):
     corner = make_corner()
     corner.setup(stop_time=1.0)

@@ -490,9 +490,7 @@ def test_corner_bad_body_input_while_stepping(make, name, value):
 # Admissible alone, refused when the corner's simulation is built.
 CORNER_BAD_AT_INITIALIZATION = [
     pytest.param({"road": 0, "road_delay": 0.1}, "road_delay", "applies to the built-in roads", id="road_delay, road=0"),
-    pytest.param({"static_load": 1e-7}, "static_load", "exceeds the numerical limit", id="static_load=1e-7",
-                 marks=pytest.mark.xfail(strict=True, reason="product: the message names `m_s`, a quarter-car "
-                                         "variable the corner does not have, instead of `static_load`")),
+    pytest.param({"static_load": 1e-7}, "static_load", "exceed the numerical limit", id="static_load=1e-7"),
 ]
 
 

@@ -2,14 +2,15 @@
 //! generated from the variable table with quick-xml (no markup is written
 //! by hand, so every value is escaped). The output is deterministic: no
 //! timestamps. Each model ([`Model`]) has its own: the quarter car's with
-//! Model Exchange beside Co-Simulation, the corner's Co-Simulation only
-//! ([`Model::offers_model_exchange`]).
+//! Model Exchange beside Co-Simulation, the corner's and the chassis's
+//! Co-Simulation only ([`Model::offers_model_exchange`]), the chassis's
+//! with capabilities of its own ([`co_simulation_capabilities`]).
 
-use crate::corner::{CornerPage, corner_page};
+use crate::component::{ComponentPage, component_page};
 use crate::markup::{
     DescriptionFrame, MODEL_DESCRIPTION, REFERENCE_RESULTS, TIRE_CONTACT, XmlResult, XmlWriter,
     diagram, html_page, list, model_description, model_exchange_text, number, paragraph,
-    text_element, unit_text, variable_table,
+    text_element, typed_in_use, unit_text, variable_table,
 };
 use quick_xml::events::{BytesText, Event};
 use tdvass::exchange::EVENT_INDICATORS;
@@ -37,10 +38,21 @@ fn bound_text(v: &Variable, b: Option<f64>) -> Option<String> {
     })
 }
 
-fn write_type_definitions(w: &mut XmlWriter) -> XmlResult {
+/// The typed quantities the FMI 2.0 variables of `model` declare (every
+/// variable of a typed quantity has its `declaredType`).
+fn quantities(model: Model) -> Vec<Quantity> {
+    typed_in_use(
+        variables_of(model, FmiVersion::Fmi2)
+            .iter()
+            .map(|v| v.quantity),
+    )
+}
+
+/// `TypeDefinitions`: a `SimpleType` of each of `quantities`.
+fn write_type_definitions(w: &mut XmlWriter, quantities: &[Quantity]) -> XmlResult {
     w.create_element("TypeDefinitions")
         .write_inner_content(|w| {
-            for q in Quantity::TYPED {
+            for q in quantities {
                 let (name, quantity, unit) = q.type_definition().expect("typed quantity");
                 w.create_element("SimpleType")
                     .with_attribute(("name", name))
@@ -244,7 +256,8 @@ pub const MODEL_EXCHANGE_CAPABILITIES: [(&str, &str); 7] = [
 ];
 
 /// The attributes of the `CoSimulation` element after `modelIdentifier`,
-/// in the order written: the capabilities the C interface provides.
+/// in the order written: the capabilities the C interface provides (the
+/// quarter car's and the corner's).
 pub const CO_SIMULATION_CAPABILITIES: [(&str, &str); 9] = [
     ("needsExecutionTool", "false"),
     ("canHandleVariableCommunicationStepSize", "true"),
@@ -257,18 +270,45 @@ pub const CO_SIMULATION_CAPABILITIES: [(&str, &str); 9] = [
     ("providesDirectionalDerivative", "true"),
 ];
 
+/// The chassis's capabilities ([`Model::Chassis`]), in the order of
+/// [`CO_SIMULATION_CAPABILITIES`]: its step is a closed form for forces
+/// linear in time, so it takes any step size and the forces' order-1
+/// derivatives; it provides neither output nor directional derivatives.
+pub const CHASSIS_CO_SIMULATION_CAPABILITIES: [(&str, &str); 9] = [
+    ("needsExecutionTool", "false"),
+    ("canHandleVariableCommunicationStepSize", "true"),
+    ("canInterpolateInputs", "true"),
+    ("maxOutputDerivativeOrder", "0"),
+    ("canBeInstantiatedOnlyOncePerProcess", "false"),
+    ("canNotUseMemoryManagementFunctions", "true"),
+    ("canGetAndSetFMUstate", "true"),
+    ("canSerializeFMUstate", "true"),
+    ("providesDirectionalDerivative", "false"),
+];
+
+/// The `CoSimulation` attributes of `model` after `modelIdentifier`.
+pub fn co_simulation_capabilities(model: Model) -> &'static [(&'static str, &'static str)] {
+    match model {
+        Model::Chassis => &CHASSIS_CO_SIMULATION_CAPABILITIES,
+        Model::QuarterCar | Model::Corner => &CO_SIMULATION_CAPABILITIES,
+    }
+}
+
 /// The complete `modelDescription.xml` of `model`: with `ModelExchange`
-/// and `numberOfEventIndicators` when the model offers Model Exchange.
+/// and `numberOfEventIndicators` when the model offers Model Exchange,
+/// the types and units its variables use.
 pub fn model_description_xml(model: Model) -> String {
     let guid = guid(model);
     let event_indicators = EVENT_INDICATORS.to_string();
     let model_exchange = model.offers_model_exchange();
     let event_indicators = [("numberOfEventIndicators", event_indicators.as_str())];
+    let quantities = quantities(model);
     let frame = DescriptionFrame {
         fmi_version: FMI_VERSION,
         model,
+        quantities: &quantities,
         token: ("guid", &guid),
-        co_simulation: &CO_SIMULATION_CAPABILITIES,
+        co_simulation: co_simulation_capabilities(model),
         model_exchange: model_exchange.then_some(&MODEL_EXCHANGE_CAPABILITIES[..]),
         root: if model_exchange {
             &event_indicators
@@ -276,7 +316,8 @@ pub fn model_description_xml(model: Model) -> String {
             &[]
         },
     };
-    model_description(frame, write_type_definitions, |w| {
+    let write_types = |w: &mut XmlWriter| write_type_definitions(w, &quantities);
+    model_description(frame, write_types, |w| {
         w.create_element("ModelVariables")
             .write_inner_content(|w| {
                 for (i, v) in variables_of(model, FmiVersion::Fmi2).iter().enumerate() {
@@ -313,8 +354,9 @@ fn variable_row(v: &Variable) -> Vec<String> {
 pub fn documentation_html(model: Model) -> String {
     match model {
         Model::QuarterCar => html_page(&format!("{MODEL_NAME} FMU"), write_body),
-        Model::Corner => corner_page(&CornerPage {
-            version: "FMI 2.0",
+        Model::Corner | Model::Chassis => component_page(&ComponentPage {
+            model,
+            version: FmiVersion::Fmi2,
             identity: format!(
                 "GUID {} (a hash of the variable names, value references, types, causalities and variabilities)",
                 guid(model)
@@ -325,7 +367,7 @@ pub fn documentation_html(model: Model) -> String {
                 .map(variable_row)
                 .collect(),
             after_variables: &|_| Ok(()),
-            co_simulation: &CO_SIMULATION_CAPABILITIES,
+            co_simulation: co_simulation_capabilities(model),
             specification: "Functional Mock-up Interface for Model Exchange and Co-Simulation, version 2.0.",
         }),
     }
@@ -858,5 +900,246 @@ mod tests {
         }
         assert!(html.contains("body_force (output, N)"));
         assert!(!html.contains("m_s (start"));
+    }
+
+    /// Every model's description defines the types and units its
+    /// variables use, each once, and no others.
+    #[test]
+    fn types_and_units_are_those_the_variables_use() {
+        for model in Model::ALL {
+            let xml = model_description_xml(model);
+            let els = elements(&xml);
+            let types: Vec<&str> = els
+                .iter()
+                .filter(|e| e.name == "SimpleType")
+                .map(|e| e.attr("name"))
+                .collect();
+            let units: Vec<&str> = els
+                .iter()
+                .filter(|e| e.name == "Unit")
+                .map(|e| e.attr("name"))
+                .collect();
+            let vars: Vec<_> = els.iter().filter(|e| e.parent.is_some()).collect();
+            let declared: Vec<&str> = vars.iter().filter_map(|e| e.get("declaredType")).collect();
+            let used: Vec<&str> = vars.iter().filter_map(|e| e.get("unit")).collect();
+            for t in &types {
+                assert!(declared.contains(t), "{model:?}: {t} unused");
+                assert_eq!(types.iter().filter(|u| *u == t).count(), 1, "{t}");
+            }
+            for t in &declared {
+                assert!(types.contains(t), "{model:?}: {t} undefined");
+            }
+            for u in &units {
+                assert!(used.contains(u), "{model:?}: {u} unused");
+                assert_eq!(units.iter().filter(|v| *v == u).count(), 1, "{u}");
+            }
+            for u in &used {
+                assert!(units.contains(u), "{model:?}: {u} undefined");
+            }
+        }
+        // The quarter car uses the twelve of the suspension; the chassis
+        // its angles and inertias, which the suspension does not.
+        assert_eq!(quantities(Model::QuarterCar).len(), 12);
+        for q in [
+            Quantity::Angle,
+            Quantity::AngularVelocity,
+            Quantity::AngularAcceleration,
+            Quantity::Inertia,
+        ] {
+            assert!(!quantities(Model::QuarterCar).contains(&q), "{q:?}");
+            assert!(quantities(Model::Chassis).contains(&q), "{q:?}");
+        }
+    }
+
+    /// The chassis's description: Co-Simulation only with its own
+    /// capabilities, its own name, GUID and variables, and a ModelStructure
+    /// whose outputs depend on the forces where they feed through.
+    #[test]
+    fn the_chassis_is_described_with_its_own_capabilities() {
+        let model = Model::Chassis;
+        let xml = model_description_xml(model);
+        let els = elements(&xml);
+        let root = &els[0];
+        assert_eq!(root.attr("fmiVersion"), "2.0");
+        assert_eq!(root.attr("modelName"), "TDVASS chassis");
+        assert_eq!(root.attr("guid"), guid(Model::Chassis));
+        for other in [Model::QuarterCar, Model::Corner] {
+            assert_ne!(root.attr("guid"), guid(other));
+        }
+        assert_eq!(root.attr("description"), crate::markup::CHASSIS_DESCRIPTION);
+        assert_eq!(root.get("numberOfEventIndicators"), None);
+        let top: Vec<&str> = els
+            .iter()
+            .filter(|e| e.parent == Some(0))
+            .map(|e| e.name.as_str())
+            .collect();
+        assert_eq!(
+            top,
+            [
+                "CoSimulation",
+                "UnitDefinitions",
+                "TypeDefinitions",
+                "LogCategories",
+                "DefaultExperiment",
+                "ModelVariables",
+                "ModelStructure"
+            ]
+        );
+        let cs = els.iter().find(|e| e.name == "CoSimulation").unwrap();
+        assert_eq!(cs.attr("modelIdentifier"), MODEL_IDENTIFIER);
+        assert_eq!(
+            cs.attributes.len(),
+            1 + CHASSIS_CO_SIMULATION_CAPABILITIES.len()
+        );
+        for (flag, value) in [
+            ("canHandleVariableCommunicationStepSize", "true"),
+            ("canInterpolateInputs", "true"),
+            ("maxOutputDerivativeOrder", "0"),
+            ("canGetAndSetFMUstate", "true"),
+            ("canSerializeFMUstate", "true"),
+            ("providesDirectionalDerivative", "false"),
+            ("needsExecutionTool", "false"),
+        ] {
+            assert_eq!(cs.attr(flag), value, "{flag}");
+        }
+        // The same attributes as the quarter car's, in the same order.
+        let names = |c: &[(&str, &str)]| c.iter().map(|(n, _)| n.to_string()).collect::<Vec<_>>();
+        assert_eq!(
+            names(&CHASSIS_CO_SIMULATION_CAPABILITIES),
+            names(&CO_SIMULATION_CAPABILITIES)
+        );
+
+        let variables = variables_of(model, FmiVersion::Fmi2);
+        let vars: Vec<_> = els.iter().filter(|e| e.name == "ScalarVariable").collect();
+        assert_eq!(vars.len(), variables.len());
+        for (v, el) in variables.iter().zip(&vars) {
+            assert_eq!(el.attr("name"), v.name);
+            assert_eq!(el.attr("valueReference"), v.vr.to_string());
+            assert_eq!(el.attr("causality"), v.causality.as_str());
+        }
+        let pitch = els
+            .iter()
+            .position(|e| e.get("name") == Some("pitch"))
+            .unwrap();
+        assert_eq!(els[pitch + 1].attr("declaredType"), "Angle");
+        assert_eq!(els[pitch + 1].attr("unit"), "rad");
+
+        let structure = els.iter().position(|e| e.name == "ModelStructure").unwrap();
+        let parts: Vec<&str> = els
+            .iter()
+            .filter(|e| e.parent == Some(structure))
+            .map(|e| e.name.as_str())
+            .collect();
+        assert_eq!(parts, ["Outputs", "InitialUnknowns"]);
+        let unknowns_of = |part: &str| -> Vec<&crate::parsed::Element> {
+            let at = els.iter().position(|e| e.name == part).unwrap();
+            els.iter().filter(|e| e.parent == Some(at)).collect()
+        };
+        let listed =
+            |s: &str| -> Vec<usize> { s.split_whitespace().map(|i| i.parse().unwrap()).collect() };
+        let index = |name: &str| index_of(model, name).unwrap();
+        let forces: Vec<usize> = ["force_fl", "force_fr", "force_rl", "force_rr"]
+            .iter()
+            .map(|n| index(n))
+            .collect();
+        let outputs = unknowns_of("Outputs");
+        let expected: Vec<String> = variables
+            .iter()
+            .enumerate()
+            .filter(|(_, v)| v.causality == Causality::Output)
+            .map(|(i, _)| (i + 1).to_string())
+            .collect();
+        let output_indices: Vec<&str> = outputs.iter().map(|e| e.attr("index")).collect();
+        assert_eq!(output_indices, expected);
+        let feedthrough = [
+            "heave_acceleration",
+            "pitch_acceleration",
+            "roll_acceleration",
+            "seat_acceleration",
+            "weighted_seat_acceleration",
+        ];
+        for o in &outputs {
+            let v = &variables[o.attr("index").parse::<usize>().unwrap() - 1];
+            let deps = listed(o.attr("dependencies"));
+            if feedthrough.contains(&v.name) {
+                assert_eq!(deps, forces, "{}", v.name);
+                assert_eq!(
+                    o.attr("dependenciesKind"),
+                    "fixed fixed fixed fixed",
+                    "{}",
+                    v.name
+                );
+            } else {
+                // The attachment points' motion, the states and the time
+                // averages: from the states alone, no algebraic loop.
+                assert!(deps.is_empty(), "{}", v.name);
+                assert_eq!(o.get("dependenciesKind"), None, "{}", v.name);
+            }
+        }
+        let displacement = outputs
+            .iter()
+            .find(|e| e.attr("index") == index("displacement_fl").to_string())
+            .unwrap();
+        assert_eq!(displacement.attr("dependencies"), "");
+        // Every output is an initial unknown, with the initial
+        // dependencies of the table.
+        let initial = unknowns_of("InitialUnknowns");
+        assert_eq!(initial.len(), outputs.len());
+        for u in &initial {
+            let v = &variables[u.attr("index").parse::<usize>().unwrap() - 1];
+            assert_eq!(
+                u.attr("dependencies"),
+                indices(model, v.initial_dependencies),
+                "{}",
+                v.name
+            );
+        }
+        let seat = initial
+            .iter()
+            .find(|e| e.attr("index") == index("seat_acceleration").to_string())
+            .unwrap();
+        assert!(listed(seat.attr("dependencies")).contains(&index("seat_x")));
+    }
+
+    #[test]
+    fn the_chassis_documentation_describes_its_variables_and_capabilities() {
+        let html = documentation_html(Model::Chassis);
+        assert!(html.starts_with("<!DOCTYPE html>"));
+        elements(html.trim_start_matches("<!DOCTYPE html>"));
+        assert!(html.contains("<title>TDVASS chassis FMI 2.0 FMU</title>"));
+        assert!(html.contains("TDVASS chassis: FMI 2.0 FMU (Co-Simulation)"));
+        assert!(html.contains(&guid(Model::Chassis)));
+        assert!(html.contains("Co-Simulation only in this version: the chassis"));
+        assert!(html.contains("picks the chassis when the FMU is instantiated"));
+        for v in variables_of(Model::Chassis, FmiVersion::Fmi2) {
+            assert!(html.contains(&format!("<td>{}</td>", v.name)), "{}", v.name);
+        }
+        for (flag, value) in CHASSIS_CO_SIMULATION_CAPABILITIES {
+            assert!(
+                html.contains(&format!("<td>{flag}</td>\n        <td>{value}</td>")),
+                "{flag}"
+            );
+        }
+        for text in [
+            "positive nose up",
+            "positive left side up",
+            "z + x theta + y phi",
+            "front and rear decouple",
+            "fmi2SetRealInputDerivatives",
+            "no algebraic loop",
+            "mass = 4 x 345 kg = 1380 kg",
+            "a = 1.3 m, b = 1.3 m",
+            "pitch_inertia = m a b = 2332.2 kg m2, roll_inertia = 400 kg m2",
+            "track_front = 1.5 m, track_rear = 1.5 m",
+            "ISO 2631-1",
+            "mass (start 1380 kg)",
+            "force_fl (input, N)",
+        ] {
+            assert!(html.contains(text), "{text}");
+        }
+        // Its legend is its own: no symbol of the suspension's.
+        assert!(!html.contains("m_s (start"));
+        assert!(!html.contains("control_force"));
+        assert!(!html.contains("<h3>Enumerations</h3>"));
     }
 }

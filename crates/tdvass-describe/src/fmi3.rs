@@ -13,11 +13,15 @@
 //!
 //! Each model ([`Model`]) has its own description, from its variables
 //! ([`variables_of`]): the quarter car's with Model Exchange, the corner's
-//! Co-Simulation only ([`Model::offers_model_exchange`]: no
-//! `ModelExchange` element, no `ContinuousStateDerivative` or
-//! `EventIndicator` in `ModelStructure`).
+//! and the chassis's Co-Simulation only ([`Model::offers_model_exchange`]:
+//! no `ModelExchange` element, no `ContinuousStateDerivative` or
+//! `EventIndicator` in `ModelStructure`), the chassis's with capabilities
+//! of its own ([`co_simulation_capabilities`]). Each defines the types and
+//! units its variables use, no others.
 
-use crate::markup::{DescriptionFrame, XmlResult, XmlWriter, model_description, number};
+use crate::markup::{
+    DescriptionFrame, XmlResult, XmlWriter, model_description, number, typed_in_use,
+};
 use tdvass::solver::CONTINUOUS_STATES;
 use tdvass_fmi3::types::{Fmi3Type, fmi3_type};
 use tdvass_fmi3::{FMI_VERSION, instantiation_token};
@@ -63,7 +67,8 @@ pub fn derivative_vr(model: Model, i: usize) -> u32 {
 }
 
 /// The attributes of the `CoSimulation` element after `modelIdentifier`,
-/// in the order written: the capabilities the C interface provides.
+/// in the order written: the capabilities the C interface provides (the
+/// quarter car's and the corner's).
 /// Flags left at their schema default (`false`) are written too, so that
 /// the description states each decision: no event mode, no early return
 /// other than the one the importer asks for in an intermediate update, no
@@ -84,6 +89,35 @@ pub const CO_SIMULATION_CAPABILITIES: [(&str, &str); 14] = [
     ("hasEventMode", "false"),
     ("providesEvaluateDiscreteStates", "false"),
 ];
+
+/// The chassis's capabilities ([`Model::Chassis`]), in the order of
+/// [`CO_SIMULATION_CAPABILITIES`]: its step is a closed form, so it takes
+/// any step size; it provides neither output, directional nor adjoint
+/// derivatives, no intermediate update and so no early return.
+pub const CHASSIS_CO_SIMULATION_CAPABILITIES: [(&str, &str); 14] = [
+    ("needsExecutionTool", "false"),
+    ("canBeInstantiatedOnlyOncePerProcess", "false"),
+    ("canGetAndSetFMUState", "true"),
+    ("canSerializeFMUState", "true"),
+    ("providesDirectionalDerivatives", "false"),
+    ("providesAdjointDerivatives", "false"),
+    ("providesPerElementDependencies", "false"),
+    ("canHandleVariableCommunicationStepSize", "true"),
+    ("maxOutputDerivativeOrder", "0"),
+    ("providesIntermediateUpdate", "false"),
+    ("mightReturnEarlyFromDoStep", "false"),
+    ("canReturnEarlyAfterIntermediateUpdate", "false"),
+    ("hasEventMode", "false"),
+    ("providesEvaluateDiscreteStates", "false"),
+];
+
+/// The `CoSimulation` attributes of `model` after `modelIdentifier`.
+pub fn co_simulation_capabilities(model: Model) -> &'static [(&'static str, &'static str)] {
+    match model {
+        Model::Chassis => &CHASSIS_CO_SIMULATION_CAPABILITIES,
+        Model::QuarterCar | Model::Corner => &CO_SIMULATION_CAPABILITIES,
+    }
+}
 
 /// A value of `v` as its FMI 3.0 type writes it (integers without a
 /// fraction).
@@ -181,10 +215,23 @@ fn is_initial_unknown(v: &Variable) -> bool {
     )
 }
 
-fn write_type_definitions(w: &mut XmlWriter, model: Model) -> XmlResult {
+/// The typed quantities the FMI 3.0 variables of `model` declare: those
+/// of its `Float64` variables (an enumeration declares its own type).
+fn quantities(model: Model) -> Vec<Quantity> {
+    typed_in_use(
+        variables_of(model, FmiVersion::Fmi3)
+            .iter()
+            .filter(|v| fmi3_type(v) == Fmi3Type::Float64)
+            .map(|v| v.quantity),
+    )
+}
+
+/// `TypeDefinitions`: a `Float64Type` of each of `quantities`, then the
+/// enumerations of `model`.
+fn write_type_definitions(w: &mut XmlWriter, model: Model, quantities: &[Quantity]) -> XmlResult {
     w.create_element("TypeDefinitions")
         .write_inner_content(|w| {
-            for q in Quantity::TYPED {
+            for q in quantities {
                 let (name, quantity, unit) = q.type_definition().expect("typed quantity");
                 w.create_element("Float64Type")
                     .with_attribute(("name", name))
@@ -354,14 +401,17 @@ fn write_model_structure(w: &mut XmlWriter, model: Model) -> XmlResult {
 }
 
 /// The complete FMI 3.0 `modelDescription.xml` of `model`: with
-/// `ModelExchange` when the model offers it.
+/// `ModelExchange` when the model offers it, the types and units its
+/// variables use.
 pub fn model_description_xml(model: Model) -> String {
     let token = instantiation_token(model);
+    let quantities = quantities(model);
     let frame = DescriptionFrame {
         fmi_version: FMI_VERSION,
         model,
+        quantities: &quantities,
         token: ("instantiationToken", &token),
-        co_simulation: &CO_SIMULATION_CAPABILITIES,
+        co_simulation: co_simulation_capabilities(model),
         model_exchange: model
             .offers_model_exchange()
             .then_some(&MODEL_EXCHANGE_CAPABILITIES[..]),
@@ -369,7 +419,7 @@ pub fn model_description_xml(model: Model) -> String {
     };
     model_description(
         frame,
-        |w| write_type_definitions(w, model),
+        |w| write_type_definitions(w, model, &quantities),
         |w| {
             w.create_element("ModelVariables")
                 .write_inner_content(|w| {

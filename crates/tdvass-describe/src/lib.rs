@@ -10,17 +10,21 @@
 //! - [`fmi3`]: the FMI 3.0 `modelDescription.xml` and
 //!   `documentation/index.html`.
 //! - [`markup`]: what both versions write alike: the header of a model
-//!   description and its unit definitions, numbers, text elements,
+//!   description and its unit definitions (the units its variables use),
+//!   numbers, text elements,
 //!   paragraphs, lists, tables, the model's diagram with its legend, and
 //!   the HTML page around a body.
 //! - [`markdown`]: the variable table as Markdown for docs/fmu.md (the
 //!   quarter car's).
-//! - `corner`: the corner's documentation page, which both versions
-//!   write from what differs between them.
+//! - `component`: the documentation page of a component of a vehicle
+//!   (the corner, the chassis), which both versions write from what
+//!   differs between them.
 //!
 //! Every model the library serves ([`tdvass_fmu::Model`]: the quarter car,
-//! the corner) has its own model description and page in each version;
-//! the corner's has no Model Exchange.
+//! the corner, the chassis) has its own model description and page in each
+//! version; the corner's and the chassis's have no Model Exchange, and the
+//! chassis declares its own Co-Simulation capabilities (no directional or
+//! output derivatives, no intermediate update).
 //!
 //! Every document is written with quick-xml (no markup by hand, so every
 //! value is escaped) and is deterministic: no timestamps.
@@ -41,7 +45,7 @@
 
 #![forbid(unsafe_code)]
 
-mod corner;
+mod component;
 pub mod fmi2;
 pub mod fmi3;
 pub mod markdown;

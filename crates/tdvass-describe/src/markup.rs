@@ -6,7 +6,8 @@
 //! elements with text, paragraphs, lists, tables, the model's diagram with
 //! the legend of its symbols, and the HTML page around a body (quick-xml,
 //! never written by hand). Each model ([`Model`]) has its own name, one-line
-//! description and legend of the diagram.
+//! description and legend of the diagram, and its description defines the
+//! types and units its variables use, no others ([`typed_in_use`]).
 
 use quick_xml::Writer;
 use quick_xml::events::{BytesDecl, BytesText, Event};
@@ -14,7 +15,9 @@ use std::io::Cursor;
 use tdvass::solver::CONTINUOUS_STATES;
 use tdvass::solver::DEFAULT_TOLERANCE;
 use tdvass_fmu::Model;
-use tdvass_fmu::variables::{Access, Causality, FmiVersion, UNITS, Variable, by_name};
+use tdvass_fmu::variables::{
+    Access, Causality, FmiVersion, Quantity, UNITS, UnitDefinition, Variable, by_name,
+};
 use tdvass_fmu::{
     DEFAULT_START_TIME, DEFAULT_STEP_SIZE, DEFAULT_STOP_TIME, LOG_CATEGORIES, MODEL_IDENTIFIER,
 };
@@ -30,12 +33,16 @@ pub const MODEL_DESCRIPTION: &str = "Quarter-car suspension with an annular vibr
 /// One-line description of the corner ([`Model::Corner`]).
 pub const CORNER_DESCRIPTION: &str = "One corner of a vehicle: the TDVASS suspension (annular absorber, time-delay feedback of the wheel displacement; CS and PVASS for comparison) and its wheel and tire, without the body: the body's attachment point's motion is an input and the force on the body an output";
 
+/// One-line description of the chassis ([`Model::Chassis`]).
+pub const CHASSIS_DESCRIPTION: &str = "The body of a vehicle on four corners: a rigid body in heave, pitch and roll (small angles) driven by the four corners' forces, with the attachment points' motion and the ride comfort at a seat point (ISO 2631-1 W_k, VDV); default: the paper's car";
+
 /// The one-line description of `model`: the `description` attribute of
 /// its model description and the first paragraph of its page.
 pub fn description(model: Model) -> &'static str {
     match model {
         Model::QuarterCar => MODEL_DESCRIPTION,
         Model::Corner => CORNER_DESCRIPTION,
+        Model::Chassis => CHASSIS_DESCRIPTION,
     }
 }
 
@@ -123,19 +130,71 @@ pub const CORNER_LEGEND: &[(&str, &str, &[&str])] = &[
     ),
 ];
 
+/// The symbols of the chassis ([`Model::Chassis`]): the diagram beside
+/// its page is the library's icon (the quarter car, whose body m_s the
+/// chassis generalizes), so that none of the quarter car's symbols is its
+/// own.
+pub const CHASSIS_LEGEND: &[(&str, &str, &[&str])] = &[
+    ("m", "body mass", &["mass"]),
+    (
+        "I_theta, I_phi",
+        "pitch and roll moments of inertia about the centre of gravity",
+        &["pitch_inertia", "roll_inertia"],
+    ),
+    (
+        "a, b",
+        "centre of gravity to the front and to the rear axle",
+        &["a", "b"],
+    ),
+    (
+        "t_f, t_r",
+        "front and rear track widths",
+        &["track_front", "track_rear"],
+    ),
+    (
+        "z, theta, phi",
+        "heave of the centre of gravity, pitch (positive nose up) and roll (positive left side up), from the static equilibrium",
+        &["heave", "pitch", "roll"],
+    ),
+    (
+        "f_fl, f_fr, f_rl, f_rr",
+        "the corners' forces on the body at their attachment points, positive up",
+        &["force_fl", "force_fr", "force_rl", "force_rr"],
+    ),
+    (
+        "z + x theta + y phi",
+        "the displacement of the attachment point at (x, y): (a, t_f/2) front left, (a, -t_f/2) front right, (-b, t_r/2) rear left, (-b, -t_r/2) rear right",
+        &[
+            "displacement_fl",
+            "displacement_fr",
+            "displacement_rl",
+            "displacement_rr",
+        ],
+    ),
+    (
+        "(x_seat, y_seat), a_w",
+        "the seat point (ahead of and left of the centre of gravity) and its vertical acceleration weighted by ISO 2631-1 W_k",
+        &["seat_x", "seat_y", "weighted_seat_acceleration"],
+    ),
+];
+
 /// The legend of the diagram on `model`'s page: [`DIAGRAM_LEGEND`], for
 /// the corner with the rows of [`CORNER_LEGEND`] in place of the
-/// quarter car's of the same symbol.
+/// quarter car's of the same symbol; the chassis's own,
+/// [`CHASSIS_LEGEND`].
 pub fn legend(model: Model) -> Vec<(&'static str, &'static str, &'static [&'static str])> {
+    if model == Model::Chassis {
+        return CHASSIS_LEGEND.to_vec();
+    }
     DIAGRAM_LEGEND
         .iter()
         .map(|row| match model {
-            Model::QuarterCar => *row,
             Model::Corner => CORNER_LEGEND
                 .iter()
                 .find(|own| own.0 == row.0)
                 .copied()
                 .unwrap_or(*row),
+            _ => *row,
         })
         .collect()
 }
@@ -149,6 +208,9 @@ pub struct DescriptionFrame<'a> {
     /// The model described: its `modelName` ([`Model::name`]) and
     /// `description` ([`description`]).
     pub model: Model,
+    /// The typed quantities its variables declare ([`typed_in_use`]):
+    /// `UnitDefinitions` defines their units, no others.
+    pub quantities: &'a [Quantity],
     /// The attribute that identifies the interface, after `modelName`:
     /// `("guid", ...)` or `("instantiationToken", ...)`.
     pub token: (&'a str, &'a str),
@@ -165,7 +227,8 @@ pub struct DescriptionFrame<'a> {
 }
 
 /// A complete `modelDescription.xml`: the XML declaration, the root
-/// element, `ModelExchange` (if any), `CoSimulation`, `UnitDefinitions`, then the version's
+/// element, `ModelExchange` (if any), `CoSimulation`, `UnitDefinitions`
+/// (of the frame's quantities), then the version's
 /// `TypeDefinitions` (`write_type_definitions`), `LogCategories`,
 /// `DefaultExperiment`, then the version's `ModelVariables` and
 /// `ModelStructure` (`write_model`).
@@ -199,7 +262,7 @@ pub fn model_description(
                     .with_attribute(("modelIdentifier", MODEL_IDENTIFIER))
                     .with_attributes(frame.co_simulation.iter().copied())
                     .write_empty()?;
-                write_unit_definitions(w)?;
+                write_unit_definitions(w, frame.quantities)?;
                 write_type_definitions(w)?;
                 w.create_element("LogCategories").write_inner_content(|w| {
                     for (name, description) in LOG_CATEGORIES {
@@ -224,12 +287,48 @@ pub fn model_description(
     finish(w)
 }
 
-/// `UnitDefinitions`: every unit of the table with its base-unit exponents
-/// and display units (the same in FMI 2.0 and 3.0).
-fn write_unit_definitions(w: &mut XmlWriter) -> XmlResult {
+/// The typed quantities among `quantities` (those with a type
+/// definition), each once, in the order of [`Quantity::TYPED`]: the
+/// `TypeDefinitions` of a description whose variables declare
+/// `quantities`.
+pub fn typed_in_use(quantities: impl IntoIterator<Item = Quantity>) -> Vec<Quantity> {
+    let used: Vec<Quantity> = quantities.into_iter().collect();
+    Quantity::TYPED
+        .into_iter()
+        .filter(|q| used.contains(q))
+        .collect()
+}
+
+/// The definition of the unit called `name` ([`UNITS`]).
+fn unit_definition(name: &str) -> &'static UnitDefinition {
+    UNITS
+        .iter()
+        .find(|u| u.name == name)
+        .unwrap_or_else(|| panic!("no definition of the unit `{name}`"))
+}
+
+/// The units of `quantities`, each once, in the order of [`UNITS`].
+pub fn units_in_use(quantities: &[Quantity]) -> Vec<&'static UnitDefinition> {
+    let names: Vec<&str> = quantities.iter().filter_map(|q| q.unit()).collect();
+    for name in &names {
+        unit_definition(name);
+    }
+    let mut out: Vec<&'static UnitDefinition> = Vec::new();
+    for unit in UNITS {
+        if names.contains(&unit.name) && !out.iter().any(|known| known.name == unit.name) {
+            out.push(unit);
+        }
+    }
+    out
+}
+
+/// `UnitDefinitions`: the units of `quantities` ([`units_in_use`]) with
+/// their base-unit exponents and display units (the same in FMI 2.0 and
+/// 3.0).
+fn write_unit_definitions(w: &mut XmlWriter, quantities: &[Quantity]) -> XmlResult {
     w.create_element("UnitDefinitions")
         .write_inner_content(|w| {
-            for unit in UNITS {
+            for unit in units_in_use(quantities) {
                 w.create_element("Unit")
                     .with_attribute(("name", unit.name))
                     .write_inner_content(|w| {
@@ -354,6 +453,9 @@ pub fn diagram(w: &mut XmlWriter, model: Model) -> XmlResult {
                 }
                 Model::Corner => {
                     "The quarter car with the annular absorber and the delayed feedback u = g x_t(t - tau): the corner is all of it but the body m_s, whose attachment point's motion is its input."
+                }
+                Model::Chassis => {
+                    "The library's icon, the quarter car: the chassis is its body m_s grown into the rigid body of a whole car, which four corners carry at their attachment points. The symbols below are the chassis's own."
                 }
             },
         )

@@ -19,17 +19,22 @@ pub enum Model {
     /// its body, whose attachment point's motion is an input and which
     /// returns the force on the body (`tdvass-corner.fmu`).
     Corner,
+    /// The body of a vehicle on four corners: a rigid body in heave, pitch
+    /// and roll whose inputs are the corners' forces and whose outputs are
+    /// their attachment points' motion (`tdvass-chassis.fmu`).
+    Chassis,
 }
 
 impl Model {
     /// Every model, the quarter car first.
-    pub const ALL: [Model; 2] = [Model::QuarterCar, Model::Corner];
+    pub const ALL: [Model; 3] = [Model::QuarterCar, Model::Corner, Model::Chassis];
 
     /// The `modelName`.
     pub fn name(self) -> &'static str {
         match self {
             Model::QuarterCar => MODEL_NAME,
             Model::Corner => "TDVASS corner",
+            Model::Chassis => "TDVASS chassis",
         }
     }
 
@@ -38,15 +43,23 @@ impl Model {
         match self {
             Model::QuarterCar => "tdvass",
             Model::Corner => "tdvass-corner",
+            Model::Chassis => "tdvass-chassis",
         }
     }
 
-    /// Whether the model offers Model Exchange (the corner is a
-    /// Co-Simulation model: its body's motion comes from another FMU).
+    /// Whether the model offers Model Exchange (the corner and the chassis
+    /// are Co-Simulation models for now).
     pub fn offers_model_exchange(self) -> bool {
         self == Model::QuarterCar
     }
+
+    /// Whether the model is the suspension (the quarter car or the
+    /// corner: the simulator of `tdvass::solver`), not the chassis.
+    pub fn is_suspension(self) -> bool {
+        self != Model::Chassis
+    }
 }
+
 /// `DefaultExperiment` start time (s).
 pub const DEFAULT_START_TIME: f64 = 0.0;
 /// `DefaultExperiment` stop time (s).

@@ -15,13 +15,14 @@
 //!   without a stop time, a tiny `max_internal_step` or a tiny
 //!   `road_sample_interval`). A longer step is refused: the master splits it.
 //! - **Time resolution** ([`check_time_resolution`]).
-//! - **Outputs** ([`non_finite_output`]): a last line of defence; a
-//!   non-finite output is never handed out.
+//! - **Outputs** ([`non_finite_output`], [`non_finite_chassis_output`]):
+//!   a last line of defence; a non-finite output is never handed out.
 
 use crate::defaults::Model;
 use crate::error::FmiError;
 use crate::settings::Settings;
 use crate::variables::{Access, FmiVersion, Variable, variables_of};
+use tdvass::chassis::Chassis;
 use tdvass::limits::Bound;
 use tdvass::road::RoadType;
 use tdvass::solver::Outputs;
@@ -63,7 +64,25 @@ pub fn check_values(settings: &Settings) -> Result<(), FmiError> {
 /// The library's rate limit for the parameters of `s` in its variant (an
 /// invalid code, refused elsewhere, counts as every part present).
 pub fn check_rates(s: &Settings) -> Result<(), FmiError> {
-    Ok(tdvass::limits::check_rates(&s.params(), s.variant().ok())?)
+    if !s.model.is_suspension() {
+        // The chassis has no rates of its own: its step is a closed form.
+        return Ok(());
+    }
+    match tdvass::limits::check_rates(&s.params(), s.variant().ok()) {
+        // The corner's body mass is its static load over g0: name that.
+        Err(tdvass::Error::RateLimit {
+            name,
+            value,
+            mass_name: "m_s",
+            mass,
+            rate,
+            limit,
+        }) if s.model == Model::Corner => Err(FmiError::error(format!(
+            "invalid `static_load` = {} N: the body mass it stands for, static_load / g0 = {mass} kg, makes `{name}` = {value} over it ({rate} 1/s^2) exceed the numerical limit {limit} 1/s^2",
+            s.static_load
+        ))),
+        other => Ok(other?),
+    }
 }
 
 /// Most internal steps plus road breakpoints in one step (2^22).
@@ -141,6 +160,20 @@ pub fn non_finite_output(model: Model, outputs: &Outputs) -> Option<(&'static st
         .find_map(|v| match v.access {
             Access::Output(id) => {
                 let value = id.value(outputs);
+                (!value.is_finite()).then_some((v.name, value))
+            }
+            _ => None,
+        })
+}
+
+/// The first output of the running `chassis` that is not finite, with
+/// its value.
+pub fn non_finite_chassis_output(chassis: &Chassis) -> Option<(&'static str, f64)> {
+    variables_of(Model::Chassis, FmiVersion::Fmi2)
+        .iter()
+        .find_map(|v| match v.access {
+            Access::ChassisOutput(id) => {
+                let value = id.value(chassis);
                 (!value.is_finite()).then_some((v.name, value))
             }
             _ => None,

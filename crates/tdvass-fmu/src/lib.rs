@@ -59,6 +59,7 @@
 
 #![deny(unsafe_code)]
 
+pub mod chassis_outputs;
 pub mod defaults;
 pub mod entry;
 pub mod error;

@@ -6,6 +6,7 @@
 
 use crate::defaults::Model;
 use tdvass::TireContact;
+use tdvass::chassis::ChassisParams;
 use tdvass::metrics::Weights;
 use tdvass::model::{Body, Params, STANDARD_GRAVITY, State, Variant};
 use tdvass::road::{RandomRoad, RoadClass, RoadShift, RoadSpec, RoadType};
@@ -62,6 +63,14 @@ pub struct Settings {
     pub body_displacement: f64,
     /// The corner: the body's attachment point's velocity (m/s).
     pub body_velocity: f64,
+    /// The chassis: its mass, geometry, inertias and seat point.
+    pub chassis: ChassisParams,
+    /// The chassis: the corners' forces on the body (N), in the order of
+    /// [`tdvass::chassis::Corner::ALL`].
+    pub forces: [f64; 4],
+    /// The chassis: the forces' rates over the next communication step
+    /// (N/s; the input derivatives, 0 unless the master gives them).
+    pub force_rates: [f64; 4],
 }
 
 impl Settings {
@@ -111,6 +120,19 @@ impl Settings {
             road_phase: 0.0,
             body_displacement: 0.0,
             body_velocity: 0.0,
+            chassis: ChassisParams {
+                mass: 0.0,
+                a: 0.0,
+                b: 0.0,
+                track_front: 0.0,
+                track_rear: 0.0,
+                pitch_inertia: 0.0,
+                roll_inertia: 0.0,
+                seat_x: 0.0,
+                seat_y: 0.0,
+            },
+            forces: [0.0; 4],
+            force_rates: [0.0; 4],
         }
     }
 
@@ -119,7 +141,8 @@ impl Settings {
     /// [`tdvass::model::Body::Attached`]).
     pub fn params(&self) -> Params {
         match self.model {
-            Model::QuarterCar => self.params,
+            // The chassis has no suspension: its settings leave them alone.
+            Model::QuarterCar | Model::Chassis => self.params,
             Model::Corner => Params {
                 m_s: self.static_load / STANDARD_GRAVITY,
                 ..self.params
@@ -131,7 +154,7 @@ impl Settings {
     /// corner's body outside the model.
     pub fn body(&self) -> Body {
         match self.model {
-            Model::QuarterCar => Body::Mass,
+            Model::QuarterCar | Model::Chassis => Body::Mass,
             Model::Corner => Body::Attached,
         }
     }

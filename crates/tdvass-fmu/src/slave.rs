@@ -13,6 +13,7 @@ use crate::settings::Settings;
 use crate::variables::FmiVersion;
 use std::collections::HashMap;
 use std::fmt;
+use tdvass::chassis::Chassis;
 use tdvass::model::Params;
 use tdvass::solver::{DelayGrid, Simulator};
 
@@ -292,6 +293,15 @@ impl Slave {
         Ok(sim)
     }
 
+    /// The chassis of the current settings at the start time, the forces
+    /// applied (the parameters checked; an error names the one refused).
+    fn build_chassis(&self) -> Result<Chassis, FmiError> {
+        let s = &self.state.settings;
+        let mut chassis = Chassis::new(s.chassis, self.state.start_time)?;
+        chassis.set_forces(s.forces, s.force_rates)?;
+        Ok(chassis)
+    }
+
     /// `ExitInitializationMode`: validates every setting (an invalid
     /// one refuses the call, naming variable and value, and the instance
     /// stays in initialization mode), starts the simulation and checks
@@ -299,6 +309,9 @@ impl Slave {
     pub fn exit_initialization_mode(&mut self) -> Result<Status, FmiError> {
         if self.state.engine.is_model_exchange() {
             return self.exit_initialization_to_event_mode();
+        }
+        if self.model() == Model::Chassis {
+            return self.exit_initialization_of_chassis();
         }
         let sim = self.build_simulator()?;
         let grid = sim.grid();
@@ -330,6 +343,29 @@ impl Slave {
                 .unwrap_or_else(|| "not defined".into())
         ));
         Ok(self.stability_check(self.call("ExitInitializationMode")))
+    }
+
+    /// `ExitInitializationMode` of the chassis: its parameters checked, at
+    /// rest at the static equilibrium under the forces set.
+    fn exit_initialization_of_chassis(&mut self) -> Result<Status, FmiError> {
+        let chassis = self.build_chassis()?;
+        self.state.engine = Engine::Chassis(Some(Box::new(chassis)));
+        self.state.input_pending = false;
+        self.state.phase = Phase::StepComplete;
+        self.state.last_successful_time = self.state.start_time;
+        self.state.terminate_requested = false;
+        let p = self.state.settings.chassis;
+        self.event(format_args!(
+            "{}: chassis of {} kg, a = {} m, b = {} m, pitch inertia {} kg m2, roll inertia {} kg m2, start {} s",
+            self.call("ExitInitializationMode"),
+            p.mass,
+            p.a,
+            p.b,
+            p.pitch_inertia,
+            p.roll_inertia,
+            self.state.start_time
+        ));
+        Ok(Status::Ok)
     }
 
     /// Logs a warning (and returns `Warning`) when (g, tau) is unstable.
@@ -382,6 +418,7 @@ impl Slave {
         match &self.state.engine {
             Engine::ModelExchange(Some(model)) => model.time(),
             Engine::CoSimulation(Some(sim)) => sim.time(),
+            Engine::Chassis(Some(chassis)) => chassis.time(),
             _ => self.state.start_time,
         }
     }

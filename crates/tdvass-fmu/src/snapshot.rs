@@ -17,7 +17,8 @@
 //! `input_extrapolation`), the hold-warning and contact-loss flags, start and stop time, the tolerance, last successful time, the terminate
 //! flag, the Model Exchange model if any ([`ModelExchange::to_bytes`],
 //! after a flag and its length), then [`Simulator::to_bytes`] (time, solver state, the delay
-//! history, the road generator, the RMS accumulators, the configuration).
+//! history, the road generator, the RMS accumulators, the configuration)
+//! or, for the chassis, its force rates and [`Chassis::write_motion`].
 //! All numbers are little-endian; floats are stored as their bit patterns,
 //! so a restored state continues bit-identically.
 //!
@@ -33,6 +34,7 @@ use crate::settings::Settings;
 use crate::state::{Engine, SlaveState};
 use crate::variables::{Access, FmiVersion, by_vr, variables_of};
 use tdvass::bytes::{ByteReader, ByteWriter};
+use tdvass::chassis::Chassis;
 use tdvass::exchange::ModelExchange;
 use tdvass::solver::Simulator;
 
@@ -187,16 +189,50 @@ fn encode_payload(model: &SlaveState) -> Vec<u8> {
         }
         None => w.u8(0),
     }
-    match model.engine.simulator() {
-        Some(sim) => {
+    match (model.engine.simulator(), model.engine.chassis()) {
+        (Some(sim), _) => {
             let bytes = sim.to_bytes();
             w.u8(1);
             w.u64(bytes.len() as u64);
             w.raw(&bytes);
         }
-        None => w.u8(0),
+        (None, Some(chassis)) => {
+            let mut motion = ByteWriter::default();
+            model
+                .settings
+                .force_rates
+                .iter()
+                .for_each(|&rate| motion.f64(rate));
+            chassis.write_motion(&mut motion);
+            w.u8(1);
+            w.u64(motion.bytes.len() as u64);
+            w.raw(&motion.bytes);
+        }
+        (None, None) => w.u8(0),
     }
     w.bytes
+}
+
+/// The chassis's engine from `bytes` (the force rates, then its motion;
+/// [`encode_payload`]), its rates written into `settings`.
+fn decode_chassis(bytes: &[u8], settings: &mut Settings) -> Result<Chassis, FmiError> {
+    let mut r = ByteReader::new(bytes);
+    let mut rates = [0.0; 4];
+    for rate in rates.iter_mut() {
+        *rate = r.f64().map_err(invalid)?;
+        if !rate.is_finite() {
+            return Err(invalid(format_args!("a force rate {rate}")));
+        }
+    }
+    settings.force_rates = rates;
+    let chassis = Chassis::read_motion(settings.chassis, &mut r).map_err(invalid)?;
+    if !r.is_empty() {
+        return Err(invalid("trailing bytes after the chassis"));
+    }
+    if let Some((name, value)) = crate::guards::non_finite_chassis_output(&chassis) {
+        return Err(invalid(format_args!("output `{name}` = {value}")));
+    }
+    Ok(chassis)
 }
 
 fn decode_settings(r: &mut Reader, model: Model) -> Result<Settings, FmiError> {
@@ -309,6 +345,7 @@ fn decode_payload(bytes: &[u8], model: Model) -> Result<SlaveState, FmiError> {
     } else {
         None
     };
+    let mut chassis = None;
     let mut sim = if r.flag("simulator present")? {
         let len = r.u64("the simulator length")?;
         let bytes = r.rest();
@@ -318,7 +355,12 @@ fn decode_payload(bytes: &[u8], model: Model) -> Result<SlaveState, FmiError> {
                 bytes.len()
             )));
         }
-        Some(Simulator::from_bytes(bytes).map_err(invalid)?)
+        if model == Model::Chassis {
+            chassis = Some(decode_chassis(bytes, &mut settings)?);
+            None
+        } else {
+            Some(Simulator::from_bytes(bytes).map_err(invalid)?)
+        }
     } else {
         None
     };
@@ -330,14 +372,16 @@ fn decode_payload(bytes: &[u8], model: Model) -> Result<SlaveState, FmiError> {
         return Err(invalid("both a simulator and a Model Exchange model"));
     }
     let stepping_phase = matches!(phase, Phase::StepComplete | Phase::StepFailed);
-    if phase.is_simulating() != (sim.is_some() || exchange.is_some())
+    let stepper = sim.is_some() || chassis.is_some();
+    if phase.is_simulating() != (stepper || exchange.is_some())
         || (model_exchange_phase && exchange.is_none())
-        || (stepping_phase && sim.is_none())
+        || (stepping_phase && !stepper)
     {
-        let holding = match (&sim, &exchange) {
-            (Some(_), _) => "a simulator",
-            (None, Some(_)) => "a Model Exchange model",
-            (None, None) => "neither a simulator nor a Model Exchange model",
+        let holding = match (&sim, &exchange, &chassis) {
+            (Some(_), _, _) => "a simulator",
+            (None, Some(_), _) => "a Model Exchange model",
+            (None, None, Some(_)) => "a chassis",
+            (None, None, None) => "neither a simulator nor a Model Exchange model",
         };
         return Err(invalid(format_args!(
             "state {} with {holding}",
@@ -382,9 +426,10 @@ fn decode_payload(bytes: &[u8], model: Model) -> Result<SlaveState, FmiError> {
         terminate_requested,
         // The kind of a state from before initialization is not in its
         // bytes: the instance that restores it gives its own.
-        engine: match (sim, exchange) {
-            (_, Some(model)) => Engine::ModelExchange(Some(Box::new(model))),
-            (sim, None) => Engine::CoSimulation(sim.map(Box::new)),
+        engine: match (sim, exchange, chassis) {
+            (_, Some(model), _) => Engine::ModelExchange(Some(Box::new(model))),
+            (_, None, Some(chassis)) => Engine::Chassis(Some(Box::new(chassis))),
+            (sim, None, None) => Engine::CoSimulation(sim.map(Box::new)),
         },
     })
 }

@@ -6,6 +6,7 @@
 use crate::defaults::Model;
 use crate::phase::Phase;
 use crate::settings::Settings;
+use tdvass::chassis::Chassis;
 use tdvass::exchange::ModelExchange;
 use tdvass::solver::Simulator;
 
@@ -19,6 +20,8 @@ pub enum Engine {
     CoSimulation(Option<Box<Simulator>>),
     /// The master's solver integrates the states (`GetDerivatives`).
     ModelExchange(Option<Box<ModelExchange>>),
+    /// The chassis's exact rigid-body step (`DoStep`; [`Model::Chassis`]).
+    Chassis(Option<Box<Chassis>>),
 }
 
 impl Engine {
@@ -32,6 +35,7 @@ impl Engine {
         match self {
             Engine::CoSimulation(_) => Engine::CoSimulation(None),
             Engine::ModelExchange(_) => Engine::ModelExchange(None),
+            Engine::Chassis(_) => Engine::Chassis(None),
         }
     }
 
@@ -39,14 +43,16 @@ impl Engine {
     pub fn is_running(&self) -> bool {
         matches!(
             self,
-            Engine::CoSimulation(Some(_)) | Engine::ModelExchange(Some(_))
+            Engine::CoSimulation(Some(_))
+                | Engine::ModelExchange(Some(_))
+                | Engine::Chassis(Some(_))
         )
     }
 
     /// The kind's name in messages.
     pub fn kind_name(&self) -> &'static str {
         match self {
-            Engine::CoSimulation(_) => "Co-Simulation",
+            Engine::CoSimulation(_) | Engine::Chassis(_) => "Co-Simulation",
             Engine::ModelExchange(_) => "Model Exchange",
         }
     }
@@ -63,6 +69,22 @@ impl Engine {
     pub fn simulator_mut(&mut self) -> Option<&mut Simulator> {
         match self {
             Engine::CoSimulation(Some(sim)) => Some(sim),
+            _ => None,
+        }
+    }
+
+    /// The chassis, if it runs.
+    pub fn chassis(&self) -> Option<&Chassis> {
+        match self {
+            Engine::Chassis(Some(chassis)) => Some(chassis),
+            _ => None,
+        }
+    }
+
+    /// The chassis, if it runs.
+    pub fn chassis_mut(&mut self) -> Option<&mut Chassis> {
+        match self {
+            Engine::Chassis(Some(chassis)) => Some(chassis),
             _ => None,
         }
     }
@@ -124,9 +146,14 @@ pub struct SlaveState {
 }
 
 impl SlaveState {
-    /// A freshly instantiated `model` of the kind `engine` says: start
-    /// values, no simulation.
+    /// A freshly instantiated `model` of the kind `engine` says (the
+    /// chassis's own engine for a Co-Simulation chassis): start values, no
+    /// simulation.
     pub fn new(engine: Engine, model: Model) -> SlaveState {
+        let engine = match (model, engine) {
+            (Model::Chassis, Engine::CoSimulation(_)) => Engine::Chassis(None),
+            (_, engine) => engine.emptied(),
+        };
         SlaveState {
             phase: Phase::Instantiated,
             settings: Settings::start_values(model),
@@ -141,7 +168,7 @@ impl SlaveState {
             stop_time: None,
             last_successful_time: crate::defaults::DEFAULT_START_TIME,
             terminate_requested: false,
-            engine: engine.emptied(),
+            engine,
         }
     }
 }

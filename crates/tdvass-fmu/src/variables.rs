@@ -4,7 +4,9 @@
 //! followed by the FMI 3.0 additions: the quarter car's. The corner
 //! ([`Model::Corner`]) has the table's variables that are not
 //! [`Variable::quarter_car_only`] (and none of Model Exchange), then
-//! [`CORNER_ADDITIONS`]. [`variables_of`] gives a model's in a version, and
+//! [`CORNER_ADDITIONS`]. The chassis ([`Model::Chassis`]) has its own
+//! list, [`CHASSIS_VARIABLES`] (`variables/chassis.rs`), and FMI 3.0's
+//! `time`. [`variables_of`] gives a model's in a version, and
 //! [`by_vr`] and [`by_name`] search it.
 //!
 //! Each variable is declared once: name, value reference, causality,
@@ -23,6 +25,7 @@
 //! declaration of every variable (about 500 lines of data), and splitting it
 //! would scatter what must be read, and changed, in one place.
 
+use crate::chassis_outputs::ChassisOutputId;
 use crate::defaults::Model;
 use crate::error::FmiError;
 use crate::outputs::{IntegerOutputId, OutputId};
@@ -197,6 +200,22 @@ pub const UNITS: &[UnitDefinition] = &[
         base: &[],
         display: &[],
     },
+    // The chassis's angles, angular accelerations and moments of inertia.
+    UnitDefinition {
+        name: "rad",
+        base: &[("rad", 1)],
+        display: &[],
+    },
+    UnitDefinition {
+        name: "rad/s2",
+        base: &[("s", -2), ("rad", 1)],
+        display: &[],
+    },
+    UnitDefinition {
+        name: "kg.m2",
+        base: &[("kg", 1), ("m", 2)],
+        display: &[],
+    },
 ];
 
 /// Physical quantity of a Real variable: its `TypeDefinitions` entry
@@ -218,11 +237,19 @@ pub enum Quantity {
     Rate,
     /// ISO 2631-1 vibration dose value (m/s^1.75).
     VibrationDose,
+    /// An angle (rad): the chassis's pitch and roll.
+    Angle,
+    /// An angular velocity (rad/s).
+    AngularVelocity,
+    /// An angular acceleration (rad/s2).
+    AngularAcceleration,
+    /// A moment of inertia (kg m2).
+    Inertia,
 }
 
 impl Quantity {
     /// Every quantity that has a type definition, in declaration order.
-    pub const TYPED: [Quantity; 12] = [
+    pub const TYPED: [Quantity; 16] = [
         Quantity::Mass,
         Quantity::Stiffness,
         Quantity::Damping,
@@ -235,6 +262,10 @@ impl Quantity {
         Quantity::Frequency,
         Quantity::Rate,
         Quantity::VibrationDose,
+        Quantity::Angle,
+        Quantity::AngularVelocity,
+        Quantity::AngularAcceleration,
+        Quantity::Inertia,
     ];
 
     /// `(type name, quantity, unit)` of the `SimpleType`, `None` when dimensionless.
@@ -253,6 +284,12 @@ impl Quantity {
             Quantity::Frequency => ("Frequency", "Frequency", "Hz"),
             Quantity::Rate => ("GrowthRate", "GrowthRate", "1/s"),
             Quantity::VibrationDose => ("VibrationDose", "VibrationDose", "m/s1.75"),
+            Quantity::Angle => ("Angle", "Angle", "rad"),
+            Quantity::AngularVelocity => ("AngularVelocity", "AngularVelocity", "rad/s"),
+            Quantity::AngularAcceleration => {
+                ("AngularAcceleration", "AngularAcceleration", "rad/s2")
+            }
+            Quantity::Inertia => ("Inertia", "MomentOfInertia", "kg.m2"),
         })
     }
 
@@ -455,6 +492,8 @@ pub enum Access {
     },
     /// A Real output of the simulator.
     Output(OutputId),
+    /// A Real output of the chassis ([`Model::Chassis`]).
+    ChassisOutput(ChassisOutputId),
     /// An Integer output of the simulator (a count).
     IntegerOutput(IntegerOutputId),
     /// A calculated parameter.
@@ -536,6 +575,7 @@ impl Variable {
         match self.access {
             Access::Real { .. }
             | Access::Output(_)
+            | Access::ChassisOutput(_)
             | Access::Time
             | Access::ContinuousState(_)
             | Access::StateDerivative(_)
@@ -586,6 +626,8 @@ impl Variable {
         let states = match self.access {
             Access::Output(id) => id.state_dependencies(),
             Access::IntegerOutput(id) => id.state_dependencies(),
+            // The chassis offers no Model Exchange: no states to name.
+            Access::ChassisOutput(_) => 0..0,
             _ => return Vec::new(),
         };
         let inputs = self.feedthrough.iter().map(|name| {
@@ -614,6 +656,11 @@ impl Variable {
     /// follow the common variables in the table).
     pub fn is_in(&self, version: FmiVersion) -> bool {
         version == FmiVersion::Fmi3 || !self.fmi3_only
+    }
+
+    /// Whether the variable is the independent variable `time`.
+    fn access_is_time(&self) -> bool {
+        matches!(self.access, Access::Time)
     }
 
     const fn display(mut self, unit: &'static str) -> Variable {
@@ -646,9 +693,18 @@ impl Variable {
 pub fn variables_of(model: Model, version: FmiVersion) -> &'static [Variable] {
     static CORNER: [std::sync::OnceLock<Vec<Variable>>; 2] =
         [std::sync::OnceLock::new(), std::sync::OnceLock::new()];
+    static CHASSIS_FMI3: std::sync::OnceLock<Vec<Variable>> = std::sync::OnceLock::new();
     match (model, version) {
         (Model::QuarterCar, FmiVersion::Fmi2) => COMMON_VARIABLES,
         (Model::QuarterCar, FmiVersion::Fmi3) => FMI3_VARIABLES,
+        (Model::Chassis, FmiVersion::Fmi2) => chassis::CHASSIS_VARIABLES,
+        (Model::Chassis, FmiVersion::Fmi3) => CHASSIS_FMI3.get_or_init(|| {
+            chassis::CHASSIS_VARIABLES
+                .iter()
+                .chain(FMI3_VARIABLES.iter().filter(|v| v.access_is_time()))
+                .copied()
+                .collect()
+        }),
         (Model::Corner, _) => CORNER[slot(version)].get_or_init(|| {
             let shared = |v: &&Variable| !v.quarter_car_only && v.causality != Causality::Local;
             COMMON_VARIABLES
@@ -691,13 +747,15 @@ pub fn by_vr(model: Model, version: FmiVersion, vr: u32) -> Option<&'static Vari
 /// in use (at most 4096); built at the first lookup.
 fn vr_table(model: Model, version: FmiVersion) -> &'static [Option<&'static Variable>] {
     type Lookup = std::sync::OnceLock<Vec<Option<&'static Variable>>>;
-    static TABLES: [[Lookup; 2]; 2] = [
+    static TABLES: [[Lookup; 2]; 3] = [
+        [Lookup::new(), Lookup::new()],
         [Lookup::new(), Lookup::new()],
         [Lookup::new(), Lookup::new()],
     ];
     let model_slot = match model {
         Model::QuarterCar => 0,
         Model::Corner => 1,
+        Model::Chassis => 2,
     };
     TABLES[model_slot][slot(version)].get_or_init(|| {
         let variables = variables_of(model, version);
@@ -2104,6 +2162,7 @@ fn token_header(model: Model, version: &str) -> String {
     match model {
         Model::QuarterCar => format!("tdvass FMI {version} Co-Simulation interface\n"),
         Model::Corner => format!("tdvass corner FMI {version} Co-Simulation interface\n"),
+        Model::Chassis => format!("tdvass chassis FMI {version} Co-Simulation interface\n"),
     }
 }
 
@@ -2179,6 +2238,9 @@ impl Settings {
         s
     }
 }
+
+mod chassis;
+pub use chassis::CHASSIS_VARIABLES;
 
 #[cfg(test)]
 mod tests;

@@ -17,7 +17,10 @@ use std::path::Path;
 /// The modules of `crates/tdvass-fmu/src`, from the ground up.
 const CRATE_LAYERS: layering::Layers = &[
     ("ground", &["defaults", "error", "phase"]),
-    ("settings and outputs", &["settings", "outputs"]),
+    (
+        "settings and outputs",
+        &["settings", "outputs", "chassis_outputs"],
+    ),
     ("variable table", &["variables"]),
     ("guards and engine state", &["guards", "state"]),
     ("FMU states", &["snapshot"]),

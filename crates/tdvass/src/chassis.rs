@@ -21,7 +21,8 @@
 //! the accelerations are too and the step is exact: for the generalized
 //! accelerations `α_0 + α_1 s`, `q(t + δ) = q + q' δ + α_0 δ²/2 + α_1 δ³/6`.
 //! With `I_θ = m a b` (the default) a force at one axle moves the other
-//! axle's points not at all: front and rear decouple, and each corner of a
+//! axle's middle not at all (heave and pitch together; roll still moves
+//! the other axle's sides): front and rear decouple, and each corner of a
 //! car whose two tracks see the same road carries `m b / (a + b) / 2` (the
 //! front) as a quarter car's body would. A rigid body cannot decouple left
 //! from right (four corners, three degrees of freedom).
@@ -44,6 +45,7 @@
 //! imports the crate's `comfort`, `error`, `metrics` and the solver's
 //! `expm`.
 
+use crate::bytes::{ByteReader, ByteWriter};
 use crate::comfort::{WK_STATES, WkStateSpace, wk_state_space};
 use crate::error::{Error, Result};
 use crate::metrics::weighted_averages;
@@ -420,6 +422,72 @@ impl Chassis {
         self.integrals[WEIGHTED_FOURTH] += fourth * delta;
         let end = step.end * z;
         self.filter = end.fixed_rows::<WK_STATES>(0).into_owned();
+    }
+
+    /// The corners' forces now (N) and their rates (N/s), in the order of
+    /// [`Corner::ALL`].
+    pub fn forces(&self) -> ([f64; 4], [f64; 4]) {
+        (self.forces, self.force_rates)
+    }
+
+    /// Appends the motion (time, states, forces, filter, integrals; the
+    /// parameters are the caller's) to `w`: [`Chassis::read_motion`]
+    /// restores it bit for bit.
+    pub fn write_motion(&self, w: &mut ByteWriter) {
+        w.f64(self.start_time);
+        w.f64(self.time);
+        let filter: [f64; WK_STATES] = self.filter.into();
+        for values in [
+            &self.position[..],
+            &self.rate,
+            &self.forces,
+            &self.force_rates,
+            &filter,
+            &self.integrals,
+        ] {
+            values.iter().for_each(|&v| w.f64(v));
+        }
+    }
+
+    /// A chassis of `params` in the motion [`Chassis::write_motion`] wrote,
+    /// read from `r`. Every value must be finite, the integrals not
+    /// negative and the time not before the start.
+    pub fn read_motion(params: ChassisParams, r: &mut ByteReader) -> Result<Chassis> {
+        let mut chassis = Chassis::new(params, r.f64()?)?;
+        chassis.time = r.f64()?;
+        let mut filter = [0.0; WK_STATES];
+        for values in [
+            &mut chassis.position[..],
+            &mut chassis.rate,
+            &mut chassis.forces,
+            &mut chassis.force_rates,
+            &mut filter,
+            &mut chassis.integrals,
+        ] {
+            for v in values.iter_mut() {
+                *v = r.f64()?;
+            }
+        }
+        chassis.filter = SVector::from(filter);
+        let finite = [chassis.time]
+            .iter()
+            .chain(&chassis.position)
+            .chain(&chassis.rate)
+            .chain(&chassis.forces)
+            .chain(&chassis.force_rates)
+            .chain(&filter)
+            .chain(&chassis.integrals)
+            .all(|v| v.is_finite());
+        if !finite
+            || chassis.time < chassis.start_time
+            || chassis.integrals.iter().any(|&v| v < 0.0)
+        {
+            return Err(Error::InvalidState(
+                "the chassis's motion is not finite, runs backwards or has a negative integral"
+                    .into(),
+            ));
+        }
+        Ok(chassis)
     }
 
     /// The attachment point of `corner`: displacement (m) and velocity

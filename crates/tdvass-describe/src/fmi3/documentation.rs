@@ -1,9 +1,13 @@
 //! `documentation/index.html` of the FMI 3.0 FMU, generated from the one
 //! variable table and the declarations of the model description: the
-//! quarter car's, and the corner's shorter page ([`crate::corner`]).
+//! quarter car's, and the shorter pages of the corner and the chassis
+//! ([`crate::component`]).
 
-use super::{CO_SIMULATION_CAPABILITIES, MODEL_EXCHANGE_CAPABILITIES, enumerations, value_text};
-use crate::corner::{CornerPage, corner_page};
+use super::{
+    CO_SIMULATION_CAPABILITIES, MODEL_EXCHANGE_CAPABILITIES, co_simulation_capabilities,
+    enumerations, value_text,
+};
+use crate::component::{ComponentPage, component_page};
 use crate::markup::{
     MODEL_DESCRIPTION, REFERENCE_RESULTS, TIRE_CONTACT, XmlResult, XmlWriter, diagram, html_page,
     list, model_exchange_text, paragraph, table, text_element, unit_text, variable_table,
@@ -73,8 +77,9 @@ fn variable_row(v: &Variable) -> Vec<String> {
 pub fn documentation_html(model: Model) -> String {
     match model {
         Model::QuarterCar => html_page(&format!("{MODEL_NAME} FMI 3.0 FMU"), write_body),
-        Model::Corner => corner_page(&CornerPage {
-            version: "FMI 3.0",
+        Model::Corner | Model::Chassis => component_page(&ComponentPage {
+            model,
+            version: FmiVersion::Fmi3,
             identity: format!(
                 "instantiationToken {} (a hash of the variable names, value references, types, causalities, variabilities, enumeration types and array dimensions)",
                 instantiation_token(model)
@@ -84,8 +89,15 @@ pub fn documentation_html(model: Model) -> String {
                 .iter()
                 .map(variable_row)
                 .collect(),
-            after_variables: &|w| write_enumerations(w, model),
-            co_simulation: &CO_SIMULATION_CAPABILITIES,
+            // The chassis has no enumerations.
+            after_variables: &|w| {
+                if enumerations(model).is_empty() {
+                    Ok(())
+                } else {
+                    write_enumerations(w, model)
+                }
+            },
+            co_simulation: co_simulation_capabilities(model),
             specification: "Functional Mock-up Interface Specification, version 3.0.",
         }),
     }

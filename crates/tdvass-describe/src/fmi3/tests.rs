@@ -770,6 +770,234 @@ fn the_corner_documentation_describes_its_variables_and_enumerations() {
     assert!(html.contains("body_force (output, N)"));
 }
 
+/// Every model's description defines the Float64 types and units its
+/// variables use, each once, and no others; the enumerations are those of
+/// its variables.
+#[test]
+fn types_and_units_are_those_the_variables_use() {
+    for model in Model::ALL {
+        let els = elements(&model_description_xml(model));
+        let types: Vec<&str> = children(&els, "TypeDefinitions")
+            .iter()
+            .filter(|t| t.name == "Float64Type")
+            .map(|t| t.attr("name"))
+            .collect();
+        let units: Vec<&str> = children(&els, "UnitDefinitions")
+            .iter()
+            .map(|u| u.attr("name"))
+            .collect();
+        let vars = children(&els, "ModelVariables");
+        let declared: Vec<&str> = vars
+            .iter()
+            .filter(|v| v.name == "Float64")
+            .filter_map(|v| v.get("declaredType"))
+            .collect();
+        let used: Vec<&str> = vars.iter().filter_map(|v| v.get("unit")).collect();
+        for t in &types {
+            assert!(declared.contains(t), "{model:?}: {t} unused");
+            assert_eq!(types.iter().filter(|u| *u == t).count(), 1, "{t}");
+        }
+        for t in &declared {
+            assert!(types.contains(t), "{model:?}: {t} undefined");
+        }
+        for u in &units {
+            assert!(used.contains(u), "{model:?}: {u} unused");
+            assert_eq!(units.iter().filter(|v| *v == u).count(), 1, "{u}");
+        }
+        for u in &used {
+            assert!(units.contains(u), "{model:?}: {u} undefined");
+        }
+        let enumerations_declared = children(&els, "TypeDefinitions")
+            .iter()
+            .filter(|t| t.name == "EnumerationType")
+            .count();
+        assert_eq!(enumerations_declared, enumerations(model).len());
+    }
+    assert!(enumerations(Model::Chassis).is_empty());
+}
+
+/// The chassis's description: Co-Simulation only with its own
+/// capabilities (no derivatives, no intermediate update), its own name,
+/// token and variables (with `time`), and a ModelStructure of outputs and
+/// initial unknowns in which the accelerations depend on the forces.
+#[test]
+fn the_chassis_is_described_with_its_own_capabilities() {
+    let model = Model::Chassis;
+    let els = elements(&model_description_xml(model));
+    let root = &els[0];
+    assert_eq!(root.attr("fmiVersion"), "3.0");
+    assert_eq!(root.attr("modelName"), "TDVASS chassis");
+    assert_eq!(
+        root.attr("instantiationToken"),
+        instantiation_token(Model::Chassis)
+    );
+    for other in [Model::QuarterCar, Model::Corner] {
+        assert_ne!(root.attr("instantiationToken"), instantiation_token(other));
+    }
+    assert_eq!(root.attr("description"), crate::markup::CHASSIS_DESCRIPTION);
+    let top: Vec<&str> = children(&els, "fmiModelDescription")
+        .iter()
+        .map(|e| e.name.as_str())
+        .collect();
+    assert_eq!(
+        top,
+        [
+            "CoSimulation",
+            "UnitDefinitions",
+            "TypeDefinitions",
+            "LogCategories",
+            "DefaultExperiment",
+            "ModelVariables",
+            "ModelStructure"
+        ]
+    );
+    let cs = els.iter().find(|e| e.name == "CoSimulation").unwrap();
+    assert_eq!(cs.attr("modelIdentifier"), "tdvass");
+    assert_eq!(
+        cs.attributes.len(),
+        1 + CHASSIS_CO_SIMULATION_CAPABILITIES.len()
+    );
+    for (flag, value) in [
+        ("canHandleVariableCommunicationStepSize", "true"),
+        ("canGetAndSetFMUState", "true"),
+        ("canSerializeFMUState", "true"),
+        ("maxOutputDerivativeOrder", "0"),
+        ("providesDirectionalDerivatives", "false"),
+        ("providesAdjointDerivatives", "false"),
+        ("providesIntermediateUpdate", "false"),
+        ("mightReturnEarlyFromDoStep", "false"),
+        ("canReturnEarlyAfterIntermediateUpdate", "false"),
+        ("hasEventMode", "false"),
+    ] {
+        assert_eq!(cs.attr(flag), value, "{flag}");
+    }
+    let names = |c: &[(&str, &str)]| c.iter().map(|(n, _)| n.to_string()).collect::<Vec<_>>();
+    assert_eq!(
+        names(&CHASSIS_CO_SIMULATION_CAPABILITIES),
+        names(&CO_SIMULATION_CAPABILITIES)
+    );
+
+    let variables = variables_of(model, FmiVersion::Fmi3);
+    let vars = children(&els, "ModelVariables");
+    assert_eq!(vars.len(), variables.len());
+    for (v, el) in variables.iter().zip(&vars) {
+        assert_eq!(el.name, fmi3_type(v).as_str(), "{}", v.name);
+        assert_eq!(el.attr("name"), v.name);
+        assert_eq!(el.attr("valueReference"), v.vr.to_string());
+        assert_eq!(el.attr("causality"), v.causality.as_str());
+        assert!(el.get("intermediateUpdate").is_none(), "{}", v.name);
+        assert!(el.get("derivative").is_none(), "{}", v.name);
+    }
+    let time: Vec<&&Element> = vars
+        .iter()
+        .filter(|e| e.get("causality") == Some("independent"))
+        .collect();
+    assert_eq!(time.len(), 1);
+    assert_eq!(time[0].attr("name"), "time");
+    let inertia = vars
+        .iter()
+        .find(|e| e.attr("name") == "roll_inertia")
+        .unwrap();
+    assert_eq!(
+        (inertia.attr("declaredType"), inertia.attr("unit")),
+        ("Inertia", "kg.m2")
+    );
+
+    let structure = children(&els, "ModelStructure");
+    for e in &structure {
+        assert!(
+            e.name == "Output" || e.name == "InitialUnknown",
+            "{}",
+            e.name
+        );
+    }
+    let vr = |name: &str| vr_of(model, name);
+    let forces: Vec<u32> = ["force_fl", "force_fr", "force_rl", "force_rr"]
+        .iter()
+        .map(|n| vr(n))
+        .collect();
+    let by_vr = |vr: u32| variables.iter().find(|v| v.vr == vr).unwrap();
+    let outputs: Vec<&&Element> = structure.iter().filter(|e| e.name == "Output").collect();
+    let expected: Vec<String> = variables
+        .iter()
+        .filter(|v| v.causality == Causality::Output)
+        .map(|v| v.vr.to_string())
+        .collect();
+    let listed: Vec<&str> = outputs.iter().map(|e| e.attr("valueReference")).collect();
+    assert_eq!(listed, expected);
+    let feedthrough = [
+        "heave_acceleration",
+        "pitch_acceleration",
+        "roll_acceleration",
+        "seat_acceleration",
+        "weighted_seat_acceleration",
+    ];
+    for o in &outputs {
+        let v = by_vr(o.attr("valueReference").parse().unwrap());
+        let deps = vr_list_of(o.attr("dependencies"));
+        if feedthrough.contains(&v.name) {
+            assert_eq!(deps, forces, "{}", v.name);
+            assert_eq!(o.attr("dependenciesKind"), "fixed fixed fixed fixed");
+        } else {
+            assert!(deps.is_empty(), "{}", v.name);
+            assert!(o.get("dependenciesKind").is_none(), "{}", v.name);
+        }
+        let pairs: Vec<(u32, &str)> = deps
+            .iter()
+            .copied()
+            .zip(o.get("dependenciesKind").unwrap_or("").split_whitespace())
+            .collect();
+        assert_eq!(pairs, output_dependencies(model, v));
+    }
+    let initial: Vec<&&Element> = structure
+        .iter()
+        .filter(|e| e.name == "InitialUnknown")
+        .collect();
+    assert_eq!(initial.len(), outputs.len());
+    for u in &initial {
+        let v = by_vr(u.attr("valueReference").parse().unwrap());
+        assert_eq!(
+            vr_list_of(u.attr("dependencies")),
+            initial_dependencies(model, v),
+            "{}",
+            v.name
+        );
+    }
+}
+
+#[test]
+fn the_chassis_documentation_describes_its_variables_and_capabilities() {
+    let html = documentation_html(Model::Chassis);
+    assert!(html.starts_with("<!DOCTYPE html>"));
+    elements(html.trim_start_matches("<!DOCTYPE html>"));
+    assert!(html.contains("<title>TDVASS chassis FMI 3.0 FMU</title>"));
+    assert!(html.contains("TDVASS chassis: FMI 3.0 FMU (Co-Simulation)"));
+    assert!(html.contains("Co-Simulation only in this version: the chassis"));
+    assert!(html.contains(&instantiation_token(Model::Chassis)));
+    for v in variables_of(Model::Chassis, FmiVersion::Fmi3) {
+        assert!(html.contains(&format!("<td>{}</td>", v.name)), "{}", v.name);
+    }
+    for (flag, _) in CHASSIS_CO_SIMULATION_CAPABILITIES {
+        assert!(html.contains(&format!("<td>{flag}</td>")), "{flag}");
+    }
+    for text in [
+        "positive nose up",
+        "positive left side up",
+        "z + x theta + y phi",
+        "front and rear decouple",
+        "no algebraic loop",
+        "FMI 3.0 has no input derivatives",
+        "no intermediate update",
+    ] {
+        assert!(html.contains(text), "{text}");
+    }
+    // No enumerations to list, no Model Exchange, no input derivatives of
+    // FMI 2.0.
+    assert!(!html.contains("<h3>Enumerations</h3>"));
+    assert!(!html.contains("fmi3InstantiateModelExchange"));
+    assert!(!html.contains("fmi2SetRealInputDerivatives"));
+}
+
 /// The variable of a value reference given as text.
 fn by_vr_any(vr: &str) -> &'static Variable {
     let vr: u32 = vr.parse().unwrap();

@@ -4,6 +4,7 @@
 //! respect to the continuous states and the input.
 
 use super::Slave;
+use crate::defaults::Model;
 use crate::error::{FmiError, Status};
 use crate::outputs::{Known, Linearization, OutputId};
 use crate::variables::{Access, Causality, Variable, by_vr};
@@ -33,6 +34,11 @@ impl Slave {
     /// (`knowns`, the states addressed by the value references of the
     /// outputs `x_s` .. `v_t`).
     pub fn partials(&mut self, unknowns: &[u32], knowns: &[u32]) -> Result<Vec<f64>, FmiError> {
+        if self.model() == Model::Chassis {
+            return Err(FmiError::error(
+                "the chassis provides no directional derivatives (providesDirectionalDerivative = false)",
+            ));
+        }
         if self.state.engine.exchange().is_some() {
             return self.exchange_partials(unknowns, knowns);
         }

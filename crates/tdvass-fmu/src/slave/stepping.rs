@@ -2,7 +2,7 @@
 //! slope or extrapolated) and the output derivatives.
 
 use super::{HOLD_WARNING_STEP, Slave};
-use crate::defaults::TIME_TOLERANCE;
+use crate::defaults::{Model, TIME_TOLERANCE};
 use crate::error::{FmiError, Status};
 use crate::guards;
 use crate::phase::Phase;
@@ -76,6 +76,10 @@ impl Slave {
                 "a step of {h} s from {t} s ends at {target} s, past the stop time {stop} s"
             )));
         }
+        if self.state.engine.chassis().is_some() {
+            // The chassis's step is a closed form: the same work however long.
+            return Ok(target);
+        }
         let Some(sim) = self.state.engine.simulator() else {
             return Err(no_simulator());
         };
@@ -107,6 +111,9 @@ impl Slave {
     /// (s); then the outputs must be finite. A divergence is a `Discard`
     /// as described at [`Self::do_step`].
     pub fn advance_within_step(&mut self, until: f64, span: f64) -> Result<Status, FmiError> {
+        if self.state.engine.chassis().is_some() {
+            return self.advance_chassis(until);
+        }
         let now = self.time();
         let settings = self.state.settings;
         let pending = self.state.input_pending;
@@ -198,6 +205,28 @@ impl Slave {
         }
     }
 
+    /// The chassis to `until` under the forces on their course (each from
+    /// where it was last set, along its input derivative); then its
+    /// outputs must be finite.
+    fn advance_chassis(&mut self, until: f64) -> Result<Status, FmiError> {
+        let Some(chassis) = self.state.engine.chassis_mut() else {
+            return Err(no_simulator());
+        };
+        chassis.advance_to(until)?;
+        if let Some((name, value)) = guards::non_finite_chassis_output(chassis) {
+            self.state.terminate_requested = true;
+            self.state.phase = Phase::StepFailed;
+            return Err(FmiError::discard(format!(
+                "`{name}` = {value} is not finite at t = {until} s; the forces are too large for the chassis, {} is {} s, the FMU asks to terminate ({})",
+                self.dialect.last_successful_time,
+                self.state.last_successful_time,
+                self.dialect.terminate_flag
+            )));
+        }
+        self.state.last_successful_time = until;
+        Ok(Status::Ok)
+    }
+
     /// Logs (under `logEvents`) each lift-off of the unilateral tire since
     /// the last call: its time, the TDD then and the limit W/k_t it
     /// reached; those the simulator did not keep are counted in one more
@@ -281,7 +310,8 @@ impl Slave {
 
     /// `SetRealInputDerivatives`: order 1 of `x_g` sets the slope used
     /// from the current communication point on (until `x_g` or the slope is
-    /// set again). Higher orders, and the derivatives of the corner's body
+    /// set again); order 1 of a chassis's force, its rate over the next
+    /// step. Higher orders, and the derivatives of the corner's body
     /// inputs, are ignored with `Warning`.
     pub fn set_real_input_derivatives(
         &mut self,
@@ -289,6 +319,9 @@ impl Slave {
         orders: &[i32],
         values: &[f64],
     ) -> Result<Status, FmiError> {
+        if self.model() == Model::Chassis {
+            return self.set_force_derivatives(vrs, orders, values);
+        }
         let mut slope = None;
         let mut ignored = Vec::new();
         let mut body_ignored = Vec::new();
@@ -347,6 +380,54 @@ impl Slave {
         }
     }
 
+    /// `SetRealInputDerivatives` of the chassis: order 1 of a force is its
+    /// rate (N/s) from now on (until the force or its rate is set again);
+    /// every value is checked before any is applied; higher orders are
+    /// ignored with `Warning`.
+    fn set_force_derivatives(
+        &mut self,
+        vrs: &[u32],
+        orders: &[i32],
+        values: &[f64],
+    ) -> Result<Status, FmiError> {
+        let mut rates = self.state.settings.force_rates;
+        let mut ignored = Vec::new();
+        for ((&vr, &order), &value) in vrs.iter().zip(orders).zip(values) {
+            let var = self.variable(vr, VarType::Real)?;
+            let Some(i) = force_index(var.name) else {
+                return Err(FmiError::error(format!(
+                    "`{}` is not an input; only the derivatives of the forces can be set",
+                    var.name
+                )));
+            };
+            if order < 1 || !value.is_finite() {
+                return Err(FmiError::error(format!(
+                    "invalid order-{order} derivative {value} of `{}`: the order must be >= 1 and the value finite",
+                    var.name
+                )));
+            }
+            if order == 1 {
+                rates[i] = value;
+            } else {
+                ignored.push((var.name, order));
+            }
+        }
+        self.state.settings.force_rates = rates;
+        // The running chassis ramps each force from where it is now.
+        if let Some(chassis) = self.state.engine.chassis_mut() {
+            let (forces, _) = chassis.forces();
+            chassis.set_forces(forces, rates)?;
+        }
+        if ignored.is_empty() {
+            return Ok(Status::Ok);
+        }
+        self.warning(format_args!(
+            "{}: derivatives {ignored:?} ignored (a force is linear over a step)",
+            self.call(self.dialect.set_input_derivatives)
+        ));
+        Ok(Status::Warning)
+    }
+
     /// `GetRealOutputDerivatives` (order 1 only).
     pub fn get_real_output_derivatives(
         &mut self,
@@ -354,6 +435,11 @@ impl Slave {
         orders: &[i32],
         values: &mut [f64],
     ) -> Result<Status, FmiError> {
+        if self.model() == Model::Chassis {
+            return Err(FmiError::error(
+                "the chassis declares no output derivatives (maxOutputDerivativeOrder = 0)",
+            ));
+        }
         let Some(sim) = self.state.engine.simulator_mut() else {
             return Err(no_simulator());
         };
@@ -393,6 +479,14 @@ impl Slave {
         }
         Ok(Status::Ok)
     }
+}
+
+/// The index among the chassis's forces ([`tdvass::chassis::Corner::ALL`])
+/// of the input `name`, if it is one.
+pub(super) fn force_index(name: &str) -> Option<usize> {
+    tdvass::chassis::Corner::ALL
+        .iter()
+        .position(|corner| corner.force_name() == name)
 }
 
 /// The refusal of a co-simulation call without a simulator: a Model

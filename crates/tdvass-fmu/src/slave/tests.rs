@@ -744,4 +744,5 @@ fn a_model_exchange_state_round_trips_and_stays_with_its_interface() {
     );
 }
 
+mod chassis;
 mod corner;

@@ -2,6 +2,7 @@
 //! limit checks, and tunable parameters reaching the running simulation.
 
 use super::{Engine, Slave, SpectrumCache};
+use crate::chassis_outputs::ChassisOutputId;
 use crate::error::{FmiError, Status};
 use crate::guards;
 use crate::outputs::OutputId;
@@ -146,6 +147,15 @@ impl Slave {
         })
     }
 
+    /// The chassis's output `id` now: of the running chassis, or during
+    /// initialization of one built from the current settings.
+    fn chassis_output(&self, id: ChassisOutputId) -> Result<f64, FmiError> {
+        if let Some(chassis) = self.state.engine.chassis() {
+            return Ok(id.value(chassis));
+        }
+        Ok(id.value(&self.build_chassis()?))
+    }
+
     /// The value of output `id` now. The outputs of one getter call are
     /// computed once (`read.outputs`); a call that asks only for time
     /// averages, or only for instantaneous outputs, computes those alone
@@ -277,6 +287,7 @@ impl Slave {
                 Access::Real { get, .. } => slots[0] = get(&self.state.settings),
                 Access::Time => slots[0] = self.time(),
                 Access::Output(id) => slots[0] = self.output_value(id, &mut read)?,
+                Access::ChassisOutput(id) => slots[0] = self.chassis_output(id)?,
                 Access::ContinuousState(i) => slots[0] = self.continuous_states()?[i],
                 Access::StateDerivative(i) => slots[0] = self.state_derivatives()?[i],
                 Access::EventIndicator(i) => slots[0] = self.event_indicator_values()?[i],
@@ -405,6 +416,18 @@ impl Slave {
             unreachable!("only settable Reals get here")
         };
         set(&mut self.state.settings, value);
+        if let Some(i) = super::stepping::force_index(var.name) {
+            // A force set anew holds from now on unless its derivative is
+            // given again; the running chassis takes it at once (its
+            // accelerations depend on it directly).
+            self.state.settings.force_rates[i] = 0.0;
+            if let Some(chassis) = self.state.engine.chassis_mut() {
+                let (mut forces, mut rates) = chassis.forces();
+                forces[i] = value;
+                rates[i] = 0.0;
+                chassis.set_forces(forces, rates)?;
+            }
+        }
         let weights = self.state.settings.weights();
         match (var.name, self.state.engine.simulator_mut()) {
             ("x_g", _) => {
@@ -437,11 +460,14 @@ impl Slave {
     /// `g`: the checks look each variable up again instead of collecting
     /// them.
     pub fn set_real(&mut self, vrs: &[u32], values: &[f64]) -> Result<Status, FmiError> {
+        let mut tunes = false;
         for (&vr, &value) in vrs.iter().zip(values) {
             let var = self.variable(vr, VarType::Real)?;
             self.check_settable(var, value)?;
+            tunes |= var.causality == Causality::Parameter;
         }
-        if self.state.phase.is_simulating() {
+        // Only a tuned parameter can change the rates (inputs cannot).
+        if tunes && self.state.phase.is_simulating() {
             let mut candidate = self.state.settings;
             for (&vr, &value) in vrs.iter().zip(values) {
                 if let Access::Real { set, .. } = self.variable(vr, VarType::Real)?.access {
@@ -451,10 +477,21 @@ impl Slave {
             guards::check_rates(&candidate)?;
         }
         let mut gain_tuned = false;
+        let mut body_moved = false;
         for (&vr, &value) in vrs.iter().zip(values) {
             let var = self.variable(vr, VarType::Real)?;
             gain_tuned |= var.name == "g" && self.state.settings.params.g != value;
+            body_moved |= matches!(var.name, "body_displacement" | "body_velocity");
             self.apply_real(var, value)?;
+        }
+        // The corner's body attachment reaches the running simulation at
+        // once (body_force depends on it directly), both inputs together.
+        if let (true, Some(sim), Some((displacement, velocity))) = (
+            body_moved,
+            self.state.engine.simulator_mut(),
+            self.state.settings.body_input(),
+        ) {
+            sim.set_body_input(displacement, velocity)?;
         }
         if gain_tuned && self.state.phase.is_simulating() {
             return Ok(self.stability_check(self.call(self.dialect.set_float)));

@@ -161,8 +161,17 @@ fn table_ranges_are_the_ones_the_model_enforces() {
 
 #[test]
 fn every_variable_is_readable_and_settings_round_trip() {
-    let mut s = Settings::start_values(Model::QuarterCar);
-    for (i, v) in FMI3_VARIABLES.iter().enumerate() {
+    for model in Model::ALL {
+        settings_round_trip(model);
+    }
+}
+
+/// Every variable of `model` is readable, and its settings are distinct
+/// fields.
+fn settings_round_trip(model: Model) {
+    let variables = variables_of(model, FmiVersion::Fmi3);
+    let mut s = Settings::start_values(model);
+    for (i, v) in variables.iter().enumerate() {
         match v.access {
             Access::Real { get, set } => {
                 set(&mut s, 1000.0 + i as f64);
@@ -172,7 +181,7 @@ fn every_variable_is_readable_and_settings_round_trip() {
                 set(&mut s, 1000 + i as i32);
                 assert_eq!(get(&s), 1000 + i as i32, "{}", v.name);
             }
-            Access::Output(_) | Access::IntegerOutput(_) => {
+            Access::Output(_) | Access::IntegerOutput(_) | Access::ChassisOutput(_) => {
                 assert_eq!(v.causality, Causality::Output)
             }
             Access::Calculated(_) => assert_eq!(v.causality, Causality::CalculatedParameter),
@@ -183,7 +192,7 @@ fn every_variable_is_readable_and_settings_round_trip() {
         }
     }
     // Distinct fields: every value written is still there.
-    for (i, v) in FMI3_VARIABLES.iter().enumerate() {
+    for (i, v) in variables.iter().enumerate() {
         match v.access {
             Access::Real { get, .. } => assert_eq!(get(&s), 1000.0 + i as f64, "{}", v.name),
             Access::Integer { get, .. } => assert_eq!(get(&s), 1000 + i as i32, "{}", v.name),

@@ -182,3 +182,33 @@ fn bad_parameters_and_inputs_are_refused_by_name() {
     );
     assert_eq!(chassis.outputs().position, [0.0; 3]);
 }
+
+#[test]
+fn a_saved_motion_restores_and_continues_bit_for_bit() {
+    let p = ChassisParams::default();
+    let mut chassis = Chassis::new(p, 0.5).unwrap();
+    chassis
+        .set_forces([120.0, -40.0, 75.0, 10.0], [300.0, 0.0, -50.0, 20.0])
+        .unwrap();
+    for i in 1..=20 {
+        chassis.advance_to(0.5 + 1e-3 * i as f64).unwrap();
+    }
+    let mut w = ByteWriter::default();
+    chassis.write_motion(&mut w);
+    let mut r = ByteReader::new(&w.bytes);
+    let mut restored = Chassis::read_motion(p, &mut r).unwrap();
+    assert!(r.is_empty());
+    for c in [&mut chassis, &mut restored] {
+        c.set_forces([10.0, 20.0, 30.0, 40.0], [0.0; 4]).unwrap();
+        c.advance_to(0.6).unwrap();
+    }
+    assert_eq!(
+        format!("{:?}", chassis.outputs()),
+        format!("{:?}", restored.outputs())
+    );
+    // Truncated or non-finite bytes are refused.
+    assert!(Chassis::read_motion(p, &mut ByteReader::new(&w.bytes[..40])).is_err());
+    let mut bad = w.bytes.clone();
+    bad[16..24].copy_from_slice(&f64::NAN.to_bits().to_le_bytes());
+    assert!(Chassis::read_motion(p, &mut ByteReader::new(&bad)).is_err());
+}
