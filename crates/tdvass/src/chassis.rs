@@ -229,6 +229,9 @@ const GAUSS: [(f64, f64); 5] = [
     (0.953_089_922_969_332, 0.118_463_442_528_094_54),
 ];
 
+/// How many step lengths the chassis keeps the filter's maps of.
+const FILTER_STEPS: usize = 4;
+
 /// The W_k filter with a linear input: `[w; u; u']`.
 type FilterInput = SMatrix<f64, { WK_STATES + 2 }, { WK_STATES + 2 }>;
 
@@ -297,8 +300,12 @@ pub struct Chassis {
     filter: SVector<f64, WK_STATES>,
     /// `∫ z''², ∫ θ''², ∫ φ''², ∫ a_w², ∫ a_w⁴` from the start.
     integrals: [f64; 5],
-    /// The filter's maps over the last step length taken.
-    step: Option<Box<FilterStep>>,
+    /// The filter's maps over the last [`FILTER_STEPS`] step lengths taken
+    /// (a master whose clock counts nanoseconds alternates between two
+    /// lengths a rounding apart), the oldest replaced first.
+    steps: Vec<FilterStep>,
+    /// Where the next new length goes in `steps`.
+    next_step: usize,
 }
 
 impl Chassis {
@@ -324,7 +331,8 @@ impl Chassis {
             force_rates: [0.0; 4],
             filter: SVector::zeros(),
             integrals: [0.0; 5],
-            step: None,
+            steps: Vec::with_capacity(FILTER_STEPS),
+            next_step: 0,
         })
     }
 
@@ -402,10 +410,20 @@ impl Chassis {
     /// The W_k filter over `delta` with the input `u0 + u1 s`, and the
     /// integrals of a_w² and a_w⁴ over it.
     fn filter_step(&mut self, delta: f64, u0: f64, u1: f64) {
-        let step: &FilterStep = match &mut self.step {
-            Some(step) if step.length == delta => step,
-            slot => slot.insert(Box::new(filter_maps(&self.wk, delta))),
+        let at = match self.steps.iter().position(|step| step.length == delta) {
+            Some(at) => at,
+            None => {
+                let maps = filter_maps(&self.wk, delta);
+                let at = self.next_step;
+                self.next_step = (at + 1) % FILTER_STEPS;
+                match self.steps.get_mut(at) {
+                    Some(slot) => *slot = maps,
+                    None => self.steps.push(maps),
+                }
+                at
+            }
         };
+        let step = &self.steps[at];
         let mut z = SVector::<f64, { WK_STATES + 2 }>::zeros();
         z.fixed_rows_mut::<WK_STATES>(0).copy_from(&self.filter);
         z[WK_STATES] = u0;
