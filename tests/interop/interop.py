@@ -382,6 +382,8 @@ def record(master: str, experiment: str, against: str, result: Agreement | str, 
 
 def summary_lines() -> list[str]:
     lines = []
+    if not _summary:
+        return lines
     width = max(len(row["master"]) for row in _summary)
     for row in _summary:
         note = f" [{row['note']}]" if row["note"] else ""

@@ -37,6 +37,7 @@ PICTURES = {
     "sweep_dask.py": ["sweep_dask.png"],
     "plot_result.py": ["plot_result.png"],
     "lift_off.py": ["lift_off.png"],
+    "full_car.py": ["full_car.png"],
 }
 # examples that are not `--quick --out` scripts
 NOT_SCRIPTS = {"default_experiment.py"}
