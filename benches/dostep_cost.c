@@ -27,9 +27,13 @@
  * under the same load, which separate runs on a shared machine do not.
  *
  * The third form runs CALLS calls of case N alone (0 aligned, 1 1 ms with
- * t += h, 2 0.7 ms, 3 9.9e-5 s, 4 1e-7 s, 5 varying), for an instruction
- * count: under callgrind, the difference of two CALLS over their
- * difference is the cost of one call.
+ * t += h, 2 0.7 ms, 3 9.9e-5 s, 4 1e-7 s, 5 varying; 6, for the corner's
+ * GUID only: 1 ms with t += h, the body's attachment point set before
+ * every step, moving as 1 mm sin(2 pi 1.5 Hz t), as a chassis moves it;
+ * 7, for the quarter car's GUID: the same with the road input, road = 0
+ * and x_g set so before every step),
+ * for an instruction count: under callgrind, the difference of two CALLS
+ * over their difference is the cost of one call.
  *
  * Figures in BENCHMARKS.md.
  */
@@ -67,10 +71,15 @@ typedef struct {
     fmi2Status (*exit_init)(fmi2Component);
     fmi2Status (*do_step)(fmi2Component, double, double, int);
     fmi2Status (*set_real)(fmi2Component, const unsigned *, size_t, const double *);
+    fmi2Status (*set_integer)(fmi2Component, const unsigned *, size_t, const int *);
 } Library;
 
 /* Value reference of max_internal_step. */
 static const unsigned MAX_INTERNAL_STEP = 20;
+/* Value references of the corner's body_displacement and body_velocity. */
+static const unsigned BODY_INPUTS[2] = {143, 144};
+/* Value references of the quarter car's road (Integer) and x_g. */
+static const unsigned ROAD = 12, ROAD_INPUT = 30;
 /* The default experiment's internal step at the default tolerance. */
 static const double DEFAULT_INTERNAL_STEP = 1e-3;
 /* The step sizes of the varying master (s), taken in turn. */
@@ -99,6 +108,7 @@ static Library load(const char *path) {
     *(void **)&l.exit_init = symbol(lib, "fmi2ExitInitializationMode");
     *(void **)&l.do_step = symbol(lib, "fmi2DoStep");
     *(void **)&l.set_real = symbol(lib, "fmi2SetReal");
+    *(void **)&l.set_integer = symbol(lib, "fmi2SetInteger");
     return l;
 }
 
@@ -110,11 +120,15 @@ static double now(void) {
 
 /* Seconds per fmi2DoStep with step h (h < 0: the varying master) over
  * `calls` calls (0: 15 s, at most 200 000 calls); `accumulate`: t += h;
- * `bound`: the max_internal_step set before initialization (0: none). */
-static double run(const Library *l, const char *guid, double h, int accumulate, double bound,
-                  long calls) {
+ * `bound`: the max_internal_step set before initialization (0: none);
+ * `body`: 1, the corner's body inputs set before every step; 2, the
+ * quarter car's road input. */
+static double run_body(const Library *l, const char *guid, double h, int accumulate, double bound,
+                       long calls, int body) {
     fmi2Component c = l->instantiate("bench", 1, guid, NULL, &callbacks, 0, 0);
-    if (!c || l->set_real(c, &MAX_INTERNAL_STEP, 1, &bound) || l->setup(c, 0, 0.0, 0.0, 0, 0.0) ||
+    const int road_input = 0;
+    if (!c || l->set_real(c, &MAX_INTERNAL_STEP, 1, &bound) ||
+        (body == 2 && l->set_integer(c, &ROAD, 1, &road_input)) || l->setup(c, 0, 0.0, 0.0, 0, 0.0) ||
         l->enter_init(c) || l->exit_init(c)) {
         fprintf(stderr, "cannot start an instance\n");
         exit(1);
@@ -126,6 +140,16 @@ static double run(const Library *l, const char *guid, double h, int accumulate, 
     double start = now();
     for (long k = 0; k < n; k++) {
         double step = h > 0 ? h : VARYING[k % 7];
+        if (body) {
+            const double w = 2.0 * 3.141592653589793 * 1.5;
+            const double motion[2] = {1e-3 * __builtin_sin(w * t), 1e-3 * w * __builtin_cos(w * t)};
+            int refused = body == 1 ? l->set_real(c, BODY_INPUTS, 2, motion)
+                                    : l->set_real(c, &ROAD_INPUT, 1, motion);
+            if (refused) {
+                fprintf(stderr, "fmi2SetReal of the inputs failed (the GUID of another model?)\n");
+                exit(1);
+            }
+        }
         if (l->do_step(c, t, step, 1) != 0) {
             fprintf(stderr, "fmi2DoStep failed at t = %g\n", t);
             exit(1);
@@ -135,6 +159,11 @@ static double run(const Library *l, const char *guid, double h, int accumulate, 
     double seconds = (now() - start) / n;
     l->free_instance(c);
     return seconds;
+}
+
+static double run(const Library *l, const char *guid, double h, int accumulate, double bound,
+                  long calls) {
+    return run_body(l, guid, h, accumulate, bound, calls, 0);
 }
 
 static double fastest(const Library *l, const char *guid, double h, int accumulate, double bound,
@@ -202,12 +231,19 @@ static int interleaved(int argc, char **argv) {
 static int one_case(int argc, char **argv) {
     int which = argc == 6 ? atoi(argv[2]) : -1;
     long calls = argc == 6 ? atol(argv[4]) : 0;
-    if (which < 0 || which >= CASES || calls <= 0) {
+    if (which < 0 || which > CASES + 1 || calls <= 0) {
         fprintf(stderr, "usage: %s --case N GUID CALLS LIB (N in 0..%d, CALLS > 0)\n", argv[0],
-                CASES - 1);
+                CASES + 1);
         return 2;
     }
     Library l = load(argv[5]);
+    if (which >= CASES) {
+        int body = which - CASES + 1;
+        double s = run_body(&l, argv[3], 1e-3, 1, 0.0, calls, body);
+        printf("1 ms, t += h, %s: %.3f us per call\n",
+               body == 1 ? "body moving (corner)" : "road input moving (quarter car)", s * 1e6);
+        return 0;
+    }
     double s = run(&l, argv[3], CASE_STEP[which], CASE_ACCUMULATED[which], 0.0, calls);
     printf("%s: %.3f us per call\n", CASE_NAME[which], s * 1e6);
     return 0;
