@@ -1029,7 +1029,7 @@ const CORNER_TIRE_DEFLECTION_DEPENDENCIES: &[&str] = &[
 ];
 
 /// An input of the corner's body attachment point (its value and slope
-/// held over a step like `x_g`'s).
+/// the line the attachment follows from where it is set).
 const fn body_input(
     name: &'static str,
     vr: u32,
@@ -1103,7 +1103,7 @@ pub const CORNER_ADDITIONS: &[Variable] = &[
         Q::Length,
         real!(body_displacement),
         Bound::Displacement,
-        "The body's attachment point: its displacement from the static equilibrium, positive up; over a communication step it moves at body_velocity",
+        "The body's attachment point: its displacement from the static equilibrium, positive up; from the time it is set the attachment moves at body_velocity until either input is set again",
     ),
     body_input(
         "body_velocity",
@@ -1111,7 +1111,7 @@ pub const CORNER_ADDITIONS: &[Variable] = &[
         Q::Velocity,
         real!(body_velocity),
         Bound::Velocity,
-        "The body's attachment point: its velocity, positive up (held over a communication step)",
+        "The body's attachment point: its velocity, positive up (from the time it is set, until either input is set again)",
     ),
     output(
         "body_force",

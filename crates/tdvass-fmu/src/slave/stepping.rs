@@ -131,11 +131,6 @@ impl Slave {
             self.state.previous_input = Some((now, settings.x_g));
         }
         self.state.input_pending = false;
-        // The corner's body attachment point as last set: it moves at its
-        // velocity from here (setting it unchanged commits nothing).
-        if let Some((displacement, velocity)) = settings.body_input() {
-            sim.set_body_input(displacement, velocity)?;
-        }
         let advanced = sim.advance_to(until);
         // The lift-offs up to where the simulation stopped, whatever the
         // outcome.
@@ -363,7 +358,7 @@ impl Slave {
         }
         if !body_ignored.is_empty() {
             self.warning(format_args!(
-                "{}: the derivatives of {body_ignored:?} are ignored: the body's attachment point moves at body_velocity from body_displacement over each communication step",
+                "{}: the derivatives of {body_ignored:?} are ignored: the body's attachment point moves at body_velocity from body_displacement, from where they were set",
                 self.call(self.dialect.set_input_derivatives)
             ));
         }

@@ -262,3 +262,24 @@ fn the_token_picks_the_model_and_a_model_exchange_corner_is_refused() {
         "{messages:?}"
     );
 }
+
+/// Body inputs set once carry the attachment along their line over the
+/// steps that follow, until they are set again; a body at rest stays put.
+#[test]
+fn the_attachment_follows_its_line_until_set_again() {
+    let mut s = started_corner(&[("road_amplitude", 0.0)]);
+    let (z, v) = (corner_vr("body_displacement"), corner_vr("body_velocity"));
+    s.set_real(&[z, v], &[0.01, 0.2]).unwrap();
+    let attachment = |s: &mut Slave| corner_get(s, "suspension_deflection") + corner_get(s, "x_t");
+    for k in 1..=10 {
+        s.do_step((k - 1) as f64 * 1e-3, 1e-3).unwrap();
+        let expected = 0.01 + 0.2 * k as f64 * 1e-3;
+        assert!((attachment(&mut s) - expected).abs() < 1e-15, "{k}");
+    }
+    s.set_real(&[v], &[0.0]).unwrap();
+    let held = attachment(&mut s);
+    for k in 10..20 {
+        s.do_step(k as f64 * 1e-3, 1e-3).unwrap();
+        assert_eq!(attachment(&mut s).to_bits(), held.to_bits(), "{k}");
+    }
+}
