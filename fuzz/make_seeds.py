@@ -60,6 +60,24 @@ def main():
     inst.lib.fmi2GetFMUstate(inst.c, fmi2.byref(state))
     save("terminated", inst, state)
     inst.free()
+    # The corner (mode bits 0x40) and the chassis (0x80), the same library:
+    # a running state with its inputs set.
+    for name, fmu, mode, values, inputs in (
+        ("corner", fmi2.corner_fmu_file(), 0x41, {"road_delay": 0.05, "road_phase": 0.3},
+         {"body_displacement": 0.002, "body_velocity": -0.01}),
+        ("chassis", fmi2.fmu_file().with_name("tdvass-chassis.fmu"), 0x81, {},
+         {"force_fl": 300.0, "force_rr": -120.0}),
+    ):
+        inst = fmi2.Instance(lib, fmu=fmu)
+        inst.initialize(stop=10.0, **values)
+        assert inst.set(**inputs) == fmi2.OK, inst.log.last()
+        assert inst.step(0.0123) == fmi2.OK, inst.log.last()
+        status, state = inst.get_state()
+        data = inst.serialize(state)
+        at, _ = fmi2.serialized_fields(data)
+        (out / f"seed-{name}").write_bytes(bytes([mode, 0x1B]) + data[at:])
+        written += 1
+        inst.free()
     print(f"{written} seeds in {out}")
 
 

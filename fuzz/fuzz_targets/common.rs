@@ -49,14 +49,28 @@ pub fn callbacks() -> fmi2CallbackFunctions {
     }
 }
 
-/// The GUID as a C string.
+/// The quarter car's GUID as a C string.
 pub fn guid() -> std::ffi::CString {
-    std::ffi::CString::new(tdvass_fmi2::guid(tdvass_fmi2::Model::QuarterCar)).unwrap()
+    guid_of(tdvass_fmi2::Model::QuarterCar)
 }
 
-/// A Co-Simulation instance (NULL if refused).
+/// The GUID of `model` as a C string.
+pub fn guid_of(model: tdvass_fmi2::Model) -> std::ffi::CString {
+    std::ffi::CString::new(tdvass_fmi2::guid(model)).unwrap()
+}
+
+/// A Co-Simulation instance of the quarter car (NULL if refused).
 pub fn instantiate(callbacks: &fmi2CallbackFunctions, logging: bool) -> fmi2Component {
-    let guid = guid();
+    instantiate_model(callbacks, logging, tdvass_fmi2::Model::QuarterCar)
+}
+
+/// A Co-Simulation instance of `model` (NULL if refused).
+pub fn instantiate_model(
+    callbacks: &fmi2CallbackFunctions,
+    logging: bool,
+    model: tdvass_fmi2::Model,
+) -> fmi2Component {
+    let guid = guid_of(model);
     // SAFETY: valid strings and callbacks that outlive the instance.
     unsafe {
         fmi2Instantiate(
@@ -191,9 +205,19 @@ pub fn value_reference(b: &mut Bytes) -> u32 {
     }
 }
 
-/// Every output is finite.
+/// Every output of the quarter car is finite.
 pub fn assert_outputs_finite(c: fmi2Component) {
-    let vrs: Vec<u32> = (31..=46).collect();
+    assert_outputs_of_finite(c, tdvass_fmi2::Model::QuarterCar);
+}
+
+/// Every Real output of `model` is finite.
+pub fn assert_outputs_of_finite(c: fmi2Component, model: tdvass_fmi2::Model) {
+    use tdvass_fmi2::variables::{Causality, FmiVersion, VarType, variables_of};
+    let vrs: Vec<u32> = variables_of(model, FmiVersion::Fmi2)
+        .iter()
+        .filter(|v| v.causality == Causality::Output && v.var_type() == VarType::Real)
+        .map(|v| v.vr)
+        .collect();
     let mut values = vec![f64::NAN; vrs.len()];
     for (vr, value) in vrs.iter().zip(values.iter_mut()) {
         // SAFETY: one value reference, one value.

@@ -3,8 +3,10 @@
 //! The first byte chooses how the rest is used: as a whole serialized state
 //! (envelope included), or (most of the time) as a payload put behind a
 //! valid header with the right CRC, so that the fuzzer reaches the checks of
-//! the content; and (bit 0x20) whether a Co-Simulation or a Model Exchange
-//! instance reads it. An accepted state must serialize again to bytes that
+//! the content; (bit 0x20) whether a Co-Simulation or a Model Exchange
+//! instance reads it; and (bits 0xc0) the model of the instance and of the
+//! header: the quarter car, the corner or the chassis (these two
+//! Co-Simulation only). An accepted state must serialize again to bytes that
 //! are accepted and reproduce themselves; it is then set and stepped
 //! (fmi2DoStep, or explicit Euler steps of a Model Exchange master, after
 //! whatever event handling its state allows), and every output must stay
@@ -16,11 +18,12 @@ mod common;
 
 use common::*;
 use libfuzzer_sys::fuzz_target;
+use tdvass_fmi2::Model;
 use tdvass_fmi2::snapshot;
 
-/// `payload` behind a valid header of this FMU.
-fn envelope(payload: &[u8]) -> Vec<u8> {
-    let guid = tdvass_fmi2::guid(tdvass_fmi2::Model::QuarterCar);
+/// `payload` behind a valid header of the FMU of `model`.
+fn envelope(payload: &[u8], model: Model) -> Vec<u8> {
+    let guid = tdvass_fmi2::guid(model);
     let mut out = Vec::with_capacity(payload.len() + 64);
     out.extend_from_slice(snapshot::MAGIC);
     out.extend_from_slice(&snapshot::FORMAT_VERSION.to_le_bytes());
@@ -108,17 +111,23 @@ fuzz_target!(|data: &[u8]| {
     let callbacks = callbacks();
     let mut input = Bytes::new(data);
     let mode = input.u8();
-    let c = if mode & 0x20 != 0 {
+    let model = [
+        Model::QuarterCar,
+        Model::Corner,
+        Model::Chassis,
+        Model::QuarterCar,
+    ][(mode >> 6) as usize];
+    let c = if mode & 0x20 != 0 && model == Model::QuarterCar {
         instantiate_model_exchange(&callbacks, false)
     } else {
-        instantiate(&callbacks, false)
+        instantiate_model(&callbacks, false, model)
     };
     assert!(!c.is_null());
     let steps = input.u8();
     let bytes = if mode.is_multiple_of(4) {
         input.rest().to_vec()
     } else {
-        envelope(input.rest())
+        envelope(input.rest(), model)
     };
     let (status, state) = deserialize(c, &bytes);
     if status == OK {
@@ -131,19 +140,19 @@ fuzz_target!(|data: &[u8]| {
         unsafe {
             assert_eq!(check(fmi2SetFMUstate(c, state)), OK);
         }
-        let model = snapshot::deserialize(
-            &bytes,
-            &tdvass_fmi2::guid(tdvass_fmi2::Model::QuarterCar),
-            tdvass_fmi2::Model::QuarterCar,
-        )
-        .expect("accepted above");
-        if let Some(exchange) = model.engine.exchange() {
+        let restored = snapshot::deserialize(&bytes, &tdvass_fmi2::guid(model), model)
+            .expect("accepted above");
+        let stepper_time = restored
+            .engine
+            .simulator()
+            .map(|sim| sim.time())
+            .or(restored.engine.chassis().map(|chassis| chassis.time()));
+        if let Some(exchange) = restored.engine.exchange() {
             assert_outputs_finite(c);
             model_exchange_steps(c, exchange.time(), steps);
-        } else if let Some(sim) = model.engine.simulator() {
-            assert_outputs_finite(c);
+        } else if let Some(mut t) = stepper_time {
+            assert_outputs_of_finite(c, model);
             // A few short steps from where the state stands.
-            let mut t = sim.time();
             for k in 0..steps % 4 {
                 let h = [1e-4, 1e-3, 0.01, 0.05][(steps as usize >> (2 * k)) % 4];
                 // SAFETY: a live instance.
@@ -152,7 +161,7 @@ fuzz_target!(|data: &[u8]| {
                     break;
                 }
                 t += h;
-                assert_outputs_finite(c);
+                assert_outputs_of_finite(c, model);
             }
         }
     }
