@@ -17,10 +17,10 @@
 # the content of ssd:ParameterValues as a lax wildcard, which xmllint checks
 # only against a schema it has loaded for that namespace; the SSD is
 # therefore validated against tests/schemas/system-structure.xsd, which
-# imports the SSD schema together with the parameter values' schema. Before
-# the built files, the script makes sure the checks can fail: an SSD whose
-# parameter values lost their required attribute, and an ECCO structure
-# without its SafetyFactor, must be refused. Needs xmllint (Debian:
+# imports the SSD schema together with the parameter values' schema. After
+# the files validate, the script makes sure the checks can fail: a copy of
+# an SSD whose ssv:Real values lost their required attribute, and of an ECCO
+# structure without its SafetyFactor, must be refused. Needs xmllint (Debian:
 # libxml2-utils) and python3 (to read the .ssp archive).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -42,7 +42,8 @@ ssds=()
 osps=()
 add_ssp() { # add_ssp ARCHIVE: its SystemStructure.ssd
     local out
-    out="$scratch/$(basename "$1" .ssp)-$((${#ssds[@]} + 1)).ssd"
+    out="$scratch/${#ssds[@]}/$(basename "$1")/SystemStructure.ssd"
+    mkdir -p "$(dirname "$out")"
     python3 -c 'import sys, zipfile; sys.stdout.buffer.write(zipfile.ZipFile(sys.argv[1]).read("SystemStructure.ssd"))' \
         "$1" >"$out"
     ssds+=("$out")
@@ -67,25 +68,6 @@ else
     done
 fi
 
-# The checks can fail: each broken copy must be refused.
-refused() { # refused SCHEMA FILE WHAT
-    if xmllint --noout --schema "$1" "$2" >"$scratch/refusal.log" 2>&1; then
-        echo "tests/system_schema.sh: $3 passed $(basename "$1"); the check does not reach it" >&2
-        exit 1
-    fi
-}
-if [ ${#ssds[@]} -gt 0 ]; then
-    grep -q '<ssv:Real value=' "${ssds[0]}" || { echo "no ssv:Real in ${ssds[0]}" >&2; exit 1; }
-    sed 's/<ssv:Real value=/<ssv:Real amount=/' "${ssds[0]}" >"$scratch/broken.ssd"
-    refused "$ssd_schema" "$scratch/broken.ssd" "an ssv:Real without its value"
-fi
-for file in "${osps[@]}"; do
-    if grep -q '<SafetyFactor>' "$file"; then
-        sed 's|<SafetyFactor>[^<]*</SafetyFactor>||' "$file" >"$scratch/broken.xml"
-        refused "$osp_schema" "$scratch/broken.xml" "an EccoConfiguration without SafetyFactor"
-    fi
-done
-
 status=0
 if [ ${#ssds[@]} -gt 0 ]; then
     xmllint --noout --schema "$ssd_schema" "${ssds[@]}" || status=1
@@ -93,4 +75,28 @@ fi
 if [ ${#osps[@]} -gt 0 ]; then
     xmllint --noout --schema "$osp_schema" "${osps[@]}" || status=1
 fi
-exit $status
+[ $status -eq 0 ] || exit $status
+
+# The checks can fail: a broken copy of each valid file must be refused.
+refused() { # refused SCHEMA FILE WHAT
+    if xmllint --noout --schema "$1" "$2" >"$scratch/refusal.log" 2>&1; then
+        echo "tests/system_schema.sh: $3 passed $(basename "$1"); the check does not reach it" >&2
+        exit 1
+    fi
+}
+for file in "${ssds[@]}"; do
+    if grep -q '<ssv:Real value=' "$file"; then
+        sed 's/<ssv:Real value=/<ssv:Real amount=/' "$file" >"$scratch/broken.ssd"
+        refused "$ssd_schema" "$scratch/broken.ssd" "an ssv:Real without its value"
+    elif [ $# -eq 0 ]; then
+        echo "tests/system_schema.sh: no ssv:Real in the full car's SSD; its parameter sets went unchecked" >&2
+        exit 1
+    fi
+done
+for file in "${osps[@]}"; do
+    if grep -q '<SafetyFactor>' "$file"; then
+        sed 's|<SafetyFactor>[^<]*</SafetyFactor>||' "$file" >"$scratch/broken.xml"
+        refused "$osp_schema" "$scratch/broken.xml" "an EccoConfiguration without SafetyFactor"
+    fi
+done
+echo "tests/system_schema.sh: ${#ssds[@]} SSD and ${#osps[@]} OSP files valid; broken copies refused"
