@@ -17,7 +17,7 @@ cd "$root"
 # name | what it runs | minutes on two cores (measured from a fresh clone: docs/testing.md)
 phases=(
     "rust|cargo fmt --check, clippy -D warnings, rustdoc -D warnings, cargo test (workspace, release)|9"
-    "fmu|fmu-build --check (generated descriptions current), every platform's FMUs, the FMI 3.0 schema, a second build byte-identical|5"
+    "fmu|fmu-build --check (generated descriptions current), every platform's FMUs, the FMI 3.0 schema, the SSP and OSP schemas of the full car, a second build byte-identical|5"
     "python|the fmpy suite and the examples (tests/python), the peers' smoke run|2"
     "robustness|bad input, the state table, divergence, hangs, valgrind, threads (tests/robustness)|10"
     "platforms|one C harness on linux64, win64 under wine and aarch64 under qemu; the glibc 2.17 policy (tests/platforms)|1"
@@ -86,6 +86,7 @@ phase_fmu() {
     cargo run --release -p fmu-build -- --check
     build_fmus
     bash tests/fmi3_schema.sh
+    bash tests/system_schema.sh
     bash tests/reproducible_fmus.sh
 }
 

@@ -14,12 +14,20 @@ tuples x86_64-linux, x86_64-windows and aarch64-linux; harness_fmi3.c runs them
 under the same runners (the `platforms3` and `results3` fixtures, results
 in target/platforms/fmi3/).
 
+The corner's and the chassis's FMUs carry the same libraries (their GUID or
+instantiationToken picks the model): in the same run, each harness drives
+them for half a second with inputs set before every step from the tables
+that DRIVEN_RUNS defines (the `driven` fixture; drive_<run>.csv beside the
+other results).
+
 Build everything first with `cargo run --release -p fmu-build -- --all-platforms`.
 """
 
+import math
 import os
 import re
 import shutil
+import struct
 import subprocess
 import xml.etree.ElementTree as ET
 import zipfile
@@ -75,6 +83,9 @@ FMU3 = target_dir() / "fmu" / "tdvass-fmi3.fmu"
 # The corner's FMUs (Co-Simulation only) carry the same libraries.
 CORNER = target_dir() / "fmu" / "tdvass-corner.fmu"
 CORNER3 = target_dir() / "fmu" / "tdvass-corner-fmi3.fmu"
+# The chassis's FMUs, the same again.
+CHASSIS = target_dir() / "fmu" / "tdvass-chassis.fmu"
+CHASSIS3 = target_dir() / "fmu" / "tdvass-chassis-fmi3.fmu"
 INCLUDE = HERE.parent / "include"  # fmi3_types.h
 BUILD_HINT = "build it with `cargo run --release -p fmu-build -- --all-platforms`"
 
@@ -236,12 +247,14 @@ def results(platforms, description):
         shutil.rmtree(out, ignore_errors=True)
         out.mkdir(parents=True)
         state_in = linux64_state or out / "state.bin"  # linux64 restores its own
+        drive, drive_outputs = driven_arguments(2, platform)
         command = [*platform.runner, str(executable), platform.host_path(platform.library),
                    description.guid, ",".join(map(str, description.outputs)),
-                   platform.host_path(out), platform.host_path(state_in)]
+                   platform.host_path(out), platform.host_path(state_in), *drive]
         env = wine_environment() if name == "win64" else None
         result = run(command, env=env, cwd=platform.dir)
         assert re.search(r"^harness: \d+ outputs x 15000 steps", result.stdout, re.M), result.stdout
+        check_driven_runs(result.stdout, "harness", drive_outputs)
         _results[name] = Results(name, out)
         return _results[name]
 
@@ -309,14 +322,140 @@ def results3(platforms3, description3):
         shutil.rmtree(out, ignore_errors=True)
         out.mkdir(parents=True)
         state_in = linux64_state or out / "state.bin"
+        drive, drive_outputs = driven_arguments(3, platform)
         command = [*platform.runner, str(executable), platform.host_path(platform.library),
                    description3.guid, ",".join(map(str, description3.outputs)),
-                   platform.host_path(out), platform.host_path(state_in)]
+                   platform.host_path(out), platform.host_path(state_in), *drive]
         env = wine_environment() if name == "win64" else None
         result = run(command, env=env, cwd=platform.dir)
         assert re.search(r"^harness_fmi3: \d+ outputs x 15000 steps", result.stdout, re.M), result.stdout
+        check_driven_runs(result.stdout, "harness_fmi3", drive_outputs)
         _results3[name] = Results(name, out)
         return _results3[name]
+
+    return get
+
+
+# ------------------------------------------------ corner and chassis, driven
+
+DRIVEN_STEP = 1e-3  # s, the communication step of the driven runs (STEP of the harnesses)
+DRIVEN_STEPS = 500  # 0.5 s
+OMEGA = 2 * math.pi * 1.5  # rad/s
+
+
+def body_motion(t: float) -> dict[str, float]:
+    """The corner's body inputs: 1 mm sin(2π 1.5 Hz t) and its derivative."""
+    return {"body_displacement": 1e-3 * math.sin(OMEGA * t), "body_velocity": 1e-3 * OMEGA * math.cos(OMEGA * t)}
+
+
+def corner_forces(t: float) -> dict[str, float]:
+    """The chassis's inputs (N, from the static equilibrium): each corner
+    pushes differently, so that the body heaves, pitches and rolls."""
+    return {"force_fl": 400 * math.sin(OMEGA * t), "force_fr": 250 * math.sin(2 * OMEGA * t),
+            "force_rl": -300 * math.sin(OMEGA * t), "force_rr": 150 * (1 - math.cos(OMEGA * t))}
+
+
+def force_fl_slope(t: float) -> dict[str, float]:
+    """The order-1 derivative of force_fl (FMI 2.0's input derivatives)."""
+    return {"force_fl": 400 * OMEGA * math.cos(OMEGA * t)}
+
+
+@dataclass
+class DrivenRun:
+    fmu: Path
+    inputs: object  # t -> {input name: value}, set before the step from t
+    derivatives: object = None  # t -> {input name: order-1 derivative}; FMI 2.0 only
+
+
+# (FMI version, run) -> what `harness drive` runs: the corner on its default
+# harmonic road under a moving body, the chassis under four forces with the
+# slope of one of them and, to compare with FMI 3.0 (which has no input
+# derivatives), without it.
+DRIVEN_RUNS = {
+    (2, "corner"): DrivenRun(CORNER, body_motion),
+    (2, "chassis"): DrivenRun(CHASSIS, corner_forces, force_fl_slope),
+    (2, "chassis_held"): DrivenRun(CHASSIS, corner_forces),
+    (3, "corner"): DrivenRun(CORNER3, body_motion),
+    (3, "chassis"): DrivenRun(CHASSIS3, corner_forces),
+}
+
+
+@dataclass
+class Model:
+    """What the driven runs read from an FMU's modelDescription.xml."""
+    token: str  # GUID or instantiationToken
+    outputs: list[int]  # value references of the scalar Real / Float64 outputs
+    variables: dict[str, int]  # name -> value reference
+
+
+def model(fmu: Path, version: int) -> Model:
+    if not fmu.is_file():
+        pytest.fail(f"{fmu} not found; {BUILD_HINT}")
+    with zipfile.ZipFile(fmu) as z:
+        root = ET.fromstring(z.read("modelDescription.xml"))
+    variables, outputs = {}, []
+    if version == 2:
+        for variable in root.iter("ScalarVariable"):
+            vr = int(variable.get("valueReference"))
+            variables[variable.get("name")] = vr
+            if variable.get("causality") == "output" and variable.find("Real") is not None:
+                outputs.append(vr)
+        token = root.get("guid")
+    else:
+        for variable in root.find("ModelVariables"):
+            vr = int(variable.get("valueReference"))
+            variables[variable.get("name")] = vr
+            if (variable.get("causality") == "output" and variable.tag == "Float64"
+                    and variable.find("Dimension") is None):
+                outputs.append(vr)
+        token = root.get("instantiationToken")
+    assert outputs, f"{fmu.name} declares no Real output"
+    return Model(token, outputs, variables)
+
+
+def driven_table(version: int, name: str, spec: DrivenRun, m: Model) -> tuple[list[int], list[int], Path]:
+    """The input table of a driven run (the same bytes for every platform):
+    the inputs' and the derivatives' value references and the file."""
+    times = [k * DRIVEN_STEP for k in range(DRIVEN_STEPS)]
+    inputs = sorted(spec.inputs(0.0))
+    derivatives = sorted(spec.derivatives(0.0)) if spec.derivatives else []
+    values = []
+    for t in times:
+        u, du = spec.inputs(t), spec.derivatives(t) if spec.derivatives else {}
+        values += [u[n] for n in inputs] + [du[n] for n in derivatives]
+    path = WORK / "drive" / f"fmi{version}-{name}.bin"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_bytes(struct.pack(f"<{len(values)}d", *values))
+    return [m.variables[n] for n in inputs], [m.variables[n] for n in derivatives], path
+
+
+def driven_arguments(version: int, platform: Platform) -> tuple[list[str], dict[str, int]]:
+    """The harness's arguments for the driven runs of one FMI version (six
+    per run) and each run's number of outputs."""
+    arguments, outputs = [], {}
+    vrs = lambda values: ",".join(map(str, values)) or "-"  # noqa: E731
+    for (v, name), spec in DRIVEN_RUNS.items():
+        if v == version:
+            m = model(spec.fmu, version)
+            inputs, derivatives, table = driven_table(version, name, spec, m)
+            arguments += [name, m.token, vrs(m.outputs), vrs(inputs), vrs(derivatives), platform.host_path(table)]
+            outputs[name] = len(m.outputs)
+    return arguments, outputs
+
+
+def check_driven_runs(stdout: str, prefix: str, outputs: dict[str, int]) -> None:
+    for name, count in outputs.items():
+        assert re.search(rf"^{prefix}: drive {name}: {count} outputs x {DRIVEN_STEPS} steps", stdout, re.M), stdout
+
+
+@pytest.fixture(scope="session")
+def driven(results, results3):
+    """driven(version, run, platform) -> the table of a driven run, which
+    the harness of that FMI version writes in its one run on the platform
+    (a process start under wine costs seconds)."""
+
+    def get(version: int, name: str, platform: str) -> tuple[list[str], list[list[float]]]:
+        return (results if version == 2 else results3)(platform).table(f"drive_{name}.csv")
 
     return get
 

@@ -5,7 +5,7 @@
  * loads one platform's library and writes what it computed as files, which
  * the tests (test_platforms.py) compare with the native Linux x86-64 run.
  *
- *   harness LIB GUID OUTPUT_VRS OUT_DIR STATE_IN
+ *   harness LIB GUID OUTPUT_VRS OUT_DIR STATE_IN [NAME TOKEN OUTPUTS INPUTS DERIVATIVES TABLE]...
  *
  *   LIB         the library (binaries/<platform>/tdvass.so or .dll)
  *   GUID        the FMU's GUID (modelDescription.xml)
@@ -13,6 +13,8 @@
  *   OUT_DIR     folder of the result files (must exist)
  *   STATE_IN    a serialized FMU state written by another run (state.bin of
  *               the linux64 run): restored and continued
+ *
+ * and, for each further group of six arguments, a driven run (below).
  *
  * Result files (CSV: header line, then one line per communication point with
  * time in s and the outputs in SI units, each printed with 17 significant
@@ -34,6 +36,20 @@
  *   bad_input.csv     case,result,message: each refused call, its status
  *                     (0 OK .. 4 Fatal, or NULL/instance for fmi2Instantiate)
  *                     and the last message logged for it
+ *   drive_NAME.csv    a driven run: the model of the library that TOKEN
+ *                     (GUID) picks (the quarter car, the corner or the
+ *                     chassis, whose FMUs carry this library) in
+ *                     Co-Simulation from t = 0, 1 ms steps, the outputs
+ *                     OUTPUTS (value references) at t = 0 and after each
+ *                     step. Before step k it sets the inputs INPUTS with
+ *                     fmi2SetReal and the order-1 derivatives of the inputs
+ *                     DERIVATIVES ("-" for none) with
+ *                     fmi2SetRealInputDerivatives, from TABLE: binary
+ *                     doubles in the machine's byte order, per step the
+ *                     inputs, then the derivatives; its length gives the
+ *                     number of steps. The values come from a file, not
+ *                     from a formula here, so that every platform's run
+ *                     gets the same bits (the C libraries' sin differ).
  *
  * Exit code 0 when every file was written; 1 (message on stderr) when a call
  * of the good experiments did not return fmi2OK. Bad input is judged by the
@@ -93,6 +109,8 @@ static struct {
     fmi2Status (*SetReal)(fmi2Component, const fmi2ValueReference *, size_t, const fmi2Real *);
     fmi2Status (*SetInteger)(fmi2Component, const fmi2ValueReference *, size_t,
                              const fmi2Integer *);
+    fmi2Status (*SetRealInputDerivatives)(fmi2Component, const fmi2ValueReference *, size_t,
+                                          const fmi2Integer *, const fmi2Real *);
     fmi2Status (*GetFMUstate)(fmi2Component, fmi2FMUstate *);
     fmi2Status (*SetFMUstate)(fmi2Component, fmi2FMUstate);
     fmi2Status (*FreeFMUstate)(fmi2Component, fmi2FMUstate *);
@@ -204,6 +222,7 @@ static void load(const char *path) {
     SYM(GetReal, "fmi2GetReal");
     SYM(SetReal, "fmi2SetReal");
     SYM(SetInteger, "fmi2SetInteger");
+    SYM(SetRealInputDerivatives, "fmi2SetRealInputDerivatives");
     SYM(GetFMUstate, "fmi2GetFMUstate");
     SYM(SetFMUstate, "fmi2SetFMUstate");
     SYM(FreeFMUstate, "fmi2FreeFMUstate");
@@ -570,27 +589,85 @@ static void bad_input(const char *dir, const fmi2Byte *state, size_t state_size)
 
 /* ------------------------------------------------------------------- main */
 
-static void parse_outputs(const char *list) {
+/* Comma-separated value references into `vrs` (at most `max`); "-" is
+ * none. Returns how many. */
+static size_t parse_vrs(const char *what, const char *list, fmi2ValueReference *vrs, size_t max) {
+    size_t n = 0;
+    if (strcmp(list, "-") == 0) return 0;
     const char *p = list;
     while (*p) {
         char *end;
         unsigned long vr = strtoul(p, &end, 10);
-        if (end == p || n_outputs == MAX_OUTPUTS) {
-            fprintf(stderr, "bad OUTPUT_VRS `%s`\n", list);
+        if (end == p || n == max) {
+            fprintf(stderr, "bad %s `%s`\n", what, list);
             exit(2);
         }
-        outputs[n_outputs++] = (fmi2ValueReference)vr;
+        vrs[n++] = (fmi2ValueReference)vr;
         p = *end == ',' ? end + 1 : end;
     }
+    return n;
+}
+
+static void parse_outputs(const char *list) {
+    n_outputs = parse_vrs("OUTPUT_VRS", list, outputs, MAX_OUTPUTS);
     if (n_outputs == 0) {
         fprintf(stderr, "OUTPUT_VRS is empty\n");
         exit(2);
     }
 }
 
+/* ------------------------------------------------------------ driven runs */
+
+#define MAX_INPUTS 16
+#define DRIVE_ARGS 6 /* NAME TOKEN OUTPUTS INPUTS DERIVATIVES TABLE */
+
+/* One driven run (drive_NAME.csv in `dir`); sets `guid` and the outputs. */
+static void drive(const char *dir, char **args) {
+    const char *name = args[0];
+    guid = args[1];
+    parse_outputs(args[2]);
+    fmi2ValueReference inputs[MAX_INPUTS], derivatives[MAX_INPUTS];
+    const size_t n_inputs = parse_vrs("INPUTS", args[3], inputs, MAX_INPUTS);
+    const size_t n_derivatives = parse_vrs("DERIVATIVES", args[4], derivatives, MAX_INPUTS);
+    fmi2Integer orders[MAX_INPUTS];
+    for (size_t i = 0; i < MAX_INPUTS; i++) orders[i] = 1;
+    const size_t row = n_inputs + n_derivatives;
+    size_t size = 0;
+    fmi2Byte *table = read_file(args[5], &size);
+    if (row == 0 || size == 0 || size % (row * sizeof(double)) != 0) {
+        fprintf(stderr, "TABLE %s: %zu bytes is not a whole number of rows of %zu doubles\n", args[5], size, row);
+        exit(2);
+    }
+    const size_t steps = size / (row * sizeof(double));
+
+    char file[256];
+    snprintf(file, sizeof file, "drive_%s.csv", name);
+    FILE *csv = open_file(dir, file, "wb");
+    write_header(csv);
+    static const Integers defaults = {0, {0}, {0}};
+    fmi2Component c = initialized(file, &defaults);
+    write_row(csv, c, 0.0);
+    for (size_t k = 0; k < steps; k++) {
+        fmi2Real values[2 * MAX_INPUTS];
+        memcpy(values, table + k * row * sizeof(double), row * sizeof(double));
+        if (n_inputs) REQUIRE_OK(fmi.SetReal(c, inputs, n_inputs, values));
+        if (n_derivatives)
+            REQUIRE_OK(fmi.SetRealInputDerivatives(c, derivatives, n_derivatives, orders, values + n_inputs));
+        REQUIRE_OK(fmi.DoStep(c, (double)k * STEP, STEP, 1));
+        write_row(csv, c, (double)(k + 1) * STEP);
+    }
+    finish(c);
+    fclose(csv);
+    free(table);
+    printf("harness: drive %s: %zu outputs x %zu steps, %zu inputs, %zu input derivatives\n", name, n_outputs,
+           steps, n_inputs, n_derivatives);
+}
+
 int main(int argc, char **argv) {
-    if (argc != 6) {
-        fprintf(stderr, "usage: %s LIB GUID OUTPUT_VRS OUT_DIR STATE_IN\n", argv[0]);
+    if (argc < 6 || (argc - 6) % DRIVE_ARGS != 0) {
+        fprintf(stderr,
+                "usage: %s LIB GUID OUTPUT_VRS OUT_DIR STATE_IN [NAME TOKEN OUTPUTS INPUTS DERIVATIVES TABLE]...\n",
+                argv[0]);
         return 2;
     }
     load(argv[1]);
@@ -621,5 +698,6 @@ int main(int argc, char **argv) {
     free(state);
     printf("harness: %zu outputs x %d steps, state of %zu bytes, results in %s\n", n_outputs,
            STEPS, size, dir);
+    for (int i = 6; i < argc; i += DRIVE_ARGS) drive(dir, argv + i); /* last: they set guid, outputs */
     return 0;
 }

@@ -6,7 +6,7 @@
  * platform's binary of tdvass-fmi3.fmu. The FMI 3.0 types are declared in
  * tests/include/fmi3_types.h.
  *
- *   harness_fmi3 LIB TOKEN OUTPUT_VRS OUT_DIR STATE_IN
+ *   harness_fmi3 LIB TOKEN OUTPUT_VRS OUT_DIR STATE_IN [NAME TOKEN OUTPUTS INPUTS DERIVATIVES TABLE]...
  *
  *   LIB         the library (binaries/<platform tuple>/tdvass.so or .dll)
  *   TOKEN       the instantiationToken of the FMU's modelDescription.xml
@@ -14,6 +14,8 @@
  *   OUT_DIR     folder of the result files (must exist)
  *   STATE_IN    a serialized FMU state written by another run (state.bin of
  *               the x86_64-linux run): restored and continued
+ *
+ * and, for each further group of six arguments, a driven run (below).
  *
  * Result files, as harness.c's (CSV, 17 significant digits):
  *   default.csv       the default experiment (TDVASS, harmonic road, 0..15 s,
@@ -33,6 +35,14 @@
  *                     (fmi3InstantiateModelExchange): explicit Euler steps
  *                     of ME_STEP to ME_END, rows as harness.c's file of
  *                     the same name (the same run through FMI 3.0)
+ *   drive_NAME.csv    a driven run, as harness.c's: the model TOKEN picks
+ *                     (the quarter car, the corner or the chassis) in
+ *                     Co-Simulation from t = 0, 1 ms steps, the Float64
+ *                     inputs INPUTS set with fmi3SetFloat64 before every
+ *                     step from TABLE (binary doubles, one row of inputs
+ *                     per step), the outputs OUTPUTS at t = 0 and after
+ *                     each step. FMI 3.0 has no input derivatives:
+ *                     DERIVATIVES must be "-".
  *
  * Exit code 0 when every file was written; 1 (message on stderr) when a call
  * did not return fmi3OK or fmi3DoStep did not reach the end of its step.
@@ -459,27 +469,86 @@ static void model_exchange(const char *dir) {
 
 /* ------------------------------------------------------------------- main */
 
-static void parse_outputs(const char *list) {
+/* Comma-separated value references into `vrs` (at most `max`); "-" is
+ * none. Returns how many. */
+static size_t parse_vrs(const char *what, const char *list, fmi3ValueReference *vrs, size_t max) {
+    size_t n = 0;
+    if (strcmp(list, "-") == 0) return 0;
     const char *p = list;
     while (*p) {
         char *end;
         unsigned long vr = strtoul(p, &end, 10);
-        if (end == p || n_outputs == MAX_OUTPUTS) {
-            fprintf(stderr, "bad OUTPUT_VRS `%s`\n", list);
+        if (end == p || n == max) {
+            fprintf(stderr, "bad %s `%s`\n", what, list);
             exit(2);
         }
-        outputs[n_outputs++] = (fmi3ValueReference)vr;
+        vrs[n++] = (fmi3ValueReference)vr;
         p = *end == ',' ? end + 1 : end;
     }
+    return n;
+}
+
+static void parse_outputs(const char *list) {
+    n_outputs = parse_vrs("OUTPUT_VRS", list, outputs, MAX_OUTPUTS);
     if (n_outputs == 0) {
         fprintf(stderr, "OUTPUT_VRS is empty\n");
         exit(2);
     }
 }
 
+/* ------------------------------------------------------------ driven runs */
+
+#define MAX_INPUTS 16
+#define DRIVE_ARGS 6 /* NAME TOKEN OUTPUTS INPUTS DERIVATIVES TABLE */
+
+/* One driven run (drive_NAME.csv in `dir`); sets `token` and the outputs. */
+static void drive(const char *dir, char **args) {
+    const char *name = args[0];
+    token = args[1];
+    parse_outputs(args[2]);
+    fmi3ValueReference inputs[MAX_INPUTS], derivatives[MAX_INPUTS];
+    const size_t n_inputs = parse_vrs("INPUTS", args[3], inputs, MAX_INPUTS);
+    if (parse_vrs("DERIVATIVES", args[4], derivatives, MAX_INPUTS) != 0) {
+        fprintf(stderr, "FMI 3.0 has no input derivatives: DERIVATIVES must be -\n");
+        exit(2);
+    }
+    size_t size = 0;
+    fmi3Byte *table = read_file(args[5], &size);
+    if (n_inputs == 0 || size == 0 || size % (n_inputs * sizeof(double)) != 0) {
+        fprintf(stderr, "TABLE %s: %zu bytes is not a whole number of rows of %zu doubles\n", args[5], size,
+                n_inputs);
+        exit(2);
+    }
+    const size_t steps = size / (n_inputs * sizeof(double));
+
+    char file[256];
+    snprintf(file, sizeof file, "drive_%s.csv", name);
+    FILE *csv = open_file(dir, file, "wb");
+    write_header(csv);
+    fmi3Instance c = initialized(file, &defaults, NULL);
+    write_values(csv, c, 0.0);
+    for (size_t k = 0; k < steps; k++) {
+        fmi3Float64 values[MAX_INPUTS];
+        memcpy(values, table + k * n_inputs * sizeof(double), n_inputs * sizeof(double));
+        REQUIRE_OK(fmi.SetFloat64(c, inputs, n_inputs, values, n_inputs));
+        fmi3Boolean event = true, terminate = true, early = true;
+        fmi3Float64 last = -1.0;
+        REQUIRE_OK(fmi.DoStep(c, (double)k * STEP, STEP, true, &event, &terminate, &early, &last));
+        if (event || terminate || early || last != (double)k * STEP + STEP)
+            fail("fmi3DoStep did not complete its step", __LINE__);
+        write_values(csv, c, (double)(k + 1) * STEP);
+    }
+    finish(c);
+    fclose(csv);
+    free(table);
+    printf("harness_fmi3: drive %s: %zu outputs x %zu steps, %zu inputs\n", name, n_outputs, steps, n_inputs);
+}
+
 int main(int argc, char **argv) {
-    if (argc != 6) {
-        fprintf(stderr, "usage: %s LIB TOKEN OUTPUT_VRS OUT_DIR STATE_IN\n", argv[0]);
+    if (argc < 6 || (argc - 6) % DRIVE_ARGS != 0) {
+        fprintf(stderr,
+                "usage: %s LIB TOKEN OUTPUT_VRS OUT_DIR STATE_IN [NAME TOKEN OUTPUTS INPUTS DERIVATIVES TABLE]...\n",
+                argv[0]);
         return 2;
     }
     load(argv[1]);
@@ -509,5 +578,6 @@ int main(int argc, char **argv) {
     model_exchange(dir);
     printf("harness_fmi3: %zu outputs x %d steps, state of %zu bytes, %ld intermediate updates, results in %s\n",
            n_outputs, STEPS, size, calls, dir);
+    for (int i = 6; i < argc; i += DRIVE_ARGS) drive(dir, argv + i); /* last: they set token, outputs */
     return 0;
 }

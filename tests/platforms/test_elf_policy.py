@@ -1,15 +1,15 @@
-"""Every Linux library of the FMUs (the quarter car's and the corner's, and
-the FMI 2.0 aarch64 library the platform tests run) loads on glibc 2.17 and
-needs only system libraries: the policy of elf_policy.py. The highest GLIBC
-version and the NEEDED list of each library are printed at the end of the
-run. The corner's FMUs carry the very libraries of the quarter car's FMU of
-the same FMI version."""
+"""Every Linux library of the FMUs (the quarter car's, the corner's and the
+chassis's, and the FMI 2.0 aarch64 library the platform tests run) loads on
+glibc 2.17 and needs only system libraries: the policy of elf_policy.py. The
+highest GLIBC version and the NEEDED list of each library are printed at the
+end of the run. The corner's and the chassis's FMUs carry the very libraries
+of the quarter car's FMU of the same FMI version."""
 
 import subprocess
 import zipfile
 
 import pytest
-from conftest import CORNER, CORNER3, FMU, FMU3, ELF_POLICY, require_tool, target_dir
+from conftest import CHASSIS, CHASSIS3, CORNER, CORNER3, FMU, FMU3, ELF_POLICY, require_tool, target_dir
 from elf_policy import GLIBC_FLOOR, SYSTEM_LIBRARIES, check, check_fmu, show
 
 AARCH64_FMI2 = target_dir() / "aarch64-unknown-linux-gnu" / "release" / "libtdvass_fmi2.so"
@@ -20,6 +20,8 @@ EXPECTED = {
     "tdvass-fmi3.fmu": ["binaries/aarch64-linux/tdvass.so", "binaries/x86_64-linux/tdvass.so"],
     "tdvass-corner.fmu": ["binaries/linux64/tdvass.so"],
     "tdvass-corner-fmi3.fmu": ["binaries/aarch64-linux/tdvass.so", "binaries/x86_64-linux/tdvass.so"],
+    "tdvass-chassis.fmu": ["binaries/linux64/tdvass.so"],
+    "tdvass-chassis-fmi3.fmu": ["binaries/aarch64-linux/tdvass.so", "binaries/x86_64-linux/tdvass.so"],
 }
 
 
@@ -27,7 +29,7 @@ EXPECTED = {
 def reports():
     require_tool("readelf", "binutils")
     found = []
-    for fmu in (FMU, FMU3, CORNER, CORNER3):
+    for fmu in (FMU, FMU3, CORNER, CORNER3, CHASSIS, CHASSIS3):
         if not fmu.is_file():
             pytest.fail(f"{fmu} not found; build it with `cargo run --release -p fmu-build -- --all-platforms`")
         found += check_fmu(fmu)
@@ -47,6 +49,8 @@ def test_every_linux_library_of_the_fmus_is_checked(reports):
     assert machines["tdvass-fmi3.fmu:binaries/aarch64-linux/tdvass.so"] == "AArch64"
     assert machines["tdvass-corner.fmu:binaries/linux64/tdvass.so"] == "X86-64"
     assert machines["tdvass-corner-fmi3.fmu:binaries/aarch64-linux/tdvass.so"] == "AArch64"
+    assert machines["tdvass-chassis.fmu:binaries/linux64/tdvass.so"] == "X86-64"
+    assert machines["tdvass-chassis-fmi3.fmu:binaries/aarch64-linux/tdvass.so"] == "AArch64"
 
 
 def binaries(fmu):
@@ -54,16 +58,16 @@ def binaries(fmu):
         return {name: z.read(name) for name in z.namelist() if name.startswith("binaries/") and not name.endswith("/")}
 
 
-def test_the_corner_carries_the_quarter_cars_libraries(reports):
-    """Each version's library is built once and carried by both models'
-    FMUs: every binary of a corner FMU (Windows too) is byte for byte the
-    quarter car's of the same version, and neither lacks one."""
-    for quarter_car, corner in [(FMU, CORNER), (FMU3, CORNER3)]:
-        ours, theirs = binaries(corner), binaries(quarter_car)
-        assert sorted(ours) == sorted(theirs), (corner.name, sorted(ours), sorted(theirs))
-        assert len(ours) >= 2, (corner.name, sorted(ours))  # a Linux and a Windows library at least
+def test_the_corner_and_the_chassis_carry_the_quarter_cars_libraries(reports):
+    """Each version's library is built once and carried by all three
+    models' FMUs: every binary of a corner or chassis FMU (Windows too) is
+    byte for byte the quarter car's of the same version, and none lacks one."""
+    for quarter_car, other in [(FMU, CORNER), (FMU3, CORNER3), (FMU, CHASSIS), (FMU3, CHASSIS3)]:
+        ours, theirs = binaries(other), binaries(quarter_car)
+        assert sorted(ours) == sorted(theirs), (other.name, sorted(ours), sorted(theirs))
+        assert len(ours) >= 2, (other.name, sorted(ours))  # a Linux and a Windows library at least
         for name in ours:
-            assert ours[name] == theirs[name], (corner.name, name)
+            assert ours[name] == theirs[name], (other.name, name)
 
 
 def test_highest_glibc_version_is_at_most_2_17(reports):
