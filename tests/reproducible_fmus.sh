@@ -5,7 +5,8 @@
 # sources at another path into a fresh target directory (so that neither the
 # checkout's location nor anything left in target/ can reach the bytes), and
 # compares them with <target>/fmu/tdvass.fmu, tdvass-fmi3.fmu,
-# tdvass-corner.fmu and tdvass-corner-fmi3.fmu, and the FMI 2.0 aarch64
+# tdvass-corner.fmu, tdvass-corner-fmi3.fmu, tdvass-chassis.fmu,
+# tdvass-chassis-fmi3.fmu and full-car.ssp, and the FMI 2.0 aarch64
 # library, byte for byte. Run it after
 # `cargo run --release -p fmu-build -- --all-platforms`; a difference names
 # the archive entries that differ. Takes a few minutes (every platform's
@@ -16,6 +17,8 @@ target="${CARGO_TARGET_DIR:-$root/target}"
 case "$target" in /*) ;; *) target="$root/$target" ;; esac
 first=("$target/fmu/tdvass.fmu" "$target/fmu/tdvass-fmi3.fmu"
     "$target/fmu/tdvass-corner.fmu" "$target/fmu/tdvass-corner-fmi3.fmu"
+    "$target/fmu/tdvass-chassis.fmu" "$target/fmu/tdvass-chassis-fmi3.fmu"
+    "$target/fmu/full-car.ssp"
     "$target/aarch64-unknown-linux-gnu/release/libtdvass_fmi2.so")
 for file in "${first[@]}"; do
     [ -f "$file" ] || {
@@ -39,6 +42,8 @@ echo "reproducible_fmus: building the FMUs again in $work" >&2
 }
 second=("$work/target/fmu/tdvass.fmu" "$work/target/fmu/tdvass-fmi3.fmu"
     "$work/target/fmu/tdvass-corner.fmu" "$work/target/fmu/tdvass-corner-fmi3.fmu"
+    "$work/target/fmu/tdvass-chassis.fmu" "$work/target/fmu/tdvass-chassis-fmi3.fmu"
+    "$work/target/fmu/full-car.ssp"
     "$work/target/aarch64-unknown-linux-gnu/release/libtdvass_fmi2.so")
 failed=0
 for i in "${!first[@]}"; do
@@ -49,7 +54,7 @@ for i in "${!first[@]}"; do
         failed=1
         echo "reproducible_fmus: $name differs between the two builds" >&2
         case "$name" in
-            *.fmu)
+            *.fmu | *.ssp)
                 python3 - "${first[$i]}" "${second[$i]}" <<'EOF' >&2
 import sys, zipfile
 a, b = (zipfile.ZipFile(p) for p in sys.argv[1:3])

@@ -42,6 +42,15 @@ def corner_file(request) -> Path:
     return path
 
 
+@pytest.fixture(params=sorted(interop.CHASSIS_FMUS))
+def chassis_file(request) -> Path:
+    """Each of the chassis's FMUs, by file name."""
+    path = interop.fmu_path().with_name(request.param)
+    if not path.is_file():
+        pytest.fail(f"{path} not found; build it with `cargo run --release -p fmu-build`")
+    return path
+
+
 @pytest.fixture(scope="session")
 def fmpy_reference(fmu_file):
     """fmpy.simulate_fmu of each experiment: name -> (times, rows), memoized."""

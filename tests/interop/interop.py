@@ -217,6 +217,9 @@ def fmi3_path() -> Path:
 # file name -> FMI version.
 CORNER_FMUS = {"tdvass-corner.fmu": "2.0", "tdvass-corner-fmi3.fmu": "3.0"}
 
+# The chassis's FMUs (Co-Simulation only), likewise.
+CHASSIS_FMUS = {"tdvass-chassis.fmu": "2.0", "tdvass-chassis-fmi3.fmu": "3.0"}
+
 
 def replay3(fmu: Path, experiment: Experiment, times, outputs=OUTPUTS) -> np.ndarray:
     """fmpy's FMU3Slave (FMI 3.0 FMU) stepped through `times` after 0, with

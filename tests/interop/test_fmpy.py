@@ -47,6 +47,20 @@ def test_cli_validate_and_info_of_the_corner(corner_file):
     interop.record(f"fmpy CLI {fmpy.__version__}", f"corner {version}", "fmpy validate", "no problems")
 
 
+def test_cli_validate_and_info_of_the_chassis(chassis_file):
+    done = subprocess.run(FMPY + ["validate", str(chassis_file)], capture_output=True, text=True)
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "No problems found" in done.stdout, done.stdout
+    info = subprocess.run(FMPY + ["info", str(chassis_file)], capture_output=True, text=True, check=True).stdout
+    version = interop.CHASSIS_FMUS[chassis_file.name]
+    assert "TDVASS chassis" in info, info
+    assert "\n  FMI Type           Co-Simulation\n" in info, info  # Co-Simulation only
+    assert f"FMI Version        {version}" in info, info
+    for name in ["force_fl", "force_rr", "displacement_fl", "heave", "roll_rate", "seat_acceleration"]:
+        assert name in info, (name, info)
+    interop.record(f"fmpy CLI {fmpy.__version__}", f"chassis {version}", "fmpy validate", "no problems")
+
+
 @pytest.mark.parametrize("name", list(EXPERIMENTS))
 def test_simulate_fmu_equals_a_replay_on_its_grid(fmu_file, fmpy_reference, replay, name):
     # simulate_fmu (its own loop, recorder and, for the input road, its input

@@ -1,6 +1,7 @@
 """fmu-manipulation-toolbox's checker: `fmutool -input tdvass.fmu -check`
 runs its XSD conformity check and its semantic checks of the description
-(of the quarter car's FMI 2.0 FMU and of both corner FMUs)."""
+(of the quarter car's FMI 2.0 FMU and of both corner and both chassis
+FMUs)."""
 
 import subprocess
 import sys
@@ -31,3 +32,9 @@ def test_fmutool_check_finds_nothing_in_the_corner(corner_file):
     fmi_version = interop.CORNER_FMUS[corner_file.name]
     check_finds_nothing(corner_file, fmi_version)
     interop.record(f"fmutool {version('fmu-manipulation-toolbox')}", f"corner {fmi_version}", "-check", "no findings")
+
+
+def test_fmutool_check_finds_nothing_in_the_chassis(chassis_file):
+    fmi_version = interop.CHASSIS_FMUS[chassis_file.name]
+    check_finds_nothing(chassis_file, fmi_version)
+    interop.record(f"fmutool {version('fmu-manipulation-toolbox')}", f"chassis {fmi_version}", "-check", "no findings")

@@ -1,5 +1,6 @@
-"""Fixtures for the fmpy tests of the built FMUs (target/fmu/tdvass.fmu, and
-the corner's tdvass-corner.fmu and tdvass-corner-fmi3.fmu).
+"""Fixtures for the fmpy tests of the built FMUs (target/fmu/tdvass.fmu, the
+corner's tdvass-corner.fmu and tdvass-corner-fmi3.fmu, and the chassis's
+tdvass-chassis.fmu and tdvass-chassis-fmi3.fmu).
 
 Nothing is built here: run `cargo run --release -p fmu-build` first.
 """
@@ -12,7 +13,14 @@ from fmpy import extract, read_model_description
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from fmu_helpers import Slave, corner_fmi3_path, corner_path, fmu_path  # noqa: E402
+from fmu_helpers import (  # noqa: E402
+    Slave,
+    chassis_fmi3_path,
+    chassis_path,
+    corner_fmi3_path,
+    corner_path,
+    fmu_path,
+)
 
 
 @pytest.fixture(scope="session")
@@ -39,6 +47,18 @@ def corner_file() -> Path:
 def corner_fmi3_file() -> Path:
     """The corner's FMI 3.0 FMU (Co-Simulation)."""
     return built(corner_fmi3_path())
+
+
+@pytest.fixture(scope="session")
+def chassis_file() -> Path:
+    """The chassis's FMI 2.0 FMU (Co-Simulation)."""
+    return built(chassis_path())
+
+
+@pytest.fixture(scope="session")
+def chassis_fmi3_file() -> Path:
+    """The chassis's FMI 3.0 FMU (Co-Simulation)."""
+    return built(chassis_fmi3_path())
 
 
 @pytest.fixture(scope="session")

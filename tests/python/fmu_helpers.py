@@ -67,6 +67,16 @@ def corner_fmi3_path() -> Path:
     return fmu_path().with_name("tdvass-corner-fmi3.fmu")
 
 
+def chassis_path() -> Path:
+    """The chassis's FMI 2.0 FMU, next to the quarter car's: tdvass-chassis.fmu."""
+    return fmu_path().with_name("tdvass-chassis.fmu")
+
+
+def chassis_fmi3_path() -> Path:
+    """The chassis's FMI 3.0 FMU, next to the quarter car's: tdvass-chassis-fmi3.fmu."""
+    return fmu_path().with_name("tdvass-chassis-fmi3.fmu")
+
+
 _STATUS = ["OK", "WARNING", "DISCARD", "ERROR", "FATAL", "PENDING"]
 _captures: dict = {}
 

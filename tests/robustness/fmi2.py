@@ -10,7 +10,8 @@ built FMU (``binaries/linux64/tdvass.so`` of ``target/fmu/tdvass.fmu``):
 
 The corner's FMU (``tdvass-corner.fmu`` next to it) carries the same
 library: an ``Instance(lib, fmu=corner_fmu_file())`` is a corner, its GUID
-and value references read from the corner's description.
+and value references read from the corner's description; likewise the
+chassis's (``tdvass-chassis.fmu``, ``chassis_fmu_file()``).
 
 Every function takes raw ctypes arguments, so that the tests can pass NULL
 pointers, wrong lengths and out-of-range values. The logger is a
@@ -112,6 +113,11 @@ def fmu_file() -> Path:
 def corner_fmu_file() -> Path:
     """The corner's FMU, next to the quarter car's."""
     return fmu_file().with_name("tdvass-corner.fmu")
+
+
+def chassis_fmu_file() -> Path:
+    """The chassis's FMU, next to the quarter car's."""
+    return fmu_file().with_name("tdvass-chassis.fmu")
 
 
 def model_description(fmu: Path | None = None) -> str:

@@ -13,7 +13,8 @@ built FMU (``binaries/x86_64-linux/tdvass.so`` of
 The instantiation token and the value references are read from the FMU's
 modelDescription.xml. The corner's FMU (``tdvass-corner-fmi3.fmu`` next to
 it) carries the same library: an ``Instance(lib, fmu=corner_fmu_file())`` is
-a corner. Every function takes raw ctypes arguments, so that
+a corner; likewise the chassis's (``tdvass-chassis-fmi3.fmu``,
+``chassis_fmu_file()``). Every function takes raw ctypes arguments, so that
 the tests can pass NULL pointers, wrong lengths and out-of-range values.
 ``fmi3Boolean`` is a C ``bool`` (one byte): ``c_bool``.
 """
@@ -73,6 +74,11 @@ def fmu_file() -> Path:
 def corner_fmu_file() -> Path:
     """The corner's FMU, next to the quarter car's."""
     return fmu_file().with_name("tdvass-corner-fmi3.fmu")
+
+
+def chassis_fmu_file() -> Path:
+    """The chassis's FMU, next to the quarter car's."""
+    return fmu_file().with_name("tdvass-chassis-fmi3.fmu")
 
 
 def model_description(fmu: Path | None = None) -> str:

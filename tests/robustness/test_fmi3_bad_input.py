@@ -685,6 +685,95 @@ def test_corner_road_delay_with_the_input_road_is_refused_at_initialization(corn
     assert inst.exit() == OK
 
 
+# The chassis's FMU (tdvass-chassis-fmi3.fmu, the same library under the
+# chassis's instantiation token): the corners' forces and the body's
+# parameters.
+CHASSIS_BAD_VALUES = [
+    ("force_fl", NAN, "must be finite"),
+    ("force_fr", INF, "must be finite"),
+    ("force_rl", -INF, "must be finite"),
+    ("force_rr", NAN, "must be finite"),
+    ("mass", 0.0, "must be > 0"),
+    ("mass", -1380.0, "must be > 0"),
+    ("mass", NAN, "must be finite"),
+    ("pitch_inertia", 0.0, "must be > 0"),
+    ("pitch_inertia", -2332.2, "must be > 0"),
+    ("pitch_inertia", INF, "must be finite"),
+    ("roll_inertia", 0.0, "must be > 0"),
+    ("roll_inertia", -400.0, "must be > 0"),
+    ("roll_inertia", NAN, "must be finite"),
+    ("a", -1.3, "must be >= 0"),
+    ("a", NAN, "must be finite"),
+    ("b", INF, "must be finite"),
+    ("track_front", 0.0, "must be > 0"),
+    ("track_rear", -1.5, "must be > 0"),
+    ("track_rear", NAN, "must be finite"),
+    ("seat_x", NAN, "must be finite"),
+    ("seat_y", -INF, "must be finite"),
+]
+CHASSIS_START = {"mass": 1380.0, "a": 1.3, "b": 1.3, "track_front": 1.5, "track_rear": 1.5,
+                 "pitch_inertia": 2332.2000000000003, "roll_inertia": 400.0, "seat_x": 0.3, "seat_y": 0.35,
+                 "force_fl": 0.0, "force_fr": 0.0, "force_rl": 0.0, "force_rr": 0.0}
+
+
+@pytest.fixture
+def chassis_init_mode(make3):
+    inst = make3(fmu=fmi3.chassis_fmu_file())
+    assert inst.ok, inst.log.last()
+    assert inst.enter(0.0, 15.0) == OK
+    return inst
+
+
+@pytest.mark.parametrize("name, value, reason", CHASSIS_BAD_VALUES,
+                         ids=[f"{n}={v}" for n, v, _ in CHASSIS_BAD_VALUES])
+def test_chassis_bad_value_is_refused_naming_variable_and_value(chassis_init_mode, name, value, reason):
+    inst = chassis_init_mode
+    before = inst.snapshot()
+    assert inst.set_values("fmi3SetFloat64", [inst.vr[name]], [value]) == ERROR
+    message = last_error(inst)
+    assert message.startswith(f"fmi3SetFloat64: invalid value {rust(value)} for `{name}`: "), message
+    assert reason in message, message
+    assert inst.snapshot() == before
+    assert inst.machine_state() == "Initialization Mode"
+    assert inst.exit() == OK  # nothing was applied
+    assert inst.get(*CHASSIS_START) == list(CHASSIS_START.values())
+    assert inst.step(0.01) == OK
+
+
+@pytest.mark.parametrize("name, value", [("force_fl", NAN), ("force_rl", INF), ("force_rr", -INF)])
+def test_chassis_bad_force_in_step_mode(make3, name, value):
+    """Refused in Step Mode too: nothing changes, and the instance steps on."""
+    inst = make3(fmu=fmi3.chassis_fmu_file())
+    inst.initialize(stop=15.0)
+    assert inst.set(force_fl=500.0, force_rr=-200.0) == OK
+    assert inst.step(0.01) == OK
+    before = inst.snapshot()
+    assert inst.set(**{name: value}) == ERROR
+    assert f"invalid value {rust(value)} for `{name}`" in last_error(inst)
+    assert inst.snapshot() == before
+    assert inst.step(0.01) == OK
+    values = inst.get("heave", "pitch", "roll", "heave_acceleration", "displacement_fl", "seat_vibration_dose_value")
+    assert all(math.isfinite(v) for v in values), values
+    assert values[0] > 0.0
+
+
+def test_chassis_zero_wheelbase_is_refused_at_initialization(chassis_init_mode):
+    """a = 0 and b = 0 pass each value's check; the wheelbase is refused
+    when the chassis is built, naming b."""
+    inst = chassis_init_mode
+    assert inst.set(a=0.0, b=0.0) == OK
+    assert inst.exit() == ERROR
+    message = last_error(inst)
+    assert message.startswith("fmi3ExitInitializationMode: invalid value 0 for parameter `b`: "), message
+    assert "the wheelbase a + b must be positive" in message, message
+    assert inst.machine_state() == "Initialization Mode"
+    assert inst.set(b=1.3) == OK
+    assert inst.exit() == OK
+    assert inst.set(force_rl=100.0) == OK
+    assert inst.step(0.01) == OK
+    assert inst.get("pitch")[0] < 0.0
+
+
 def test_derivatives_with_a_huge_seed(initialized3):
     inst = initialized3()
     assert inst.step(0.3) == OK
