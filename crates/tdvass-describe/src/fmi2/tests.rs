@@ -562,7 +562,6 @@ fn the_chassis_is_described_with_its_own_capabilities() {
         "pitch_acceleration",
         "roll_acceleration",
         "seat_acceleration",
-        "weighted_seat_acceleration",
     ];
     for o in &outputs {
         let v = &variables[o.attr("index").parse::<usize>().unwrap() - 1];

@@ -930,7 +930,6 @@ fn the_chassis_is_described_with_its_own_capabilities() {
         "pitch_acceleration",
         "roll_acceleration",
         "seat_acceleration",
-        "weighted_seat_acceleration",
     ];
     for o in &outputs {
         let v = by_vr(o.attr("valueReference").parse().unwrap());

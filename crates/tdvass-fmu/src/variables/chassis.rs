@@ -437,9 +437,9 @@ pub const CHASSIS_VARIABLES: &[Variable] = &[
         243,
         Q::Acceleration,
         C::WeightedSeatAcceleration,
-        "The seat's acceleration weighted by ISO 2631-1 W_k, a_w (m/s2; the filter integrated exactly over each step); depends directly on the forces",
-        FORCES,
-        SEAT_DEPENDENCIES,
+        "The seat's acceleration weighted by ISO 2631-1 W_k, a_w (m/s2; the filter integrated exactly over each step): an output of the filter's states (W_k has no direct feedthrough), so a force changes it over the step that follows",
+        &[],
+        &[],
     ),
     output(
         "rms_weighted_seat_acceleration",
