@@ -744,5 +744,76 @@ fn a_model_exchange_state_round_trips_and_stays_with_its_interface() {
     );
 }
 
+/// `x_g` reaches the outputs that depend on it directly as soon as it is
+/// set, and reading them between the set and the step changes nothing of
+/// the run (the step applies the input again, from the same time, with
+/// the slope it fits).
+#[test]
+fn x_g_feeds_through_at_once_and_reading_it_early_changes_nothing() {
+    let run = |read_early: bool| {
+        let (mut s, _) = new_slave(false);
+        s.setup_experiment(None, 0.0, Some(15.0)).unwrap();
+        s.set_integer(&[vr("road")], &[0]).unwrap();
+        s.set_integer(&[vr("input_extrapolation")], &[2]).unwrap();
+        start(&mut s);
+        let mut t = 0.0_f64;
+        for k in 0..200 {
+            let x_g = 0.05 * (5.0 * t).sin();
+            s.set_real(&[vr("x_g")], &[x_g]).unwrap();
+            if read_early {
+                assert_eq!(get(&mut s, "road_displacement"), x_g, "{k}");
+                let (x_t, tdd) = (get(&mut s, "x_t"), get(&mut s, "tire_deflection"));
+                assert_eq!(tdd, x_t - x_g, "{k}");
+            }
+            let h = [1e-3, 7e-4, 1.3e-3][k % 3];
+            s.do_step(t, h).unwrap();
+            t += h;
+        }
+        [
+            "x_t",
+            "rms_body_acceleration",
+            "rms_tire_deflection",
+            "rms_weighted_body_acceleration",
+            "road_displacement",
+        ]
+        .map(|n| get(&mut s, n).to_bits())
+    };
+    assert_eq!(run(true), run(false));
+}
+
+/// A master that sets `x_g` inside a step (an FMI 3.0 intermediate update
+/// that returns early), reads the outputs there or not, and goes on from
+/// that time: the run is the same to the bit either way.
+#[test]
+fn reading_after_an_input_set_inside_a_step_changes_nothing() {
+    let run = |read_early: bool| {
+        let (mut s, _) = new_slave(false);
+        s.setup_experiment(None, 0.0, Some(15.0)).unwrap();
+        s.set_integer(&[vr("road")], &[0]).unwrap();
+        s.set_integer(&[vr("input_extrapolation")], &[1]).unwrap();
+        start(&mut s);
+        let road = |t: f64| 0.05 * (5.0 * t).sin();
+        let mut t = 0.0_f64;
+        let mut seen = Vec::new();
+        for k in 0..60 {
+            s.set_real(&[vr("x_g")], &[road(t)]).unwrap();
+            let end = s.begin_step(t, 7.3e-3).unwrap();
+            // Part of the step, to an intermediate node, where the master
+            // sets the input and returns early.
+            let node = s.next_intermediate_time(t, end).unwrap_or(end);
+            s.advance_within_step(node, node - t).unwrap();
+            seen.push(get(&mut s, "x_t").to_bits());
+            s.set_real(&[vr("x_g")], &[road(node)]).unwrap();
+            if read_early && k % 2 == 0 {
+                assert_eq!(get(&mut s, "road_displacement"), road(node), "{k}");
+            }
+            t = node;
+        }
+        seen.push(get(&mut s, "rms_tire_deflection").to_bits());
+        seen
+    };
+    assert_eq!(run(true), run(false));
+}
+
 mod chassis;
 mod corner;
