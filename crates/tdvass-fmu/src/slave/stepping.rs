@@ -435,7 +435,6 @@ impl Slave {
                 "the chassis declares no output derivatives (maxOutputDerivativeOrder = 0)",
             ));
         }
-        self.apply_pending_road_input()?;
         let Some(sim) = self.state.engine.simulator_mut() else {
             return Err(no_simulator());
         };

@@ -147,29 +147,6 @@ impl Slave {
         })
     }
 
-    /// An `x_g` set since the last step (road = 0) reaches the outputs that
-    /// depend on it directly before they are read: applied to the running
-    /// simulation now, with the slope the master gave (held otherwise). It
-    /// stays pending: the step applies it again with the slope it fits
-    /// over its length, from the same time, so the run goes on as if it
-    /// had been applied once.
-    pub(super) fn apply_pending_road_input(&mut self) -> Result<(), FmiError> {
-        let m = &self.state;
-        if !(m.input_pending && m.settings.road_is_input()) {
-            return Ok(());
-        }
-        let slope = if m.input_slope_given {
-            m.input_slope
-        } else {
-            0.0
-        };
-        let x_g = m.settings.x_g;
-        if let Some(sim) = self.state.engine.simulator_mut() {
-            sim.set_road_input(x_g, slope)?;
-        }
-        Ok(())
-    }
-
     /// The chassis's output `id` now: of the running chassis, or during
     /// initialization of one built from the current settings.
     fn chassis_output(&self, id: ChassisOutputId) -> Result<f64, FmiError> {
@@ -284,7 +261,6 @@ impl Slave {
     /// elements in row-major order; `values` must hold exactly as many as
     /// the value references need.
     pub fn get_real(&mut self, vrs: &[u32], values: &mut [f64]) -> Result<Status, FmiError> {
-        self.apply_pending_road_input()?;
         let plan = self.read_plan(vrs);
         let mut read = OutputRead {
             // Without a plan (a list longer than a plan holds, or one with
@@ -347,7 +323,6 @@ impl Slave {
 
     /// `GetInteger`: the Integer settings and the counts.
     pub fn get_integer(&mut self, vrs: &[u32], values: &mut [i32]) -> Result<Status, FmiError> {
-        self.apply_pending_road_input()?;
         let mut outputs = None;
         for (&vr, value) in vrs.iter().zip(values.iter_mut()) {
             let var = self.variable(vr, VarType::Integer)?;
