@@ -305,8 +305,8 @@ impl Slave {
 
     /// `SetRealInputDerivatives`: order 1 of `x_g` sets the slope used
     /// from the current communication point on (until `x_g` or the slope is
-    /// set again); order 1 of a chassis's force, its rate over the next
-    /// step. Higher orders, and the derivatives of the corner's body
+    /// set again); order 1 of a chassis's force, its rate from now on
+    /// (`set_force_derivatives`). Higher orders, and the derivatives of the corner's body
     /// inputs, are ignored with `Warning`.
     pub fn set_real_input_derivatives(
         &mut self,
