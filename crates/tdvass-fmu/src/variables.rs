@@ -840,6 +840,28 @@ const fn output(
     feedthrough: &'static [&'static str],
     initial_dependencies: &'static [&'static str],
 ) -> Variable {
+    output_read_by(
+        name,
+        vr,
+        quantity,
+        Access::Output(id),
+        description,
+        feedthrough,
+        initial_dependencies,
+    )
+}
+
+/// A continuous Real output read through `access` (the simulator's, or
+/// the chassis's).
+const fn output_read_by(
+    name: &'static str,
+    vr: u32,
+    quantity: Quantity,
+    access: Access,
+    description: &'static str,
+    feedthrough: &'static [&'static str],
+    initial_dependencies: &'static [&'static str],
+) -> Variable {
     Variable {
         name,
         vr,
@@ -849,7 +871,7 @@ const fn output(
         display_unit: None,
         start: None,
         range: Range::Computed,
-        access: Access::Output(id),
+        access,
         description,
         feedthrough,
         initial_dependencies,

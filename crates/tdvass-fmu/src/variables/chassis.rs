@@ -7,7 +7,7 @@
 //! chassis has no algebraic loop); the accelerations depend directly on
 //! the forces.
 
-use super::{Access, Causality, Q, Range, Variability, Variable, parameter};
+use super::{Access, Causality, Q, Range, Variability, Variable, output_read_by, parameter};
 use crate::chassis_outputs::ChassisOutputId as C;
 use crate::settings::Settings;
 use tdvass::chassis::Corner;
@@ -59,26 +59,18 @@ const fn output(
     initial_dependencies: &'static [&'static str],
 ) -> Variable {
     Variable {
-        name,
-        vr,
-        causality: Causality::Output,
-        variability: Variability::Continuous,
-        quantity,
-        display_unit: None,
-        start: None,
-        range: Range::Computed,
-        access: Access::ChassisOutput(id),
-        description,
-        feedthrough,
-        initial_dependencies,
-        enumeration: None,
-        dimensions: &[],
         // The chassis steps exactly to the communication point; it has no
         // internal nodes to report at.
         intermediate_update: false,
-        fmi3_only: false,
-        bound: None,
-        quarter_car_only: false,
+        ..output_read_by(
+            name,
+            vr,
+            quantity,
+            Access::ChassisOutput(id),
+            description,
+            feedthrough,
+            initial_dependencies,
+        )
     }
 }
 
