@@ -1,5 +1,5 @@
 //! The `tdvass` command line: `simulate`, `stability`, `stable`, `frf`,
-//! `optimize` and `map` (names and JSON keys fixed by the interface spec).
+//! `optimize`, `map` and `car` (names and JSON keys fixed by the interface spec).
 //! Every subcommand prints a table, or one JSON object with `--json`.
 
 use crate::json::ToJson;
@@ -29,6 +29,7 @@ const PROGRESS_CHUNK: f64 = 1.0;
 pub const MAX_SIMULATE_STEPS: f64 = 1e10;
 
 mod args;
+mod car;
 mod warnings;
 
 use args::*;
@@ -189,6 +190,7 @@ fn execute(cli: Cli) -> Result<String> {
         }
         Command::Optimize(a) => optimize_command(a),
         Command::Map(a) => map_command(a),
+        Command::Car(a) => car::car_command(*a),
     }
 }
 

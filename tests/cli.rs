@@ -885,3 +885,53 @@ fn the_linear_analyses_say_so_and_take_no_tire_contact() {
         );
     }
 }
+
+#[test]
+fn the_decoupled_car_s_corner_is_tdvass_simulate() {
+    // The default chassis and one road on both tracks: the front left
+    // corner is the quarter car of `simulate` (the same step) to 1e-10.
+    let car = tdvass_json(&[
+        "car",
+        "--road",
+        "iso8608",
+        "--duration",
+        "1",
+        "--right-seed",
+        "1",
+    ]);
+    let quarter = tdvass_json(&["simulate", "--road", "iso8608", "--duration", "1"]);
+    assert_eq!(car["internal_step"], quarter["internal_step"]);
+    let corner = &car["corners"]["fl"];
+    for key in [
+        "rms_suspension_deflection",
+        "rms_tire_deflection",
+        "rms_dynamic_tire_load_ratio",
+    ] {
+        let (ours, theirs) = (
+            corner[key].as_f64().unwrap(),
+            quarter[key].as_f64().unwrap(),
+        );
+        assert!(
+            (ours - theirs).abs() <= 1e-10 * theirs.abs(),
+            "{key}: {ours} vs {theirs}"
+        );
+    }
+    assert_eq!(corner["lift_off_count"], quarter["lift_off_count"]);
+    let reference = command_line_reference();
+    for key in car
+        .as_object()
+        .unwrap()
+        .keys()
+        .chain(corner.as_object().unwrap().keys())
+    {
+        assert!(
+            reference.contains(&format!("`{key}`")),
+            "JSON key `{key}` of `tdvass car` is not documented in docs/cli.md"
+        );
+    }
+    let refused = failure(&["car", "--vehicle-speed", "0"]);
+    assert!(
+        refused.contains("`vehicle_speed`") && refused.contains('0'),
+        "{refused}"
+    );
+}

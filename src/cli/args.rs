@@ -43,6 +43,9 @@ pub(super) enum Command {
     /// The (g, tau) stability map as CSV, of the linear model (the bilateral
     /// tire; --tire-contact does not apply).
     Map(MapArgs),
+    /// The monolithic full car: the chassis on four corners in one delay
+    /// equation (the reference of the corner and chassis FMUs' co-simulation).
+    Car(Box<super::car::CarArgs>),
 }
 
 /// Model parameters, named as the FMU parameters (defaults: Table 1, g1, tau1).

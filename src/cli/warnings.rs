@@ -140,6 +140,20 @@ pub(super) fn warnings(command: &Command, given: &GivenFlags) -> Vec<String> {
             &["g", "tau"],
             "the map scans g from --g-min to --g-max and tau from 0 to --tau-max",
         )),
+        Command::Car(a) => {
+            variant_warnings(&a.variant, given, &mut warnings);
+            // The speed sets the rear wheels' delay on every road.
+            let mut road_flags = GivenFlags(given.0.clone());
+            road_flags.0.remove("vehicle_speed");
+            road_warnings(&a.run, &road_flags, &mut warnings);
+            warnings.extend(given.unused(
+                &["m_s", "w_ba", "w_sdd", "w_tdd"],
+                "each corner carries its share of --mass, and the car reports no J",
+            ));
+            if a.output.is_none() {
+                warnings.extend(given.unused(&["output_interval"], "it needs --output"));
+            }
+        }
     }
     warnings
 }

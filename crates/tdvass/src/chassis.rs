@@ -191,13 +191,13 @@ impl ChassisParams {
     }
 
     /// How a point `(x, y)` moves with `[z, θ, φ]`: `[1, x, y]`.
-    fn point(x: f64, y: f64) -> [f64; 3] {
+    pub fn point(x: f64, y: f64) -> [f64; 3] {
         [1.0, x, y]
     }
 
     /// The generalized accelerations `[z'', θ'', φ'']` of the corners'
     /// forces `f`.
-    fn accelerations(&self, f: &[f64; 4]) -> [f64; 3] {
+    pub fn accelerations(&self, f: &[f64; 4]) -> [f64; 3] {
         let mut generalized = [0.0; 3];
         for (corner, force) in Corner::ALL.iter().zip(f) {
             let (x, y) = self.position(*corner);

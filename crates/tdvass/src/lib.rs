@@ -106,6 +106,7 @@
 
 pub mod analysis;
 pub mod bytes;
+pub mod car;
 pub mod chassis;
 pub mod comfort;
 pub mod error;

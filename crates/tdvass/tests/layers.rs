@@ -26,7 +26,7 @@ const CRATE_LAYERS: layering::Layers = &[
     ("data", &["bytes", "model", "comfort", "road"]),
     ("checks", &["metrics", "limits"]),
     ("solver", &["solver"]),
-    ("engines", &["exchange", "chassis"]),
+    ("engines", &["exchange", "chassis", "car"]),
     ("analysis", &["analysis"]),
     ("root", &["lib"]),
 ];
@@ -78,6 +78,14 @@ const EXCHANGE_LAYERS: layering::Layers = &[
     ("engine", &["mod"]),
 ];
 
+/// The files of `crates/tdvass/src/car`, from the ground up.
+const CAR_LAYERS: layering::Layers = &[
+    ("system", &["layout"]),
+    ("step maps", &["maps"]),
+    ("run", &["run"]),
+    ("car", &["mod"]),
+];
+
 /// The files of `crates/tdvass/src/analysis`, from the ground up.
 const ANALYSIS_LAYERS: layering::Layers = &[
     (
@@ -99,6 +107,7 @@ const LAYOUT: Layout = Layout {
         ("model", MODEL_LAYERS),
         ("road", ROAD_LAYERS),
         ("exchange", EXCHANGE_LAYERS),
+        ("car", CAR_LAYERS),
         ("analysis", ANALYSIS_LAYERS),
     ],
     // `dense`'s partial-step filter beside `Iterator::filter`.

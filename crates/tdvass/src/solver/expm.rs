@@ -6,7 +6,7 @@
 //! Layer: linear algebra (docs/architecture.md); it imports nothing of the
 //! crate.
 
-use nalgebra::SMatrix;
+use nalgebra::{DMatrix, SMatrix};
 
 /// The scaled matrix norm is brought below 2^-SCALED_NORM_EXPONENT before
 /// the Taylor increment; the truncation error of the fourth-order increment
@@ -55,6 +55,35 @@ pub fn precise_exp_increment<const D: usize>(m: &SMatrix<f64, D, D>) -> SMatrix<
         increment = increment * 2.0 + product;
     }
     increment
+}
+
+/// [`precise_exp`] of a square matrix whose size is known only at run
+/// time (the full car's augmented system, `crate::car`): the same scaling,
+/// increment and squarings, with nalgebra's dynamic product.
+///
+/// # Panics
+///
+/// If `m` is not square.
+pub fn precise_exp_dynamic(m: &DMatrix<f64>) -> DMatrix<f64> {
+    assert!(m.is_square(), "the exponential of a square matrix");
+    let size = m.nrows();
+    let norm = m.abs().row_sum().max();
+    let squarings = if norm > 0.0 && norm.is_finite() {
+        (ceil_log2(norm) + SCALED_NORM_EXPONENT).max(0) as u32
+    } else {
+        0
+    };
+    let scaled = m * 0.5f64.powi(squarings as i32);
+    let identity = DMatrix::<f64>::identity(size, size);
+    let scaled2 = &scaled * &scaled;
+    let tail =
+        &scaled2 * (identity.clone() * 0.5 + &scaled * (1.0 / 6.0) + &scaled2 * (1.0 / 24.0));
+    let mut increment = scaled + tail;
+    for _ in 0..squarings {
+        let product = &increment * &increment;
+        increment = increment * 2.0 + product;
+    }
+    identity + increment
 }
 
 /// `out = a b`, column by column: column j is `Σ_k a_k b_kj` summed in k
@@ -129,6 +158,25 @@ mod tests {
                 "h = {h}: {}",
                 (ours - reference).abs().max()
             );
+        }
+    }
+
+    #[test]
+    fn the_dynamic_exponential_is_the_static_one() {
+        let plant = crate::model::Plant::new(
+            crate::model::Params::default(),
+            crate::model::Variant::Tdvass,
+        )
+        .unwrap();
+        for h in [1e-4, 1e-2, 1.0] {
+            let m: Matrix6<f64> = plant.a * h;
+            let ours = precise_exp_dynamic(&DMatrix::from_column_slice(6, 6, m.as_slice()));
+            let reference = precise_exp(&m);
+            let scale = reference.abs().max();
+            let gap = (ours - DMatrix::from_column_slice(6, 6, reference.as_slice()))
+                .abs()
+                .max();
+            assert!(gap <= 1e-14 * scale, "h = {h}: {gap}");
         }
     }
 

@@ -106,6 +106,7 @@ pub use contact::{LIFT_OFF_LOG, LiftOff, LiftOffLog, MAX_SWITCHES_PER_STEP};
 pub use driver::Simulator;
 pub use events::LOCATION_TOLERANCE;
 pub use grid::{DelayGrid, DelayRegime, MAX_HISTORY_NODES, MIN_RESOLVED_DELAY};
+pub(crate) use holding::largest_magnitude;
 pub use persist::STATE_FORMAT_VERSION;
 pub use reports::{
     CONTINUOUS_STATES, ComfortValues, ContactLoss, FILTER_STATES_AT, INTEGRAL_NAMES,

@@ -1,0 +1,276 @@
+//! `tdvass car`: the monolithic full car (`tdvass::car`), the chassis on
+//! four corners in one delay equation, with its JSON report.
+
+use super::args::{ModelArgs, RunArgs, io_error, parse_variant};
+use clap::Args;
+use serde_json::{Value, json};
+use std::io::Write as _;
+use tdvass::car::{CarConfig, CarReport, CarSample, run_car_with};
+use tdvass::chassis::{ChassisParams, Corner};
+use tdvass::error::{Error, Result};
+use tdvass::road::RoadSpec;
+
+/// The chassis's parameters, named as the chassis FMU's.
+#[derive(Debug, Clone, Args)]
+pub(super) struct ChassisArgs {
+    /// Body mass m (kg; 4 x 345, the paper's car).
+    #[arg(long, default_value_t = 1380.0)]
+    pub(super) mass: f64,
+    /// Centre of gravity to the front axle a (m).
+    #[arg(long, default_value_t = 1.3)]
+    pub(super) a: f64,
+    /// Centre of gravity to the rear axle b (m).
+    #[arg(long, default_value_t = 1.3)]
+    pub(super) b: f64,
+    /// Front track (m).
+    #[arg(long, default_value_t = 1.5)]
+    pub(super) track_front: f64,
+    /// Rear track (m).
+    #[arg(long, default_value_t = 1.5)]
+    pub(super) track_rear: f64,
+    /// Pitch inertia I_theta (kg.m2; default m a b, which decouples front
+    /// and rear).
+    #[arg(long)]
+    pub(super) pitch_inertia: Option<f64>,
+    /// Roll inertia I_phi (kg.m2).
+    #[arg(long, default_value_t = 400.0)]
+    pub(super) roll_inertia: f64,
+    /// Seat point ahead of the centre of gravity (m).
+    #[arg(long, default_value_t = 0.3)]
+    pub(super) seat_x: f64,
+    /// Seat point left of the centre of gravity (m).
+    #[arg(long, default_value_t = 0.35)]
+    pub(super) seat_y: f64,
+}
+
+impl ChassisArgs {
+    fn params(&self) -> ChassisParams {
+        ChassisParams {
+            mass: self.mass,
+            a: self.a,
+            b: self.b,
+            track_front: self.track_front,
+            track_rear: self.track_rear,
+            pitch_inertia: self.pitch_inertia.unwrap_or(self.mass * self.a * self.b),
+            roll_inertia: self.roll_inertia,
+            seat_x: self.seat_x,
+            seat_y: self.seat_y,
+        }
+    }
+}
+
+#[derive(Debug, Args)]
+pub(super) struct CarArgs {
+    #[command(flatten)]
+    pub(super) model: ModelArgs,
+    #[command(flatten)]
+    pub(super) run: RunArgs,
+    #[command(flatten)]
+    pub(super) chassis: ChassisArgs,
+    /// cs, pvass or tdvass on every corner (any case; or the codes 1, 2, 3).
+    #[arg(long, default_value = "tdvass")]
+    pub(super) variant: String,
+    /// Seed of the right track's random road (default: --road-seed + 1).
+    #[arg(long)]
+    pub(super) right_seed: Option<u64>,
+    /// The right track's phase on the harmonic road (rad).
+    #[arg(long, default_value_t = 0.0)]
+    pub(super) right_phase: f64,
+    /// Write heave, pitch, roll, the seat acceleration and the four
+    /// suspension deflections to this CSV file.
+    #[arg(long)]
+    pub(super) output: Option<String>,
+    /// Time between CSV rows (s), rounded to a whole number of internal steps.
+    #[arg(long, default_value_t = 1e-3)]
+    pub(super) output_interval: f64,
+    /// Print one JSON object.
+    #[arg(long)]
+    pub(super) json: bool,
+}
+
+impl CarArgs {
+    fn config(&self) -> Result<CarConfig> {
+        let road = self.run.road_spec()?;
+        let right_seed = self
+            .right_seed
+            .unwrap_or(self.run.road_seed.wrapping_add(1));
+        let right_road = match &road {
+            RoadSpec::Iso8608(random) => RoadSpec::Iso8608(tdvass::road::RandomRoad {
+                seed: right_seed,
+                ..*random
+            }),
+            RoadSpec::PaperCompatible {
+                road: random,
+                sample_interval,
+            } => RoadSpec::PaperCompatible {
+                road: tdvass::road::RandomRoad {
+                    seed: right_seed,
+                    ..*random
+                },
+                sample_interval: *sample_interval,
+            },
+            other => other.clone(),
+        };
+        let sim = self
+            .run
+            .config(self.model.params(), parse_variant(&self.variant)?)?;
+        Ok(CarConfig {
+            params: sim.params,
+            variant: sim.variant,
+            chassis: self.chassis.params(),
+            road,
+            right_road,
+            right_phase: self.right_phase,
+            vehicle_speed: self.run.vehicle_speed,
+            tire_contact: sim.tire_contact,
+            tolerance: sim.tolerance,
+            max_internal_step: sim.max_internal_step,
+        })
+    }
+}
+
+/// Runs `tdvass car`.
+pub(super) fn car_command(a: CarArgs) -> Result<String> {
+    let config = a.config()?;
+    let choice = config.choose_step()?;
+    let duration = a.run.duration;
+    let report = match &a.output {
+        Some(path) => write_history(&config, &choice, duration, a.output_interval, path)?,
+        None => run_car_with(&config, &choice, duration, 0, &mut |_| {})?,
+    };
+    if a.json {
+        return Ok(car_json(&a, &config, &report)?.to_string());
+    }
+    let mut out = format!(
+        "full car, {} on every corner, {}, {} tire, {} s from rest (internal step {} s)\n  RMS heave acceleration      {:.4} m/s^2\n  RMS pitch acceleration      {:.4} rad/s^2\n  RMS roll acceleration       {:.4} rad/s^2\n  ISO 2631-1 a_w at the seat  {:.4} m/s^2\n  seat vibration dose value   {:.4} m/s^1.75\n  corner  RMS SDD (mm)  RMS TDD (mm)  tire load ratio  lift-offs\n",
+        config.variant.label(),
+        a.run.road_note(),
+        config.tire_contact.name(),
+        duration,
+        report.internal_step,
+        report.rms_heave_acceleration,
+        report.rms_pitch_acceleration,
+        report.rms_roll_acceleration,
+        report.rms_weighted_seat_acceleration,
+        report.seat_vibration_dose_value,
+    );
+    for (corner, c) in Corner::ALL.iter().zip(&report.corners) {
+        out += &format!(
+            "  {:<6}  {:>12.4}  {:>12.4}  {:>15.4}  {:>9}\n",
+            corner.name(),
+            c.rms_suspension_deflection * 1e3,
+            c.rms_tire_deflection * 1e3,
+            c.rms_dynamic_tire_load_ratio,
+            c.lift_off_count
+        );
+    }
+    Ok(out)
+}
+
+/// The JSON of a run: the chassis's RMS outputs, `corners`, and every
+/// parameter the run used.
+fn car_json(a: &CarArgs, config: &CarConfig, report: &CarReport) -> Result<Value> {
+    let mut corners = serde_json::Map::new();
+    for (corner, c) in Corner::ALL.iter().zip(&report.corners) {
+        corners.insert(
+            corner.name().into(),
+            json!({
+                "rms_suspension_deflection": c.rms_suspension_deflection,
+                "rms_tire_deflection": c.rms_tire_deflection,
+                "rms_dynamic_tire_load_ratio": c.rms_dynamic_tire_load_ratio,
+                "lift_off_count": c.lift_off_count,
+                "contact_loss_time": c.contact_loss_time,
+                "max_suspension_deflection": c.max_suspension_deflection,
+                "static_load": c.static_load,
+            }),
+        );
+    }
+    let mut value = json!({
+        "variant": config.variant.name(),
+        "road_note": a.run.road_note(),
+        "rms_heave_acceleration": report.rms_heave_acceleration,
+        "rms_pitch_acceleration": report.rms_pitch_acceleration,
+        "rms_roll_acceleration": report.rms_roll_acceleration,
+        "rms_weighted_seat_acceleration": report.rms_weighted_seat_acceleration,
+        "seat_vibration_dose_value": report.seat_vibration_dose_value,
+        "corners": corners,
+    });
+    for (name, parameter) in config.params.named_values() {
+        if name != "m_s" {
+            value[name] = parameter.into();
+        }
+    }
+    let p = &config.chassis;
+    for (name, parameter) in [
+        ("mass", p.mass),
+        ("a", p.a),
+        ("b", p.b),
+        ("track_front", p.track_front),
+        ("track_rear", p.track_rear),
+        ("pitch_inertia", p.pitch_inertia),
+        ("roll_inertia", p.roll_inertia),
+        ("seat_x", p.seat_x),
+        ("seat_y", p.seat_y),
+    ] {
+        value[name] = parameter.into();
+    }
+    a.run.record(&mut value)?;
+    if let RoadSpec::Iso8608(right) | RoadSpec::PaperCompatible { road: right, .. } =
+        &config.right_road
+    {
+        value["right_seed"] = right.seed.into();
+    }
+    value["right_phase"] = config.right_phase.into();
+    value["rear_road_delay"] = config.rear_delay().into();
+    value["internal_step"] = report.internal_step.into();
+    Ok(value)
+}
+
+/// Runs the car writing a CSV row every `interval` (whole internal steps).
+fn write_history(
+    config: &CarConfig,
+    choice: &tdvass::solver::StepChoice,
+    duration: f64,
+    interval: f64,
+    path: &str,
+) -> Result<CarReport> {
+    if !(interval.is_finite() && interval > 0.0) {
+        return Err(Error::InvalidParameter {
+            name: "output_interval",
+            value: interval,
+            reason: "must be finite and > 0",
+        });
+    }
+    let file = std::fs::File::create(path).map_err(|e| io_error("creating", path, &e))?;
+    let mut csv = std::io::BufWriter::new(file);
+    let step = tdvass::solver::DelayGrid::new(
+        if config.variant.has_control() {
+            config.params.tau
+        } else {
+            0.0
+        },
+        choice.step_bound,
+    )?
+    .step;
+    let every = (interval / step).round().max(1.0) as u64;
+    let mut failure = None;
+    let header = "time,heave,pitch,roll,seat_acceleration,suspension_deflection_fl,suspension_deflection_fr,suspension_deflection_rl,suspension_deflection_rr";
+    writeln!(csv, "{header}").map_err(|e| io_error("writing", path, &e))?;
+    let mut row = |s: CarSample| {
+        let [z, pitch, roll] = s.position;
+        let [fl, fr, rl, rr] = s.suspension_deflection;
+        if let Err(e) = writeln!(
+            csv,
+            "{},{z},{pitch},{roll},{},{fl},{fr},{rl},{rr}",
+            s.time, s.seat_acceleration
+        ) {
+            failure.get_or_insert(e);
+        }
+    };
+    let report = run_car_with(config, choice, duration, every, &mut row)?;
+    if let Some(e) = failure {
+        return Err(io_error("writing", path, &e));
+    }
+    csv.flush().map_err(|e| io_error("writing", path, &e))?;
+    Ok(report)
+}
