@@ -182,14 +182,18 @@ def test_validate_fmu_reports_no_problems(chassis_fmu):
     assert validate_fmu(str(path)) == []
 
 
-def test_description_declares_a_cosimulation_chassis(chassis_fmu):
+def test_description_declares_a_cosimulation_and_model_exchange_chassis(chassis_fmu):
     path, md, _ = chassis_fmu
     assert md.modelName == "TDVASS chassis"
     assert md.coSimulation is not None and md.coSimulation.modelIdentifier == "tdvass"
-    assert md.modelExchange is None
+    # Model Exchange over 19 states, no event indicators.
+    assert md.modelExchange is not None and md.modelExchange.modelIdentifier == "tdvass"
+    assert [d.variable.derivative.name for d in md.derivatives][:6] == POSITIONS + RATES
+    assert len(md.derivatives) == 19
+    assert not md.eventIndicators
     with zipfile.ZipFile(path) as z:
         xml = z.read("modelDescription.xml").decode()
-    assert "<ModelExchange" not in xml
+    assert "<ModelExchange" in xml
     cs = md.coSimulation
     assert cs.maxOutputDerivativeOrder == 0
     assert cs.providesIntermediateUpdate is False
@@ -219,9 +223,10 @@ def test_description_declares_a_cosimulation_chassis(chassis_fmu):
 
 def test_model_structure(chassis_fmu):
     """The attachment points and the motion depend on no input (a car of
-    corners and chassis has no algebraic loop); the accelerations and the
-    seat's depend directly on the four forces; the W_k-weighted one, an
-    output of the filter's states, on none."""
+    corners and chassis has no algebraic loop), only on the continuous
+    states; the accelerations and the seat's depend directly on the four
+    forces; the W_k-weighted one, an output of the filter's states, on
+    those states."""
     _, md, _ = chassis_fmu
     outputs = {o.variable.name: o for o in md.outputs}
     assert set(outputs) == {v.name for v in md.modelVariables if v.causality == "output"}
@@ -230,9 +235,12 @@ def test_model_structure(chassis_fmu):
             assert [d.name for d in output.dependencies] == FORCES, name
             assert output.dependenciesKind == ["fixed"] * 4, name
         else:
-            assert output.dependencies == [], name
+            assert output.dependencies, name
+            assert all(d.causality in ("output", "local") for d in output.dependencies), name
     initial = {u.variable.name: u for u in md.initialUnknowns}
-    assert set(initial) == set(outputs)
+    assert set(outputs) <= set(initial)
+    assert all(md_v.causality == "local" for md_v in
+               (u.variable for u in md.initialUnknowns) if md_v.name not in outputs)
     body = ["mass", "a", "b", "track_front", "track_rear", "pitch_inertia", "roll_inertia"]
     for name in ACCELERATIONS:
         assert [d.name for d in initial[name].dependencies] == body + FORCES, name

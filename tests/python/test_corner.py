@@ -157,13 +157,18 @@ def test_validate_fmu_reports_no_problems(corner_fmu):
     assert validate_fmu(str(path)) == []
 
 
-def test_description_declares_a_cosimulation_corner(corner_fmu):
+def test_description_declares_a_cosimulation_and_model_exchange_corner(corner_fmu):
     path, md, _ = corner_fmu
     assert md.modelName == "TDVASS corner"
     assert md.coSimulation is not None and md.coSimulation.modelIdentifier == "tdvass"
-    assert md.modelExchange is None
+    # Model Exchange over its own 7 states (the body's coordinates are
+    # inputs), without directional derivatives.
+    assert md.modelExchange is not None and md.modelExchange.modelIdentifier == "tdvass"
+    assert not md.modelExchange.providesDirectionalDerivative
+    assert [d.variable.derivative.name for d in md.derivatives] == CORNER_STATES + [
+        "integral_suspension_deflection_squared", "integral_tire_deflection_squared", "contact_loss_time"]
     with zipfile.ZipFile(path) as z:
-        assert "<ModelExchange" not in z.read("modelDescription.xml").decode()
+        assert "<ModelExchange" in z.read("modelDescription.xml").decode()
     variables = {v.name: v for v in md.modelVariables}
     assert "m_s" not in variables and "x_s" not in variables and "body_acceleration" not in variables
     for name in ["static_load", "road_delay", "road_phase"]:
@@ -175,12 +180,12 @@ def test_description_declares_a_cosimulation_corner(corner_fmu):
     assert variables["body_force"].causality == "output"
     outputs = {o.variable.name: o for o in md.outputs}
     force = outputs["body_force"]
-    assert [d.name for d in force.dependencies] == ["body_displacement", "body_velocity"]
-    assert force.dependenciesKind == ["fixed", "fixed"]
-    assert [d.name for d in outputs["suspension_deflection"].dependencies] == ["body_displacement"]
-    # The states depend on no input directly.
+    assert [d.name for d in force.dependencies] == [*CORNER_STATES, "body_displacement", "body_velocity"]
+    assert force.dependenciesKind == ["dependent"] * 4 + ["fixed", "fixed"]
+    assert [d.name for d in outputs["suspension_deflection"].dependencies] == [*CORNER_STATES, "body_displacement"]
+    # The states depend on no input directly, only on themselves.
     for name in CORNER_STATES:
-        assert outputs[name].dependencies == [], name
+        assert [d.name for d in outputs[name].dependencies] == [name], name
 
 
 def test_the_quarter_cars_body_is_the_default_static_load(corner_fmu, model_description):

@@ -33,6 +33,9 @@ pub(crate) struct ComponentPage<'a> {
     pub(crate) after_variables: &'a dyn Fn(&mut XmlWriter) -> XmlResult,
     /// The attributes of the `CoSimulation` element after `modelIdentifier`.
     pub(crate) co_simulation: &'a [(&'a str, &'a str)],
+    /// The attributes of the `ModelExchange` element after
+    /// `modelIdentifier`.
+    pub(crate) model_exchange: &'a [(&'a str, &'a str)],
     /// The standard, for the references.
     pub(crate) specification: &'a str,
 }
@@ -46,6 +49,41 @@ fn label(version: FmiVersion) -> &'static str {
 }
 
 /// What the page calls the component: `corner`, `chassis`.
+/// What the page says of the model's Model Exchange: its continuous
+/// states in order, its event indicators, what the master sets.
+fn model_exchange_text(model: Model, version: FmiVersion) -> String {
+    let variables = tdvass_fmu::variables::variables_of(model, version);
+    let states: Vec<&str> = model
+        .continuous_states()
+        .iter()
+        .map(|&i| {
+            variables
+                .iter()
+                .find(|v| v.state_index() == Some(i))
+                .map(|v| v.name)
+                .unwrap_or_else(|| panic!("no variable of continuous state {i}"))
+        })
+        .collect();
+    let instantiate = match version {
+        FmiVersion::Fmi2 => "fmi2Instantiate with fmi2ModelExchange",
+        FmiVersion::Fmi3 => "fmi3InstantiateModelExchange",
+    };
+    let what = match model {
+        Model::Chassis => {
+            "The event indicators: none. The master sets the four forces at every point it evaluates (each is taken as it is; the forces' rates play no part); heave, pitch, roll and their rates are outputs and states, the W_k filter of the seat acceleration and the integrals behind the RMS accelerations, the RMS of a_w and the VDV are local states. The states are linear in the forces: the master's solver alone sets the accuracy. No delay history: CompletedIntegratorStep is not needed. No directional derivatives."
+        }
+        _ => {
+            "The event indicator contact_indicator is the margin W/k_t - TDD to the loss of tire contact, as in the quarter car. The master sets body_displacement and body_velocity, the attachment point's motion now, before each evaluation of the derivatives (the body's coordinates are inputs, not states), and x_g with road = 0. The delayed x_t(t - tau) comes from a history of the master's points, as in the quarter car: call CompletedIntegratorStep at the solver's accepted steps. No directional derivatives in Model Exchange (those of Co-Simulation remain)."
+        }
+    };
+    format!(
+        "The {} also serves Model Exchange ({instantiate}): the master's solver integrates its {} continuous states, in this order: {}. Their derivatives are the local variables der(...). {what}",
+        noun(model),
+        states.len(),
+        states.join(", ")
+    )
+}
+
 fn noun(model: Model) -> &'static str {
     match model {
         Model::Corner => "corner",
@@ -67,7 +105,10 @@ fn write_body(w: &mut XmlWriter, page: &ComponentPage<'_>) -> XmlResult {
     text_element(
         w,
         "h1",
-        &format!("{}: {version} FMU (Co-Simulation)", model.name()),
+        &format!(
+            "{}: {version} FMU (Co-Simulation and Model Exchange)",
+            model.name()
+        ),
     )?;
     paragraph(w, description(model))?;
     paragraph(
@@ -112,14 +153,16 @@ fn write_body(w: &mut XmlWriter, page: &ComponentPage<'_>) -> XmlResult {
     )?;
     paragraph(w, REFERENCE_RESULTS)?;
 
+    text_element(w, "h2", "Model Exchange")?;
+    paragraph(w, &model_exchange_text(model, page.version))?;
+    let rows: Vec<Vec<String>> = page
+        .model_exchange
+        .iter()
+        .map(|(name, value)| vec![name.to_string(), value.to_string()])
+        .collect();
+    table(w, &["attribute", "value"], &rows)?;
+
     text_element(w, "h2", "Co-Simulation")?;
-    paragraph(
-        w,
-        &format!(
-            "Co-Simulation only in this version: the {} offers no Model Exchange (its model description has no ModelExchange element, and instantiating it for Model Exchange fails); the quarter car's {version} FMU offers both.",
-            noun(model)
-        ),
-    )?;
     if model == Model::Chassis {
         paragraph(w, chassis_capabilities(page.version))?;
     }

@@ -1,10 +1,12 @@
 //! The FMI 2.0 `modelDescription.xml` and `documentation/index.html`,
 //! generated from the variable table with quick-xml (no markup is written
 //! by hand, so every value is escaped). The output is deterministic: no
-//! timestamps. Each model ([`Model`]) has its own: the quarter car's with
-//! Model Exchange beside Co-Simulation, the corner's and the chassis's
-//! Co-Simulation only ([`Model::offers_model_exchange`]), the chassis's
-//! with capabilities of its own ([`co_simulation_capabilities`]).
+//! timestamps. Each model ([`Model`]) has its own, with Model Exchange
+//! beside Co-Simulation over its own continuous states
+//! ([`Model::continuous_states`]; the corner's and the chassis's without
+//! directional derivatives, [`model_exchange_capabilities`]), the
+//! chassis's with Co-Simulation capabilities of its own
+//! ([`co_simulation_capabilities`]).
 
 use crate::component::{ComponentPage, component_page};
 use crate::markup::{
@@ -14,7 +16,6 @@ use crate::markup::{
 };
 use quick_xml::events::{BytesText, Event};
 use tdvass::exchange::EVENT_INDICATORS;
-use tdvass::solver::CONTINUOUS_STATES;
 use tdvass_fmi2::FMI_VERSION;
 use tdvass_fmu::Model;
 use tdvass_fmu::variables::{
@@ -193,7 +194,7 @@ fn write_model_structure(w: &mut XmlWriter, model: Model) -> XmlResult {
             // on every known (no `dependencies`).
             if model.offers_model_exchange() {
                 w.create_element("Derivatives").write_inner_content(|w| {
-                    for i in 0..CONTINUOUS_STATES {
+                    for &i in model.continuous_states() {
                         let index = variables
                             .iter()
                             .position(|v| matches!(v.access, Access::StateDerivative(j) if j == i))
@@ -255,6 +256,40 @@ pub const MODEL_EXCHANGE_CAPABILITIES: [(&str, &str); 7] = [
     ("providesDirectionalDerivative", "true"),
 ];
 
+/// The corner's `ModelExchange` attributes ([`Model::Corner`]), in the
+/// order of [`MODEL_EXCHANGE_CAPABILITIES`]: no directional derivatives.
+pub const CORNER_MODEL_EXCHANGE_CAPABILITIES: [(&str, &str); 7] = [
+    ("needsExecutionTool", "false"),
+    ("completedIntegratorStepNotNeeded", "false"),
+    ("canBeInstantiatedOnlyOncePerProcess", "false"),
+    ("canNotUseMemoryManagementFunctions", "true"),
+    ("canGetAndSetFMUstate", "true"),
+    ("canSerializeFMUstate", "true"),
+    ("providesDirectionalDerivative", "false"),
+];
+
+/// The chassis's `ModelExchange` attributes ([`Model::Chassis`]): no
+/// delay history, so completed integrator steps are not needed; no
+/// directional derivatives.
+pub const CHASSIS_MODEL_EXCHANGE_CAPABILITIES: [(&str, &str); 7] = [
+    ("needsExecutionTool", "false"),
+    ("completedIntegratorStepNotNeeded", "true"),
+    ("canBeInstantiatedOnlyOncePerProcess", "false"),
+    ("canNotUseMemoryManagementFunctions", "true"),
+    ("canGetAndSetFMUstate", "true"),
+    ("canSerializeFMUstate", "true"),
+    ("providesDirectionalDerivative", "false"),
+];
+
+/// The `ModelExchange` attributes of `model` after `modelIdentifier`.
+pub fn model_exchange_capabilities(model: Model) -> &'static [(&'static str, &'static str)] {
+    match model {
+        Model::QuarterCar => &MODEL_EXCHANGE_CAPABILITIES,
+        Model::Corner => &CORNER_MODEL_EXCHANGE_CAPABILITIES,
+        Model::Chassis => &CHASSIS_MODEL_EXCHANGE_CAPABILITIES,
+    }
+}
+
 /// The attributes of the `CoSimulation` element after `modelIdentifier`,
 /// in the order written: the capabilities the C interface provides (the
 /// quarter car's and the corner's).
@@ -299,7 +334,7 @@ pub fn co_simulation_capabilities(model: Model) -> &'static [(&'static str, &'st
 /// the types and units its variables use.
 pub fn model_description_xml(model: Model) -> String {
     let guid = guid(model);
-    let event_indicators = EVENT_INDICATORS.to_string();
+    let event_indicators = model.event_indicators().to_string();
     let model_exchange = model.offers_model_exchange();
     let event_indicators = [("numberOfEventIndicators", event_indicators.as_str())];
     let quantities = quantities(model);
@@ -309,7 +344,7 @@ pub fn model_description_xml(model: Model) -> String {
         quantities: &quantities,
         token: ("guid", &guid),
         co_simulation: co_simulation_capabilities(model),
-        model_exchange: model_exchange.then_some(&MODEL_EXCHANGE_CAPABILITIES[..]),
+        model_exchange: model_exchange.then_some(model_exchange_capabilities(model)),
         root: if model_exchange {
             &event_indicators
         } else {
@@ -368,6 +403,7 @@ pub fn documentation_html(model: Model) -> String {
                 .collect(),
             after_variables: &|_| Ok(()),
             co_simulation: co_simulation_capabilities(model),
+            model_exchange: model_exchange_capabilities(model),
             specification: "Functional Mock-up Interface for Model Exchange and Co-Simulation, version 2.0.",
         }),
     }

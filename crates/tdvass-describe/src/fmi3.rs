@@ -12,17 +12,16 @@
 //! [`Access::StateDerivative`], [`Access::EventIndicator`]).
 //!
 //! Each model ([`Model`]) has its own description, from its variables
-//! ([`variables_of`]): the quarter car's with Model Exchange, the corner's
-//! and the chassis's Co-Simulation only ([`Model::offers_model_exchange`]:
-//! no `ModelExchange` element, no `ContinuousStateDerivative` or
-//! `EventIndicator` in `ModelStructure`), the chassis's with capabilities
-//! of its own ([`co_simulation_capabilities`]). Each defines the types and
+//! ([`variables_of`]), each with Model Exchange beside Co-Simulation over
+//! its own continuous states ([`Model::continuous_states`]; the corner's
+//! and the chassis's without directional derivatives,
+//! [`model_exchange_capabilities`]), the chassis's with Co-Simulation
+//! capabilities of its own ([`co_simulation_capabilities`]). Each defines the types and
 //! units its variables use, no others.
 
 use crate::markup::{
     DescriptionFrame, XmlResult, XmlWriter, model_description, number, typed_in_use,
 };
-use tdvass::solver::CONTINUOUS_STATES;
 use tdvass_fmi3::types::{Fmi3Type, fmi3_type};
 use tdvass_fmi3::{FMI_VERSION, instantiation_token};
 use tdvass_fmu::Model;
@@ -46,6 +45,43 @@ pub const MODEL_EXCHANGE_CAPABILITIES: [(&str, &str); 8] = [
     ("needsCompletedIntegratorStep", "true"),
     ("providesEvaluateDiscreteStates", "false"),
 ];
+
+/// The corner's `ModelExchange` attributes ([`Model::Corner`]), in the
+/// order of [`MODEL_EXCHANGE_CAPABILITIES`]: no directional or adjoint
+/// derivatives.
+pub const CORNER_MODEL_EXCHANGE_CAPABILITIES: [(&str, &str); 8] = [
+    ("needsExecutionTool", "false"),
+    ("canBeInstantiatedOnlyOncePerProcess", "false"),
+    ("canGetAndSetFMUState", "true"),
+    ("canSerializeFMUState", "true"),
+    ("providesDirectionalDerivatives", "false"),
+    ("providesAdjointDerivatives", "false"),
+    ("needsCompletedIntegratorStep", "true"),
+    ("providesEvaluateDiscreteStates", "false"),
+];
+
+/// The chassis's `ModelExchange` attributes ([`Model::Chassis`]): no
+/// delay history, so completed integrator steps are not needed; no
+/// directional or adjoint derivatives.
+pub const CHASSIS_MODEL_EXCHANGE_CAPABILITIES: [(&str, &str); 8] = [
+    ("needsExecutionTool", "false"),
+    ("canBeInstantiatedOnlyOncePerProcess", "false"),
+    ("canGetAndSetFMUState", "true"),
+    ("canSerializeFMUState", "true"),
+    ("providesDirectionalDerivatives", "false"),
+    ("providesAdjointDerivatives", "false"),
+    ("needsCompletedIntegratorStep", "false"),
+    ("providesEvaluateDiscreteStates", "false"),
+];
+
+/// The `ModelExchange` attributes of `model` after `modelIdentifier`.
+pub fn model_exchange_capabilities(model: Model) -> &'static [(&'static str, &'static str)] {
+    match model {
+        Model::QuarterCar => &MODEL_EXCHANGE_CAPABILITIES,
+        Model::Corner => &CORNER_MODEL_EXCHANGE_CAPABILITIES,
+        Model::Chassis => &CHASSIS_MODEL_EXCHANGE_CAPABILITIES,
+    }
+}
 
 /// The value reference of continuous state `i`'s variable of `model`.
 pub fn state_vr(model: Model, i: usize) -> u32 {
@@ -353,12 +389,12 @@ fn write_model_structure(w: &mut XmlWriter, model: Model) -> XmlResult {
             // In the order of the continuous states (that of
             // fmi3GetContinuousStates); each depends on every known (no
             // `dependencies`).
-            let states = if model.offers_model_exchange() {
-                CONTINUOUS_STATES
+            let states: &[usize] = if model.offers_model_exchange() {
+                model.continuous_states()
             } else {
-                0
+                &[]
             };
-            for i in 0..states {
+            for &i in states {
                 w.create_element("ContinuousStateDerivative")
                     .with_attribute((
                         "valueReference",
@@ -414,7 +450,7 @@ pub fn model_description_xml(model: Model) -> String {
         co_simulation: co_simulation_capabilities(model),
         model_exchange: model
             .offers_model_exchange()
-            .then_some(&MODEL_EXCHANGE_CAPABILITIES[..]),
+            .then_some(model_exchange_capabilities(model)),
         root: &[],
     };
     model_description(

@@ -1250,10 +1250,10 @@ pub unsafe extern "C" fn fmi3GetNumberOfEventIndicators(
     instance: fmi3Instance,
     nEventIndicators: *mut size_t,
 ) -> fmi3Status {
-    call(instance, Function::GetNumberOfEventIndicators, |_| {
+    call(instance, Function::GetNumberOfEventIndicators, |i| {
         // SAFETY: module contract: points to a size_t.
         *unsafe { out_value(nEventIndicators, "nEventIndicators") }? =
-            tdvass::exchange::EVENT_INDICATORS;
+            i.slave().model().event_indicators();
         Ok(Status::Ok)
     })
 }
@@ -1263,10 +1263,10 @@ pub unsafe extern "C" fn fmi3GetNumberOfContinuousStates(
     instance: fmi3Instance,
     nContinuousStates: *mut size_t,
 ) -> fmi3Status {
-    call(instance, Function::GetNumberOfContinuousStates, |_| {
+    call(instance, Function::GetNumberOfContinuousStates, |i| {
         // SAFETY: module contract: points to a size_t.
         *unsafe { out_value(nContinuousStates, "nContinuousStates") }? =
-            tdvass::solver::CONTINUOUS_STATES;
+            i.slave().model().continuous_states().len();
         Ok(Status::Ok)
     })
 }

@@ -3,7 +3,8 @@
 //! alone), the body's heave, pitch and roll with their rates and
 //! accelerations, and the ride-comfort measures at the seat point.
 
-use tdvass::chassis::{Chassis, Corner};
+use std::ops::Range;
+use tdvass::chassis::{CHASSIS_FILTER_AT, CHASSIS_INTEGRALS_AT, Chassis, Corner};
 
 /// An output of the chassis.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -31,6 +32,25 @@ pub enum ChassisOutputId {
 }
 
 impl ChassisOutputId {
+    /// The continuous states of Model Exchange (indices into
+    /// [`Chassis::states`]) the value is computed from at an instant,
+    /// besides the forces: the dependencies on states in
+    /// ModelStructure/Outputs.
+    pub fn state_dependencies(self) -> Range<usize> {
+        use ChassisOutputId as C;
+        match self {
+            C::Displacement(_) => 0..3,
+            C::Velocity(_) => 3..6,
+            C::Position(k) => k..k + 1,
+            C::Rate(k) => 3 + k..4 + k,
+            C::Acceleration(_) | C::SeatAcceleration => 0..0,
+            C::RmsAcceleration(k) => CHASSIS_INTEGRALS_AT + k..CHASSIS_INTEGRALS_AT + k + 1,
+            C::WeightedSeatAcceleration => CHASSIS_FILTER_AT..CHASSIS_INTEGRALS_AT,
+            C::RmsWeightedSeatAcceleration => CHASSIS_INTEGRALS_AT + 3..CHASSIS_INTEGRALS_AT + 4,
+            C::SeatVibrationDoseValue => CHASSIS_INTEGRALS_AT + 4..CHASSIS_INTEGRALS_AT + 5,
+        }
+    }
+
     /// The value of the output of `chassis` now.
     pub fn value(self, chassis: &Chassis) -> f64 {
         use ChassisOutputId as C;

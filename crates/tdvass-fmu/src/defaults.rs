@@ -1,6 +1,11 @@
 //! The FMUs' names, default experiment, time tolerance and log
 //! categories: what the model descriptions declare and the slave assumes.
 
+use tdvass::chassis::CHASSIS_STATES;
+use tdvass::exchange::EVENT_INDICATORS;
+use tdvass::model::{V_H, V_T, X_H, X_T};
+use tdvass::solver::{CONTINUOUS_STATES, INTEGRALS_AT};
+
 /// The `modelIdentifier` (shared library base name) of the FMUs.
 pub const MODEL_IDENTIFIER: &str = "tdvass";
 /// The `modelName` of the quarter car's FMUs ([`Model::name`] names
@@ -47,10 +52,48 @@ impl Model {
         }
     }
 
-    /// Whether the model offers Model Exchange (the corner and the chassis
-    /// are Co-Simulation models for now).
+    /// Whether the model offers Model Exchange (every model does: the
+    /// quarter car and the corner with the states of
+    /// [`tdvass::exchange::ModelExchange`], the chassis with its own,
+    /// [`tdvass::chassis::Chassis::states`]).
     pub fn offers_model_exchange(self) -> bool {
-        self == Model::QuarterCar
+        true
+    }
+
+    /// Model Exchange: the model's continuous states, in the order the
+    /// master sees them, as indices into its engine's states (the
+    /// quarter car's and the corner's into
+    /// [`tdvass::solver::CONTINUOUS_STATES`], the chassis's into
+    /// [`tdvass::chassis::CHASSIS_STATES`]). The corner leaves out the
+    /// body's coordinates (its input), the W_k filter of the body
+    /// acceleration and the integrals of outputs it does not have.
+    pub fn continuous_states(self) -> &'static [usize] {
+        const QUARTER_CAR: [usize; CONTINUOUS_STATES] = indices();
+        const CHASSIS: [usize; CHASSIS_STATES] = indices();
+        const CORNER: [usize; 7] = [
+            X_H,
+            V_H,
+            X_T,
+            V_T,
+            INTEGRALS_AT + 1,
+            INTEGRALS_AT + 2,
+            CONTINUOUS_STATES - 1,
+        ];
+        match self {
+            Model::QuarterCar => &QUARTER_CAR,
+            Model::Corner => &CORNER,
+            Model::Chassis => &CHASSIS,
+        }
+    }
+
+    /// Model Exchange: how many event indicators the model has (the
+    /// suspension's switching elements; the chassis has none).
+    pub fn event_indicators(self) -> usize {
+        if self.is_suspension() {
+            EVENT_INDICATORS
+        } else {
+            0
+        }
     }
 
     /// Whether the model is the suspension (the quarter car or the
@@ -58,6 +101,17 @@ impl Model {
     pub fn is_suspension(self) -> bool {
         self != Model::Chassis
     }
+}
+
+/// `[0, 1, .., N - 1]`.
+const fn indices<const N: usize>() -> [usize; N] {
+    let mut all = [0; N];
+    let mut i = 0;
+    while i < N {
+        all[i] = i;
+        i += 1;
+    }
+    all
 }
 
 /// `DefaultExperiment` start time (s).

@@ -418,7 +418,9 @@ impl Slave {
         match &self.state.engine {
             Engine::ModelExchange(Some(model)) => model.time(),
             Engine::CoSimulation(Some(sim)) => sim.time(),
-            Engine::Chassis(Some(chassis)) => chassis.time(),
+            Engine::Chassis(Some(chassis)) | Engine::ChassisExchange(Some(chassis)) => {
+                chassis.time()
+            }
             _ => self.state.start_time,
         }
     }

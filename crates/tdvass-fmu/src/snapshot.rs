@@ -16,7 +16,8 @@
 //! input slope and its origin, the last two input values (for
 //! `input_extrapolation`), the hold-warning and contact-loss flags, start and stop time, the tolerance, last successful time, the terminate
 //! flag, the Model Exchange model if any ([`ModelExchange::to_bytes`],
-//! after a flag and its length), then [`Simulator::to_bytes`] (time, solver state, the delay
+//! after a flag and its length; the flag 2 for the chassis in Model
+//! Exchange, whose motion follows as in Co-Simulation), then [`Simulator::to_bytes`] (time, solver state, the delay
 //! history, the road generator, the RMS accumulators, the configuration)
 //! or, for the chassis, its force rates and [`Chassis::write_motion`].
 //! All numbers are little-endian; floats are stored as their bit patterns,
@@ -53,6 +54,10 @@ pub const MAGIC: &[u8; 8] = b"TDVASSFS";
 /// same format; the header's token (the FMI 2.0 GUID or the FMI 3.0
 /// instantiation token) keeps a state of one from being read by the other.
 pub const FORMAT_VERSION: u32 = 6;
+/// The code of the Model Exchange model's presence that says the chassis
+/// runs in Model Exchange (its motion follows where the co-simulation's
+/// does; 0: no Model Exchange model, 1: the suspension's follows).
+const CHASSIS_EXCHANGE: u8 = 2;
 /// Longest GUID accepted in a header.
 const MAX_GUID_LEN: usize = 64;
 /// Most internal steps between the start and a restored state (2^52: node
@@ -180,14 +185,17 @@ fn encode_payload(model: &SlaveState) -> Vec<u8> {
     w.f64(model.settings.tolerance);
     w.f64(model.last_successful_time);
     w.u8(model.terminate_requested as u8);
-    match model.engine.exchange() {
-        Some(exchange) => {
+    match (model.engine.exchange(), &model.engine) {
+        (Some(exchange), _) => {
             let bytes = exchange.to_bytes();
             w.u8(1);
             w.u64(bytes.len() as u64);
             w.raw(&bytes);
         }
-        None => w.u8(0),
+        // The chassis in Model Exchange: its motion follows as the
+        // co-simulation's does.
+        (None, Engine::ChassisExchange(Some(_))) => w.u8(CHASSIS_EXCHANGE),
+        (None, _) => w.u8(0),
     }
     match (model.engine.simulator(), model.engine.chassis()) {
         (Some(sim), _) => {
@@ -329,7 +337,15 @@ fn decode_payload(bytes: &[u8], model: Model) -> Result<SlaveState, FmiError> {
     settings.tolerance = tolerance;
     let last_successful_time = r.finite("the last successful time")?;
     let terminate_requested = r.flag("terminate requested")?;
-    let exchange = if r.flag("Model Exchange model present")? {
+    let exchange_code = r.u8("the Model Exchange model's presence")?;
+    if exchange_code > CHASSIS_EXCHANGE
+        || (exchange_code == CHASSIS_EXCHANGE && model != Model::Chassis)
+        || (exchange_code == 1 && model == Model::Chassis)
+    {
+        return Err(invalid(format_args!("Model Exchange code {exchange_code}")));
+    }
+    let chassis_exchange = exchange_code == CHASSIS_EXCHANGE;
+    let exchange = if exchange_code == 1 {
         let len = r.u64("the Model Exchange model length")?;
         let len = usize::try_from(len)
             .map_err(|_| invalid(format_args!("a Model Exchange model of {len} bytes")))?;
@@ -373,8 +389,11 @@ fn decode_payload(bytes: &[u8], model: Model) -> Result<SlaveState, FmiError> {
     }
     let stepping_phase = matches!(phase, Phase::StepComplete | Phase::StepFailed);
     let stepper = sim.is_some() || chassis.is_some();
+    if chassis_exchange && chassis.is_none() {
+        return Err(invalid("a chassis in Model Exchange without its motion"));
+    }
     if phase.is_simulating() != (stepper || exchange.is_some())
-        || (model_exchange_phase && exchange.is_none())
+        || (model_exchange_phase && exchange.is_none() && !chassis_exchange)
         || (stepping_phase && !stepper)
     {
         let holding = match (&sim, &exchange, &chassis) {
@@ -428,6 +447,9 @@ fn decode_payload(bytes: &[u8], model: Model) -> Result<SlaveState, FmiError> {
         // bytes: the instance that restores it gives its own.
         engine: match (sim, exchange, chassis) {
             (_, Some(model), _) => Engine::ModelExchange(Some(Box::new(model))),
+            (_, None, Some(chassis)) if chassis_exchange => {
+                Engine::ChassisExchange(Some(Box::new(chassis)))
+            }
             (_, None, Some(chassis)) => Engine::Chassis(Some(Box::new(chassis))),
             (sim, None, None) => Engine::CoSimulation(sim.map(Box::new)),
         },

@@ -22,12 +22,15 @@ pub enum Engine {
     ModelExchange(Option<Box<ModelExchange>>),
     /// The chassis's exact rigid-body step (`DoStep`; [`Model::Chassis`]).
     Chassis(Option<Box<Chassis>>),
+    /// The master's solver integrates the chassis's states
+    /// ([`Chassis::states`]; [`Model::Chassis`] in Model Exchange).
+    ChassisExchange(Option<Box<Chassis>>),
 }
 
 impl Engine {
     /// Whether the instance was made for Model Exchange.
     pub fn is_model_exchange(&self) -> bool {
-        matches!(self, Engine::ModelExchange(_))
+        matches!(self, Engine::ModelExchange(_) | Engine::ChassisExchange(_))
     }
 
     /// The same kind, without a model (before initialization).
@@ -36,6 +39,7 @@ impl Engine {
             Engine::CoSimulation(_) => Engine::CoSimulation(None),
             Engine::ModelExchange(_) => Engine::ModelExchange(None),
             Engine::Chassis(_) => Engine::Chassis(None),
+            Engine::ChassisExchange(_) => Engine::ChassisExchange(None),
         }
     }
 
@@ -46,6 +50,7 @@ impl Engine {
             Engine::CoSimulation(Some(_))
                 | Engine::ModelExchange(Some(_))
                 | Engine::Chassis(Some(_))
+                | Engine::ChassisExchange(Some(_))
         )
     }
 
@@ -53,7 +58,7 @@ impl Engine {
     pub fn kind_name(&self) -> &'static str {
         match self {
             Engine::CoSimulation(_) | Engine::Chassis(_) => "Co-Simulation",
-            Engine::ModelExchange(_) => "Model Exchange",
+            Engine::ModelExchange(_) | Engine::ChassisExchange(_) => "Model Exchange",
         }
     }
 
@@ -73,18 +78,22 @@ impl Engine {
         }
     }
 
-    /// The chassis, if it runs.
+    /// The chassis, if it runs (either kind).
     pub fn chassis(&self) -> Option<&Chassis> {
         match self {
-            Engine::Chassis(Some(chassis)) => Some(chassis),
+            Engine::Chassis(Some(chassis)) | Engine::ChassisExchange(Some(chassis)) => {
+                Some(chassis)
+            }
             _ => None,
         }
     }
 
-    /// The chassis, if it runs.
+    /// The chassis, if it runs (either kind).
     pub fn chassis_mut(&mut self) -> Option<&mut Chassis> {
         match self {
-            Engine::Chassis(Some(chassis)) => Some(chassis),
+            Engine::Chassis(Some(chassis)) | Engine::ChassisExchange(Some(chassis)) => {
+                Some(chassis)
+            }
             _ => None,
         }
     }
@@ -151,7 +160,10 @@ impl SlaveState {
     /// simulation.
     pub fn new(engine: Engine, model: Model) -> SlaveState {
         let engine = match (model, engine) {
-            (Model::Chassis, Engine::CoSimulation(_)) => Engine::Chassis(None),
+            (Model::Chassis, Engine::CoSimulation(_) | Engine::Chassis(_)) => Engine::Chassis(None),
+            (Model::Chassis, Engine::ModelExchange(_) | Engine::ChassisExchange(_)) => {
+                Engine::ChassisExchange(None)
+            }
             (_, engine) => engine.emptied(),
         };
         SlaveState {

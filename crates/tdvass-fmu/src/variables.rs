@@ -600,14 +600,33 @@ impl Variable {
     }
 
     /// Model Exchange: the index of the continuous state this variable is
-    /// ([`tdvass::solver::CONTINUOUS_STATES`]), `None` for the others.
+    /// among its engine's states ([`tdvass::solver::CONTINUOUS_STATES`],
+    /// the chassis's [`tdvass::chassis::CHASSIS_STATES`];
+    /// [`Model::continuous_states`] says which the model has), `None` for
+    /// the others.
     pub fn state_index(&self) -> Option<usize> {
         match self.access {
             Access::Output(OutputId::State(i)) | Access::ContinuousState(i) => Some(i),
             Access::Output(OutputId::ContactLossTime) => {
                 Some(tdvass::solver::CONTINUOUS_STATES - 1)
             }
+            Access::ChassisOutput(ChassisOutputId::Position(k)) => Some(k),
+            Access::ChassisOutput(ChassisOutputId::Rate(k)) => Some(3 + k),
             _ => None,
+        }
+    }
+
+    /// Whether the corner has this variable of Model Exchange (a local
+    /// state, a derivative or the event indicator): the states of
+    /// [`Model::continuous_states`] and their derivatives, the tire's
+    /// event indicator.
+    fn in_corner_exchange(&self) -> bool {
+        match self.access {
+            Access::ContinuousState(i) | Access::StateDerivative(i) => {
+                Model::Corner.continuous_states().contains(&i)
+            }
+            Access::EventIndicator(_) => true,
+            _ => false,
         }
     }
 
@@ -626,8 +645,7 @@ impl Variable {
         let states = match self.access {
             Access::Output(id) => id.state_dependencies(),
             Access::IntegerOutput(id) => id.state_dependencies(),
-            // The chassis offers no Model Exchange: no states to name.
-            Access::ChassisOutput(_) => 0..0,
+            Access::ChassisOutput(id) => id.state_dependencies(),
             _ => return Vec::new(),
         };
         let inputs = self.feedthrough.iter().map(|name| {
@@ -635,9 +653,10 @@ impl Variable {
                 .unwrap_or_else(|| panic!("unknown feedthrough input `{name}`"));
             (input, DependencyKind::Fixed)
         });
-        // A model without Model Exchange has no continuous states to
-        // depend on: its outputs depend on the inputs alone.
-        let states = states.filter(|_| model.offers_model_exchange()).map(|i| {
+        // Only the model's own continuous states are knowns (the corner
+        // takes the body's coordinates from its inputs).
+        let own = model.continuous_states();
+        let states = states.filter(|i| own.contains(i)).map(|i| {
             let state = variables_of(model, version)
                 .iter()
                 .find(|v| v.state_index() == Some(i))
@@ -686,10 +705,10 @@ impl Variable {
 
 /// The variables of `model` in `version`, in `ModelVariables` order: for
 /// the quarter car [`COMMON_VARIABLES`] (FMI 2.0) and [`FMI3_VARIABLES`]
-/// (FMI 3.0); for the corner the table's variables it shares (neither the
-/// quarter car's own nor Model Exchange's, which the corner does not
-/// offer), then [`CORNER_ADDITIONS`], then the FMI 3.0 additions (built
-/// at the first call).
+/// (FMI 3.0); for the corner the table's variables it shares (not the
+/// quarter car's own, and of Model Exchange's only those of its own
+/// states, [`Model::continuous_states`]), then [`CORNER_ADDITIONS`], then
+/// the FMI 3.0 additions (built at the first call).
 pub fn variables_of(model: Model, version: FmiVersion) -> &'static [Variable] {
     static CORNER: [std::sync::OnceLock<Vec<Variable>>; 2] =
         [std::sync::OnceLock::new(), std::sync::OnceLock::new()];
@@ -706,7 +725,9 @@ pub fn variables_of(model: Model, version: FmiVersion) -> &'static [Variable] {
                 .collect()
         }),
         (Model::Corner, _) => CORNER[slot(version)].get_or_init(|| {
-            let shared = |v: &&Variable| !v.quarter_car_only && v.causality != Causality::Local;
+            let shared = |v: &&Variable| {
+                !v.quarter_car_only && (v.causality != Causality::Local || v.in_corner_exchange())
+            };
             COMMON_VARIABLES
                 .iter()
                 .filter(shared)

@@ -229,6 +229,53 @@ const GAUSS: [(f64, f64); 5] = [
     (0.953_089_922_969_332, 0.118_463_442_528_094_54),
 ];
 
+/// Model Exchange: how many continuous states the chassis has
+/// ([`Chassis::states`]).
+pub const CHASSIS_STATES: usize = 6 + WK_STATES + 5;
+/// Where the W_k filter's states start among the chassis's continuous
+/// states.
+pub const CHASSIS_FILTER_AT: usize = 6;
+/// Where the integrals start among the chassis's continuous states.
+pub const CHASSIS_INTEGRALS_AT: usize = CHASSIS_FILTER_AT + WK_STATES;
+const FILTER_AT: usize = CHASSIS_FILTER_AT;
+const INTEGRALS_AT: usize = CHASSIS_INTEGRALS_AT;
+
+/// The names of the chassis's continuous states, in order (the FMU's
+/// variables of the same names).
+pub const CHASSIS_STATE_NAMES: [&str; CHASSIS_STATES] = [
+    "heave",
+    "pitch",
+    "roll",
+    "heave_velocity",
+    "pitch_rate",
+    "roll_rate",
+    "seat_wk_filter_1",
+    "seat_wk_filter_2",
+    "seat_wk_filter_3",
+    "seat_wk_filter_4",
+    "seat_wk_filter_5",
+    "seat_wk_filter_6",
+    "seat_wk_filter_7",
+    "seat_wk_filter_8",
+    "integral_heave_acceleration_squared",
+    "integral_pitch_acceleration_squared",
+    "integral_roll_acceleration_squared",
+    "integral_weighted_seat_acceleration_squared",
+    "integral_weighted_seat_acceleration_fourth",
+];
+
+/// The nominal values of the chassis's continuous states (their typical
+/// magnitudes; a master scales its absolute tolerances by them):
+/// displacements 1e-3 m or rad, rates 1e-2, the W_k filter 1e-2 m/s²,
+/// the integrals 1e-3.
+pub fn chassis_nominals() -> [f64; CHASSIS_STATES] {
+    std::array::from_fn(|i| match i {
+        0..3 => 1e-3,
+        3..INTEGRALS_AT => 1e-2,
+        _ => 1e-3,
+    })
+}
+
 /// How many step lengths the chassis keeps the filter's maps of.
 const FILTER_STEPS: usize = 4;
 
@@ -506,6 +553,80 @@ impl Chassis {
             ));
         }
         Ok(chassis)
+    }
+
+    /// Model Exchange: the continuous states, in the order of
+    /// [`CHASSIS_STATE_NAMES`] (`[z, θ, φ]`, their rates, the W_k filter at
+    /// the seat, then the integrals of `z''²`, `θ''²`, `φ''²`, `a_w²` and
+    /// `a_w⁴` from the start).
+    pub fn states(&self) -> [f64; CHASSIS_STATES] {
+        let mut x = [0.0; CHASSIS_STATES];
+        x[..3].copy_from_slice(&self.position);
+        x[3..6].copy_from_slice(&self.rate);
+        x[FILTER_AT..INTEGRALS_AT].copy_from_slice(self.filter.as_slice());
+        x[INTEGRALS_AT..].copy_from_slice(&self.integrals);
+        x
+    }
+
+    /// Model Exchange: sets the continuous states ([`Chassis::states`]),
+    /// exactly [`CHASSIS_STATES`] finite values (the error names the first
+    /// that is not; a refused call changes nothing).
+    pub fn set_states(&mut self, values: &[f64]) -> Result<()> {
+        if values.len() != CHASSIS_STATES {
+            return Err(Error::Refused(format!(
+                "{} continuous states given, the chassis has {CHASSIS_STATES}",
+                values.len()
+            )));
+        }
+        if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+            return Err(Error::Refused(format!(
+                "continuous state {i} (`{}`) = {} is not finite",
+                CHASSIS_STATE_NAMES[i], values[i]
+            )));
+        }
+        self.position.copy_from_slice(&values[..3]);
+        self.rate.copy_from_slice(&values[3..6]);
+        self.filter
+            .as_mut_slice()
+            .copy_from_slice(&values[FILTER_AT..INTEGRALS_AT]);
+        self.integrals.copy_from_slice(&values[INTEGRALS_AT..]);
+        Ok(())
+    }
+
+    /// Model Exchange: sets the time (s; finite and not before the start
+    /// time). The states and the forces keep their values: the master's
+    /// solver integrates the states and sets the forces at each time.
+    pub fn set_time(&mut self, time: f64) -> Result<()> {
+        if !(time.is_finite() && time >= self.start_time) {
+            return Err(Error::InvalidTime {
+                name: "time",
+                value: time,
+                reason: "must be finite and not before the start time",
+            });
+        }
+        self.time = time;
+        Ok(())
+    }
+
+    /// Model Exchange: the time derivatives of [`Chassis::states`] under
+    /// the forces now (their rates play no part: the master sets the
+    /// forces at every point it evaluates).
+    pub fn rates(&self) -> [f64; CHASSIS_STATES] {
+        let p = &self.params;
+        let acceleration = p.accelerations(&self.forces);
+        let seat = acceleration[0] + p.seat_x * acceleration[1] + p.seat_y * acceleration[2];
+        let mut dx = [0.0; CHASSIS_STATES];
+        dx[..3].copy_from_slice(&self.rate);
+        dx[3..6].copy_from_slice(&acceleration);
+        dx[FILTER_AT..INTEGRALS_AT]
+            .copy_from_slice(self.wk.derivative(&self.filter, seat).as_slice());
+        let a_w = self.wk.weighted_acceleration(&self.filter, seat);
+        for k in [HEAVE, PITCH, ROLL] {
+            dx[INTEGRALS_AT + k] = acceleration[k] * acceleration[k];
+        }
+        dx[INTEGRALS_AT + WEIGHTED_SQUARE] = a_w * a_w;
+        dx[INTEGRALS_AT + WEIGHTED_FOURTH] = a_w * a_w * a_w * a_w;
+        dx
     }
 
     /// The attachment point of `corner`: displacement (m) and velocity

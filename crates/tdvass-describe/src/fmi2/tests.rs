@@ -1,5 +1,6 @@
 use super::*;
 use crate::parsed::elements;
+use tdvass::solver::CONTINUOUS_STATES;
 use tdvass_fmu::variables::COMMON_VARIABLES;
 
 #[test]
@@ -276,10 +277,11 @@ fn output_is_deterministic() {
     }
 }
 
-/// The corner's description: Co-Simulation only, its own name, GUID
-/// and variables, and a ModelStructure that refers to them.
+/// The corner's description: Co-Simulation and Model Exchange (its own
+/// states, no directional derivatives), its own name, GUID and
+/// variables, and a ModelStructure that refers to them.
 #[test]
-fn the_corner_is_described_without_model_exchange() {
+fn the_corner_is_described_with_model_exchange() {
     let model = Model::Corner;
     let xml = model_description_xml(model);
     let els = elements(&xml);
@@ -295,7 +297,7 @@ fn the_corner_is_described_without_model_exchange() {
     );
     assert_ne!(root.attr("guid"), guid(Model::QuarterCar));
     assert_eq!(root.attr("description"), crate::markup::CORNER_DESCRIPTION);
-    assert_eq!(root.get("numberOfEventIndicators"), None);
+    assert_eq!(root.get("numberOfEventIndicators"), Some("1"));
     let top: Vec<&str> = els
         .iter()
         .filter(|e| e.parent == Some(0))
@@ -304,6 +306,7 @@ fn the_corner_is_described_without_model_exchange() {
     assert_eq!(
         top,
         [
+            "ModelExchange",
             "CoSimulation",
             "UnitDefinitions",
             "TypeDefinitions",
@@ -313,7 +316,15 @@ fn the_corner_is_described_without_model_exchange() {
             "ModelStructure"
         ]
     );
-    assert!(!els.iter().any(|e| e.name == "ModelExchange"));
+    let me = els.iter().find(|e| e.name == "ModelExchange").unwrap();
+    assert_eq!(
+        me.attributes.len(),
+        1 + CORNER_MODEL_EXCHANGE_CAPABILITIES.len()
+    );
+    for (flag, value) in CORNER_MODEL_EXCHANGE_CAPABILITIES {
+        assert_eq!(me.attr(flag), value, "{flag}");
+    }
+    assert_eq!(me.attr("providesDirectionalDerivative"), "false");
     let cs = els.iter().find(|e| e.name == "CoSimulation").unwrap();
     assert_eq!(cs.attr("modelIdentifier"), MODEL_IDENTIFIER);
     assert_eq!(cs.attributes.len(), 1 + CO_SIMULATION_CAPABILITIES.len());
@@ -325,25 +336,41 @@ fn the_corner_is_described_without_model_exchange() {
         assert_eq!(el.attr("name"), v.name);
         assert_eq!(el.attr("valueReference"), v.vr.to_string());
         assert_eq!(el.attr("causality"), v.causality.as_str());
-        assert_ne!(v.causality, Causality::Local, "{}", v.name);
     }
-    assert!(!els.iter().any(|e| e.get("derivative").is_some()));
+    // The corner's 7 states: x_h, v_h, x_t, v_t, the integrals of SDD^2
+    // and TDD^2, the time without contact; each with its derivative.
+    let states = Model::Corner.continuous_states();
+    assert_eq!(states.len(), 7);
+    assert_eq!(
+        els.iter().filter(|e| e.get("derivative").is_some()).count(),
+        states.len()
+    );
 
-    // ModelStructure: the outputs and initial unknowns, no derivatives;
-    // every dependency an index of an existing variable.
+    // ModelStructure: the outputs, the derivatives and the initial
+    // unknowns; every dependency an index of an existing variable.
     let structure = els.iter().position(|e| e.name == "ModelStructure").unwrap();
     let parts: Vec<&str> = els
         .iter()
         .filter(|e| e.parent == Some(structure))
         .map(|e| e.name.as_str())
         .collect();
-    assert_eq!(parts, ["Outputs", "InitialUnknowns"]);
+    assert_eq!(parts, ["Outputs", "Derivatives", "InitialUnknowns"]);
     let unknowns_of = |part: &str| -> Vec<&crate::parsed::Element> {
         let at = els.iter().position(|e| e.name == part).unwrap();
         els.iter().filter(|e| e.parent == Some(at)).collect()
     };
     let listed =
         |s: &str| -> Vec<usize> { s.split_whitespace().map(|i| i.parse().unwrap()).collect() };
+    let derivatives = unknowns_of("Derivatives");
+    assert_eq!(derivatives.len(), states.len());
+    for (d, &i) in derivatives.iter().zip(states) {
+        let v = &variables[d.attr("index").parse::<usize>().unwrap() - 1];
+        assert!(
+            matches!(v.access, Access::StateDerivative(j) if j == i),
+            "{}",
+            v.name
+        );
+    }
     let outputs = unknowns_of("Outputs");
     let expected: Vec<String> = variables
         .iter()
@@ -354,7 +381,7 @@ fn the_corner_is_described_without_model_exchange() {
     let indices: Vec<&str> = outputs.iter().map(|e| e.attr("index")).collect();
     assert_eq!(indices, expected);
     for unknown in outputs.iter().chain(&unknowns_of("InitialUnknowns")) {
-        let deps = listed(unknown.attr("dependencies"));
+        let deps = listed(unknown.get("dependencies").unwrap_or(""));
         assert!(deps.windows(2).all(|w| w[0] < w[1]), "ascending");
         for d in deps {
             assert!(
@@ -372,9 +399,16 @@ fn the_corner_is_described_without_model_exchange() {
             .split_whitespace()
             .collect();
         assert_eq!(deps.len(), kinds.len(), "{:?}", o.attributes);
-        // No continuous states to depend on: the inputs alone.
+        // The inputs and the corner's own states (never the body's
+        // coordinates, which are inputs).
         for d in deps {
-            assert_eq!(variables[d - 1].causality, Causality::Input);
+            let known = &variables[d - 1];
+            assert!(
+                known.causality == Causality::Input
+                    || known.state_index().is_some_and(|i| states.contains(&i)),
+                "{}",
+                known.name
+            );
         }
     }
     let index = |name: &str| index_of(model, name).unwrap();
@@ -382,11 +416,23 @@ fn the_corner_is_described_without_model_exchange() {
         .iter()
         .find(|e| e.attr("index") == index("body_force").to_string())
         .unwrap();
+    // The body's coordinates feed through; the wheel's and the
+    // absorber's are states.
     assert_eq!(
         listed(body_force.attr("dependencies")),
-        [index("body_displacement"), index("body_velocity")]
+        [
+            index("x_h"),
+            index("v_h"),
+            index("x_t"),
+            index("v_t"),
+            index("body_displacement"),
+            index("body_velocity")
+        ]
     );
-    assert_eq!(body_force.attr("dependenciesKind"), "fixed fixed");
+    assert_eq!(
+        body_force.attr("dependenciesKind"),
+        "dependent dependent dependent dependent fixed fixed"
+    );
 }
 
 #[test]
@@ -395,9 +441,9 @@ fn the_corner_documentation_describes_its_variables() {
     assert!(html.starts_with("<!DOCTYPE html>"));
     elements(html.trim_start_matches("<!DOCTYPE html>"));
     assert!(html.contains("<title>TDVASS corner FMI 2.0 FMU</title>"));
-    assert!(html.contains("TDVASS corner: FMI 2.0 FMU (Co-Simulation)"));
+    assert!(html.contains("TDVASS corner: FMI 2.0 FMU (Co-Simulation and Model Exchange)"));
     assert!(html.contains(&guid(Model::Corner)));
-    assert!(html.contains("Co-Simulation only in this version"));
+    assert!(html.contains("integrates its 7 continuous states"));
     for v in variables_of(Model::Corner, FmiVersion::Fmi2) {
         assert!(html.contains(&format!("<td>{}</td>", v.name)), "{}", v.name);
     }
@@ -457,7 +503,7 @@ fn types_and_units_are_those_the_variables_use() {
     }
 }
 
-/// The chassis's description: Co-Simulation only with its own
+/// The chassis's description: Co-Simulation and Model Exchange with its own
 /// capabilities, its own name, GUID and variables, and a ModelStructure
 /// whose outputs depend on the forces where they feed through.
 #[test]
@@ -473,7 +519,7 @@ fn the_chassis_is_described_with_its_own_capabilities() {
         assert_ne!(root.attr("guid"), guid(other));
     }
     assert_eq!(root.attr("description"), crate::markup::CHASSIS_DESCRIPTION);
-    assert_eq!(root.get("numberOfEventIndicators"), None);
+    assert_eq!(root.get("numberOfEventIndicators"), Some("0"));
     let top: Vec<&str> = els
         .iter()
         .filter(|e| e.parent == Some(0))
@@ -482,6 +528,7 @@ fn the_chassis_is_described_with_its_own_capabilities() {
     assert_eq!(
         top,
         [
+            "ModelExchange",
             "CoSimulation",
             "UnitDefinitions",
             "TypeDefinitions",
@@ -536,7 +583,11 @@ fn the_chassis_is_described_with_its_own_capabilities() {
         .filter(|e| e.parent == Some(structure))
         .map(|e| e.name.as_str())
         .collect();
-    assert_eq!(parts, ["Outputs", "InitialUnknowns"]);
+    assert_eq!(parts, ["Outputs", "Derivatives", "InitialUnknowns"]);
+    let me = els.iter().find(|e| e.name == "ModelExchange").unwrap();
+    for (flag, value) in CHASSIS_MODEL_EXCHANGE_CAPABILITIES {
+        assert_eq!(me.attr(flag), value, "{flag}");
+    }
     let unknowns_of = |part: &str| -> Vec<&crate::parsed::Element> {
         let at = els.iter().position(|e| e.name == part).unwrap();
         els.iter().filter(|e| e.parent == Some(at)).collect()
@@ -576,22 +627,40 @@ fn the_chassis_is_described_with_its_own_capabilities() {
             );
         } else {
             // The attachment points' motion, the states and the time
-            // averages: from the states alone, no algebraic loop.
-            assert!(deps.is_empty(), "{}", v.name);
-            assert_eq!(o.get("dependenciesKind"), None, "{}", v.name);
+            // averages: from the continuous states alone, no algebraic
+            // loop.
+            assert!(!deps.is_empty(), "{}", v.name);
+            for d in deps {
+                assert!(variables[d - 1].state_index().is_some(), "{}", v.name);
+            }
         }
     }
     let displacement = outputs
         .iter()
         .find(|e| e.attr("index") == index("displacement_fl").to_string())
         .unwrap();
-    assert_eq!(displacement.attr("dependencies"), "");
-    // Every output is an initial unknown, with the initial
-    // dependencies of the table.
+    assert_eq!(
+        listed(displacement.attr("dependencies")),
+        [index("heave"), index("pitch"), index("roll")]
+    );
+    assert_eq!(
+        unknowns_of("Derivatives").len(),
+        tdvass::chassis::CHASSIS_STATES
+    );
+    // Every output is an initial unknown, with the initial dependencies
+    // of the table; so are the local states and the derivatives (on
+    // every known).
     let initial = unknowns_of("InitialUnknowns");
-    assert_eq!(initial.len(), outputs.len());
+    assert_eq!(
+        initial.len(),
+        outputs.len() + 2 * tdvass::chassis::CHASSIS_STATES - 6
+    );
     for u in &initial {
         let v = &variables[u.attr("index").parse::<usize>().unwrap() - 1];
+        if v.causality == Causality::Local {
+            assert_eq!(u.get("dependencies"), None, "{}", v.name);
+            continue;
+        }
         assert_eq!(
             u.attr("dependencies"),
             indices(model, v.initial_dependencies),
@@ -612,9 +681,9 @@ fn the_chassis_documentation_describes_its_variables_and_capabilities() {
     assert!(html.starts_with("<!DOCTYPE html>"));
     elements(html.trim_start_matches("<!DOCTYPE html>"));
     assert!(html.contains("<title>TDVASS chassis FMI 2.0 FMU</title>"));
-    assert!(html.contains("TDVASS chassis: FMI 2.0 FMU (Co-Simulation)"));
+    assert!(html.contains("TDVASS chassis: FMI 2.0 FMU (Co-Simulation and Model Exchange)"));
     assert!(html.contains(&guid(Model::Chassis)));
-    assert!(html.contains("Co-Simulation only in this version: the chassis"));
+    assert!(html.contains("integrates its 19 continuous states"));
     assert!(html.contains("picks the chassis when the FMU is instantiated"));
     for v in variables_of(Model::Chassis, FmiVersion::Fmi2) {
         assert!(html.contains(&format!("<td>{}</td>", v.name)), "{}", v.name);

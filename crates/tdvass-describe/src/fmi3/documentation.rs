@@ -98,6 +98,7 @@ pub fn documentation_html(model: Model) -> String {
                 }
             },
             co_simulation: co_simulation_capabilities(model),
+            model_exchange: super::model_exchange_capabilities(model),
             specification: "Functional Mock-up Interface Specification, version 3.0.",
         }),
     }

@@ -610,11 +610,11 @@ fn output_is_deterministic() {
     }
 }
 
-/// The corner's description: Co-Simulation only, its own name, token and
-/// variables, and a ModelStructure of outputs and initial unknowns that
-/// refers to them.
+/// The corner's description: Co-Simulation and Model Exchange (its own
+/// states, no directional or adjoint derivatives), its own name, token
+/// and variables, and a ModelStructure that refers to them.
 #[test]
-fn the_corner_is_described_without_model_exchange() {
+fn the_corner_is_described_with_model_exchange() {
     let model = Model::Corner;
     let els = elements(&model_description_xml(model));
     let root = &els[0];
@@ -641,6 +641,7 @@ fn the_corner_is_described_without_model_exchange() {
     assert_eq!(
         top,
         [
+            "ModelExchange",
             "CoSimulation",
             "UnitDefinitions",
             "TypeDefinitions",
@@ -650,7 +651,14 @@ fn the_corner_is_described_without_model_exchange() {
             "ModelStructure"
         ]
     );
-    assert!(!els.iter().any(|e| e.name == "ModelExchange"));
+    let me = els.iter().find(|e| e.name == "ModelExchange").unwrap();
+    assert_eq!(
+        me.attributes.len(),
+        1 + CORNER_MODEL_EXCHANGE_CAPABILITIES.len()
+    );
+    for (flag, value) in CORNER_MODEL_EXCHANGE_CAPABILITIES {
+        assert_eq!(me.attr(flag), value, "{flag}");
+    }
     let cs = els.iter().find(|e| e.name == "CoSimulation").unwrap();
     assert_eq!(cs.attr("modelIdentifier"), "tdvass");
     for (flag, value) in CO_SIMULATION_CAPABILITIES {
@@ -665,8 +673,14 @@ fn the_corner_is_described_without_model_exchange() {
         assert_eq!(el.attr("name"), v.name);
         assert_eq!(el.attr("valueReference"), v.vr.to_string());
         assert_eq!(el.attr("causality"), v.causality.as_str());
-        assert!(el.get("derivative").is_none(), "{}", v.name);
     }
+    let states = Model::Corner.continuous_states();
+    assert_eq!(
+        vars.iter()
+            .filter(|e| e.get("derivative").is_some())
+            .count(),
+        states.len()
+    );
     assert_eq!(
         vars.iter()
             .filter(|e| e.get("causality") == Some("independent"))
@@ -691,15 +705,27 @@ fn the_corner_is_described_without_model_exchange() {
         ["Variant", "Road", "RoadClass", "TireContact"]
     );
 
-    // ModelStructure: outputs and initial unknowns only.
+    // ModelStructure: outputs, the derivatives in the order of the
+    // states, initial unknowns and the tire's event indicator.
     let structure = children(&els, "ModelStructure");
-    for e in &structure {
-        assert!(
-            e.name == "Output" || e.name == "InitialUnknown",
-            "{}",
-            e.name
-        );
-    }
+    let derivatives: Vec<u32> = structure
+        .iter()
+        .filter(|e| e.name == "ContinuousStateDerivative")
+        .map(|e| e.attr("valueReference").parse().unwrap())
+        .collect();
+    let expected_derivatives: Vec<u32> = states.iter().map(|&i| derivative_vr(model, i)).collect();
+    assert_eq!(derivatives, expected_derivatives);
+    assert_eq!(
+        structure
+            .iter()
+            .filter(|e| e.name == "EventIndicator")
+            .count(),
+        1
+    );
+    let structure: Vec<&Element> = structure
+        .into_iter()
+        .filter(|e| e.name == "Output" || e.name == "InitialUnknown")
+        .collect();
     let vrs: HashSet<u32> = variables.iter().map(|v| v.vr).collect();
     let by_vr = |vr: u32| variables.iter().find(|v| v.vr == vr).unwrap();
     let outputs: Vec<&&Element> = structure.iter().filter(|e| e.name == "Output").collect();
@@ -718,9 +744,15 @@ fn the_corner_is_described_without_model_exchange() {
         }
         let v = by_vr(unknown.attr("valueReference").parse().unwrap());
         if unknown.name == "Output" {
-            // No continuous states to depend on: the inputs alone.
+            // The inputs and the corner's own states.
             for d in &deps {
-                assert_eq!(by_vr(*d).causality, Causality::Input, "{}", v.name);
+                let known = by_vr(*d);
+                assert!(
+                    known.causality == Causality::Input
+                        || known.state_index().is_some_and(|i| states.contains(&i)),
+                    "{}",
+                    v.name
+                );
             }
             let kinds: Vec<&str> = unknown
                 .get("dependenciesKind")
@@ -729,7 +761,7 @@ fn the_corner_is_described_without_model_exchange() {
                 .collect();
             let pairs: Vec<(u32, &str)> = deps.iter().copied().zip(kinds).collect();
             assert_eq!(pairs, output_dependencies(model, v));
-        } else {
+        } else if v.causality != Causality::Local {
             assert_eq!(deps, initial_dependencies(model, v));
         }
     }
@@ -738,11 +770,23 @@ fn the_corner_is_described_without_model_exchange() {
         .iter()
         .find(|e| e.attr("valueReference") == vr("body_force").to_string())
         .unwrap();
+    // The body's coordinates feed through; the wheel's and the
+    // absorber's are states.
     assert_eq!(
         vr_list_of(body_force.attr("dependencies")),
-        [vr("body_displacement"), vr("body_velocity")]
+        [
+            vr("x_h"),
+            vr("v_h"),
+            vr("x_t"),
+            vr("v_t"),
+            vr("body_displacement"),
+            vr("body_velocity")
+        ]
     );
-    assert_eq!(body_force.attr("dependenciesKind"), "fixed fixed");
+    assert_eq!(
+        body_force.attr("dependenciesKind"),
+        "dependent dependent dependent dependent fixed fixed"
+    );
 }
 
 #[test]
@@ -751,8 +795,8 @@ fn the_corner_documentation_describes_its_variables_and_enumerations() {
     assert!(html.starts_with("<!DOCTYPE html>"));
     elements(html.trim_start_matches("<!DOCTYPE html>"));
     assert!(html.contains("<title>TDVASS corner FMI 3.0 FMU</title>"));
-    assert!(html.contains("TDVASS corner: FMI 3.0 FMU (Co-Simulation)"));
-    assert!(html.contains("Co-Simulation only in this version"));
+    assert!(html.contains("TDVASS corner: FMI 3.0 FMU (Co-Simulation and Model Exchange)"));
+    assert!(html.contains("integrates its 7 continuous states"));
     assert!(html.contains(&instantiation_token(Model::Corner)));
     for v in variables_of(Model::Corner, FmiVersion::Fmi3) {
         assert!(html.contains(&format!("<td>{}</td>", v.name)), "{}", v.name);
@@ -766,7 +810,7 @@ fn the_corner_documentation_describes_its_variables_and_enumerations() {
             );
         }
     }
-    assert!(!html.contains("fmi3InstantiateModelExchange"));
+    assert!(html.contains("fmi3InstantiateModelExchange"));
     assert!(html.contains("body_force (output, N)"));
 }
 
@@ -816,8 +860,8 @@ fn types_and_units_are_those_the_variables_use() {
     assert!(enumerations(Model::Chassis).is_empty());
 }
 
-/// The chassis's description: Co-Simulation only with its own
-/// capabilities (no derivatives, no intermediate update), its own name,
+/// The chassis's description: Co-Simulation and Model Exchange with its
+/// own capabilities (no derivatives, no intermediate update), its own name,
 /// token and variables (with `time`), and a ModelStructure of outputs and
 /// initial unknowns in which the accelerations depend on the forces.
 #[test]
@@ -842,6 +886,7 @@ fn the_chassis_is_described_with_its_own_capabilities() {
     assert_eq!(
         top,
         [
+            "ModelExchange",
             "CoSimulation",
             "UnitDefinitions",
             "TypeDefinitions",
@@ -886,8 +931,17 @@ fn the_chassis_is_described_with_its_own_capabilities() {
         assert_eq!(el.attr("valueReference"), v.vr.to_string());
         assert_eq!(el.attr("causality"), v.causality.as_str());
         assert!(el.get("intermediateUpdate").is_none(), "{}", v.name);
-        assert!(el.get("derivative").is_none(), "{}", v.name);
     }
+    let me = els.iter().find(|e| e.name == "ModelExchange").unwrap();
+    for (flag, value) in CHASSIS_MODEL_EXCHANGE_CAPABILITIES {
+        assert_eq!(me.attr(flag), value, "{flag}");
+    }
+    assert_eq!(
+        vars.iter()
+            .filter(|e| e.get("derivative").is_some())
+            .count(),
+        tdvass::chassis::CHASSIS_STATES
+    );
     let time: Vec<&&Element> = vars
         .iter()
         .filter(|e| e.get("causality") == Some("independent"))
@@ -906,11 +960,20 @@ fn the_chassis_is_described_with_its_own_capabilities() {
     let structure = children(&els, "ModelStructure");
     for e in &structure {
         assert!(
-            e.name == "Output" || e.name == "InitialUnknown",
+            e.name == "Output"
+                || e.name == "InitialUnknown"
+                || e.name == "ContinuousStateDerivative",
             "{}",
             e.name
         );
     }
+    assert_eq!(
+        structure
+            .iter()
+            .filter(|e| e.name == "ContinuousStateDerivative")
+            .count(),
+        tdvass::chassis::CHASSIS_STATES
+    );
     let vr = |name: &str| vr_of(model, name);
     let forces: Vec<u32> = ["force_fl", "force_fr", "force_rl", "force_rr"]
         .iter()
@@ -938,8 +1001,11 @@ fn the_chassis_is_described_with_its_own_capabilities() {
             assert_eq!(deps, forces, "{}", v.name);
             assert_eq!(o.attr("dependenciesKind"), "fixed fixed fixed fixed");
         } else {
-            assert!(deps.is_empty(), "{}", v.name);
-            assert!(o.get("dependenciesKind").is_none(), "{}", v.name);
+            // From the continuous states alone: no algebraic loop.
+            assert!(!deps.is_empty(), "{}", v.name);
+            for d in &deps {
+                assert!(by_vr(*d).state_index().is_some(), "{}", v.name);
+            }
         }
         let pairs: Vec<(u32, &str)> = deps
             .iter()
@@ -952,9 +1018,16 @@ fn the_chassis_is_described_with_its_own_capabilities() {
         .iter()
         .filter(|e| e.name == "InitialUnknown")
         .collect();
-    assert_eq!(initial.len(), outputs.len());
+    assert_eq!(
+        initial.len(),
+        outputs.len() + 2 * tdvass::chassis::CHASSIS_STATES - 6
+    );
     for u in &initial {
         let v = by_vr(u.attr("valueReference").parse().unwrap());
+        if v.causality == Causality::Local {
+            assert!(u.get("dependencies").is_none(), "{}", v.name);
+            continue;
+        }
         assert_eq!(
             vr_list_of(u.attr("dependencies")),
             initial_dependencies(model, v),
@@ -970,8 +1043,8 @@ fn the_chassis_documentation_describes_its_variables_and_capabilities() {
     assert!(html.starts_with("<!DOCTYPE html>"));
     elements(html.trim_start_matches("<!DOCTYPE html>"));
     assert!(html.contains("<title>TDVASS chassis FMI 3.0 FMU</title>"));
-    assert!(html.contains("TDVASS chassis: FMI 3.0 FMU (Co-Simulation)"));
-    assert!(html.contains("Co-Simulation only in this version: the chassis"));
+    assert!(html.contains("TDVASS chassis: FMI 3.0 FMU (Co-Simulation and Model Exchange)"));
+    assert!(html.contains("integrates its 19 continuous states"));
     assert!(html.contains(&instantiation_token(Model::Chassis)));
     for v in variables_of(Model::Chassis, FmiVersion::Fmi3) {
         assert!(html.contains(&format!("<td>{}</td>", v.name)), "{}", v.name);
@@ -990,10 +1063,9 @@ fn the_chassis_documentation_describes_its_variables_and_capabilities() {
     ] {
         assert!(html.contains(text), "{text}");
     }
-    // No enumerations to list, no Model Exchange, no input derivatives of
-    // FMI 2.0.
+    // No enumerations to list, no input derivatives of FMI 2.0.
     assert!(!html.contains("<h3>Enumerations</h3>"));
-    assert!(!html.contains("fmi3InstantiateModelExchange"));
+    assert!(html.contains("fmi3InstantiateModelExchange"));
     assert!(!html.contains("fmi2SetRealInputDerivatives"));
 }
 

@@ -501,7 +501,7 @@ fn restoring_a_step_mode_state_in_configuration_mode_leaves_configuration_mode()
 }
 
 #[test]
-fn model_exchange_and_wrong_tokens_are_refused() {
+fn wrong_tokens_are_refused_and_every_model_offers_model_exchange() {
     // SAFETY: valid strings, no callbacks.
     unsafe {
         assert!(
@@ -554,4 +554,52 @@ fn model_exchange_and_wrong_tokens_are_refused() {
         assert_eq!(fmi3SetTime(instance, 1.0), status(Status::Error));
     }
     free(instance);
+    // Every model offers Model Exchange, with its own states and event
+    // indicators: the quarter car 20 and 1, the corner 7 and 1, the
+    // chassis 19 and none.
+    for (model, states, indicators) in [
+        (Model::QuarterCar, 20, 1),
+        (Model::Corner, 7, 1),
+        (Model::Chassis, 19, 0),
+    ] {
+        let token =
+            std::ffi::CString::new(tdvass_fmu::variables::instantiation_token(model)).unwrap();
+        // SAFETY: valid strings, no callbacks; the instance is freed below.
+        unsafe {
+            let instance = fmi3InstantiateModelExchange(
+                c"me".as_ptr(),
+                token.as_ptr(),
+                std::ptr::null(),
+                0,
+                0,
+                std::ptr::null_mut(),
+                None,
+            );
+            assert!(!instance.is_null(), "{model:?}");
+            assert_eq!(
+                fmi3EnterInitializationMode(instance, 0, 0.0, 0.0, 0, 0.0),
+                0
+            );
+            let (mut nx, mut nz) = (0, 0);
+            assert_eq!(fmi3GetNumberOfContinuousStates(instance, &mut nx), 0);
+            assert_eq!(fmi3GetNumberOfEventIndicators(instance, &mut nz), 0);
+            assert_eq!((nx, nz), (states, indicators), "{model:?}");
+            assert_eq!(fmi3ExitInitializationMode(instance), 0);
+            let mut x = vec![0.0; nx];
+            let mut dx = vec![f64::NAN; nx];
+            assert_eq!(fmi3GetContinuousStates(instance, x.as_mut_ptr(), nx), 0);
+            assert_eq!(fmi3EnterContinuousTimeMode(instance), 0);
+            assert_eq!(
+                fmi3GetContinuousStateDerivatives(instance, dx.as_mut_ptr(), nx),
+                0
+            );
+            assert!(dx.iter().all(|d| d.is_finite()), "{model:?}");
+            // A wrong count is refused.
+            assert_eq!(
+                fmi3GetContinuousStates(instance, x.as_mut_ptr(), nx - 1),
+                status(Status::Error)
+            );
+            fmi3FreeInstance(instance);
+        }
+    }
 }

@@ -40,6 +40,11 @@ impl Slave {
             ));
         }
         if self.state.engine.exchange().is_some() {
+            if self.model() != Model::QuarterCar {
+                return Err(FmiError::error(
+                    "the corner provides no directional derivatives in Model Exchange (its ModelExchange element: providesDirectionalDerivative = false)",
+                ));
+            }
             return self.exchange_partials(unknowns, knowns);
         }
         let known: Vec<Known> = knowns

@@ -493,6 +493,13 @@ impl Slave {
         ) {
             sim.set_body_input(displacement, velocity)?;
         }
+        if let (true, Some(model), Some((displacement, velocity))) = (
+            body_moved,
+            self.state.engine.exchange_mut(),
+            self.state.settings.body_input(),
+        ) {
+            model.set_body_input(displacement, velocity)?;
+        }
         if gain_tuned && self.state.phase.is_simulating() {
             return Ok(self.stability_check(self.call(self.dialect.set_float)));
         }
