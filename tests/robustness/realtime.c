@@ -13,8 +13,11 @@
  *   FMI     2 or 3
  *   LIB     binaries/linux64/tdvass.so (FMI 2.0) or
  *           binaries/x86_64-linux/tdvass.so (FMI 3.0) of the shipped FMU
- *   TOKEN   the GUID / instantiationToken of its modelDescription.xml
+ *   TOKEN   the GUID / instantiationToken of its modelDescription.xml:
+ *           the quarter car's, the corner's or the chassis's
  *   CASE    a case name of `realtime list`: road, tire and step pattern
+ *           (corner-*: the corner's, chassis-*: the chassis's; both
+ *           Co-Simulation only)
  *
  * The harness defines malloc, calloc, realloc, free, posix_memalign,
  * aligned_alloc, memalign and valloc itself (linked with -rdynamic, so the
@@ -55,6 +58,21 @@
  * derivatives at both ends, the indicators, an event if any, the completed
  * step, the outputs). Exit code 2: the library could not be loaded or a
  * call failed.
+ *
+ * The corner (`count` of a corner-* case, 10 s, the state restored after
+ * 5 s, g changed at 1/3 and back at 2/3 of the run) is run as the quarter
+ * car, under a point mass of 345 kg (static_load / g0) that the
+ * body_force read after each step moves over it (a Jacobi loop): before
+ * every step it sets body_displacement and body_velocity, and (FMI 2.0)
+ * their first derivatives, which the corner ignores with a warning; it
+ * reads the corner's outputs, lift_off_count and the output derivatives.
+ * The chassis (chassis-*, 10 s, restored after 5 s) gets four changing
+ * forces before every step and (FMI 2.0) force_fl's first derivative, and
+ * has every output read (it has no output derivatives, no intermediate
+ * updates, no g); its step patterns include libcosim's clock, whose steps
+ * alternate between 1 ms and 1 ms + 1e-12, and the varying master's 8
+ * lengths, each new to the chassis's 4 W_k maps. It prints "allocations N
+ * calls M (restoring a serialized state: R allocations)".
  */
 #define _GNU_SOURCE
 #include <dlfcn.h>
@@ -138,11 +156,14 @@ int posix_memalign(void **out, size_t alignment, size_t size) {
 
 /* ---- the cases ---- */
 
-enum { PATTERN_ALIGNED, PATTERN_IN_STEP, PATTERN_VARYING, PATTERN_LONG };
+enum { PATTERN_ALIGNED, PATTERN_IN_STEP, PATTERN_VARYING, PATTERN_LONG, PATTERN_LIBCOSIM };
 enum { ROAD_INPUT = 0, ROAD_HARMONIC = 1, ROAD_ISO = 2, ROAD_PAPER = 3 };
+/* The model the GUID / instantiation token picks. */
+enum { MODEL_QUARTER_CAR, MODEL_CORNER, MODEL_CHASSIS };
 
 typedef struct {
     const char *name;
+    int model;
     int road;
     int road_class; /* ISO 8608: 1 = A ... 8 = H */
     double speed;   /* m/s */
@@ -150,36 +171,51 @@ typedef struct {
     int pattern;
 } Case;
 
-static const char *PATTERN_NAME[] = {"aligned", "0.7ms", "varying", "10ms"};
+static const char *PATTERN_NAME[] = {"aligned", "0.7ms", "varying", "10ms", "libcosim"};
 static const char *ROAD_NAME[] = {"input", "harmonic", "iso", "paper"};
 /* The varying master's steps (s), taken in turn: 0.1 ... 1.9 ms. */
 static const double VARYING[] = {0.13e-3, 1.9e-3, 0.71e-3, 0.29e-3, 1.37e-3, 0.53e-3, 1.03e-3, 0.1e-3};
 #define N_VARYING (sizeof VARYING / sizeof VARYING[0])
 
-#define MAX_CASES 64
+#define MAX_CASES 128
 static Case cases[MAX_CASES];
 static int n_cases;
 static char names[MAX_CASES][48];
 
-static void add_case(int road, int road_class, double speed, int tire, int pattern) {
+static void add_case_of(int model, int road, int road_class, double speed, int tire, int pattern) {
     Case *c = &cases[n_cases];
+    const char *prefix = model == MODEL_CORNER ? "corner-" : "";
+    c->model = model;
     c->road = road;
     c->road_class = road_class;
     c->speed = speed;
     c->tire = tire;
     c->pattern = pattern;
     if (road == ROAD_ISO)
-        snprintf(names[n_cases], sizeof names[0], "iso-%c-%g-%s-%s", 'A' + road_class - 1, speed,
-                 tire ? "unilateral" : "bilateral", PATTERN_NAME[pattern]);
+        snprintf(names[n_cases], sizeof names[0], "%siso-%c-%g-%s-%s", prefix, 'A' + road_class - 1,
+                 speed, tire ? "unilateral" : "bilateral", PATTERN_NAME[pattern]);
+    else if (model == MODEL_CHASSIS)
+        snprintf(names[n_cases], sizeof names[0], "chassis-%s", PATTERN_NAME[pattern]);
     else
-        snprintf(names[n_cases], sizeof names[0], "%s-%s-%s", ROAD_NAME[road],
+        snprintf(names[n_cases], sizeof names[0], "%s%s-%s-%s", prefix, ROAD_NAME[road],
                  tire ? "unilateral" : "bilateral", PATTERN_NAME[pattern]);
     c->name = names[n_cases];
     n_cases++;
 }
 
-/* Every road (the ISO road as class D at 20 m/s and class E at 30 m/s, the
- * most lift-offs) x both tires x every step pattern. */
+static void add_case(int road, int road_class, double speed, int tire, int pattern) {
+    add_case_of(MODEL_QUARTER_CAR, road, road_class, speed, tire, pattern);
+}
+
+static void add_corner_case(int road, int road_class, double speed, int tire, int pattern) {
+    add_case_of(MODEL_CORNER, road, road_class, speed, tire, pattern);
+}
+
+/* The quarter car: every road (the ISO road as class D at 20 m/s and class
+ * E at 30 m/s, the most lift-offs) x both tires x every step pattern but
+ * libcosim's. The corner: the same roads and tires x the aligned, varying
+ * and 10 ms patterns. The chassis (no road, no tire): aligned, libcosim's
+ * clock, varying and 10 ms. */
 static void make_cases(void) {
     for (int pattern = 0; pattern < 4; pattern++)
         for (int tire = 0; tire < 2; tire++) {
@@ -189,6 +225,17 @@ static void make_cases(void) {
             add_case(ROAD_ISO, 5, 30.0, tire, pattern);
             add_case(ROAD_PAPER, 3, 20.0, tire, pattern);
         }
+    const int corner_patterns[] = {PATTERN_ALIGNED, PATTERN_VARYING, PATTERN_LONG};
+    for (int p = 0; p < 3; p++)
+        for (int tire = 0; tire < 2; tire++) {
+            add_corner_case(ROAD_INPUT, 3, 20.0, tire, corner_patterns[p]);
+            add_corner_case(ROAD_HARMONIC, 3, 20.0, tire, corner_patterns[p]);
+            add_corner_case(ROAD_ISO, 4, 20.0, tire, corner_patterns[p]);
+            add_corner_case(ROAD_ISO, 5, 30.0, tire, corner_patterns[p]);
+            add_corner_case(ROAD_PAPER, 3, 20.0, tire, corner_patterns[p]);
+        }
+    const int chassis_patterns[] = {PATTERN_ALIGNED, PATTERN_LIBCOSIM, PATTERN_VARYING, PATTERN_LONG};
+    for (int p = 0; p < 4; p++) add_case_of(MODEL_CHASSIS, ROAD_INPUT, 0, 0.0, 0, chassis_patterns[p]);
 }
 
 static const Case *find_case(const char *name) {
@@ -203,8 +250,17 @@ static double step_of(const Case *c, long k) {
     case PATTERN_ALIGNED: return 1e-3;
     case PATTERN_IN_STEP: return 0.7e-3;
     case PATTERN_VARYING: return VARYING[k % N_VARYING];
+    /* libcosim's clock counts nanoseconds: its steps, as doubles, alternate
+     * between lengths a rounding apart. */
+    case PATTERN_LIBCOSIM: return k % 2 ? 1e-3 + 1e-12 : 1e-3;
     default: return 10e-3;
     }
+}
+
+/* The time after the step k of length `step` from t: the aligned and 10 ms
+ * masters multiply, the others add. */
+static double next_time(const Case *c, long k, double t, double step) {
+    return c->pattern == PATTERN_ALIGNED || c->pattern == PATTERN_LONG ? (double)(k + 1) * step : t + step;
 }
 
 /* ---- the variables ---- */
@@ -222,6 +278,51 @@ static const unsigned OUTPUTS[] = {31, 32, 33, 34, 35, 36, 37, 38, 39, 40, 41, 4
                                    44, 45, 53, 54, 55, 56, 57, 58, 59};
 #define N_OUTPUTS (sizeof OUTPUTS / sizeof OUTPUTS[0])
 static const double G = 5386.0;
+
+/* The corner: the quarter car's VR_* above that it has (g, road, road_class,
+ * vehicle_speed, x_g, tire_contact, lift_off_count), and the body's. */
+enum {
+    CORNER_VR_BODY_DISPLACEMENT = 143,
+    CORNER_VR_BODY_VELOCITY = 144,
+    CORNER_VR_BODY_FORCE = 145,
+};
+static const unsigned CORNER_OUTPUTS[] = {33, 34, 35, 36, 38, 39, 40, 41, 43, 44, 56, 57, 58, 59, 145};
+#define N_CORNER_OUTPUTS (sizeof CORNER_OUTPUTS / sizeof CORNER_OUTPUTS[0])
+/* The corner's body: a point mass of static_load / g0 (the default). */
+static const double BODY_MASS = 345.0;
+
+/* The chassis. */
+enum {
+    CHASSIS_VR_FORCE_FL = 210,
+    CHASSIS_VR_FORCE_FR = 211,
+    CHASSIS_VR_FORCE_RL = 212,
+    CHASSIS_VR_FORCE_RR = 213,
+};
+static const unsigned CHASSIS_OUTPUTS[] = {220, 221, 222, 223, 224, 225, 226, 227, 230, 231, 232, 233,
+                                           234, 235, 236, 237, 238, 239, 240, 241, 242, 243, 244, 245};
+#define N_CHASSIS_OUTPUTS (sizeof CHASSIS_OUTPUTS / sizeof CHASSIS_OUTPUTS[0])
+
+/* The outputs of the model run (the quarter car's or the corner's). */
+#define MAX_OUTPUTS 32
+static const unsigned *outputs = OUTPUTS;
+static size_t n_outputs = N_OUTPUTS;
+
+/* The corner's body, moved by the body_force read after each step (a
+ * Jacobi loop); its last acceleration. */
+static double body_z, body_v, body_a;
+
+static void move_body(double force, double h) {
+    body_a = force / BODY_MASS;
+    body_z += body_v * h + 0.5 * body_a * h * h;
+    body_v += body_a * h;
+}
+
+/* A corner's force on the chassis (N): four different, changing signals,
+ * and their rates. */
+static double chassis_force(int i, double t) { return 800.0 * sin((3.0 + 2.0 * i) * t + i) + 50.0 * i; }
+static double chassis_force_rate(int i, double t) {
+    return 800.0 * (3.0 + 2.0 * i) * cos((3.0 + 2.0 * i) * t + i);
+}
 
 static double road_input(double t) { return 0.05 * sin(5.0 * t); }
 static double road_input_rate(double t) { return 0.25 * cos(5.0 * t); }
@@ -369,18 +470,20 @@ static long run_fmi2(void *library, const char *token, const Case *c, double sec
     }
     if (exit_init(instance)) fail("fmi2ExitInitializationMode", 0.0);
 
-    int orders[N_OUTPUTS];
-    for (size_t i = 0; i < N_OUTPUTS; i++) orders[i] = 1;
-    double values[N_OUTPUTS], rates[N_OUTPUTS];
+    int orders[MAX_OUTPUTS];
+    for (size_t i = 0; i < MAX_OUTPUTS; i++) orders[i] = 1;
+    double values[MAX_OUTPUTS], rates[MAX_OUTPUTS];
     int lift_offs = 0;
     const unsigned lift_off_vr = VR_LIFT_OFF_COUNT;
+    const unsigned body_vrs[] = {CORNER_VR_BODY_DISPLACEMENT, CORNER_VR_BODY_VELOCITY};
+    const int body_orders[] = {1, 1};
     double t = 0.0, last_g = G;
     long k = 0;
     counting = 1;
     while (t < seconds - 1e-9) {
         double step = step_of(c, k);
         double g = G;
-        if (change_g && t >= 10.0 && t < 20.0) g = 0.8 * G;
+        if (change_g && t >= seconds / 3.0 && t < 2.0 * seconds / 3.0) g = 0.8 * G;
         double start = call_times ? seconds_now() : 0.0;
         int change = set_gain_every_call && g != last_g;
         if (change) begin_gain_change();
@@ -394,19 +497,27 @@ static long run_fmi2(void *library, const char *token, const Case *c, double sec
                 set_input_derivatives(instance, &x_g_vr, 1, &order, &rate))
                 fail("setting x_g", t);
         }
+        if (c->model == MODEL_CORNER) {
+            /* The body inputs and their derivatives (which the corner
+             * ignores with a warning). */
+            const double body[] = {body_z, body_v}, body_rates[] = {body_v, body_a};
+            if (set_real(instance, body_vrs, 2, body) ||
+                set_input_derivatives(instance, body_vrs, 2, body_orders, body_rates) > 1)
+                fail("setting the body inputs", t);
+        }
         if (restore_at == k) {
             counting = 0;
             if (restore_serialized2(instance)) fail("restoring a serialized FMU state", t);
             counting = 1;
         }
         if (do_step(instance, t, step, 1)) fail("fmi2DoStep", t);
-        if (get_real(instance, OUTPUTS, N_OUTPUTS, values) ||
+        if (get_real(instance, outputs, n_outputs, values) ||
             get_integer(instance, &lift_off_vr, 1, &lift_offs) ||
-            get_output_derivatives(instance, OUTPUTS, N_OUTPUTS, orders, rates))
+            get_output_derivatives(instance, outputs, n_outputs, orders, rates))
             fail("reading the outputs", t);
+        if (c->model == MODEL_CORNER) move_body(values[n_outputs - 1], step);
         if (call_times && k < max_calls) call_times[k] = seconds_now() - start;
-        t = c->pattern == PATTERN_ALIGNED || c->pattern == PATTERN_LONG ? (double)(k + 1) * step
-                                                                        : t + step;
+        t = next_time(c, k, t, step);
         k++;
     }
     counting = 0;
@@ -432,8 +543,8 @@ static void intermediate_update(fmi3InstanceEnvironment env, fmi3Float64 time,
                                 fmi3Boolean *early_return_requested,
                                 fmi3Float64 *early_return_time) {
     (void)env, (void)set_requested, (void)step_finished;
-    double values[N_OUTPUTS];
-    if (get_allowed && get_float64(instance3, OUTPUTS, N_OUTPUTS, values, N_OUTPUTS) != fmi3OK)
+    double values[MAX_OUTPUTS];
+    if (get_allowed && get_float64(instance3, outputs, n_outputs, values, n_outputs) != fmi3OK)
         fail("fmi3GetFloat64 in an intermediate update", time);
     intermediate_calls++;
     *early_return_requested = can_return_early && intermediate_calls % 7 == 0;
@@ -511,11 +622,12 @@ static long run_fmi3(void *library, const char *token, const Case *c, double sec
     }
     if (exit_init(instance3)) fail("fmi3ExitInitializationMode", 0.0);
 
-    fmi3Int32 orders[N_OUTPUTS];
-    for (size_t i = 0; i < N_OUTPUTS; i++) orders[i] = 1;
-    double values[N_OUTPUTS], rates[N_OUTPUTS];
+    fmi3Int32 orders[MAX_OUTPUTS];
+    for (size_t i = 0; i < MAX_OUTPUTS; i++) orders[i] = 1;
+    double values[MAX_OUTPUTS], rates[MAX_OUTPUTS];
     fmi3Int32 lift_offs = 0;
     const fmi3ValueReference lift_off_vr = VR_LIFT_OFF_COUNT;
+    const fmi3ValueReference body_vrs[] = {CORNER_VR_BODY_DISPLACEMENT, CORNER_VR_BODY_VELOCITY};
     double t = 0.0, last_g = G;
     long k = 0;
     intermediate_calls = 0;
@@ -523,7 +635,7 @@ static long run_fmi3(void *library, const char *token, const Case *c, double sec
     while (t < seconds - 1e-9) {
         double step = step_of(c, k);
         double g = G;
-        if (change_g && t >= 10.0 && t < 20.0) g = 0.8 * G;
+        if (change_g && t >= seconds / 3.0 && t < 2.0 * seconds / 3.0) g = 0.8 * G;
         double start = call_times ? seconds_now() : 0.0;
         int change = set_gain_every_call && g != last_g;
         if (change) begin_gain_change();
@@ -535,6 +647,10 @@ static long run_fmi3(void *library, const char *token, const Case *c, double sec
             double x_g = road_input(t);
             if (set_float64(instance3, &x_g_vr, 1, &x_g, 1)) fail("fmi3SetFloat64 x_g", t);
         }
+        if (c->model == MODEL_CORNER) {
+            const double body[] = {body_z, body_v};
+            if (set_float64(instance3, body_vrs, 2, body, 2)) fail("setting the body inputs", t);
+        }
         if (restore_at == k) {
             counting = 0;
             if (restore_serialized3(instance3)) fail("restoring a serialized FMU state", t);
@@ -544,20 +660,123 @@ static long run_fmi3(void *library, const char *token, const Case *c, double sec
         double last_time = t;
         if (do_step(instance3, t, step, 1, &event_needed, &terminate, &early_return, &last_time))
             fail("fmi3DoStep", t);
-        if (get_float64(instance3, OUTPUTS, N_OUTPUTS, values, N_OUTPUTS) ||
+        if (get_float64(instance3, outputs, n_outputs, values, n_outputs) ||
             get_int32(instance3, &lift_off_vr, 1, &lift_offs, 1) ||
-            get_output_derivatives(instance3, OUTPUTS, N_OUTPUTS, orders, rates, N_OUTPUTS))
+            get_output_derivatives(instance3, outputs, n_outputs, orders, rates, n_outputs))
             fail("reading the outputs", t);
         if (call_times && k < max_calls) call_times[k] = seconds_now() - start;
-        if (early_return)
-            t = last_time;
-        else
-            t = c->pattern == PATTERN_ALIGNED || c->pattern == PATTERN_LONG ? (double)(k + 1) * step
-                                                                            : t + step;
+        double next = early_return ? last_time : next_time(c, k, t, step);
+        if (c->model == MODEL_CORNER) move_body(values[n_outputs - 1], next - t);
+        t = next;
         k++;
     }
     counting = 0;
     free_instance(instance3);
+    return k;
+}
+
+/* ---- the chassis (both versions) ---- */
+
+/* The chassis driven by four forces set at every communication point (FMI
+ * 2.0: force_fl with its order-1 derivative too), every output read, a
+ * serialized state restored in the middle. Its steps vary at least by
+ * roundings (the chassis keeps the W_k filter's maps of its last 4 step
+ * lengths and makes those of a new one). */
+static long run_chassis(int fmi, void *library, const char *token, const Case *c, double seconds) {
+    fmi2Component (*instantiate2)(const char *, int, const char *, const char *,
+                                  const fmi2CallbackFunctions *, int, int) = NULL;
+    fmi2Status (*setup2)(fmi2Component, int, double, double, int, double) = NULL;
+    fmi2Status (*enter_init2)(fmi2Component) = NULL;
+    fmi2Status (*exit_init2)(fmi2Component) = NULL;
+    fmi2Status (*do_step2)(fmi2Component, double, double, int) = NULL;
+    fmi2Status (*set_real2)(fmi2Component, const unsigned *, size_t, const double *) = NULL;
+    fmi2Status (*get_real2)(fmi2Component, const unsigned *, size_t, double *) = NULL;
+    fmi2Status (*set_input_derivatives2)(fmi2Component, const unsigned *, size_t, const int *,
+                                         const double *) = NULL;
+    void (*free_instance2)(fmi2Component) = NULL;
+    fmi3InstantiateCoSimulationTYPE instantiate3 = NULL;
+    fmi3EnterInitializationModeTYPE enter_init3 = NULL;
+    fmi3ExitInitializationModeTYPE exit_init3 = NULL;
+    fmi3DoStepTYPE do_step3 = NULL;
+    fmi3SetFloat64TYPE set_float64 = NULL;
+    fmi3FreeInstanceTYPE free_instance3 = NULL;
+    void *instance;
+    if (fmi == 2) {
+        SYM(instantiate2, library, "fmi2Instantiate");
+        SYM(setup2, library, "fmi2SetupExperiment");
+        SYM(enter_init2, library, "fmi2EnterInitializationMode");
+        SYM(exit_init2, library, "fmi2ExitInitializationMode");
+        SYM(do_step2, library, "fmi2DoStep");
+        SYM(set_real2, library, "fmi2SetReal");
+        SYM(get_real2, library, "fmi2GetReal");
+        SYM(set_input_derivatives2, library, "fmi2SetRealInputDerivatives");
+        SYM(free_instance2, library, "fmi2FreeInstance");
+        bind_states2(library);
+        static const fmi2CallbackFunctions callbacks = {logger2, master_allocate, free, NULL, NULL};
+        instance = instantiate2("realtime", 1, token, NULL, &callbacks, 0, 0);
+        if (!instance) fail("fmi2Instantiate", 0.0);
+        if (setup2(instance, 0, 0.0, 0.0, 0, 0.0) || enter_init2(instance) || exit_init2(instance))
+            fail("initialization", 0.0);
+    } else {
+        SYM(instantiate3, library, "fmi3InstantiateCoSimulation");
+        SYM(enter_init3, library, "fmi3EnterInitializationMode");
+        SYM(exit_init3, library, "fmi3ExitInitializationMode");
+        SYM(do_step3, library, "fmi3DoStep");
+        SYM(set_float64, library, "fmi3SetFloat64");
+        SYM(get_float64, library, "fmi3GetFloat64");
+        SYM(free_instance3, library, "fmi3FreeInstance");
+        bind_states3(library);
+        instance = instantiate3("realtime", token, NULL, 0, 0, 0, 0, NULL, 0, NULL, logger3, NULL);
+        if (!instance) fail("fmi3InstantiateCoSimulation", 0.0);
+        if (enter_init3(instance, 0, 0.0, 0.0, 0, 0.0) || exit_init3(instance)) fail("initialization", 0.0);
+    }
+    const unsigned force_vrs[] = {CHASSIS_VR_FORCE_FL, CHASSIS_VR_FORCE_FR, CHASSIS_VR_FORCE_RL,
+                                  CHASSIS_VR_FORCE_RR};
+    double values[N_CHASSIS_OUTPUTS];
+    double t = 0.0;
+    long k = 0;
+    counting = 1;
+    while (t < seconds - 1e-9) {
+        double step = step_of(c, k);
+        double start = call_times ? seconds_now() : 0.0;
+        double forces[4];
+        for (int i = 0; i < 4; i++) forces[i] = chassis_force(i, t);
+        if (fmi == 2) {
+            const int order = 1;
+            const double rate = chassis_force_rate(0, t);
+            if (set_real2(instance, force_vrs, 4, forces) ||
+                set_input_derivatives2(instance, force_vrs, 1, &order, &rate))
+                fail("setting the forces", t);
+        } else if (set_float64(instance, force_vrs, 4, forces, 4))
+            fail("setting the forces", t);
+        if (restore_at == k) {
+            counting = 0;
+            counting_restore = 1;
+            if (fmi == 2 ? restore_serialized2(instance) : restore_serialized3(instance))
+                fail("restoring a serialized FMU state", t);
+            counting_restore = 0;
+            counting = 1;
+        }
+        if (fmi == 2) {
+            if (do_step2(instance, t, step, 1) ||
+                get_real2(instance, CHASSIS_OUTPUTS, N_CHASSIS_OUTPUTS, values))
+                fail("fmi2DoStep and reading the outputs", t);
+        } else {
+            fmi3Boolean event_needed, terminate, early_return;
+            double last_time = t;
+            if (do_step3(instance, t, step, 1, &event_needed, &terminate, &early_return, &last_time) ||
+                get_float64(instance, CHASSIS_OUTPUTS, N_CHASSIS_OUTPUTS, values, N_CHASSIS_OUTPUTS))
+                fail("fmi3DoStep and reading the outputs", t);
+        }
+        if (call_times && k < max_calls) call_times[k] = seconds_now() - start;
+        t = next_time(c, k, t, step);
+        k++;
+    }
+    counting = 0;
+    if (fmi == 2)
+        free_instance2(instance);
+    else
+        free_instance3(instance);
     return k;
 }
 
@@ -855,6 +1074,10 @@ static long run_model_exchange_fmi3(void *library, const char *token, const Case
 
 static long run(int fmi, void *library, const char *token, const Case *c, double seconds,
                 int change_g) {
+    if (c->model == MODEL_CHASSIS) return run_chassis(fmi, library, token, c, seconds);
+    outputs = c->model == MODEL_CORNER ? CORNER_OUTPUTS : OUTPUTS;
+    n_outputs = c->model == MODEL_CORNER ? N_CORNER_OUTPUTS : N_OUTPUTS;
+    body_z = body_v = body_a = 0.0;
     return fmi == 2 ? run_fmi2(library, token, c, seconds, change_g)
                     : run_fmi3(library, token, c, seconds, change_g);
 }
@@ -889,12 +1112,29 @@ int main(int argc, char **argv) {
     void *library = open_library(argv[3]);
     const char *token = argv[4];
     const Case *c = find_case(argv[5]);
+    if (model_exchange_mode && c->model != MODEL_QUARTER_CAR) {
+        fprintf(stderr, "%s: the corner and the chassis are Co-Simulation only\n", c->name);
+        return 2;
+    }
     if (model_exchange_mode) {
         restore_at = 15000;
         long steps = fmi == 2 ? run_model_exchange_fmi2(library, token, c, 30.0)
                               : run_model_exchange_fmi3(library, token, c, 30.0);
         printf("allocations %ld steps %ld (restoring a serialized state: %ld allocations)\n", allocations,
                steps, restore_allocations);
+        return allocations == 0 ? 0 : 1;
+    }
+    if (count_mode && c->model != MODEL_QUARTER_CAR) {
+        /* 10 s, a serialized state restored after 5 s (the 10 ms steps: 500). */
+        set_gain_every_call = 1;
+        restore_at = c->pattern == PATTERN_LONG ? 500 : 5000;
+        long calls = run(fmi, library, token, c, 10.0, 1);
+        if (c->model == MODEL_CHASSIS)
+            printf("allocations %ld calls %ld (restoring a serialized state: %ld allocations)\n",
+                   allocations, calls, restore_allocations);
+        else
+            printf("allocations %ld calls %ld (g value changes: 2 calls, %ld allocations)\n", allocations,
+                   calls, gain_change_allocations);
         return allocations == 0 ? 0 : 1;
     }
     if (count_mode) {

@@ -11,7 +11,7 @@ use crate::Slave;
 use crate::defaults::Model;
 use crate::error::Status;
 use crate::slave::{Dialect, LogSink, Logger};
-use crate::variables::{model_of_token, token};
+use crate::variables::{build_lookup, model_of_token, token};
 use std::path::Path;
 
 /// One call of the instantiation function, before the instance exists.
@@ -96,6 +96,10 @@ impl Instantiation {
         details: &str,
     ) -> Slave {
         let token = token(model, self.dialect.version);
+        // A model whose first variable access comes after Exit
+        // Initialization Mode (the chassis's, with every parameter at its
+        // default) allocates nothing for it then.
+        build_lookup(model, self.dialect.version);
         let resources = resource_path
             .map(|p| format!("at {}", p.display()))
             .unwrap_or_else(|| "not given".into());

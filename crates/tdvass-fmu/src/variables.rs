@@ -763,6 +763,13 @@ pub fn by_vr(model: Model, version: FmiVersion, vr: u32) -> Option<&'static Vari
     }
 }
 
+/// Builds the lookup table of [`by_vr`] for `model` in `version` now (once
+/// per process), so that the first getter or setter after initialization
+/// does not allocate it (an instantiation calls this).
+pub fn build_lookup(model: Model, version: FmiVersion) {
+    vr_table(model, version);
+}
+
 /// The variables of `model` in `version` by value reference (the first of
 /// each, as a search finds it), for the references below the largest one
 /// in use (at most 4096); built at the first lookup.

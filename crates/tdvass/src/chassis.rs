@@ -349,8 +349,10 @@ pub struct Chassis {
     integrals: [f64; 5],
     /// The filter's maps over the last [`FILTER_STEPS`] step lengths taken
     /// (a master whose clock counts nanoseconds alternates between two
-    /// lengths a rounding apart), the oldest replaced first.
-    steps: Vec<FilterStep>,
+    /// lengths a rounding apart), the oldest replaced first. In place, not
+    /// on the heap: a new length (a step of its own, a state restored)
+    /// makes its maps without allocating.
+    steps: [Option<FilterStep>; FILTER_STEPS],
     /// Where the next new length goes in `steps`.
     next_step: usize,
 }
@@ -378,7 +380,7 @@ impl Chassis {
             force_rates: [0.0; 4],
             filter: SVector::zeros(),
             integrals: [0.0; 5],
-            steps: Vec::with_capacity(FILTER_STEPS),
+            steps: [const { None }; FILTER_STEPS],
             next_step: 0,
         })
     }
@@ -457,20 +459,22 @@ impl Chassis {
     /// The W_k filter over `delta` with the input `u0 + u1 s`, and the
     /// integrals of a_w² and a_w⁴ over it.
     fn filter_step(&mut self, delta: f64, u0: f64, u1: f64) {
-        let at = match self.steps.iter().position(|step| step.length == delta) {
+        let found = self
+            .steps
+            .iter()
+            .position(|step| step.as_ref().is_some_and(|step| step.length == delta));
+        let at = match found {
             Some(at) => at,
             None => {
-                let maps = filter_maps(&self.wk, delta);
                 let at = self.next_step;
                 self.next_step = (at + 1) % FILTER_STEPS;
-                match self.steps.get_mut(at) {
-                    Some(slot) => *slot = maps,
-                    None => self.steps.push(maps),
-                }
+                self.steps[at] = Some(filter_maps(&self.wk, delta));
                 at
             }
         };
-        let step = &self.steps[at];
+        let Some(step) = &self.steps[at] else {
+            unreachable!("the maps of a step length just found or made")
+        };
         let mut z = SVector::<f64, { WK_STATES + 2 }>::zeros();
         z.fixed_rows_mut::<WK_STATES>(0).copy_from(&self.filter);
         z[WK_STATES] = u0;

@@ -318,8 +318,10 @@ impl Slave {
             return self.set_force_derivatives(vrs, orders, values);
         }
         let mut slope = None;
-        let mut ignored = Vec::new();
-        let mut body_ignored = Vec::new();
+        // Whether orders above 1 of `x_g`, and derivatives of the body
+        // inputs, were given: named in the warnings as the arguments list
+        // them (without allocating: masters set these at every step).
+        let (mut ignored, mut body_ignored) = (false, false);
         for ((&vr, &order), &value) in vrs.iter().zip(orders).zip(values) {
             let var = self.variable(vr, VarType::Real)?;
             if var.causality != Causality::Input {
@@ -343,32 +345,42 @@ impl Slave {
             if var.name != "x_g" {
                 // The corner's attachment moves at `body_velocity` over a
                 // step; a body input's derivative adds nothing to it.
-                body_ignored.push(var.name);
+                body_ignored = true;
             } else if order == 1 {
                 guards::check_input_slope(value)?;
                 slope = Some(value);
             } else {
-                ignored.push(order);
+                ignored = true;
             }
         }
+        // Every reference is known here (checked above).
+        let (model, version) = (self.model(), self.dialect.version);
+        let name = |vr: u32| by_vr(model, version, vr).map_or("", |var| var.name);
+        let body_names = DebugList(|| vrs.iter().map(|&vr| name(vr)).filter(|&name| name != "x_g"));
+        let orders_ignored = DebugList(|| {
+            vrs.iter()
+                .zip(orders)
+                .filter(|&(&vr, &order)| name(vr) == "x_g" && order != 1)
+                .map(|(_, &order)| order)
+        });
         if let Some(slope) = slope {
             self.state.input_slope = slope;
             self.state.input_slope_given = true;
             self.state.input_pending = true;
         }
-        if !body_ignored.is_empty() {
+        if body_ignored {
             self.warning(format_args!(
-                "{}: the derivatives of {body_ignored:?} are ignored: the body's attachment point moves at body_velocity from body_displacement, from where they were set",
+                "{}: the derivatives of {body_names:?} are ignored: the body's attachment point moves at body_velocity from body_displacement, from where they were set",
                 self.call(self.dialect.set_input_derivatives)
             ));
         }
-        if ignored.is_empty() && body_ignored.is_empty() {
+        if !ignored && !body_ignored {
             Ok(Status::Ok)
-        } else if ignored.is_empty() {
+        } else if !ignored {
             Ok(Status::Warning)
         } else {
             self.warning(format_args!(
-                "{}: derivative orders {ignored:?} of `x_g` ignored (the input is extrapolated linearly)",
+                "{}: derivative orders {orders_ignored:?} of `x_g` ignored (the input is extrapolated linearly)",
                 self.call(self.dialect.set_input_derivatives)
             ));
             Ok(Status::Warning)
@@ -386,7 +398,7 @@ impl Slave {
         values: &[f64],
     ) -> Result<Status, FmiError> {
         let mut rates = self.state.settings.force_rates;
-        let mut ignored = Vec::new();
+        let mut ignored = false;
         for ((&vr, &order), &value) in vrs.iter().zip(orders).zip(values) {
             let var = self.variable(vr, VarType::Real)?;
             let Some(i) = force_index(var.name) else {
@@ -404,7 +416,7 @@ impl Slave {
             if order == 1 {
                 rates[i] = value;
             } else {
-                ignored.push((var.name, order));
+                ignored = true;
             }
         }
         self.state.settings.force_rates = rates;
@@ -413,9 +425,17 @@ impl Slave {
             let (forces, _) = chassis.forces();
             chassis.set_forces(forces, rates)?;
         }
-        if ignored.is_empty() {
+        if !ignored {
             return Ok(Status::Ok);
         }
+        // The forces' references are known here (checked above).
+        let (model, version) = (self.model(), self.dialect.version);
+        let ignored = DebugList(|| {
+            vrs.iter()
+                .zip(orders)
+                .filter(|&(_, &order)| order != 1)
+                .map(|(&vr, &order)| (by_vr(model, version, vr).map_or("", |var| var.name), order))
+        });
         self.warning(format_args!(
             "{}: derivatives {ignored:?} ignored (a force is linear over a step)",
             self.call(self.dialect.set_input_derivatives)
@@ -478,6 +498,21 @@ impl Slave {
 
 /// The index among the chassis's forces ([`tdvass::chassis::Corner::ALL`])
 /// of the input `name`, if it is one.
+/// Formats as `{:?}` of a `Vec` of the items `.0` yields, made while
+/// formatting: a warning lists them without collecting them.
+struct DebugList<F>(F);
+
+impl<I, F> std::fmt::Debug for DebugList<F>
+where
+    F: Fn() -> I,
+    I: Iterator,
+    I::Item: std::fmt::Debug,
+{
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_list().entries((self.0)()).finish()
+    }
+}
+
 pub(super) fn force_index(name: &str) -> Option<usize> {
     tdvass::chassis::Corner::ALL
         .iter()

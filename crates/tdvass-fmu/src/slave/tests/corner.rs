@@ -286,3 +286,72 @@ fn the_attachment_follows_its_line_until_set_again() {
         assert_eq!(attachment(&mut s).to_bits(), held.to_bits(), "{k}");
     }
 }
+
+/// The warnings of ignored input derivatives name them as the call gave
+/// them: the body inputs, the orders of `x_g` above 1, the chassis's
+/// forces with their orders (listed while formatting, not collected).
+#[test]
+fn ignored_input_derivatives_are_named_in_the_order_given() {
+    let log: Log = Rc::default();
+    let sink = log.clone();
+    let logger = Logger::new(
+        Box::new(move |s, c, m| sink.borrow_mut().push((s, c.into(), m.into()))),
+        true,
+    );
+    let mut s = Slave::new(TEST_DIALECT, Model::Corner, guid(Model::Corner), logger);
+    s.setup_experiment(None, 0.0, None).unwrap();
+    s.set_integer(&[corner_vr("road")], &[0]).unwrap();
+    start(&mut s);
+    let vrs = [
+        corner_vr("x_g"),
+        corner_vr("body_velocity"),
+        corner_vr("x_g"),
+        corner_vr("body_displacement"),
+    ];
+    let status = s
+        .set_real_input_derivatives(&vrs, &[2, 1, 3, 1], &[0.1, 0.2, 0.3, 0.4])
+        .unwrap();
+    assert_eq!(status, Status::Warning);
+    let warnings: Vec<String> = log
+        .borrow()
+        .iter()
+        .filter(|(status, _, _)| *status == Status::Warning)
+        .map(|(_, _, message)| message.clone())
+        .collect();
+    assert_eq!(warnings.len(), 2, "{warnings:?}");
+    assert!(
+        warnings[0]
+            .contains(r#"the derivatives of ["body_velocity", "body_displacement"] are ignored"#),
+        "{}",
+        warnings[0]
+    );
+    assert!(
+        warnings[1].contains("derivative orders [2, 3] of `x_g` ignored"),
+        "{}",
+        warnings[1]
+    );
+
+    let log: Log = Rc::default();
+    let sink = log.clone();
+    let logger = Logger::new(
+        Box::new(move |s, c, m| sink.borrow_mut().push((s, c.into(), m.into()))),
+        true,
+    );
+    let mut s = Slave::new(TEST_DIALECT, Model::Chassis, guid(Model::Chassis), logger);
+    s.setup_experiment(None, 0.0, None).unwrap();
+    start(&mut s);
+    let force = |name| by_name(Model::Chassis, FmiVersion::Fmi2, name).unwrap().vr;
+    let status = s
+        .set_real_input_derivatives(
+            &[force("force_rl"), force("force_fl"), force("force_rr")],
+            &[2, 1, 4],
+            &[1.0, 2.0, 3.0],
+        )
+        .unwrap();
+    assert_eq!(status, Status::Warning);
+    let last = log.borrow().last().unwrap().2.clone();
+    assert!(
+        last.contains(r#"derivatives [("force_rl", 2), ("force_rr", 4)] ignored"#),
+        "{last}"
+    );
+}
