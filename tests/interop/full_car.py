@@ -16,7 +16,10 @@ MASTER is one of
 - `fmpy-loop`: examples/full_car.py's loop: fmpy's FMU2Slave, five
   instances stepped at STEP, with the components, parameters and
   connections read from the SSD inside full-car.ssp (fmpy's own
-  `simulate_ssp` leaves the SSD's parameter bindings out).
+  `simulate_ssp` leaves the SSD's parameter bindings out);
+- `monolithic`: not a master but the reference, `tdvass car` (the
+  command line next to FMU_DIR's `target/fmu`: `target/release/tdvass`),
+  the same car as one delay equation with no coupling error.
 
 Writes the car's summary at STOP_TIME as JSON: the chassis's RMS values,
 each corner's RMS values and lift-off count, and the master's name.
@@ -228,12 +231,37 @@ def fmpy_loop(fmu_dir: Path, stop_time: float, step: float) -> dict:
     return result
 
 
+# ---------------------------------------------------------- the exact car
+
+
+def monolithic(fmu_dir: Path, stop_time: float, step: float) -> dict:
+    """`tdvass car` (the same car as one delay equation, STEP is ignored):
+    the SSD's road (ISO 8608 class C at 20 m/s, seed 1 on the left track,
+    the next seed on the right, the rear wheels a wheelbase behind) and
+    every other parameter at its default, as the FMUs'."""
+    import subprocess
+
+    binary = fmu_dir.parent / "release" / ("tdvass.exe" if sys.platform == "win32" else "tdvass")
+    done = subprocess.run(
+        [str(binary), "car", "--road", "iso8608", "--duration", repr(stop_time), "--json"],
+        capture_output=True, text=True, check=True, timeout=600,
+    )
+    car = json.loads(done.stdout)
+    result = summary(
+        lambda instance, name: car[name] if instance == CHASSIS else car["corners"][instance][name],
+        lambda instance, name: car["corners"][instance][name],
+    )
+    result["time"] = float(car["duration"])
+    return result
+
+
 MASTERS = {
     "libcosim-osp": lambda d, t, h: libcosim_osp(d, t, h, "OspSystemStructure.xml"),
     "libcosim-ecco": libcosim_ecco,
     "libcosim-ssp": libcosim_ssp,
     "ecos-ssp": ecos_ssp,
     "fmpy-loop": fmpy_loop,
+    "monolithic": monolithic,
 }
 
 

@@ -6,7 +6,9 @@ against the Co-Simulation car of examples/full_car.py."""
 
 from __future__ import annotations
 
+import json
 import shutil
+import subprocess
 import sys
 import tempfile
 import zipfile
@@ -193,26 +195,45 @@ def flat(summary):
     return values
 
 
+def monolithic_car(fmu_file: Path, stop: float) -> dict:
+    """`tdvass car` on the SSD's road (the command line next to the FMUs:
+    target/release/tdvass), in the summary's shape."""
+    binary = fmu_file.parent.parent / "release" / ("tdvass.exe" if sys.platform == "win32" else "tdvass")
+    if not binary.is_file():
+        pytest.fail(f"{binary} not found; build it with `cargo build --release`")
+    done = subprocess.run([str(binary), "car", "--road", "iso8608", "--duration", repr(stop), "--json"],
+                          capture_output=True, text=True, check=True, timeout=300)
+    car = json.loads(done.stdout)
+    return {"chassis": {n: car[n] for n in CHASSIS},
+            "corners": {c: {n: car["corners"][c][n] for n in CORNER} for c in CORNERS}}
+
+
 def test_the_full_car_in_model_exchange_is_the_limit_of_its_co_simulation(fmu_file):
     """The five Model Exchange FMUs of full-car.ssp in one DOP853 solver
-    (rtol 1e-7, CompletedIntegratorStep at every accepted step) over 0.5 s
-    of the ISO 8608 class C road, against the Co-Simulation car of
-    examples/full_car.py at h = 0.1 ms and 0.2 ms.
+    (rtol 1e-8, CompletedIntegratorStep at every accepted step) over 0.5 s
+    of the ISO 8608 class C road.
 
-    The co-simulation's error is of first order in h (the forces are held
-    over each communication step), so CS(2h) - CS(h) estimates the error of
-    CS(h) (Richardson): Model Exchange must lie within 1.25 times that
-    estimate (plus 2e-6 of the value for its own solver), and within 1e-3
-    of CS(h). Measured: the chassis's RMS accelerations 2.7e-4 to 4.7e-4
-    of their value, the corners' outputs 1e-5 to 2.5e-5, each about the
-    Richardson estimate."""
+    Against the monolithic car (`tdvass car`, the same car as one delay
+    equation): within 1e-5 of every RMS value (measured: 1.8e-6).
+
+    Against the Co-Simulation car of examples/full_car.py at h = 0.1 ms and
+    0.2 ms: the co-simulation's error is of first order in h (the forces
+    are held over each communication step), so CS(2h) - CS(h) estimates the
+    error of CS(h) (Richardson): Model Exchange must lie within 1.25 times
+    that estimate (plus 2e-6 of the value for its own solver), and within
+    1e-3 of CS(h). Measured: the chassis's RMS accelerations 2.7e-4 to
+    4.7e-4 of their value, the corners' outputs 1e-5 to 2.5e-5, each about
+    the Richardson estimate."""
     ssp = fmu_file.with_name("full-car.ssp")
     if not ssp.is_file():
         pytest.fail(f"{ssp} not found; build it with `cargo run --release -p fmu-build`")
     stop = 0.5
-    me, lift_offs, _ = run_model_exchange_car(ssp, stop, 1e-7)
+    me, lift_offs, _ = run_model_exchange_car(ssp, stop, 1e-8)
     # The bilateral tire of the SSD stays in contact: no event to handle.
     assert set(lift_offs.values()) == {0}
+    exact = flat(monolithic_car(fmu_file, stop))
+    for key, value in flat(me).items():
+        assert abs(value - exact[key]) <= 1e-5 * abs(exact[key]), (key, value, exact[key])
     cs = {h: flat(full_car.run_car(ssp, stop, h)[2]) for h in (1e-4, 2e-4)}
     for key, value in flat(me).items():
         reference = cs[1e-4][key]
