@@ -103,6 +103,29 @@ fn the_decoupled_car_is_four_quarter_cars() {
 }
 
 #[test]
+fn the_decoupled_car_is_the_quarter_car_on_every_built_in_road() {
+    // The rear wheels' breakpoints fall between the front's grid nodes on
+    // the paper-compatible road (0.1 s apart, 0.13 s behind at 20 m/s).
+    let paper = RoadSpec::PaperCompatible {
+        road: RandomRoad {
+            class: RoadClass::C,
+            speed: 20.0,
+            cutoff_frequency: 0.1,
+            seed: 3,
+        },
+        sample_interval: 0.1,
+    };
+    let harmonic = RoadSpec::Harmonic {
+        amplitude: 0.05,
+        angular_frequency: 5.0,
+    };
+    for road in [paper, harmonic] {
+        let config = CarConfig::new(Variant::Tdvass, road, 20.0);
+        check_decoupled(&config, 2.0, DECOUPLED);
+    }
+}
+
+#[test]
 fn the_decoupled_car_lifts_off_as_the_quarter_car() {
     for tau in [0.0, 2e-4, 0.011] {
         let road = RoadSpec::Harmonic {

@@ -65,6 +65,12 @@ const TIRE: usize = CORNERS;
 const ACCELERATION: usize = 2 * CORNERS;
 const WEIGHTED_SQUARE: usize = 2 * CORNERS + 3;
 const WEIGHTED_FOURTH: usize = 2 * CORNERS + 4;
+/// The groups of time averages: each corner's, then the chassis's.
+const GROUPS: usize = CORNERS + 1;
+/// The chassis's group.
+const CHASSIS_GROUP: usize = CORNERS;
+/// Every group's bit.
+const ALL_GROUPS: u8 = (1 << GROUPS) - 1;
 /// Most tire switches inside one step.
 const MAX_SWITCHES_PER_STEP: usize = 64;
 
@@ -125,9 +131,10 @@ struct Stretch {
     x_from: DVector<f64>,
     x_to: DVector<f64>,
     inputs: DVector<f64>,
-    /// Whether it ends at `t_k + tau` (the delay inside the step) and at
-    /// no road breakpoint.
-    ends_at_delay: bool,
+    /// The groups ([`GROUPS`]) whose time averages end a piece at `to`:
+    /// all at the step's end; at a wheel's road breakpoint that corner's
+    /// and the chassis's; none at `t_k + tau` alone.
+    closes: u8,
 }
 
 /// The outputs the integrals need at an instant, with their rates.
@@ -174,6 +181,20 @@ impl Run {
         let depth = grid.delay_steps() as usize + 1;
         let mut history = VecDeque::with_capacity(depth + 1);
         history.push_back([[0.0; 2]; CORNERS]);
+        // A wheel at rest above its road's start (a delayed harmonic road)
+        // starts without contact: a lift-off at the start, as the quarter
+        // car counts it, and in flight with the unilateral tire.
+        let mut roads = roads;
+        let mut accumulated = Accumulated::default();
+        let mut flight = 0;
+        for (c, road) in roads.iter_mut().enumerate() {
+            if system.limits[c] + road.piece(start).value(start) < 0.0 {
+                accumulated.lift_offs[c] += 1;
+                if unilateral {
+                    flight |= 1 << c;
+                }
+            }
+        }
         Run {
             system,
             grid,
@@ -185,9 +206,9 @@ impl Run {
             mode_matrices: vec![None; 1 << CORNERS],
             x,
             node: 0,
-            flight: 0,
+            flight,
             history,
-            accumulated: Accumulated::default(),
+            accumulated,
         }
     }
 
@@ -264,28 +285,35 @@ impl Run {
         for _ in 0..=MAX_SWITCHES_PER_STEP {
             let stretches = self.resolve(from, &x_from)?;
             let mut switched = None;
-            // The start of the time averages' current piece: a stretch
-            // that ends at the delay (`t_k + tau`) does not end it, as the
-            // quarter car integrates from node to node across it.
-            let mut open: Option<(f64, Point)> = None;
+            // Where each group's time averages started their current
+            // piece: a stretch end closes the groups whose integrands may
+            // have a kink there (`Stretch::closes`), as the quarter car
+            // closes its runs.
+            let mut open: [Option<(f64, Point)>; GROUPS] = [None; GROUPS];
             for stretch in stretches.iter().filter(|s| s.from < end) {
                 let to = stretch.to.min(end);
-                let start = match open.take() {
-                    Some(start) => start,
-                    None => {
-                        let point = self.point(stretch.from, &stretch.x_from, stretch, self.flight);
-                        (stretch.from, point)
+                if open.iter().any(Option::is_none) {
+                    let start = self.point(stretch.from, &stretch.x_from, stretch, self.flight);
+                    for slot in open.iter_mut().filter(|o| o.is_none()) {
+                        *slot = Some((stretch.from, start));
                     }
-                };
+                }
                 if let Some((at, x_at, corner)) = self.switch_in(stretch, to)? {
                     let stop = self.point(at, &x_at, stretch, self.flight);
-                    self.accumulate(at - start.0, &start.1, &stop);
+                    for (group, start) in open.iter().enumerate() {
+                        let (from, start) = start.expect("every group is open");
+                        self.accumulate(group, at - from, &start, &stop);
+                    }
                     self.flip(corner);
                     switched = Some((at, x_at));
                     break;
                 }
-                if stretch.ends_at_delay && to == stretch.to {
-                    open = Some(start);
+                let closes = if to < stretch.to {
+                    ALL_GROUPS
+                } else {
+                    stretch.closes
+                };
+                if closes == 0 {
                     continue;
                 }
                 let x_to = if to < stretch.to {
@@ -295,7 +323,12 @@ impl Run {
                     stretch.x_to.clone()
                 };
                 let stop = self.point(to, &x_to, stretch, self.flight);
-                self.accumulate(to - start.0, &start.1, &stop);
+                for (group, start) in open.iter_mut().enumerate() {
+                    if closes & (1 << group) != 0 {
+                        let (from, point) = start.take().expect("every group is open");
+                        self.accumulate(group, to - from, &point, &stop);
+                    }
+                }
             }
             match switched {
                 Some((at, x_at)) if at < end * (1.0 - 1e-12) => {
@@ -355,28 +388,34 @@ impl Run {
         let mut cuts = vec![from, h];
         let mut road_cuts = Vec::new();
         if !self.harmonic {
-            for road in self.roads.iter_mut() {
+            for (corner, road) in self.roads.iter_mut().enumerate() {
                 let mut at = from;
                 loop {
                     let end = road.piece(t_node + at + tolerance).end() - t_node;
                     if end >= h - tolerance {
                         break;
                     }
-                    road_cuts.push(end);
+                    road_cuts.push((end, corner));
                     at = end;
                 }
             }
         }
-        cuts.extend_from_slice(&road_cuts);
-        let delay_cut = match self.grid.regime {
-            DelayRegime::InsideStep { tau } if tau > from + tolerance => {
-                cuts.push(tau);
-                road_cuts
-                    .iter()
-                    .all(|cut| (cut - tau).abs() > tolerance)
-                    .then_some(tau)
+        cuts.extend(road_cuts.iter().map(|(cut, _)| *cut));
+        if let DelayRegime::InsideStep { tau } = self.grid.regime
+            && tau > from + tolerance
+        {
+            cuts.push(tau);
+        }
+        let closes = |b: f64| -> u8 {
+            if b >= h - tolerance {
+                return ALL_GROUPS;
             }
-            _ => None,
+            road_cuts
+                .iter()
+                .filter(|(cut, _)| (cut - b).abs() <= tolerance)
+                .fold(0, |mask, (_, corner)| {
+                    mask | 1 << corner | 1 << CHASSIS_GROUP
+                })
         };
         cuts.sort_by(f64::total_cmp);
         cuts.dedup_by(|b, a| *b - *a <= tolerance);
@@ -434,7 +473,7 @@ impl Run {
                 x_from: x0 + m * &y,
                 x_to: x_to + m_to * &y,
                 inputs: known + unknown * &y,
-                ends_at_delay: delay_cut.is_some_and(|tau| (b - tau).abs() <= tolerance),
+                closes: closes(b),
             });
         }
         Ok(stretches)
@@ -541,35 +580,41 @@ impl Run {
         }
     }
 
-    /// Adds a stretch of `length` between the points `a` and `b`.
-    fn accumulate(&mut self, length: f64, a: &Point, b: &Point) {
+    /// Adds a piece of `length` between the points `a` and `b` to the
+    /// time averages of `group` (a corner's SDD², TDD², largest |SDD| and
+    /// contact; the chassis's accelerations and a_w).
+    fn accumulate(&mut self, group: usize, length: f64, a: &Point, b: &Point) {
         let acc = &mut self.accumulated;
         let trapezoid = |f: [f64; 2], g: [f64; 2]| {
             length / 2.0 * (f[0] + g[0]) - length * length / 12.0 * (g[1] - f[1])
         };
         let square = |p: &Point, i: usize| [p.value[i] * p.value[i], 2.0 * p.value[i] * p.rate[i]];
-        for i in 0..WEIGHTED_SQUARE + 1 {
+        if group == CHASSIS_GROUP {
+            for i in ACCELERATION..WEIGHTED_SQUARE + 1 {
+                acc.integrals[i] += trapezoid(square(a, i), square(b, i));
+            }
+            let fourth = |p: &Point| {
+                let y = p.value[WEIGHTED_SQUARE];
+                [y * y * y * y, 4.0 * y * y * y * p.rate[WEIGHTED_SQUARE]]
+            };
+            acc.integrals[WEIGHTED_FOURTH] += trapezoid(fourth(a), fourth(b));
+            return;
+        }
+        let c = group;
+        for i in [DEFLECTION + c, TIRE + c] {
             acc.integrals[i] += trapezoid(square(a, i), square(b, i));
         }
-        let fourth = |p: &Point| {
-            let y = p.value[WEIGHTED_SQUARE];
-            [y * y * y * y, 4.0 * y * y * y * p.rate[WEIGHTED_SQUARE]]
-        };
-        acc.integrals[WEIGHTED_FOURTH] += trapezoid(fourth(a), fourth(b));
-        for c in 0..CORNERS {
-            let i = DEFLECTION + c;
-            let largest =
-                largest_magnitude(length, [a.value[i], a.rate[i]], [b.value[i], b.rate[i]]);
-            acc.max_deflection[c] = acc.max_deflection[c].max(largest);
-            if self.unilateral {
-                if self.flight & (1 << c) != 0 {
-                    acc.loss_time[c] += length;
-                }
-            } else {
-                let (below, downs) = below_zero(length, a.margin[c], b.margin[c]);
-                acc.loss_time[c] += below;
-                acc.lift_offs[c] += downs;
+        let i = DEFLECTION + c;
+        let largest = largest_magnitude(length, [a.value[i], a.rate[i]], [b.value[i], b.rate[i]]);
+        acc.max_deflection[c] = acc.max_deflection[c].max(largest);
+        if self.unilateral {
+            if self.flight & (1 << c) != 0 {
+                acc.loss_time[c] += length;
             }
+        } else {
+            let (below, downs) = below_zero(length, a.margin[c], b.margin[c]);
+            acc.loss_time[c] += below;
+            acc.lift_offs[c] += downs;
         }
     }
 
