@@ -6,6 +6,7 @@ use tdvass::TireContact;
 use tdvass::analysis::optimize::{
     CONTROLLER_DELAY_RANGE, CONTROLLER_GAIN_RANGE, DEFAULT_TRAVEL_LIMIT, Objective, Target,
 };
+use tdvass::chassis::ChassisParams;
 use tdvass::error::{Error, Result};
 use tdvass::metrics::Weights;
 use tdvass::model::{Params, State, Variant};
@@ -45,7 +46,7 @@ pub(super) enum Command {
     Map(MapArgs),
     /// The monolithic full car: the chassis on four corners in one delay
     /// equation (the reference of the corner and chassis FMUs' co-simulation).
-    Car(Box<super::car::CarArgs>),
+    Car(Box<CarArgs>),
 }
 
 /// Model parameters, named as the FMU parameters (defaults: Table 1, g1, tau1).
@@ -329,6 +330,84 @@ pub(super) struct SimulateArgs {
     #[arg(long)]
     pub(super) output: Option<String>,
     /// Time between CSV rows (s).
+    #[arg(long, default_value_t = 1e-3)]
+    pub(super) output_interval: f64,
+    /// Print one JSON object.
+    #[arg(long)]
+    pub(super) json: bool,
+}
+
+/// The chassis's parameters, named as the chassis FMU's.
+#[derive(Debug, Clone, Args)]
+pub(super) struct ChassisArgs {
+    /// Body mass m (kg; 4 x 345, the paper's car).
+    #[arg(long, default_value_t = 1380.0)]
+    pub(super) mass: f64,
+    /// Centre of gravity to the front axle a (m).
+    #[arg(long, default_value_t = 1.3)]
+    pub(super) a: f64,
+    /// Centre of gravity to the rear axle b (m).
+    #[arg(long, default_value_t = 1.3)]
+    pub(super) b: f64,
+    /// Front track (m).
+    #[arg(long, default_value_t = 1.5)]
+    pub(super) track_front: f64,
+    /// Rear track (m).
+    #[arg(long, default_value_t = 1.5)]
+    pub(super) track_rear: f64,
+    /// Pitch inertia I_theta (kg.m2; default m a b, which decouples front
+    /// and rear).
+    #[arg(long)]
+    pub(super) pitch_inertia: Option<f64>,
+    /// Roll inertia I_phi (kg.m2).
+    #[arg(long, default_value_t = 400.0)]
+    pub(super) roll_inertia: f64,
+    /// Seat point ahead of the centre of gravity (m).
+    #[arg(long, default_value_t = 0.3)]
+    pub(super) seat_x: f64,
+    /// Seat point left of the centre of gravity (m).
+    #[arg(long, default_value_t = 0.35)]
+    pub(super) seat_y: f64,
+}
+
+impl ChassisArgs {
+    pub(super) fn params(&self) -> ChassisParams {
+        ChassisParams {
+            mass: self.mass,
+            a: self.a,
+            b: self.b,
+            track_front: self.track_front,
+            track_rear: self.track_rear,
+            pitch_inertia: self.pitch_inertia.unwrap_or(self.mass * self.a * self.b),
+            roll_inertia: self.roll_inertia,
+            seat_x: self.seat_x,
+            seat_y: self.seat_y,
+        }
+    }
+}
+
+#[derive(Debug, Args)]
+pub(super) struct CarArgs {
+    #[command(flatten)]
+    pub(super) model: ModelArgs,
+    #[command(flatten)]
+    pub(super) run: RunArgs,
+    #[command(flatten)]
+    pub(super) chassis: ChassisArgs,
+    /// cs, pvass or tdvass on every corner (any case; or the codes 1, 2, 3).
+    #[arg(long, default_value = "tdvass")]
+    pub(super) variant: String,
+    /// Seed of the right track's random road (default: --road-seed + 1).
+    #[arg(long)]
+    pub(super) right_seed: Option<u64>,
+    /// The right track's phase on the harmonic road (rad).
+    #[arg(long, default_value_t = 0.0)]
+    pub(super) right_phase: f64,
+    /// Write heave, pitch, roll, the seat acceleration and the four
+    /// suspension deflections to this CSV file.
+    #[arg(long)]
+    pub(super) output: Option<String>,
+    /// Time between CSV rows (s), rounded to a whole number of internal steps.
     #[arg(long, default_value_t = 1e-3)]
     pub(super) output_interval: f64,
     /// Print one JSON object.

@@ -1,137 +1,54 @@
 //! `tdvass car`: the monolithic full car (`tdvass::car`), the chassis on
 //! four corners in one delay equation, with its JSON report.
 
-use super::args::{ModelArgs, RunArgs, io_error, parse_variant};
-use clap::Args;
+use super::args::{CarArgs, io_error, parse_variant};
 use serde_json::{Value, json};
 use std::io::Write as _;
 use tdvass::car::{CarConfig, CarReport, CarSample, run_car_with};
-use tdvass::chassis::{ChassisParams, Corner};
+use tdvass::chassis::Corner;
 use tdvass::error::{Error, Result};
-use tdvass::road::RoadSpec;
+use tdvass::road::{RandomRoad, RoadSpec};
 
-/// The chassis's parameters, named as the chassis FMU's.
-#[derive(Debug, Clone, Args)]
-pub(super) struct ChassisArgs {
-    /// Body mass m (kg; 4 x 345, the paper's car).
-    #[arg(long, default_value_t = 1380.0)]
-    pub(super) mass: f64,
-    /// Centre of gravity to the front axle a (m).
-    #[arg(long, default_value_t = 1.3)]
-    pub(super) a: f64,
-    /// Centre of gravity to the rear axle b (m).
-    #[arg(long, default_value_t = 1.3)]
-    pub(super) b: f64,
-    /// Front track (m).
-    #[arg(long, default_value_t = 1.5)]
-    pub(super) track_front: f64,
-    /// Rear track (m).
-    #[arg(long, default_value_t = 1.5)]
-    pub(super) track_rear: f64,
-    /// Pitch inertia I_theta (kg.m2; default m a b, which decouples front
-    /// and rear).
-    #[arg(long)]
-    pub(super) pitch_inertia: Option<f64>,
-    /// Roll inertia I_phi (kg.m2).
-    #[arg(long, default_value_t = 400.0)]
-    pub(super) roll_inertia: f64,
-    /// Seat point ahead of the centre of gravity (m).
-    #[arg(long, default_value_t = 0.3)]
-    pub(super) seat_x: f64,
-    /// Seat point left of the centre of gravity (m).
-    #[arg(long, default_value_t = 0.35)]
-    pub(super) seat_y: f64,
-}
-
-impl ChassisArgs {
-    fn params(&self) -> ChassisParams {
-        ChassisParams {
-            mass: self.mass,
-            a: self.a,
-            b: self.b,
-            track_front: self.track_front,
-            track_rear: self.track_rear,
-            pitch_inertia: self.pitch_inertia.unwrap_or(self.mass * self.a * self.b),
-            roll_inertia: self.roll_inertia,
-            seat_x: self.seat_x,
-            seat_y: self.seat_y,
-        }
-    }
-}
-
-#[derive(Debug, Args)]
-pub(super) struct CarArgs {
-    #[command(flatten)]
-    pub(super) model: ModelArgs,
-    #[command(flatten)]
-    pub(super) run: RunArgs,
-    #[command(flatten)]
-    pub(super) chassis: ChassisArgs,
-    /// cs, pvass or tdvass on every corner (any case; or the codes 1, 2, 3).
-    #[arg(long, default_value = "tdvass")]
-    pub(super) variant: String,
-    /// Seed of the right track's random road (default: --road-seed + 1).
-    #[arg(long)]
-    pub(super) right_seed: Option<u64>,
-    /// The right track's phase on the harmonic road (rad).
-    #[arg(long, default_value_t = 0.0)]
-    pub(super) right_phase: f64,
-    /// Write heave, pitch, roll, the seat acceleration and the four
-    /// suspension deflections to this CSV file.
-    #[arg(long)]
-    pub(super) output: Option<String>,
-    /// Time between CSV rows (s), rounded to a whole number of internal steps.
-    #[arg(long, default_value_t = 1e-3)]
-    pub(super) output_interval: f64,
-    /// Print one JSON object.
-    #[arg(long)]
-    pub(super) json: bool,
-}
-
-impl CarArgs {
-    fn config(&self) -> Result<CarConfig> {
-        let road = self.run.road_spec()?;
-        let right_seed = self
-            .right_seed
-            .unwrap_or(self.run.road_seed.wrapping_add(1));
-        let right_road = match &road {
-            RoadSpec::Iso8608(random) => RoadSpec::Iso8608(tdvass::road::RandomRoad {
+/// The car of the command line's arguments: the right track's road from
+/// its own seed (`--right-seed`, default `--road-seed` + 1).
+fn config(a: &CarArgs) -> Result<CarConfig> {
+    let road = a.run.road_spec()?;
+    let right_seed = a.right_seed.unwrap_or(a.run.road_seed.wrapping_add(1));
+    let right_road = match &road {
+        RoadSpec::Iso8608(random) => RoadSpec::Iso8608(RandomRoad {
+            seed: right_seed,
+            ..*random
+        }),
+        RoadSpec::PaperCompatible {
+            road: random,
+            sample_interval,
+        } => RoadSpec::PaperCompatible {
+            road: RandomRoad {
                 seed: right_seed,
                 ..*random
-            }),
-            RoadSpec::PaperCompatible {
-                road: random,
-                sample_interval,
-            } => RoadSpec::PaperCompatible {
-                road: tdvass::road::RandomRoad {
-                    seed: right_seed,
-                    ..*random
-                },
-                sample_interval: *sample_interval,
             },
-            other => other.clone(),
-        };
-        let sim = self
-            .run
-            .config(self.model.params(), parse_variant(&self.variant)?)?;
-        Ok(CarConfig {
-            params: sim.params,
-            variant: sim.variant,
-            chassis: self.chassis.params(),
-            road,
-            right_road,
-            right_phase: self.right_phase,
-            vehicle_speed: self.run.vehicle_speed,
-            tire_contact: sim.tire_contact,
-            tolerance: sim.tolerance,
-            max_internal_step: sim.max_internal_step,
-        })
-    }
+            sample_interval: *sample_interval,
+        },
+        other => other.clone(),
+    };
+    let sim = a.run.config(a.model.params(), parse_variant(&a.variant)?)?;
+    Ok(CarConfig {
+        params: sim.params,
+        variant: sim.variant,
+        chassis: a.chassis.params(),
+        road,
+        right_road,
+        right_phase: a.right_phase,
+        vehicle_speed: a.run.vehicle_speed,
+        tire_contact: sim.tire_contact,
+        tolerance: sim.tolerance,
+        max_internal_step: sim.max_internal_step,
+    })
 }
 
 /// Runs `tdvass car`.
 pub(super) fn car_command(a: CarArgs) -> Result<String> {
-    let config = a.config()?;
+    let config = config(&a)?;
     let choice = config.choose_step()?;
     let duration = a.run.duration;
     let report = match &a.output {

@@ -81,7 +81,7 @@ const EXCHANGE_LAYERS: layering::Layers = &[
 /// The files of `crates/tdvass/src/car`, from the ground up.
 const CAR_LAYERS: layering::Layers = &[
     ("system", &["layout"]),
-    ("step maps", &["maps"]),
+    ("step maps, crossings", &["maps", "crossings"]),
     ("run", &["run"]),
     ("car", &["mod"]),
 ];

@@ -25,13 +25,14 @@
 //! the wheel's column), and the filter is `comfort::wk_state_space`.
 //!
 //! Layer: the car's system; it imports the crate's `chassis`, `comfort`,
-//! `error` and `model`.
+//! `error`, `limits` and `model`.
 
 use crate::chassis::{ChassisParams, Corner};
 use crate::comfort::{WK_STATES, wk_state_space};
-use crate::error::Result;
+use crate::error::{Error, Result};
+use crate::limits::{DIVERGENCE_DISPLACEMENT, DIVERGENCE_VELOCITY};
 use crate::model::dynamics::folded_feedback;
-use crate::model::{Body, Params, Plant, STANDARD_GRAVITY, V_S, V_T, Variant, X_H, X_S, X_T};
+use crate::model::{Body, Params, Plant, STANDARD_GRAVITY, V_H, V_S, V_T, Variant, X_H, X_S, X_T};
 use nalgebra::{DMatrix, DVector, RowDVector};
 
 /// The corners, in the order fl, fr, rl, rr.
@@ -264,4 +265,58 @@ pub fn corner_share(chassis: &ChassisParams, corner: Corner) -> f64 {
         Corner::RearLeft | Corner::RearRight => chassis.a,
     };
     chassis.mass * axle / (chassis.a + chassis.b) / 2.0
+}
+
+/// The names of the car's states, for a divergence's message.
+const STATE_NAMES: [&str; 22] = [
+    "heave",
+    "pitch",
+    "roll",
+    "heave_velocity",
+    "pitch_rate",
+    "roll_rate",
+    "x_h_fl",
+    "v_h_fl",
+    "x_t_fl",
+    "v_t_fl",
+    "x_h_fr",
+    "v_h_fr",
+    "x_t_fr",
+    "v_t_fr",
+    "x_h_rl",
+    "v_h_rl",
+    "x_t_rl",
+    "v_t_rl",
+    "x_h_rr",
+    "v_h_rr",
+    "x_t_rr",
+    "v_t_rr",
+];
+
+/// Fails where a displacement (or angle) passes
+/// [`DIVERGENCE_DISPLACEMENT`] or a rate [`DIVERGENCE_VELOCITY`], or a
+/// state is not finite.
+pub(super) fn check_divergence(x: &DVector<f64>, time: f64) -> Result<()> {
+    for (i, name) in STATE_NAMES.iter().enumerate() {
+        let is_rate = if i < 6 {
+            i >= 3
+        } else {
+            matches!((i - 6) % 4 + X_H, V_H | V_T)
+        };
+        let bound = if is_rate {
+            DIVERGENCE_VELOCITY
+        } else {
+            DIVERGENCE_DISPLACEMENT
+        };
+        let value = x[i];
+        if !value.is_finite() || value.abs() > bound {
+            return Err(Error::Diverged {
+                time,
+                variable: name,
+                value,
+                bound,
+            });
+        }
+    }
+    Ok(())
 }

@@ -24,8 +24,10 @@
 //!
 //! Layer: engines (docs/architecture.md), beside the chassis and Model
 //! Exchange; `layout` (the state and the matrices), `maps` (the exact
-//! step maps), `run` (the integration) and this facade.
+//! step maps), `crossings` (a switch function's zeros inside a stretch),
+//! `run` (the integration) and this facade.
 
+mod crossings;
 mod layout;
 mod maps;
 mod run;

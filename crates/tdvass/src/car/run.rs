@@ -34,18 +34,19 @@
 //! every approximation, each corner's RMS values equal the quarter car's
 //! to rounding (`tests/car.rs`).
 //!
-//! Layer: the car's run; it imports the car's `layout` and `maps`, the
-//! solver's grid and `largest_magnitude`, and the crate's `error`,
-//! `limits`, `model` and `road`.
+//! Layer: the car's run; it imports the car's `layout`, `maps` and
+//! `crossings`, the solver's grid and `largest_magnitude`, and the crate's
+//! `error`, `model` and `road`.
 
+use super::crossings::{below_zero, first_crossing};
 use super::layout::{
-    CORNERS, CarSystem, DELAY_ORDER, INPUTS, ROAD_ORDER, STATES, delay_input, road_input, slot,
+    CORNERS, CarSystem, DELAY_ORDER, INPUTS, ROAD_ORDER, STATES, check_divergence, delay_input,
+    road_input, slot,
 };
 use super::maps::{Maps, StretchMap};
 use crate::error::{Error, Result};
-use crate::limits::{DIVERGENCE_DISPLACEMENT, DIVERGENCE_VELOCITY};
 use crate::model::dynamics::hermite;
-use crate::model::{V_H, V_T, X_H, X_T};
+use crate::model::{V_T, X_T};
 use crate::road::Road;
 use crate::solver::{DelayGrid, DelayRegime, largest_magnitude};
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
@@ -690,146 +691,4 @@ impl Run {
             StretchMap::new(&self.system, self.flight, s).apply(&stretch.x_from, &stretch.inputs);
         Ok(Some((stretch.from + s, x, corner)))
     }
-}
-
-/// The first offset in `(0, length]` where the cubic Hermite interpolant
-/// through `a = [p, p']` at 0 and `b` at `length` crosses zero downwards
-/// (`falling`: from `>= 0` to `< 0`) or upwards.
-fn first_crossing(length: f64, a: [f64; 2], b: [f64; 2], falling: bool) -> Option<f64> {
-    let sign = if falling { 1.0 } else { -1.0 };
-    let (a, b) = ([sign * a[0] + 0.0, sign * a[1]], [sign * b[0], sign * b[1]]);
-    // Now a crossing is from >= 0 to < 0.
-    pieces(length, a, b).windows(2).find_map(|w| {
-        let (u0, u1) = (w[0], w[1]);
-        let (p0, p1) = (cubic(length, a, b, u0), cubic(length, a, b, u1));
-        (u1 > 1e-9 * length && p0 >= 0.0 && p1 < 0.0)
-            .then(|| bisect(length, a, b, u0.max(1e-9 * length), u1))
-    })
-}
-
-/// The time below zero in `[0, length]` of the cubic Hermite interpolant
-/// through `a`, `b`, and the number of downward crossings.
-fn below_zero(length: f64, a: [f64; 2], b: [f64; 2]) -> (f64, u64) {
-    let cuts = pieces(length, a, b);
-    let mut roots = vec![0.0];
-    let mut downs = 0;
-    for w in cuts.windows(2) {
-        let (p0, p1) = (cubic(length, a, b, w[0]), cubic(length, a, b, w[1]));
-        if (p0 >= 0.0) != (p1 >= 0.0) {
-            roots.push(bisect(length, a, b, w[0], w[1]));
-            downs += u64::from(p0 >= 0.0);
-        }
-    }
-    roots.push(length);
-    let below = roots
-        .windows(2)
-        .filter(|w| cubic(length, a, b, 0.5 * (w[0] + w[1])) < 0.0)
-        .map(|w| w[1] - w[0])
-        .sum();
-    (below, downs)
-}
-
-/// The interpolant's monotone pieces: 0, its critical points inside, length.
-fn pieces(length: f64, a: [f64; 2], b: [f64; 2]) -> Vec<f64> {
-    let (p0, d0, p1, d1) = (a[0], a[1] * length, b[0], b[1] * length);
-    let c2 = 3.0 * (p1 - p0) - 2.0 * d0 - d1;
-    let c3 = 2.0 * (p0 - p1) + d0 + d1;
-    // p'(u) = d0 + 2 c2 u + 3 c3 u² on [0, 1].
-    let (qa, qb, qc) = (3.0 * c3, 2.0 * c2, d0);
-    let mut points = vec![0.0, length];
-    if qa.abs() > 0.0 {
-        let disc = qb * qb - 4.0 * qa * qc;
-        if disc >= 0.0 {
-            let root = disc.sqrt();
-            for u in [(-qb - root) / (2.0 * qa), (-qb + root) / (2.0 * qa)] {
-                if u > 0.0 && u < 1.0 {
-                    points.push(u * length);
-                }
-            }
-        }
-    } else if qb.abs() > 0.0 {
-        let u = -qc / qb;
-        if u > 0.0 && u < 1.0 {
-            points.push(u * length);
-        }
-    }
-    points.sort_by(f64::total_cmp);
-    points
-}
-
-/// The interpolant at `s` in `[0, length]`.
-fn cubic(length: f64, a: [f64; 2], b: [f64; 2], s: f64) -> f64 {
-    hermite([a[0], a[1], b[0], b[1]], length, s)[0]
-}
-
-/// The root of the interpolant between `lo` (`>= 0`) and `hi` (`< 0`),
-/// or the other way round, by bisection.
-fn bisect(length: f64, a: [f64; 2], b: [f64; 2], mut lo: f64, mut hi: f64) -> f64 {
-    let lo_sign = cubic(length, a, b, lo) >= 0.0;
-    for _ in 0..80 {
-        let mid = 0.5 * (lo + hi);
-        if mid <= lo || mid >= hi {
-            break;
-        }
-        if (cubic(length, a, b, mid) >= 0.0) == lo_sign {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    hi
-}
-
-/// The names of the car's states, for a divergence's message.
-const STATE_NAMES: [&str; 22] = [
-    "heave",
-    "pitch",
-    "roll",
-    "heave_velocity",
-    "pitch_rate",
-    "roll_rate",
-    "x_h_fl",
-    "v_h_fl",
-    "x_t_fl",
-    "v_t_fl",
-    "x_h_fr",
-    "v_h_fr",
-    "x_t_fr",
-    "v_t_fr",
-    "x_h_rl",
-    "v_h_rl",
-    "x_t_rl",
-    "v_t_rl",
-    "x_h_rr",
-    "v_h_rr",
-    "x_t_rr",
-    "v_t_rr",
-];
-
-/// Fails where a displacement (or angle) passes
-/// [`DIVERGENCE_DISPLACEMENT`] or a rate [`DIVERGENCE_VELOCITY`], or a
-/// state is not finite.
-fn check_divergence(x: &DVector<f64>, time: f64) -> Result<()> {
-    for (i, name) in STATE_NAMES.iter().enumerate() {
-        let is_rate = if i < 6 {
-            i >= 3
-        } else {
-            matches!((i - 6) % 4 + X_H, V_H | V_T)
-        };
-        let bound = if is_rate {
-            DIVERGENCE_VELOCITY
-        } else {
-            DIVERGENCE_DISPLACEMENT
-        };
-        let value = x[i];
-        if !value.is_finite() || value.abs() > bound {
-            return Err(Error::Diverged {
-                time,
-                variable: name,
-                value,
-                bound,
-            });
-        }
-    }
-    Ok(())
 }
