@@ -70,16 +70,21 @@ def read_ssd(ssp: Path):
     return components, connections
 
 
-def run_car(ssp: Path, stop_time: float, step: float, traces: dict | None = None):
+def run_car(ssp: Path, stop_time: float, step: float, traces: dict | None = None, overrides: dict | None = None):
     """Runs the car of `ssp` to `stop_time` in steps of `step` (Jacobi).
 
     `traces`: `{instance: [output, ...]}` recorded at every communication
-    point. Returns `(times, {(instance, output): values}, summary)`, the
+    point. `overrides`: `{instance: {parameter: value}}` set after the
+    SSD's parameters, so they win (a different chassis, road or tire).
+    Returns `(times, {(instance, output): values}, summary)`, the
     summary the chassis's and corners' outputs at the end."""
     from fmpy import extract, read_model_description
     from fmpy.fmi2 import FMU2Slave
 
     components, connections = read_ssd(ssp)
+    unknown = set(overrides or {}) - set(components)
+    if unknown:
+        raise ValueError(f"no instance {sorted(unknown)} in {ssp}")
     n = round(stop_time / step)
     traces = traces or {}
     work = Path(tempfile.mkdtemp())
@@ -95,7 +100,7 @@ def run_car(ssp: Path, stop_time: float, step: float, traces: dict | None = None
             slave.instantiate()
             slave.setupExperiment(startTime=0.0, stopTime=n * step)
             refs[instance] = {v.name: (v.valueReference, v.type) for v in description.modelVariables}
-            for name, value in parameters.items():
+            for name, value in {**parameters, **(overrides or {}).get(instance, {})}.items():
                 vr, kind = refs[instance][name]
                 if kind == "Integer":
                     slave.setInteger([vr], [int(value)])
