@@ -11,6 +11,11 @@ status, log one line naming the function and the argument or value, change
 nothing (the serialized state is bit-identical before and after) and leave
 the instance usable. A diverging state asks the master to terminate.
 
+The corner and the chassis (their own FMUs, the same library) get the same:
+non-finite states, times, body inputs, x_g and forces, a non-positive mass
+or inertia, each refused naming the value; their FMU states restore a run
+to the bit.
+
 One file for the whole Model Exchange surface on purpose (the fixtures load
 both libraries once): hence its length."""
 
@@ -876,4 +881,254 @@ def test_no_call_sequence_of_this_file_made_an_instance_fatal(me):
                     assert me.call(inst, key, values, n) in (OK, ERROR), inst.log.last()
         for t in (NAN, -INF, INF, -1.0, 0.0, 1e300):
             assert me.call(inst, "set_time", t) in (OK, ERROR), inst.log.last()
+        assert not [m for m in inst.log.messages if m[0] == FATAL], inst.log.messages
+
+
+# ------------------------------------------------- the corner and the chassis
+
+CORNER_STATES = ["x_h", "v_h", "x_t", "v_t", "integral_suspension_deflection_squared",
+                 "integral_tire_deflection_squared", "contact_loss_time"]
+CHASSIS_STATES = ["heave", "pitch", "roll", "heave_velocity", "pitch_rate", "roll_rate",
+                  *[f"seat_wk_filter_{k}" for k in range(1, 9)],
+                  *[f"integral_{n}_acceleration_squared" for n in ("heave", "pitch", "roll")],
+                  "integral_weighted_seat_acceleration_squared", "integral_weighted_seat_acceleration_fourth"]
+# (the FMU of FMI 2.0 and of FMI 3.0, the continuous states, the event indicators)
+COMPONENTS = {"corner": ((fmi2.corner_fmu_file, fmi3.corner_fmu_file), 7, 1),
+              "chassis": ((fmi2.chassis_fmu_file, fmi3.chassis_fmu_file), 19, 0)}
+FORCES = ["force_fl", "force_fr", "force_rl", "force_rr"]
+
+
+def fmu_of(me, model):
+    """The FMU of `model` for the version of `me`."""
+    return COMPONENTS[model][0][me.version == "fmi3"]()
+
+
+def component(me, model, **values):
+    """A Model Exchange instance of the corner or the chassis in
+    Continuous-Time Mode at t = 0."""
+    inst = me.instance(fmu=fmu_of(me, model))
+    assert inst.initialize_model_exchange(stop=15.0, **values) == OK, inst.log.last()
+    assert me.discrete(inst)[0] == OK
+    assert inst.enter_continuous_time_mode() == OK
+    return inst
+
+
+def component_step(inst, model, h=1e-4):
+    """One explicit Euler step of h of the component, completed, its inputs
+    (the body attachment or the forces) set first from the time."""
+    n = COMPONENTS[model][1]
+    t = inst.time
+    if model == "corner":
+        assert inst.set(body_displacement=2e-3 * math.sin(11 * t), body_velocity=2.2e-2 * math.cos(11 * t)) == OK
+    else:
+        assert inst.set(**{f: 400.0 * math.sin(9 * t + i) for i, f in enumerate(FORCES)}) == OK
+    status, x = inst.continuous_states(n)
+    assert status == OK, inst.log.last()
+    status, dx = inst.derivatives(n)
+    assert status == OK, inst.log.last()
+    assert inst.set_time(t + h) == OK, inst.log.last()
+    inst.time = t + h
+    assert inst.set_continuous_states([a + h * b for a, b in zip(x, dx)]) == OK, inst.log.last()
+    assert inst.completed_integrator_step()[0] == OK, inst.log.last()
+
+
+def component_names(model):
+    return CORNER_STATES if model == "corner" else CHASSIS_STATES
+
+
+@pytest.mark.parametrize("model", list(COMPONENTS))
+def test_a_component_s_state_names_are_those_of_its_description(me, model):
+    inst = me.instance(fmu=fmu_of(me, model))
+    for name in component_names(model):
+        assert name in inst.vr, name
+
+
+@pytest.mark.parametrize("value", [NAN, INF, -INF])
+@pytest.mark.parametrize("model", list(COMPONENTS))
+def test_a_component_s_non_finite_states_are_refused_naming_them(me, model, value):
+    inst = component(me, model)
+    for _ in range(5):
+        component_step(inst, model)
+    n = COMPONENTS[model][1]
+    status, x = inst.continuous_states(n)
+    for i, name in enumerate(component_names(model)):
+        bad = list(x)
+        bad[i] = value
+        refused(me, inst, "set_states", (array(c_double, bad), n),
+                f"continuous state {i} (`{name}`) = {rust(value)} is not finite", "continuous")
+    refused(me, inst, "set_states", (array(c_double, x[:-1]), n - 1),
+            f"{n - 1} continuous states given, the model has {n}", "continuous")
+    assert inst.continuous_states(n) == (OK, x)
+    component_step(inst, model)  # still usable
+
+
+@pytest.mark.parametrize("value", [NAN, INF, -INF])
+def test_the_corner_s_non_finite_or_going_back_times_are_refused(me, value):
+    inst = component(me, "corner")
+    for _ in range(5):
+        component_step(inst, "corner")
+    refused_naming(me, inst, "set_time", (value,), [f"time {rust(value)} s is not finite or beyond"])
+    # Before the last completed step: refused naming both times.
+    refused(me, inst, "set_time", (3e-4,), floor_message(3e-4, inst.time), "continuous")
+    component_step(inst, "corner")
+
+
+@pytest.mark.parametrize("value", [NAN, INF, -INF, -1.0])
+def test_the_chassis_s_non_finite_or_early_times_are_refused(me, value):
+    inst = component(me, "chassis")
+    for _ in range(5):
+        component_step(inst, "chassis")
+    refused(me, inst, "set_time", (value,),
+            f"invalid time {rust(value)} s for `time`: must be finite and not before the start time", "continuous")
+    component_step(inst, "chassis")
+
+
+def refused_value(me, inst, state, **values):
+    """Setting `values` is refused: the Error status, one log line naming
+    the variable and its value, nothing changed."""
+    ((name, value),) = values.items()
+    before = inst.snapshot()
+    count = len(inst.log.messages)
+    assert inst.set(**values) == ERROR
+    logged = inst.log.since(count)
+    assert len(logged) == 1 and logged[0][:2] == (ERROR, "logStatusError"), logged
+    setter = "fmi2SetReal" if me.version == "fmi2" else "fmi3SetFloat64"
+    message = logged[0][2]
+    assert message.startswith(f"{setter}: ") and f"`{name}`" in message and rust(value) in message, message
+    assert inst.machine_state() == me.state_name[state]
+    assert inst.snapshot() == before
+    return message
+
+
+CORNER_INPUTS = [("body_displacement", NAN), ("body_displacement", -INF), ("body_displacement", 1e9),
+                 ("body_velocity", INF), ("body_velocity", NAN), ("x_g", NAN), ("x_g", INF)]
+
+
+@pytest.mark.parametrize("name, value", CORNER_INPUTS)
+@pytest.mark.parametrize("state", ["event", "continuous"])
+def test_the_corner_s_bad_inputs_are_refused_naming_them(me, name, value, state):
+    inst = component(me, "corner")
+    for _ in range(3):
+        component_step(inst, "corner")
+    if state == "event":
+        assert inst.enter_event_mode() == OK
+    refused_value(me, inst, state, **{name: value})
+    if state == "event":
+        assert me.discrete(inst)[0] == OK and inst.enter_continuous_time_mode() == OK
+    component_step(inst, "corner")
+
+
+@pytest.mark.parametrize("name", FORCES)
+@pytest.mark.parametrize("value", [NAN, INF, -INF])
+def test_the_chassis_s_non_finite_forces_are_refused_naming_them(me, name, value):
+    inst = component(me, "chassis")
+    for _ in range(3):
+        component_step(inst, "chassis")
+    refused_value(me, inst, "continuous", **{name: value})
+    component_step(inst, "chassis")
+
+
+def test_forces_too_large_for_the_chassis_make_its_derivatives_refused(me):
+    """Finite forces whose squared accelerations overflow: the derivatives
+    are refused naming the first that is not finite; smaller forces go on."""
+    inst = component(me, "chassis")
+    component_step(inst, "chassis")
+    assert inst.set(force_fl=1e300) == OK
+    refused_naming(me, inst, "derivatives", (vector(19), 19),
+                   ["the derivative of `integral_heave_acceleration_squared` is inf at t = 0.0001 s",
+                    "too large for the chassis"])
+    component_step(inst, "chassis")
+    status, dx = inst.derivatives(19)
+    assert status == OK and all(math.isfinite(v) for v in dx)
+
+
+@pytest.mark.parametrize("name, value", [("mass", 0.0), ("mass", -1380.0), ("mass", NAN), ("pitch_inertia", 0.0),
+                                         ("pitch_inertia", INF), ("roll_inertia", -400.0), ("roll_inertia", 0.0)])
+@pytest.mark.parametrize("state", ["instantiated", "initialization"])
+def test_the_chassis_refuses_a_non_positive_mass_or_inertia(me, name, value, state):
+    inst = me.instance(fmu=fmu_of(me, "chassis"))
+    if state == "initialization":
+        me.initialization_mode(inst)
+    refused_value(me, inst, state, **{name: value})
+    # The start values stay: the model starts and runs.
+    if state == "instantiated":
+        me.initialization_mode(inst)
+    assert inst.exit() == OK, inst.log.last()
+    assert me.discrete(inst)[0] == OK and inst.enter_continuous_time_mode() == OK
+    component_step(inst, "chassis")
+
+
+
+
+def test_the_chassis_s_fixed_parameters_are_refused_once_it_runs(me):
+    inst = component(me, "chassis")
+    setter = "fmi2SetReal" if me.version == "fmi2" else "fmi3SetFloat64"
+    before = inst.snapshot()
+    assert inst.set(mass=1000.0) == ERROR
+    message = last_error(inst)
+    assert message.startswith(f"{setter}: ") and "`mass`" in message, message
+    assert inst.snapshot() == before
+
+
+@pytest.mark.parametrize("model", list(COMPONENTS))
+def test_a_component_s_model_exchange_state_restores_the_run_to_the_bit(me, model):
+    """Saved mid-run, set back, and through bytes into a fresh instance: the
+    same states, derivatives and outputs, bit for bit."""
+    n = COMPONENTS[model][1]
+    inst = component(me, model)
+    for _ in range(50):
+        component_step(inst, model)
+    status, state = inst.get_state()
+    assert status == OK
+    data = inst.serialize(state)
+    then = inst.time
+
+    def run(target):
+        target.time = then
+        for _ in range(50):
+            component_step(target, model)
+        out = target.continuous_states(n)[1] + target.derivatives(n)[1]
+        names = ["body_force", "rms_suspension_deflection"] if model == "corner" else [
+            "seat_acceleration", "rms_weighted_seat_acceleration", "seat_vibration_dose_value"]
+        return bits(out + target.get(*names))
+
+    first = run(inst)
+    setter = inst.lib.fmi2SetFMUstate if me.version == "fmi2" else inst.lib.fmi3SetFMUState
+    assert setter(inst.c, state) == OK
+    assert run(inst) == first
+    other = me.instance(fmu=fmu_of(me, model))
+    status, moved = other.deserialize(data)
+    assert status == OK, other.log.last()
+    other_setter = other.lib.fmi2SetFMUstate if me.version == "fmi2" else other.lib.fmi3SetFMUState
+    assert other_setter(other.c, moved) == OK
+    assert other.machine_state() == me.state_name["continuous"]
+    assert run(other) == first
+
+
+@pytest.mark.parametrize("model", list(COMPONENTS))
+def test_no_bad_call_made_a_component_fatal(me, model):
+    """The Model Exchange functions of the corner and the chassis with
+    every bad argument, in every state: refused or done, never Fatal."""
+    n, nz = COMPONENTS[model][1], COMPONENTS[model][2]
+    for state in ["instantiated", "initialization", "event", "continuous", "terminated"]:
+        inst = me.instance(fmu=fmu_of(me, model))
+        if state != "instantiated":
+            me.initialization_mode(inst)
+        if state in ("event", "continuous", "terminated"):
+            assert inst.exit() == OK
+        if state in ("continuous", "terminated"):
+            assert me.discrete(inst)[0] == OK and inst.enter_continuous_time_mode() == OK
+            component_step(inst, model)
+        if state == "terminated":
+            assert me.call(inst, "terminate") == OK
+        for key in ["set_states", "derivatives", "indicators", "states", "nominals"]:
+            for k in (0, 1, n - 1, n, n + 1, nz, NX):
+                for values in (None, vector(NX + 1, NAN), vector(NX + 1, 1e308)):
+                    assert me.call(inst, key, values, k) in (OK, ERROR), inst.log.last()
+        for t in (NAN, -INF, INF, -1.0, 0.0, 1e300):
+            assert me.call(inst, "set_time", t) in (OK, ERROR), inst.log.last()
+        names = ["body_displacement", "body_velocity", "x_g"] if model == "corner" else [*FORCES, "mass"]
+        for name in names:
+            for value in (NAN, INF, -INF, 1e308, 0.0):
+                assert inst.set(**{name: value}) in (OK, ERROR), inst.log.last()
         assert not [m for m in inst.log.messages if m[0] == FATAL], inst.log.messages

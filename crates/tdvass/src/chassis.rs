@@ -519,8 +519,10 @@ impl Chassis {
     }
 
     /// A chassis of `params` in the motion [`Chassis::write_motion`] wrote,
-    /// read from `r`. Every value must be finite, the integrals not
-    /// negative and the time not before the start.
+    /// read from `r`. Every value must be finite and the time not before
+    /// the start. The integrals may be below 0: in Model Exchange the
+    /// master's solver sets them ([`Chassis::set_states`]), and the
+    /// outputs take a negative one as 0.
     pub fn read_motion(params: ChassisParams, r: &mut ByteReader) -> Result<Chassis> {
         let mut chassis = Chassis::new(params, r.f64()?)?;
         chassis.time = r.f64()?;
@@ -547,13 +549,9 @@ impl Chassis {
             .chain(&filter)
             .chain(&chassis.integrals)
             .all(|v| v.is_finite());
-        if !finite
-            || chassis.time < chassis.start_time
-            || chassis.integrals.iter().any(|&v| v < 0.0)
-        {
+        if !finite || chassis.time < chassis.start_time {
             return Err(Error::InvalidState(
-                "the chassis's motion is not finite, runs backwards or has a negative integral"
-                    .into(),
+                "the chassis's motion is not finite or runs backwards".into(),
             ));
         }
         Ok(chassis)
@@ -631,6 +629,19 @@ impl Chassis {
         dx[INTEGRALS_AT + WEIGHTED_SQUARE] = a_w * a_w;
         dx[INTEGRALS_AT + WEIGHTED_FOURTH] = a_w * a_w * a_w * a_w;
         dx
+    }
+
+    /// Model Exchange: [`Chassis::rates`], refused naming the first that
+    /// is not finite (forces or states too large for the chassis).
+    pub fn derivatives(&self) -> Result<[f64; CHASSIS_STATES]> {
+        let dx = self.rates();
+        if let Some(i) = dx.iter().position(|v| !v.is_finite()) {
+            return Err(Error::Refused(format!(
+                "the derivative of `{}` is {} at t = {} s; the forces or the states are too large for the chassis",
+                CHASSIS_STATE_NAMES[i], dx[i], self.time
+            )));
+        }
+        Ok(dx)
     }
 
     /// The attachment point of `corner`: displacement (m) and velocity

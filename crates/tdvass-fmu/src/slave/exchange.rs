@@ -345,7 +345,9 @@ impl Slave {
         }
     }
 
-    /// The derivatives of [`Self::continuous_states`].
+    /// The derivatives of [`Self::continuous_states`] (the chassis's in
+    /// Model Exchange refused when one is not finite, naming it, as the
+    /// suspension's are).
     pub(super) fn state_derivatives(&mut self) -> Result<EngineStates, FmiError> {
         let chassis = self.model() == Model::Chassis;
         match &mut self.state.engine {
@@ -353,9 +355,8 @@ impl Slave {
             Engine::CoSimulation(Some(sim)) => {
                 Ok(engine_states(&sim.continuous_state_derivatives()))
             }
-            Engine::Chassis(Some(chassis)) | Engine::ChassisExchange(Some(chassis)) => {
-                Ok(engine_states(&chassis.rates()))
-            }
+            Engine::Chassis(Some(chassis)) => Ok(engine_states(&chassis.rates())),
+            Engine::ChassisExchange(Some(chassis)) => Ok(engine_states(&chassis.derivatives()?)),
             _ if chassis => Ok(engine_states(&self.build_chassis()?.rates())),
             _ => Ok(engine_states(&self.build_exchange()?.derivatives()?)),
         }

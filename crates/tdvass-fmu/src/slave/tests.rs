@@ -745,4 +745,5 @@ fn a_model_exchange_state_round_trips_and_stays_with_its_interface() {
 }
 
 mod chassis;
+mod component_exchange;
 mod corner;

@@ -212,3 +212,166 @@ fn a_saved_motion_restores_and_continues_bit_for_bit() {
     bad[16..24].copy_from_slice(&f64::NAN.to_bits().to_le_bytes());
     assert!(Chassis::read_motion(p, &mut ByteReader::new(&bad)).is_err());
 }
+
+/// A chassis at `t0` in a state away from rest (every state nonzero), the
+/// forces `forces` held.
+fn moving(forces: [f64; 4], t0: f64) -> Chassis {
+    let mut chassis = Chassis::new(ChassisParams::default(), 0.0).unwrap();
+    chassis.set_forces(forces, [0.0; 4]).unwrap();
+    chassis.set_time(t0).unwrap();
+    let x: [f64; CHASSIS_STATES] = std::array::from_fn(|i| match i {
+        0..3 => 1e-3 * (i as f64 + 1.0),
+        3..6 => -2e-2 * (i as f64 - 2.5),
+        FILTER_AT..INTEGRALS_AT => 3e-2 * ((i as f64).sin()),
+        _ => 1e-3 * i as f64,
+    });
+    chassis.set_states(&x).unwrap();
+    chassis
+}
+
+#[test]
+fn the_model_exchange_rates_are_the_derivatives_of_the_exact_motion() {
+    let forces = [420.0, -130.0, 260.0, 75.0];
+    let p = ChassisParams::default();
+    let chassis = moving(forces, 0.3);
+    let dx = chassis.rates();
+    // The positions' rates are the rates, theirs the accelerations of the
+    // forces, to the bit.
+    assert_eq!(dx[..3], chassis.states()[3..6]);
+    assert_eq!(dx[3..6], p.accelerations(&forces));
+    // Each state's rate is the slope of Co-Simulation's exact step under
+    // the same held forces: a forward difference over h and h/2,
+    // extrapolated (error O(h²)).
+    let after = |h: f64| {
+        let mut c = chassis.clone();
+        c.advance_to(0.3 + h).unwrap();
+        c.states()
+    };
+    let (h, x0) = (1e-7, chassis.states());
+    let (full, half) = (after(h), after(h / 2.0));
+    for i in 0..CHASSIS_STATES {
+        let slope = 2.0 * (half[i] - x0[i]) / (h / 2.0) - (full[i] - x0[i]) / h;
+        let scale = dx[i].abs().max(1e-3);
+        assert!(
+            (slope - dx[i]).abs() <= 1e-6 * scale,
+            "{}: {slope} {}",
+            CHASSIS_STATE_NAMES[i],
+            dx[i]
+        );
+    }
+}
+
+#[test]
+fn model_exchange_integrated_by_rk4_follows_the_exact_step() {
+    // Held forces, changed every 0.1 s: the classical Runge–Kutta method
+    // on `rates` against `advance_to` over 0.5 s, all 19 states.
+    let p = ChassisParams::default();
+    let mut exact = Chassis::new(p, 0.0).unwrap();
+    let mut me = Chassis::new(p, 0.0).unwrap();
+    let h = 1e-4;
+    let rates_at = |c: &mut Chassis, x: &[f64; CHASSIS_STATES]| {
+        c.set_states(x).unwrap();
+        c.rates()
+    };
+    for segment in 0..5 {
+        let s = segment as f64;
+        let forces = [
+            300.0 * (1.0 + s).sin(),
+            -150.0 + 40.0 * s,
+            200.0 * (2.0 * s).cos(),
+            90.0 - 35.0 * s,
+        ];
+        exact.set_forces(forces, [0.0; 4]).unwrap();
+        me.set_forces(forces, [0.0; 4]).unwrap();
+        for k in 1..=1000 {
+            let t = 0.1 * s + h * k as f64;
+            exact.advance_to(t).unwrap();
+            let x = me.states();
+            let add = |a: &[f64; CHASSIS_STATES], b: &[f64; CHASSIS_STATES], c: f64| {
+                std::array::from_fn::<f64, CHASSIS_STATES, _>(|i| a[i] + c * b[i])
+            };
+            let k1 = rates_at(&mut me, &x);
+            let k2 = rates_at(&mut me, &add(&x, &k1, h / 2.0));
+            let k3 = rates_at(&mut me, &add(&x, &k2, h / 2.0));
+            let k4 = rates_at(&mut me, &add(&x, &k3, h));
+            let next: [f64; CHASSIS_STATES] = std::array::from_fn(|i| {
+                x[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+            });
+            me.set_time(t).unwrap();
+            me.set_states(&next).unwrap();
+        }
+    }
+    let (a, b) = (exact.states(), me.states());
+    for i in 0..CHASSIS_STATES {
+        assert!(
+            (a[i] - b[i]).abs() <= 1e-9 * a[i].abs().max(1e-6),
+            "{}: {} {}",
+            CHASSIS_STATE_NAMES[i],
+            a[i],
+            b[i]
+        );
+    }
+    // The outputs built from them agree as closely.
+    let (oa, ob) = (exact.outputs(), me.outputs());
+    assert_eq!(oa.time, ob.time);
+    assert_eq!(oa.acceleration, ob.acceleration);
+    for (x, y) in [
+        (
+            oa.rms_weighted_seat_acceleration,
+            ob.rms_weighted_seat_acceleration,
+        ),
+        (oa.seat_vibration_dose_value, ob.seat_vibration_dose_value),
+        (oa.rms_acceleration[1], ob.rms_acceleration[1]),
+    ] {
+        assert!((x - y).abs() <= 1e-9 * x, "{x} {y}");
+    }
+}
+
+#[test]
+fn the_model_exchange_states_round_trip_and_refusals_name_the_value() {
+    let mut chassis = moving([100.0, 200.0, -300.0, 50.0], 0.25);
+    let x = chassis.states();
+    // Set as they are read: the same bits, states, rates and outputs.
+    let (rates, outputs) = (chassis.rates(), format!("{:?}", chassis.outputs()));
+    chassis.set_states(&x).unwrap();
+    assert_eq!(chassis.states().map(f64::to_bits), x.map(f64::to_bits));
+    assert_eq!(chassis.rates(), rates);
+    assert_eq!(format!("{:?}", chassis.outputs()), outputs);
+    let o = chassis.outputs();
+    assert_eq!(o.position[..], x[..3]);
+    assert_eq!(o.rate[..], x[3..6]);
+    // Through the saved motion too.
+    let mut w = ByteWriter::default();
+    chassis.write_motion(&mut w);
+    let copy = Chassis::read_motion(*chassis.params(), &mut ByteReader::new(&w.bytes)).unwrap();
+    assert_eq!(copy.states().map(f64::to_bits), x.map(f64::to_bits));
+    assert_eq!(copy.rates(), rates);
+    // Refused, by index, name and value, changing nothing.
+    for (i, bad) in [(0, f64::NAN), (7, f64::INFINITY), (18, f64::NEG_INFINITY)] {
+        let mut values = x;
+        values[i] = bad;
+        let e = chassis.set_states(&values).unwrap_err().to_string();
+        let expected = format!(
+            "continuous state {i} (`{}`) = {bad} is not finite",
+            CHASSIS_STATE_NAMES[i]
+        );
+        assert!(e.contains(&expected), "{e}");
+    }
+    let e = chassis.set_states(&x[..18]).unwrap_err().to_string();
+    assert!(
+        e.contains("18 continuous states given, the chassis has 19"),
+        "{e}"
+    );
+    for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, -0.5] {
+        let e = chassis.set_time(bad).unwrap_err().to_string();
+        assert!(
+            e.contains(&format!("invalid time {bad} s for `time`")),
+            "{e}"
+        );
+    }
+    assert_eq!(chassis.states().map(f64::to_bits), x.map(f64::to_bits));
+    assert_eq!(chassis.time(), 0.25);
+    // Back to the start time is allowed (the chassis keeps no history).
+    chassis.set_time(0.0).unwrap();
+    assert_eq!(chassis.outputs().rms_acceleration, [0.0; 3]);
+}

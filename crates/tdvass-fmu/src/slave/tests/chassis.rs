@@ -311,3 +311,52 @@ fn a_decoupled_car_of_four_corners_rides_as_the_quarter_car() {
     assert!(fine.0 < coarse.0 / 2.5, "{coarse:?} -> {fine:?}");
     assert!(fine.1 < coarse.1, "{coarse:?} -> {fine:?}");
 }
+
+/// A Co-Simulation state of the chassis written before it had Model
+/// Exchange (format 6, commit 3920e17: the run of
+/// [`a_chassis_state_restores_and_continues_to_the_bit`] saved after its 7
+/// steps). Its GUID was that of the variables then; under this FMU's
+/// header its payload still loads, and the run continues as a fresh one.
+#[test]
+fn a_chassis_co_simulation_state_of_format_6_before_model_exchange_still_loads() {
+    let old = include_bytes!("chassis_cs_state_3920e17.bin");
+    assert_eq!(&old[..8], crate::snapshot::MAGIC);
+    assert_eq!(u32::from_le_bytes(old[8..12].try_into().unwrap()), 6);
+    let guid_len = u32::from_le_bytes(old[12..16].try_into().unwrap()) as usize;
+    let payload = &old[16 + guid_len + 12..];
+    let token = guid(Model::Chassis);
+    let mut bytes = Vec::new();
+    bytes.extend_from_slice(crate::snapshot::MAGIC);
+    bytes.extend_from_slice(&crate::snapshot::FORMAT_VERSION.to_le_bytes());
+    bytes.extend_from_slice(&(token.len() as u32).to_le_bytes());
+    bytes.extend_from_slice(token.as_bytes());
+    bytes.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+    bytes.extend_from_slice(&crate::snapshot::crc32(payload).to_le_bytes());
+    bytes.extend_from_slice(payload);
+    let mut fresh = started(Model::Chassis, &[("force_fl", 300.0), ("force_rr", -120.0)]);
+    fresh
+        .set_real_input_derivatives(&[vr_of(Model::Chassis, "force_fr")], &[1], &[50.0])
+        .unwrap();
+    for k in 0..7 {
+        fresh.do_step(k as f64 * 1e-2, 1e-2).unwrap();
+    }
+    let now = fresh.get_fmu_state(None).unwrap();
+    // The payload is the one this FMU writes for the same run.
+    assert_eq!(fresh.serialize_fmu_state(now).unwrap(), bytes);
+    let mut old_run = slave_of(Model::Chassis);
+    let restored = old_run.deserialize_fmu_state(&bytes, None).unwrap();
+    old_run.set_fmu_state(restored).unwrap();
+    let run = |s: &mut Slave| {
+        set_of(s, "force_rl", 80.0);
+        s.do_step(0.07, 0.03).unwrap();
+        [
+            "heave",
+            "roll_rate",
+            "displacement_rr",
+            "rms_weighted_seat_acceleration",
+            "seat_vibration_dose_value",
+        ]
+        .map(|n| get_of(s, n).to_bits())
+    };
+    assert_eq!(run(&mut old_run), run(&mut fresh));
+}
