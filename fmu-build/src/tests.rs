@@ -703,11 +703,11 @@ fn the_component_fmus_carry_the_quarter_cars_library_with_their_own_description(
             tdvass_fmu::variables::token(component.model, component.version)
         );
         assert_ne!(component.token, quarter_car.token);
-        // Its own description: Co-Simulation only, the same model identifier.
+        // Its own description: both interfaces, the same model identifier.
         let description = &component.description;
         assert!(description.contains(&format!(r#"modelName="{}""#, component.model.name())));
         assert!(description.contains(&component.token));
-        assert!(!description.contains("<ModelExchange"));
+        assert!(description.contains(r#"<ModelExchange modelIdentifier="tdvass""#));
         assert!(description.contains(r#"<CoSimulation modelIdentifier="tdvass""#));
         assert!(!component.documentation.contains(&quarter_car.token));
         assert!(component.documentation.contains(&component.token));
