@@ -213,11 +213,11 @@ def fmi3_path() -> Path:
     return fmu_path().with_name("tdvass-fmi3.fmu")
 
 
-# The corner's FMUs (Co-Simulation only), built next to the quarter car's:
+# The corner's FMUs (Co-Simulation and Model Exchange), built next to the quarter car's:
 # file name -> FMI version.
 CORNER_FMUS = {"tdvass-corner.fmu": "2.0", "tdvass-corner-fmi3.fmu": "3.0"}
 
-# The chassis's FMUs (Co-Simulation only), likewise.
+# The chassis's FMUs (Co-Simulation and Model Exchange), likewise.
 CHASSIS_FMUS = {"tdvass-chassis.fmu": "2.0", "tdvass-chassis-fmi3.fmu": "3.0"}
 
 

@@ -80,7 +80,7 @@ def target_dir() -> Path:
 WORK = target_dir() / "platforms"
 FMU = target_dir() / "fmu" / "tdvass.fmu"
 FMU3 = target_dir() / "fmu" / "tdvass-fmi3.fmu"
-# The corner's FMUs (Co-Simulation only) carry the same libraries.
+# The corner's FMUs (Co-Simulation and Model Exchange) carry the same libraries.
 CORNER = target_dir() / "fmu" / "tdvass-corner.fmu"
 CORNER3 = target_dir() / "fmu" / "tdvass-corner-fmi3.fmu"
 # The chassis's FMUs, the same again.

@@ -1,5 +1,5 @@
 """The chassis FMUs (target/fmu/tdvass-chassis.fmu, FMI 2.0, and
-tdvass-chassis-fmi3.fmu, FMI 3.0; both Co-Simulation only) driven from
+tdvass-chassis-fmi3.fmu, FMI 3.0; both Co-Simulation and Model Exchange; here in Co-Simulation) driven from
 fmpy: their descriptions and dependencies, the rigid body's motion in
 closed form under a held force and (FMI 2.0) under a ramped one, the
 immediate feedthrough of the forces to the accelerations, the decoupling

@@ -1,5 +1,5 @@
 """The corner FMUs (target/fmu/tdvass-corner.fmu, FMI 2.0, and
-tdvass-corner-fmi3.fmu, FMI 3.0; both Co-Simulation only) driven from fmpy:
+tdvass-corner-fmi3.fmu, FMI 3.0; both Co-Simulation and Model Exchange; here in Co-Simulation) driven from fmpy:
 their descriptions, the body attachment (inputs body_displacement and
 body_velocity, output body_force), the delayed and phase-shifted road, the
 static load under the unilateral tire, refused values, and the quarter car

@@ -16,7 +16,7 @@ method at the case's steps, a trial point at each step's end, events,
 CompletedIntegratorStep, every output read), also after restoring a
 serialized state in the middle of the run, allocate nothing either.
 
-The corner and the chassis (Co-Simulation only), each from its own FMU,
+The corner and the chassis (driven in Co-Simulation), each from its own FMU,
 for 10 s with a serialized state restored after 5 s. The corner: every
 road x tire mode x the aligned, varying and 10 ms patterns, under a point
 mass moved by the body_force it reads (body_displacement, body_velocity
