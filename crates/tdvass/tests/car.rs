@@ -7,6 +7,7 @@
 //! variants and the three delay regimes, and with the unilateral tire the
 //! lift-off counts are equal too.
 
+use std::sync::Arc;
 use tdvass::car::{CarConfig, CarReport, run_car_with};
 use tdvass::chassis::Corner;
 use tdvass::model::{Params, TireContact, Variant};
@@ -141,4 +142,126 @@ fn the_decoupled_car_lifts_off_as_the_quarter_car() {
         let worst = check_decoupled(&config, 2.0, UNILATERAL);
         eprintln!("unilateral tau {tau}: {worst:e}");
     }
+}
+
+/// A 2 cm step at `at` (s), climbed in 0.1 ms.
+fn step_road(at: f64) -> RoadSpec {
+    RoadSpec::Samples(Arc::new(vec![(0.0, 0.0), (at, 0.0), (at + 1e-4, 0.02)]))
+}
+
+fn flat_road() -> RoadSpec {
+    RoadSpec::Samples(Arc::new(vec![(0.0, 0.0)]))
+}
+
+#[test]
+fn every_wheel_on_its_own_road_the_same_step_is_the_quarter_car() {
+    // Four roads of their own, all the same step: no wheelbase delay, so
+    // the car heaves without pitch or roll and each corner is the quarter
+    // car on that road (the rear's check_decoupled compares the rear left
+    // with its own quarter car, on the same road).
+    for tau in [0.0, 2e-4, 0.011] {
+        let mut config = CarConfig::new(Variant::Tdvass, step_road(0.2), 20.0);
+        config.params = Params {
+            tau,
+            ..Params::default()
+        };
+        config.corner_roads = Some(std::array::from_fn(|_| step_road(0.2)));
+        let worst = check_decoupled(&config, 1.0, DECOUPLED);
+        eprintln!("own roads, tau {tau}: {worst:e}");
+        let choice = config.choose_step().unwrap();
+        let car = run_car_with(&config, &choice, 1.0, 0, &mut |_| {}).unwrap();
+        assert!(car.rms_heave_acceleration > 0.1, "{car:?}");
+        // Pitch and roll are roundings of zero.
+        let rounding = 1e-12 * car.rms_heave_acceleration;
+        assert!(car.rms_pitch_acceleration < rounding, "{car:?}");
+        assert!(car.rms_roll_acceleration < rounding, "{car:?}");
+    }
+}
+
+#[test]
+fn a_step_under_one_front_wheel_rolls_the_car_and_its_mirror_rolls_it_back() {
+    let under = |corner: Corner| {
+        let mut config = CarConfig::new(Variant::Tdvass, flat_road(), 20.0);
+        config.chassis.seat_y = 0.0;
+        config.corner_roads = Some(std::array::from_fn(|c| {
+            if c == corner as usize {
+                step_road(0.1)
+            } else {
+                flat_road()
+            }
+        }));
+        let choice = config.choose_step().unwrap();
+        run_car_with(&config, &choice, 1.0, 0, &mut |_| {}).unwrap()
+    };
+    let left = under(Corner::FrontLeft);
+    let right = under(Corner::FrontRight);
+    assert!(left.rms_roll_acceleration > 0.1, "{left:?}");
+    assert!(left.rms_pitch_acceleration > 0.01, "{left:?}");
+    // The wheel on the step works hardest.
+    let fl = &left.corners[Corner::FrontLeft as usize];
+    for other in &left.corners[1..] {
+        assert!(
+            fl.rms_tire_deflection > 2.0 * other.rms_tire_deflection,
+            "{left:?}"
+        );
+    }
+    let mirror = [1, 0, 3, 2];
+    let mut worst: f64 = 0.0;
+    for (ours, theirs) in [
+        (left.rms_heave_acceleration, right.rms_heave_acceleration),
+        (left.rms_pitch_acceleration, right.rms_pitch_acceleration),
+        (left.rms_roll_acceleration, right.rms_roll_acceleration),
+        (
+            left.rms_weighted_seat_acceleration,
+            right.rms_weighted_seat_acceleration,
+        ),
+        (
+            left.seat_vibration_dose_value,
+            right.seat_vibration_dose_value,
+        ),
+    ]
+    .into_iter()
+    .chain((0..4).flat_map(|c| {
+        let (ours, theirs) = (&left.corners[c], &right.corners[mirror[c]]);
+        [
+            (
+                ours.rms_suspension_deflection,
+                theirs.rms_suspension_deflection,
+            ),
+            (ours.rms_tire_deflection, theirs.rms_tire_deflection),
+            (
+                ours.rms_dynamic_tire_load_ratio,
+                theirs.rms_dynamic_tire_load_ratio,
+            ),
+        ]
+    })) {
+        worst = worst.max(relative(ours, theirs));
+    }
+    eprintln!("mirror: {worst:e}");
+    assert!(worst <= DECOUPLED, "{left:?}\n{right:?}");
+}
+
+#[test]
+fn roads_of_their_own_must_be_alike() {
+    let harmonic = |amplitude| RoadSpec::Harmonic {
+        amplitude,
+        angular_frequency: 5.0,
+    };
+    let mut config = CarConfig::new(Variant::Tdvass, harmonic(0.05), 20.0);
+    config.corner_roads = Some([harmonic(0.05), harmonic(0.05), harmonic(0.05), flat_road()]);
+    let error = config.choose_step().unwrap_err().to_string();
+    assert!(error.contains("same kind"), "{error}");
+    config.corner_roads = Some([
+        harmonic(0.05),
+        harmonic(0.04),
+        harmonic(0.05),
+        harmonic(0.05),
+    ]);
+    let error = config.choose_step().unwrap_err().to_string();
+    assert!(
+        error.contains("road_amplitude") && error.contains("0.04"),
+        "{error}"
+    );
+    config.corner_roads = Some(std::array::from_fn(|_| harmonic(0.05)));
+    assert!(config.choose_step().is_ok());
 }

@@ -13,7 +13,10 @@
 //! random road from its own seed; the harmonic road with its own phase,
 //! [`CarConfig::right_phase`]), the rear wheels delayed behind the front
 //! by the wheelbase over the speed (`(a + b) / vehicle_speed`), as
-//! [`crate::road::RoadShift`] delays a corner FMU's road.
+//! [`crate::road::RoadShift`] delays a corner FMU's road. Or each corner
+//! rolls on a road of its own, [`CarConfig::corner_roads`], seen as it is
+//! (a step under one wheel: that wheel's road steps, the others' stay
+//! flat).
 //!
 //! **The step** is the quarter car's: [`Simulator::choose_step`] of each
 //! axle's quarter car (its corner's share of the body as `m_s`, the left
@@ -61,6 +64,10 @@ pub struct CarConfig {
     pub right_road: RoadSpec,
     /// The right track's phase on the harmonic road (rad).
     pub right_phase: f64,
+    /// Each corner's own road (fl, fr, rl, rr), seen as it is (no delay,
+    /// no phase), in place of the tracks when given: roads of one kind,
+    /// and harmonic ones of one amplitude and frequency.
+    pub corner_roads: Option<[RoadSpec; CORNERS]>,
     /// The speed (m/s): the rear wheels follow the front by `(a + b) / speed`.
     pub vehicle_speed: f64,
     /// The tires' contact law.
@@ -83,6 +90,7 @@ impl CarConfig {
             right_road: road.clone(),
             road,
             right_phase: 0.0,
+            corner_roads: None,
             vehicle_speed,
             tire_contact: TireContact::Bilateral,
             tolerance: crate::solver::DEFAULT_TOLERANCE,
@@ -95,8 +103,12 @@ impl CarConfig {
         (self.chassis.a + self.chassis.b) / self.vehicle_speed
     }
 
-    /// How corner `corner` sees its track's road.
+    /// How corner `corner` sees its track's road (its own road, when
+    /// given, as it is).
     pub fn road_shift(&self, corner: Corner) -> RoadShift {
+        if self.corner_roads.is_some() {
+            return RoadShift::NONE;
+        }
         let delay = match corner {
             Corner::FrontLeft | Corner::FrontRight => 0.0,
             Corner::RearLeft | Corner::RearRight => self.rear_delay(),
@@ -108,8 +120,12 @@ impl CarConfig {
         RoadShift { delay, phase }
     }
 
-    /// The road specification of corner `corner`'s track.
+    /// The road specification of corner `corner`'s track, or its own road
+    /// when given.
     pub fn track(&self, corner: Corner) -> &RoadSpec {
+        if let Some(roads) = &self.corner_roads {
+            return &roads[corner as usize];
+        }
         match corner {
             Corner::FrontLeft | Corner::RearLeft => &self.road,
             Corner::FrontRight | Corner::RearRight => &self.right_road,
@@ -158,36 +174,71 @@ impl CarConfig {
                 reason: "must be finite",
             });
         }
-        for spec in [&self.road, &self.right_road] {
+        let roads: Vec<&RoadSpec> = Corner::ALL.iter().map(|&c| self.track(c)).collect();
+        for spec in &roads {
             if matches!(spec, RoadSpec::Input) {
                 return Err(Error::InvalidSetting {
                     name: "road",
                     value: 0,
-                    reason: "the full car runs a built-in road on each track, not an input",
+                    reason: "the full car runs a built-in road under each wheel, not an input",
                 });
             }
         }
-        if std::mem::discriminant(&self.road) != std::mem::discriminant(&self.right_road) {
-            return Err(Error::InvalidSetting {
-                name: "road",
-                value: self.right_road.road_type().code(),
-                reason: "both tracks must be roads of the same kind",
-            });
+        for spec in &roads[1..] {
+            if std::mem::discriminant(*spec) != std::mem::discriminant(roads[0]) {
+                return Err(Error::InvalidSetting {
+                    name: "road",
+                    value: spec.road_type().code(),
+                    reason: "every wheel's road must be of the same kind",
+                });
+            }
+            if let (
+                RoadSpec::Harmonic {
+                    amplitude,
+                    angular_frequency,
+                },
+                RoadSpec::Harmonic {
+                    amplitude: first_amplitude,
+                    angular_frequency: first_frequency,
+                },
+            ) = (spec, roads[0])
+                && (amplitude != first_amplitude || angular_frequency != first_frequency)
+            {
+                return Err(Error::InvalidParameter {
+                    name: "road_amplitude",
+                    value: *amplitude,
+                    reason: "harmonic roads under the wheels must share amplitude and frequency",
+                });
+            }
         }
         Ok(())
     }
 
-    /// The step the car takes: each axle's quarter car's choice, the
-    /// shorter.
+    /// The corners whose quarter cars choose the step: one of each axle on
+    /// the tracks, all four on roads of their own.
+    fn step_corners(&self) -> &'static [Corner] {
+        if self.corner_roads.is_some() {
+            &Corner::ALL
+        } else {
+            &[Corner::FrontLeft, Corner::RearLeft]
+        }
+    }
+
+    /// The step the car takes: each axle's quarter car's choice (each
+    /// corner's, on roads of their own), the shortest.
     pub fn choose_step(&self) -> Result<StepChoice> {
         self.validate()?;
-        let front = Simulator::choose_step(&self.quarter_car(Corner::FrontLeft))?;
-        let rear = Simulator::choose_step(&self.quarter_car(Corner::RearLeft))?;
-        Ok(if rear.step_bound < front.step_bound {
-            rear
-        } else {
-            front
-        })
+        let mut shortest: Option<StepChoice> = None;
+        for &corner in self.step_corners() {
+            let choice = Simulator::choose_step(&self.quarter_car(corner))?;
+            if shortest
+                .as_ref()
+                .is_none_or(|s| choice.step_bound < s.step_bound)
+            {
+                shortest = Some(choice);
+            }
+        }
+        Ok(shortest.expect("at least one corner"))
     }
 }
 
