@@ -935,3 +935,47 @@ fn the_decoupled_car_s_corner_is_tdvass_simulate() {
         "{refused}"
     );
 }
+
+#[test]
+fn a_step_under_one_wheel_rolls_the_car_and_its_mirror_rolls_it_back() {
+    // `--corner-road`: a 2 cm step under one front wheel from the start,
+    // the other wheels on flat roads, no wheelbase delay.
+    let step = temporary("step.csv");
+    std::fs::write(&step, "t,x_g\n0,0.02\n").unwrap();
+    let road = |corner: &str| format!("{corner}=file:{}", step.display());
+    let run =
+        |corner: &str| tdvass_json(&["car", "--duration", "0.5", "--corner-road", &road(corner)]);
+    let (left, right) = (run("fl"), run("fr"));
+    assert_eq!(left["rear_road_delay"], 0.0);
+    assert_eq!(left["corner_roads"][0], road("fl").as_str());
+    let deflection = |car: &Value, corner: &str| {
+        car["corners"][corner]["rms_suspension_deflection"]
+            .as_f64()
+            .unwrap()
+    };
+    // The stepped wheel works hardest, and the mirror of the step is the
+    // mirror of the car (the seat on the centre line).
+    assert!(deflection(&left, "fl") > 5.0 * deflection(&left, "fr"));
+    for (a, b) in [("fl", "fr"), ("rl", "rr")] {
+        let (ours, mirrored) = (deflection(&left, a), deflection(&right, b));
+        assert!(
+            (ours - mirrored).abs() <= 1e-12 * ours,
+            "{a}: {ours} vs {mirrored}"
+        );
+    }
+    assert!(left["rms_roll_acceleration"].as_f64().unwrap() > 0.01);
+    let unknown = failure(&["car", "--corner-road", "front=file:x.csv"]);
+    assert!(
+        unknown.contains("corner road") && unknown.contains("front=file:x.csv"),
+        "{unknown}"
+    );
+    let twice = failure(&[
+        "car",
+        "--corner-road",
+        &road("fl"),
+        "--corner-road",
+        &road("fl"),
+    ]);
+    assert!(twice.contains("each named once"), "{twice}");
+    std::fs::remove_file(&step).unwrap();
+}

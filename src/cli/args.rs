@@ -403,6 +403,12 @@ pub(super) struct CarArgs {
     /// The right track's phase on the harmonic road (rad).
     #[arg(long, default_value_t = 0.0)]
     pub(super) right_phase: f64,
+    /// A corner's own road, `CORNER=file:PATH` (CORNER: fl, fr, rl, rr;
+    /// repeatable), seen as it is, with no wheelbase delay. Once one is
+    /// given, every wheel rolls on its own road in place of --road's
+    /// tracks, and a corner not named on a flat one (x_g = 0).
+    #[arg(long, value_name = "CORNER=file:PATH")]
+    pub(super) corner_road: Vec<String>,
     /// Write heave, pitch, roll, the seat acceleration and the four
     /// suspension deflections to this CSV file.
     #[arg(long)]

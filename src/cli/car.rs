@@ -4,7 +4,8 @@
 use super::args::{CarArgs, io_error, parse_variant};
 use serde_json::{Value, json};
 use std::io::Write as _;
-use tdvass::car::{CarConfig, CarReport, CarSample, run_car_with};
+use std::sync::Arc;
+use tdvass::car::{CORNERS, CarConfig, CarReport, CarSample, run_car_with};
 use tdvass::chassis::Corner;
 use tdvass::error::{Error, Result};
 use tdvass::road::{RandomRoad, RoadSpec};
@@ -39,11 +40,53 @@ fn config(a: &CarArgs) -> Result<CarConfig> {
         road,
         right_road,
         right_phase: a.right_phase,
+        corner_roads: corner_roads(&a.corner_road)?,
         vehicle_speed: a.run.vehicle_speed,
         tire_contact: sim.tire_contact,
         tolerance: sim.tolerance,
         max_internal_step: sim.max_internal_step,
     })
+}
+
+/// The corners' own roads of `--corner-road CORNER=file:PATH` (a corner
+/// not named: flat), or none.
+fn corner_roads(given: &[String]) -> Result<Option<[RoadSpec; CORNERS]>> {
+    if given.is_empty() {
+        return Ok(None);
+    }
+    let flat = RoadSpec::Samples(Arc::new(vec![(0.0, 0.0)]));
+    let mut roads: [Option<RoadSpec>; CORNERS] = Default::default();
+    for argument in given {
+        let unknown = || Error::UnknownName {
+            what: "corner road",
+            given: argument.clone(),
+            expected: "CORNER=file:PATH with CORNER one of fl, fr, rl, rr, each named once",
+        };
+        let (name, road) = argument.split_once('=').ok_or_else(unknown)?;
+        let corner = Corner::ALL
+            .into_iter()
+            .find(|c| c.name() == name.trim())
+            .ok_or_else(unknown)?;
+        let path = road.trim().strip_prefix("file:").ok_or_else(unknown)?;
+        let slot = &mut roads[corner as usize];
+        if slot.is_some() {
+            return Err(unknown());
+        }
+        *slot = Some(RoadSpec::from_csv_file(path)?);
+    }
+    Ok(Some(roads.map(|road| road.unwrap_or_else(|| flat.clone()))))
+}
+
+/// The roads in words: `--road`'s tracks, or the corners' own roads.
+fn road_note(a: &CarArgs) -> String {
+    if a.corner_road.is_empty() {
+        a.run.road_note()
+    } else {
+        format!(
+            "each wheel on a road of its own ({}; a corner not named: flat)",
+            a.corner_road.join(", ")
+        )
+    }
 }
 
 /// Runs `tdvass car`.
@@ -61,7 +104,7 @@ pub(super) fn car_command(a: CarArgs) -> Result<String> {
     let mut out = format!(
         "full car, {} on every corner, {}, {} tire, {} s from rest (internal step {} s)\n  RMS heave acceleration      {:.4} m/s^2\n  RMS pitch acceleration      {:.4} rad/s^2\n  RMS roll acceleration       {:.4} rad/s^2\n  ISO 2631-1 a_w at the seat  {:.4} m/s^2\n  seat vibration dose value   {:.4} m/s^1.75\n  corner  RMS SDD (mm)  RMS TDD (mm)  tire load ratio  lift-offs\n",
         config.variant.label(),
-        a.run.road_note(),
+        road_note(&a),
         config.tire_contact.name(),
         duration,
         report.internal_step,
@@ -104,7 +147,7 @@ fn car_json(a: &CarArgs, config: &CarConfig, report: &CarReport) -> Result<Value
     }
     let mut value = json!({
         "variant": config.variant.name(),
-        "road_note": a.run.road_note(),
+        "road_note": road_note(a),
         "rms_heave_acceleration": report.rms_heave_acceleration,
         "rms_pitch_acceleration": report.rms_pitch_acceleration,
         "rms_roll_acceleration": report.rms_roll_acceleration,
@@ -138,7 +181,10 @@ fn car_json(a: &CarArgs, config: &CarConfig, report: &CarReport) -> Result<Value
         value["right_seed"] = right.seed.into();
     }
     value["right_phase"] = config.right_phase.into();
-    value["rear_road_delay"] = config.rear_delay().into();
+    value["rear_road_delay"] = config.road_shift(Corner::RearLeft).delay.into();
+    if !a.corner_road.is_empty() {
+        value["corner_roads"] = a.corner_road.clone().into();
+    }
     value["internal_step"] = report.internal_step.into();
     Ok(value)
 }
