@@ -95,12 +95,31 @@ def car_parameters(chassis: dict, road_class: int, vehicle_speed: float, left_se
 SEDAN = {"mass": 1380.0, "a": 1.2, "b": 1.4, "pitch_inertia": 0.9 * 1380.0 * 1.2 * 1.4, "roll_inertia": 400.0,
          "track_front": 1.5, "track_rear": 1.5}
 
+
+def step_parameters(chassis: dict, corner: str, height: float) -> dict:
+    """`{instance: {parameter: value}}` of a car at rest whose `corner`
+    wheel's road steps up by `height` (m) at the start while the others'
+    stay flat: every corner on the input road (`road = 0`) with its `x_g`
+    held, the linear tire."""
+    parameters = car_parameters(chassis, road_class=3, vehicle_speed=20.0, left_seed=1, right_seed=1,
+                                tire_contact=0)
+    for name in CORNERS:
+        parameters[name]["road"] = 0
+        # The input road is the road as the wheel sees it: no delay.
+        parameters[name]["road_delay"] = 0.0
+        parameters[name]["x_g"] = height if name == corner else 0.0
+    return parameters
+
+
 SCENARIOS = {
     # The same class C road under both tracks at 20 m/s, the linear tire.
     "sedan-c": car_parameters(SEDAN, road_class=3, vehicle_speed=20.0, left_seed=1, right_seed=1, tire_contact=0),
     # Class E at 30 m/s, a road of its own under each track, the tire that
     # cannot pull: the wheels lift off.
     "sedan-e": car_parameters(SEDAN, road_class=5, vehicle_speed=30.0, left_seed=1, right_seed=2, tire_contact=1),
+    # A 2 cm step under the front left wheel only, at the start: the car
+    # heaves, pitches and rolls.
+    "sedan-step": step_parameters(SEDAN, "fl", 0.02),
 }
 
 
@@ -380,17 +399,20 @@ def example():
 CHASSIS_FLAGS = ["mass", "a", "b", "track_front", "track_rear", "pitch_inertia", "roll_inertia", "seat_x", "seat_y"]
 CORNER_FLAGS = ["variant", "m_h", "m_t", "k_s", "k_h", "k_t", "c_s", "c_h", "g", "tau", "road_class",
                 "vehicle_speed", "road_cutoff_frequency", "tire_contact"]
-# The corners' parameters the flags account for otherwise.
-CORNER_DERIVED = ["road", "road_seed", "road_delay", "static_load"]
+# The corners' parameters and inputs the flags account for otherwise.
+CORNER_DERIVED = ["road", "road_seed", "road_delay", "static_load", "x_g"]
 
 
-def car_flags(fmu_dir: Path, overrides: dict) -> list[str]:
+def car_flags(fmu_dir: Path, overrides: dict, work: Path) -> list[str]:
     """The `tdvass car` flags of the SSD's car with `overrides`: every
     parameter the car has, from the FMUs' defaults, the SSD's values and the
-    overrides. Refuses (ValueError) a car `tdvass car` does not state: any
+    overrides. Corners on the input road (`road = 0`) with their `x_g` held
+    become roads of their own (`--corner-road`, a one-sample file in
+    `work`). Refuses (ValueError) a car `tdvass car` does not state: any
     other parameter changed, corners unlike one another, a road other than
-    ISO 8608, a static load other than the corner's share of the body's
-    weight, a rear road delay other than the wheelbase over the speed."""
+    ISO 8608 or held inputs, a static load other than the corner's share of
+    the body's weight, a rear road delay other than the wheelbase over the
+    speed."""
     variables = model_variables(fmu_dir)
     components, _ = example().read_ssd(fmu_dir / "full-car.ssp")
     effective = {}
@@ -419,8 +441,17 @@ def car_flags(fmu_dir: Path, overrides: dict) -> list[str]:
         else:
             flags += [f"--{name.replace('_', '-')}", repr(value)]
     fl, fr, rl, rr = corners
-    if {c["road"] for c in corners} != {2}:
-        raise ValueError("tdvass car's corners here roll on the ISO 8608 road (road = 2)")
+    roads = {c["road"] for c in corners}
+    if roads == {0}:
+        # Each wheel's held x_g: a road of its own.
+        for corner, c in zip(CORNERS, corners):
+            path = work / f"road_{corner}.csv"
+            path.write_text(f"t,x_g\n0,{c['x_g']!r}\n")
+            flags += ["--corner-road", f"{corner}=file:{path}"]
+    elif roads != {2}:
+        raise ValueError("tdvass car's corners here roll on the ISO 8608 road (road = 2) or on held inputs (road = 0)")
+    elif any(c["x_g"] != 0.0 for c in corners):
+        raise ValueError("x_g is the road only when road = 0")
     if fl["road_seed"] != rl["road_seed"] or fr["road_seed"] != rr["road_seed"]:
         raise ValueError("a rear wheel rolls on its front wheel's road")
     flags += ["--road-seed", str(fl["road_seed"]), "--right-seed", str(fr["road_seed"])]
@@ -430,7 +461,7 @@ def car_flags(fmu_dir: Path, overrides: dict) -> list[str]:
         front = corner[0] == "f"
         delay = 0.0 if front else wheelbase_delay
         share = mass * (b if front else a) / (a + b) / 2.0 * STANDARD_GRAVITY
-        if abs(c["road_delay"] - delay) > 1e-12 * wheelbase_delay:
+        if roads == {2} and abs(c["road_delay"] - delay) > 1e-12 * wheelbase_delay:
             raise ValueError(f"{corner}'s road_delay {c['road_delay']} is not {delay}")
         if abs(c["static_load"] - share) > 1e-12 * share:
             raise ValueError(f"{corner}'s static_load {c['static_load']} is not its share {share}")
@@ -444,12 +475,15 @@ def monolithic(fmu_dir: Path, stop_time: float, step: float, overrides: dict) ->
     other parameter at the FMUs' default) with `overrides`, as `car_flags`
     states it."""
     import subprocess
+    import tempfile
 
     binary = fmu_dir.parent / "release" / ("tdvass.exe" if sys.platform == "win32" else "tdvass")
-    done = subprocess.run(
-        [str(binary), "car", *car_flags(fmu_dir, overrides), "--duration", repr(stop_time), "--json"],
-        capture_output=True, text=True, check=True, timeout=600,
-    )
+    with tempfile.TemporaryDirectory() as work:
+        done = subprocess.run(
+            [str(binary), "car", *car_flags(fmu_dir, overrides, Path(work)), "--duration", repr(stop_time),
+             "--json"],
+            capture_output=True, text=True, check=True, timeout=600,
+        )
     car = json.loads(done.stdout)
     result = summary(
         lambda instance, name: car[name] if instance == CHASSIS else car["corners"][instance][name],
