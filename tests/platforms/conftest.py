@@ -16,9 +16,13 @@ in target/platforms/fmi3/).
 
 The corner's and the chassis's FMUs carry the same libraries (their GUID or
 instantiationToken picks the model): in the same run, each harness drives
-them for half a second with inputs set before every step from the tables
-that DRIVEN_RUNS defines (the `driven` fixture; drive_<run>.csv beside the
-other results).
+them for half a second with inputs set before every 1 ms step from the
+tables that DRIVEN_RUNS defines (the `driven` fixture; drive_<run>.csv
+beside the other results), in Co-Simulation and, in the runs named *_me, in
+Model Exchange: the harness integrates each step with ten explicit Euler
+steps of 0.1 ms under the inputs held, handles the events and writes the
+continuous states, their derivatives and the event indicators beside the
+outputs; their numbers come from the FMU's modelDescription.xml (`Model`).
 
 Build everything first with `cargo run --release -p fmu-build -- --all-platforms`.
 """
@@ -247,14 +251,14 @@ def results(platforms, description):
         shutil.rmtree(out, ignore_errors=True)
         out.mkdir(parents=True)
         state_in = linux64_state or out / "state.bin"  # linux64 restores its own
-        drive, drive_outputs = driven_arguments(2, platform)
+        drive, drive_lines = driven_arguments(2, platform)
         command = [*platform.runner, str(executable), platform.host_path(platform.library),
                    description.guid, ",".join(map(str, description.outputs)),
                    platform.host_path(out), platform.host_path(state_in), *drive]
         env = wine_environment() if name == "win64" else None
         result = run(command, env=env, cwd=platform.dir)
         assert re.search(r"^harness: \d+ outputs x 15000 steps", result.stdout, re.M), result.stdout
-        check_driven_runs(result.stdout, "harness", drive_outputs)
+        check_driven_runs(result.stdout, "harness", drive_lines)
         _results[name] = Results(name, out)
         return _results[name]
 
@@ -322,14 +326,14 @@ def results3(platforms3, description3):
         shutil.rmtree(out, ignore_errors=True)
         out.mkdir(parents=True)
         state_in = linux64_state or out / "state.bin"
-        drive, drive_outputs = driven_arguments(3, platform)
+        drive, drive_lines = driven_arguments(3, platform)
         command = [*platform.runner, str(executable), platform.host_path(platform.library),
                    description3.guid, ",".join(map(str, description3.outputs)),
                    platform.host_path(out), platform.host_path(state_in), *drive]
         env = wine_environment() if name == "win64" else None
         result = run(command, env=env, cwd=platform.dir)
         assert re.search(r"^harness_fmi3: \d+ outputs x 15000 steps", result.stdout, re.M), result.stdout
-        check_driven_runs(result.stdout, "harness_fmi3", drive_outputs)
+        check_driven_runs(result.stdout, "harness_fmi3", drive_lines)
         _results3[name] = Results(name, out)
         return _results3[name]
 
@@ -360,23 +364,32 @@ def force_fl_slope(t: float) -> dict[str, float]:
     return {"force_fl": 400 * OMEGA * math.cos(OMEGA * t)}
 
 
+CO_SIMULATION, MODEL_EXCHANGE = "cs", "me"  # the modes of a driven run
+
+
 @dataclass
 class DrivenRun:
     fmu: Path
     inputs: object  # t -> {input name: value}, set before the step from t
-    derivatives: object = None  # t -> {input name: order-1 derivative}; FMI 2.0 only
+    derivatives: object = None  # t -> {input name: order-1 derivative}; FMI 2.0 Co-Simulation only
+    mode: str = CO_SIMULATION  # or MODEL_EXCHANGE: the harness's Euler steps, the inputs held over a step
 
 
 # (FMI version, run) -> what `harness drive` runs: the corner on its default
 # harmonic road under a moving body, the chassis under four forces with the
 # slope of one of them and, to compare with FMI 3.0 (which has no input
-# derivatives), without it.
+# derivatives), without it; the corner and the chassis again in Model
+# Exchange (*_me), with the inputs of their Co-Simulation twins.
 DRIVEN_RUNS = {
     (2, "corner"): DrivenRun(CORNER, body_motion),
     (2, "chassis"): DrivenRun(CHASSIS, corner_forces, force_fl_slope),
     (2, "chassis_held"): DrivenRun(CHASSIS, corner_forces),
+    (2, "corner_me"): DrivenRun(CORNER, body_motion, mode=MODEL_EXCHANGE),
+    (2, "chassis_me"): DrivenRun(CHASSIS, corner_forces, mode=MODEL_EXCHANGE),
     (3, "corner"): DrivenRun(CORNER3, body_motion),
     (3, "chassis"): DrivenRun(CHASSIS3, corner_forces),
+    (3, "corner_me"): DrivenRun(CORNER3, body_motion, mode=MODEL_EXCHANGE),
+    (3, "chassis_me"): DrivenRun(CHASSIS3, corner_forces, mode=MODEL_EXCHANGE),
 }
 
 
@@ -386,6 +399,9 @@ class Model:
     token: str  # GUID or instantiationToken
     outputs: list[int]  # value references of the scalar Real / Float64 outputs
     variables: dict[str, int]  # name -> value reference
+    model_exchange: bool  # the FMU declares Model Exchange
+    states: int  # continuous states (Model Exchange)
+    event_indicators: int
 
 
 def model(fmu: Path, version: int) -> Model:
@@ -401,16 +417,27 @@ def model(fmu: Path, version: int) -> Model:
             if variable.get("causality") == "output" and variable.find("Real") is not None:
                 outputs.append(vr)
         token = root.get("guid")
+        derivatives = root.find("ModelStructure/Derivatives")
+        states = 0 if derivatives is None else len(derivatives)
+        event_indicators = int(root.get("numberOfEventIndicators", "0"))
     else:
+        scalars = set()
         for variable in root.find("ModelVariables"):
             vr = int(variable.get("valueReference"))
             variables[variable.get("name")] = vr
-            if (variable.get("causality") == "output" and variable.tag == "Float64"
-                    and variable.find("Dimension") is None):
+            if variable.find("Dimension") is None:
+                scalars.add(vr)
+            if variable.get("causality") == "output" and variable.tag == "Float64" and vr in scalars:
                 outputs.append(vr)
         token = root.get("instantiationToken")
+        structure = root.find("ModelStructure")
+        derivatives, indicators = structure.findall("ContinuousStateDerivative"), structure.findall("EventIndicator")
+        # One state or indicator per element: the harness counts no array's elements.
+        for element in derivatives + indicators:
+            assert int(element.get("valueReference")) in scalars, f"{fmu.name}: {element.tag} of an array"
+        states, event_indicators = len(derivatives), len(indicators)
     assert outputs, f"{fmu.name} declares no Real output"
-    return Model(token, outputs, variables)
+    return Model(token, outputs, variables, root.find("ModelExchange") is not None, states, event_indicators)
 
 
 def driven_table(version: int, name: str, spec: DrivenRun, m: Model) -> tuple[list[int], list[int], Path]:
@@ -429,23 +456,32 @@ def driven_table(version: int, name: str, spec: DrivenRun, m: Model) -> tuple[li
     return [m.variables[n] for n in inputs], [m.variables[n] for n in derivatives], path
 
 
-def driven_arguments(version: int, platform: Platform) -> tuple[list[str], dict[str, int]]:
-    """The harness's arguments for the driven runs of one FMI version (six
-    per run) and each run's number of outputs."""
-    arguments, outputs = [], {}
+def driven_arguments(version: int, platform: Platform) -> tuple[list[str], dict[str, str]]:
+    """The harness's arguments for the driven runs of one FMI version (seven
+    per run, the last the mode: `cs`, or `me,NX,NZ` with the numbers of
+    continuous states and event indicators) and the line each run prints
+    (a pattern)."""
+    arguments, lines = [], {}
     vrs = lambda values: ",".join(map(str, values)) or "-"  # noqa: E731
     for (v, name), spec in DRIVEN_RUNS.items():
         if v == version:
             m = model(spec.fmu, version)
             inputs, derivatives, table = driven_table(version, name, spec, m)
-            arguments += [name, m.token, vrs(m.outputs), vrs(inputs), vrs(derivatives), platform.host_path(table)]
-            outputs[name] = len(m.outputs)
-    return arguments, outputs
+            lines[name] = f"{len(m.outputs)} outputs x {DRIVEN_STEPS} steps"
+            mode = CO_SIMULATION
+            if spec.mode == MODEL_EXCHANGE:
+                assert m.model_exchange, f"{spec.fmu.name} declares no ModelExchange"
+                assert not derivatives, f"{name}: input derivatives are Co-Simulation only"
+                mode = f"{MODEL_EXCHANGE},{m.states},{m.event_indicators}"
+                lines[name] += f".*, Model Exchange: {m.states} states, {m.event_indicators} event indicators,"
+            arguments += [name, m.token, vrs(m.outputs), vrs(inputs), vrs(derivatives), platform.host_path(table),
+                          mode]
+    return arguments, lines
 
 
-def check_driven_runs(stdout: str, prefix: str, outputs: dict[str, int]) -> None:
-    for name, count in outputs.items():
-        assert re.search(rf"^{prefix}: drive {name}: {count} outputs x {DRIVEN_STEPS} steps", stdout, re.M), stdout
+def check_driven_runs(stdout: str, prefix: str, lines: dict[str, str]) -> None:
+    for name, line in lines.items():
+        assert re.search(rf"^{prefix}: drive {name}: {line}", stdout, re.M), stdout
 
 
 @pytest.fixture(scope="session")

@@ -5,7 +5,7 @@
  * loads one platform's library and writes what it computed as files, which
  * the tests (test_platforms.py) compare with the native Linux x86-64 run.
  *
- *   harness LIB GUID OUTPUT_VRS OUT_DIR STATE_IN [NAME TOKEN OUTPUTS INPUTS DERIVATIVES TABLE]...
+ *   harness LIB GUID OUTPUT_VRS OUT_DIR STATE_IN [NAME TOKEN OUTPUTS INPUTS DERIVATIVES TABLE MODE]...
  *
  *   LIB         the library (binaries/<platform>/tdvass.so or .dll)
  *   GUID        the FMU's GUID (modelDescription.xml)
@@ -14,7 +14,7 @@
  *   STATE_IN    a serialized FMU state written by another run (state.bin of
  *               the linux64 run): restored and continued
  *
- * and, for each further group of six arguments, a driven run (below).
+ * and, for each further group of seven arguments, a driven run (below).
  *
  * Result files (CSV: header line, then one line per communication point with
  * time in s and the outputs in SI units, each printed with 17 significant
@@ -38,18 +38,28 @@
  *                     and the last message logged for it
  *   drive_NAME.csv    a driven run: the model of the library that TOKEN
  *                     (GUID) picks (the quarter car, the corner or the
- *                     chassis, whose FMUs carry this library) in
- *                     Co-Simulation from t = 0, 1 ms steps, the outputs
- *                     OUTPUTS (value references) at t = 0 and after each
- *                     step. Before step k it sets the inputs INPUTS with
- *                     fmi2SetReal and the order-1 derivatives of the inputs
- *                     DERIVATIVES ("-" for none) with
+ *                     chassis, whose FMUs carry this library) from t = 0
+ *                     in 1 ms steps. Before step k it sets the inputs
+ *                     INPUTS with fmi2SetReal and the order-1 derivatives
+ *                     of the inputs DERIVATIVES ("-" for none) with
  *                     fmi2SetRealInputDerivatives, from TABLE: binary
  *                     doubles in the machine's byte order, per step the
  *                     inputs, then the derivatives; its length gives the
  *                     number of steps. The values come from a file, not
  *                     from a formula here, so that every platform's run
  *                     gets the same bits (the C libraries' sin differ).
+ *                     MODE "cs": Co-Simulation, a row of time and the
+ *                     outputs OUTPUTS (value references) at t = 0 and
+ *                     after each step. MODE "me,NX,NZ": Model Exchange of
+ *                     NX continuous states and NZ event indicators (the
+ *                     FMU's modelDescription.xml), each step integrated
+ *                     with DRIVE_SUBSTEPS explicit Euler steps of 0.1 ms,
+ *                     events handled as in model_exchange.csv; the inputs
+ *                     hold over the step (input derivatives are
+ *                     Co-Simulation only: DERIVATIVES must be "-"). A row
+ *                     at t = 0 and after each step of time, the states,
+ *                     their derivatives there, the event indicators and
+ *                     the outputs OUTPUTS.
  *
  * Exit code 0 when every file was written; 1 (message on stderr) when a call
  * of the good experiments did not return fmi2OK. Bad input is judged by the
@@ -152,6 +162,9 @@ enum { VARIANT_CS = 1, ROAD_ISO8608 = 2, ROAD_CLASS_C = 3 };
 #define ME_STEP 1e-4        /* the Euler step of the Model Exchange run, s */
 #define ME_STEPS 10000      /* 1 s */
 #define ME_ROW_EVERY 10     /* a row every 1 ms */
+#define MAX_STATES 64       /* Model Exchange runs: continuous states */
+#define MAX_INDICATORS 16   /* and event indicators */
+_Static_assert(NX <= MAX_STATES && NZ <= MAX_INDICATORS, "the quarter car's states fit the arrays");
 
 static const char *guid;
 static fmi2ValueReference outputs[MAX_OUTPUTS];
@@ -365,52 +378,59 @@ static void event_iteration(fmi2Component c) {
     } while (info.newDiscreteStatesNeeded);
 }
 
-/* One explicit Euler step from `t` (Continuous-Time Mode); the
- * derivatives at the start of the step in `dx`; an event (the indicator
- * changes sign) is handled in Event Mode. Returns the new time. */
-static double euler_step(fmi2Component c, double t, fmi2Real dx[NX], fmi2Real *z_before) {
-    fmi2Real x[NX], z[NZ];
-    REQUIRE_OK(fmi.GetContinuousStates(c, x, NX));
-    REQUIRE_OK(fmi.GetDerivatives(c, dx, NX));
-    for (int i = 0; i < NX; i++) x[i] += ME_STEP * dx[i];
-    t += ME_STEP;
+/* One explicit Euler step of `h` to the time `t` (Continuous-Time Mode)
+ * of `nx` states and `nz` event indicators: the derivatives at the start
+ * of the step in `dx`, the indicators there in `z`, replaced by those at
+ * its end. An event (the FMU asks for one, or an indicator changes sign)
+ * is handled in Event Mode. Returns whether there was one. */
+static int euler_step(fmi2Component c, double h, double t, size_t nx, size_t nz, fmi2Real *dx, fmi2Real *z) {
+    fmi2Real x[MAX_STATES], z_end[MAX_INDICATORS];
+    REQUIRE_OK(fmi.GetContinuousStates(c, x, nx));
+    REQUIRE_OK(fmi.GetDerivatives(c, dx, nx));
+    for (size_t i = 0; i < nx; i++) x[i] += h * dx[i];
     REQUIRE_OK(fmi.SetTime(c, t));
-    REQUIRE_OK(fmi.SetContinuousStates(c, x, NX));
-    REQUIRE_OK(fmi.GetEventIndicators(c, z, NZ));
+    REQUIRE_OK(fmi.SetContinuousStates(c, x, nx));
+    REQUIRE_OK(fmi.GetEventIndicators(c, z_end, nz));
     fmi2Boolean enter = 1, terminate = 1;
     REQUIRE_OK(fmi.CompletedIntegratorStep(c, 1, &enter, &terminate));
     if (terminate) fail("fmi2CompletedIntegratorStep: terminateSimulation", __LINE__);
-    if (enter || (z[0] > 0) != (*z_before > 0)) {
+    for (size_t i = 0; i < nz; i++) enter |= (z_end[i] > 0) != (z[i] > 0);
+    if (enter) {
         REQUIRE_OK(fmi.EnterEventMode(c));
         event_iteration(c);
         REQUIRE_OK(fmi.EnterContinuousTimeMode(c));
-        REQUIRE_OK(fmi.GetEventIndicators(c, z, NZ));
+        REQUIRE_OK(fmi.GetEventIndicators(c, z_end, nz));
     }
-    *z_before = z[0];
-    return t;
+    memcpy(z, z_end, nz * sizeof *z);
+    return enter != 0;
 }
 
-static void model_exchange_row(FILE *csv, fmi2Component c, double t, const fmi2Real dx[NX]) {
-    fmi2Real x[NX], z[NZ], values[MAX_OUTPUTS];
-    REQUIRE_OK(fmi.GetContinuousStates(c, x, NX));
-    REQUIRE_OK(fmi.GetEventIndicators(c, z, NZ));
+/* The header of a Model Exchange file: x0.., der_x0.., z0.., the outputs. */
+static void model_exchange_header(FILE *csv, size_t nx, size_t nz) {
+    fprintf(csv, "time");
+    for (size_t i = 0; i < nx; i++) fprintf(csv, ",x%zu", i);
+    for (size_t i = 0; i < nx; i++) fprintf(csv, ",der_x%zu", i);
+    for (size_t i = 0; i < nz; i++) fprintf(csv, ",z%zu", i);
+    for (size_t i = 0; i < n_outputs; i++) fprintf(csv, ",%u", outputs[i]);
+    fprintf(csv, "\n");
+}
+
+static void model_exchange_row(FILE *csv, fmi2Component c, double t, size_t nx, size_t nz, const fmi2Real *dx) {
+    fmi2Real x[MAX_STATES], z[MAX_INDICATORS], values[MAX_OUTPUTS];
+    REQUIRE_OK(fmi.GetContinuousStates(c, x, nx));
+    REQUIRE_OK(fmi.GetEventIndicators(c, z, nz));
     REQUIRE_OK(fmi.GetReal(c, outputs, n_outputs, values));
     fprintf(csv, "%.17g", t);
-    for (int i = 0; i < NX; i++) fprintf(csv, ",%.17g", x[i]);
-    for (int i = 0; i < NX; i++) fprintf(csv, ",%.17g", dx[i]);
-    fprintf(csv, ",%.17g", z[0]);
+    for (size_t i = 0; i < nx; i++) fprintf(csv, ",%.17g", x[i]);
+    for (size_t i = 0; i < nx; i++) fprintf(csv, ",%.17g", dx[i]);
+    for (size_t i = 0; i < nz; i++) fprintf(csv, ",%.17g", z[i]);
     for (size_t i = 0; i < n_outputs; i++) fprintf(csv, ",%.17g", values[i]);
     fprintf(csv, "\n");
 }
 
 static void model_exchange(const char *dir) {
     FILE *csv = open_file(dir, "model_exchange.csv", "wb");
-    fprintf(csv, "time");
-    for (int i = 0; i < NX; i++) fprintf(csv, ",x%d", i);
-    for (int i = 0; i < NX; i++) fprintf(csv, ",der_x%d", i);
-    fprintf(csv, ",z0");
-    for (size_t i = 0; i < n_outputs; i++) fprintf(csv, ",%u", outputs[i]);
-    fprintf(csv, "\n");
+    model_exchange_header(csv, NX, NZ);
     fmi2Component c = model_exchange_instance("model_exchange");
     event_iteration(c);
     REQUIRE_OK(fmi.EnterContinuousTimeMode(c));
@@ -418,10 +438,11 @@ static void model_exchange(const char *dir) {
     REQUIRE_OK(fmi.GetDerivatives(c, dx, NX));
     REQUIRE_OK(fmi.GetEventIndicators(c, z, NZ));
     double t = 0.0;
-    model_exchange_row(csv, c, t, dx);
+    model_exchange_row(csv, c, t, NX, NZ, dx);
     for (int k = 1; k <= ME_STEPS; k++) {
-        t = euler_step(c, t, dx, &z[0]);
-        if (k % ME_ROW_EVERY == 0) model_exchange_row(csv, c, t, dx);
+        t += ME_STEP;
+        euler_step(c, ME_STEP, t, NX, NZ, dx, z);
+        if (k % ME_ROW_EVERY == 0) model_exchange_row(csv, c, t, NX, NZ, dx);
     }
     REQUIRE_OK(fmi.EnterEventMode(c));
     event_iteration(c);
@@ -619,7 +640,35 @@ static void parse_outputs(const char *list) {
 /* ------------------------------------------------------------ driven runs */
 
 #define MAX_INPUTS 16
-#define DRIVE_ARGS 6 /* NAME TOKEN OUTPUTS INPUTS DERIVATIVES TABLE */
+#define DRIVE_ARGS 7 /* NAME TOKEN OUTPUTS INPUTS DERIVATIVES TABLE MODE */
+#define DRIVE_SUBSTEPS 10 /* Model Exchange: Euler steps per 1 ms step, of 0.1 ms */
+
+/* MODE of a driven run: "cs" (Co-Simulation) or "me,NX,NZ" (Model
+ * Exchange of NX continuous states and NZ event indicators). */
+typedef struct {
+    int model_exchange;
+    size_t nx, nz;
+} Mode;
+
+static Mode parse_mode(const char *text) {
+    Mode mode = {0, 0, 0};
+    if (strcmp(text, "cs") == 0) return mode;
+    unsigned long nx = 0, nz = 0;
+    char end = 0;
+    if (sscanf(text, "me,%lu,%lu%c", &nx, &nz, &end) != 2) {
+        fprintf(stderr, "bad MODE `%s`: cs or me,NX,NZ\n", text);
+        exit(2);
+    }
+    if (nx > MAX_STATES || nz > MAX_INDICATORS) {
+        fprintf(stderr, "MODE `%s`: at most %d continuous states and %d event indicators (harness.c)\n", text,
+                MAX_STATES, MAX_INDICATORS);
+        exit(2);
+    }
+    mode.model_exchange = 1;
+    mode.nx = nx;
+    mode.nz = nz;
+    return mode;
+}
 
 /* One driven run (drive_NAME.csv in `dir`); sets `guid` and the outputs. */
 static void drive(const char *dir, char **args) {
@@ -629,6 +678,11 @@ static void drive(const char *dir, char **args) {
     fmi2ValueReference inputs[MAX_INPUTS], derivatives[MAX_INPUTS];
     const size_t n_inputs = parse_vrs("INPUTS", args[3], inputs, MAX_INPUTS);
     const size_t n_derivatives = parse_vrs("DERIVATIVES", args[4], derivatives, MAX_INPUTS);
+    const Mode mode = parse_mode(args[6]);
+    if (mode.model_exchange && n_derivatives) {
+        fprintf(stderr, "MODE %s: input derivatives are Co-Simulation only: DERIVATIVES must be -\n", args[6]);
+        exit(2);
+    }
     fmi2Integer orders[MAX_INPUTS];
     for (size_t i = 0; i < MAX_INPUTS; i++) orders[i] = 1;
     const size_t row = n_inputs + n_derivatives;
@@ -643,30 +697,60 @@ static void drive(const char *dir, char **args) {
     char file[256];
     snprintf(file, sizeof file, "drive_%s.csv", name);
     FILE *csv = open_file(dir, file, "wb");
-    write_header(csv);
-    static const Integers defaults = {0, {0}, {0}};
-    fmi2Component c = initialized(file, &defaults);
-    write_row(csv, c, 0.0);
+    fmi2Component c;
+    fmi2Real dx[MAX_STATES], z[MAX_INDICATORS]; /* Model Exchange */
+    if (mode.model_exchange) {
+        model_exchange_header(csv, mode.nx, mode.nz);
+        c = model_exchange_instance(file);
+        event_iteration(c);
+        REQUIRE_OK(fmi.EnterContinuousTimeMode(c));
+        REQUIRE_OK(fmi.GetDerivatives(c, dx, mode.nx));
+        REQUIRE_OK(fmi.GetEventIndicators(c, z, mode.nz));
+        model_exchange_row(csv, c, 0.0, mode.nx, mode.nz, dx);
+    } else {
+        write_header(csv);
+        static const Integers defaults = {0, {0}, {0}};
+        c = initialized(file, &defaults);
+        write_row(csv, c, 0.0);
+    }
+    size_t events = 0;
     for (size_t k = 0; k < steps; k++) {
         fmi2Real values[2 * MAX_INPUTS];
         memcpy(values, table + k * row * sizeof(double), row * sizeof(double));
         if (n_inputs) REQUIRE_OK(fmi.SetReal(c, inputs, n_inputs, values));
         if (n_derivatives)
             REQUIRE_OK(fmi.SetRealInputDerivatives(c, derivatives, n_derivatives, orders, values + n_inputs));
-        REQUIRE_OK(fmi.DoStep(c, (double)k * STEP, STEP, 1));
-        write_row(csv, c, (double)(k + 1) * STEP);
+        const double t = (double)(k + 1) * STEP;
+        if (mode.model_exchange) {
+            /* Euler steps to t_k + j STEP / DRIVE_SUBSTEPS: the last ends at t exactly. */
+            double now = (double)k * STEP;
+            for (int j = 1; j <= DRIVE_SUBSTEPS; j++) {
+                const double next = ((double)k + (double)j / DRIVE_SUBSTEPS) * STEP;
+                events += euler_step(c, next - now, next, mode.nx, mode.nz, dx, z);
+                now = next;
+            }
+            REQUIRE_OK(fmi.GetDerivatives(c, dx, mode.nx)); /* the row's: at t */
+            model_exchange_row(csv, c, t, mode.nx, mode.nz, dx);
+        } else {
+            REQUIRE_OK(fmi.DoStep(c, (double)k * STEP, STEP, 1));
+            write_row(csv, c, t);
+        }
     }
     finish(c);
     fclose(csv);
     free(table);
-    printf("harness: drive %s: %zu outputs x %zu steps, %zu inputs, %zu input derivatives\n", name, n_outputs,
-           steps, n_inputs, n_derivatives);
+    printf("harness: drive %s: %zu outputs x %zu steps, %zu inputs, %zu input derivatives", name, n_outputs, steps,
+           n_inputs, n_derivatives);
+    if (mode.model_exchange)
+        printf(", Model Exchange: %zu states, %zu event indicators, %zu events", mode.nx, mode.nz, events);
+    printf("\n");
 }
 
 int main(int argc, char **argv) {
     if (argc < 6 || (argc - 6) % DRIVE_ARGS != 0) {
         fprintf(stderr,
-                "usage: %s LIB GUID OUTPUT_VRS OUT_DIR STATE_IN [NAME TOKEN OUTPUTS INPUTS DERIVATIVES TABLE]...\n",
+                "usage: %s LIB GUID OUTPUT_VRS OUT_DIR STATE_IN"
+                " [NAME TOKEN OUTPUTS INPUTS DERIVATIVES TABLE MODE]...\n",
                 argv[0]);
         return 2;
     }

@@ -1,12 +1,12 @@
 /*
- * Platform-neutral harness of the tdvass FMI 3.0 library (Co-Simulation),
- * the counterpart of harness.c: compiled natively for x86_64-linux, with
- * MinGW-w64 for x86_64-windows (run under wine) and with the aarch64 GNU
- * toolchain for aarch64-linux (run under qemu-user), each run loads that
- * platform's binary of tdvass-fmi3.fmu. The FMI 3.0 types are declared in
- * tests/include/fmi3_types.h.
+ * Platform-neutral harness of the tdvass FMI 3.0 library (Co-Simulation
+ * and Model Exchange), the counterpart of harness.c: compiled natively for
+ * x86_64-linux, with MinGW-w64 for x86_64-windows (run under wine) and
+ * with the aarch64 GNU toolchain for aarch64-linux (run under qemu-user),
+ * each run loads that platform's binary of tdvass-fmi3.fmu. The FMI 3.0
+ * types are declared in tests/include/fmi3_types.h.
  *
- *   harness_fmi3 LIB TOKEN OUTPUT_VRS OUT_DIR STATE_IN [NAME TOKEN OUTPUTS INPUTS DERIVATIVES TABLE]...
+ *   harness_fmi3 LIB TOKEN OUTPUT_VRS OUT_DIR STATE_IN [NAME TOKEN OUTPUTS INPUTS DERIVATIVES TABLE MODE]...
  *
  *   LIB         the library (binaries/<platform tuple>/tdvass.so or .dll)
  *   TOKEN       the instantiationToken of the FMU's modelDescription.xml
@@ -15,7 +15,7 @@
  *   STATE_IN    a serialized FMU state written by another run (state.bin of
  *               the x86_64-linux run): restored and continued
  *
- * and, for each further group of six arguments, a driven run (below).
+ * and, for each further group of seven arguments, a driven run (below).
  *
  * Result files, as harness.c's (CSV, 17 significant digits):
  *   default.csv       the default experiment (TDVASS, harmonic road, 0..15 s,
@@ -36,16 +36,26 @@
  *                     of ME_STEP to ME_END, rows as harness.c's file of
  *                     the same name (the same run through FMI 3.0)
  *   drive_NAME.csv    a driven run, as harness.c's: the model TOKEN picks
- *                     (the quarter car, the corner or the chassis) in
- *                     Co-Simulation from t = 0, 1 ms steps, the Float64
- *                     inputs INPUTS set with fmi3SetFloat64 before every
- *                     step from TABLE (binary doubles, one row of inputs
- *                     per step), the outputs OUTPUTS at t = 0 and after
- *                     each step. FMI 3.0 has no input derivatives:
- *                     DERIVATIVES must be "-".
+ *                     (the quarter car, the corner or the chassis) from
+ *                     t = 0 in 1 ms steps, the Float64 inputs INPUTS set
+ *                     with fmi3SetFloat64 before every step from TABLE
+ *                     (binary doubles, one row of inputs per step). FMI
+ *                     3.0 has no input derivatives: DERIVATIVES must be
+ *                     "-". MODE "cs": Co-Simulation, the outputs OUTPUTS
+ *                     at t = 0 and after each step. MODE "me,NX,NZ":
+ *                     Model Exchange of NX continuous states and NZ event
+ *                     indicators (modelDescription.xml; checked against
+ *                     fmi3GetNumberOfContinuousStates and
+ *                     fmi3GetNumberOfEventIndicators), each step
+ *                     integrated with DRIVE_SUBSTEPS explicit Euler steps
+ *                     of 0.1 ms under the inputs held, events handled as
+ *                     in model_exchange.csv; a row at t = 0 and after
+ *                     each step of time, the states, their derivatives
+ *                     there, the event indicators and the outputs.
  *
  * Exit code 0 when every file was written; 1 (message on stderr) when a call
- * did not return fmi3OK or fmi3DoStep did not reach the end of its step.
+ * did not return fmi3OK, fmi3DoStep did not reach the end of its step or
+ * a Model Exchange run's NX or NZ is not the FMU's.
  */
 #define __USE_MINGW_ANSI_STDIO 1 /* C99 printf on Windows: exact %.17g */
 #include <stdio.h>
@@ -82,6 +92,7 @@ typedef fmi3Status (*fmi3CompletedIntegratorStepTYPE)(fmi3Instance,
 typedef fmi3Status (*fmi3SetTimeTYPE)(fmi3Instance, fmi3Float64);
 typedef fmi3Status (*fmi3SetContinuousStatesTYPE)(fmi3Instance, const fmi3Float64[], size_t);
 typedef fmi3Status (*fmi3GetFloat64VectorTYPE)(fmi3Instance, fmi3Float64[], size_t);
+typedef fmi3Status (*fmi3GetNumberTYPE)(fmi3Instance, size_t *);
 
 static struct {
     fmi3InstantiateCoSimulationTYPE InstantiateCoSimulation;
@@ -110,6 +121,8 @@ static struct {
     fmi3GetFloat64VectorTYPE GetContinuousStateDerivatives;
     fmi3GetFloat64VectorTYPE GetEventIndicators;
     fmi3GetFloat64VectorTYPE GetContinuousStates;
+    fmi3GetNumberTYPE GetNumberOfContinuousStates;
+    fmi3GetNumberTYPE GetNumberOfEventIndicators;
 } fmi;
 
 /* Value references of the parameters the harness sets (the tests check
@@ -127,6 +140,9 @@ enum { VARIANT_CS = 1, ROAD_ISO8608 = 2, ROAD_CLASS_C = 3 };
 #define ME_STEP 1e-4        /* the Euler step of the Model Exchange run, s */
 #define ME_STEPS 10000      /* 1 s */
 #define ME_ROW_EVERY 10     /* a row every 1 ms */
+#define MAX_STATES 64       /* Model Exchange runs: continuous states */
+#define MAX_INDICATORS 16   /* and event indicators */
+_Static_assert(NX <= MAX_STATES && NZ <= MAX_INDICATORS, "the quarter car's states fit the arrays");
 
 static const char *token;
 static fmi3ValueReference outputs[MAX_OUTPUTS];
@@ -205,6 +221,8 @@ static void load(const char *path) {
     SYM(GetContinuousStateDerivatives, "fmi3GetContinuousStateDerivatives");
     SYM(GetEventIndicators, "fmi3GetEventIndicators");
     SYM(GetContinuousStates, "fmi3GetContinuousStates");
+    SYM(GetNumberOfContinuousStates, "fmi3GetNumberOfContinuousStates");
+    SYM(GetNumberOfEventIndicators, "fmi3GetNumberOfEventIndicators");
 #undef SYM
 }
 
@@ -400,66 +418,81 @@ static void event_iteration(fmi3Instance c) {
     } while (again);
 }
 
-/* One explicit Euler step from `t` (Continuous-Time Mode); the
- * derivatives at the start of the step in `dx`; an event (the indicator
- * changes sign) is handled in Event Mode. Returns the new time. */
-static double euler_step(fmi3Instance c, double t, fmi3Float64 dx[NX], fmi3Float64 *z_before) {
-    fmi3Float64 x[NX], z[NZ];
-    REQUIRE_OK(fmi.GetContinuousStates(c, x, NX));
-    REQUIRE_OK(fmi.GetContinuousStateDerivatives(c, dx, NX));
-    for (int i = 0; i < NX; i++) x[i] += ME_STEP * dx[i];
-    t += ME_STEP;
+/* A Model Exchange instance of the model `token` picks, initialized: in
+ * Event Mode. */
+static fmi3Instance model_exchange_instance(const char *name) {
+    fmi3Instance c = fmi.InstantiateModelExchange(name, token, NULL, false, false, NULL, logger);
+    if (!c) fail("fmi3InstantiateModelExchange returned NULL", __LINE__);
+    REQUIRE_OK(fmi.EnterInitializationMode(c, false, 0.0, 0.0, true, STEPS * STEP));
+    REQUIRE_OK(fmi.ExitInitializationMode(c));
+    return c;
+}
+
+/* One explicit Euler step of `h` to the time `t` (Continuous-Time Mode)
+ * of `nx` states and `nz` event indicators: the derivatives at the start
+ * of the step in `dx`, the indicators there in `z`, replaced by those at
+ * its end. An event (the FMU asks for one, or an indicator changes sign)
+ * is handled in Event Mode. Returns whether there was one. */
+static int euler_step(fmi3Instance c, double h, double t, size_t nx, size_t nz, fmi3Float64 *dx, fmi3Float64 *z) {
+    fmi3Float64 x[MAX_STATES], z_end[MAX_INDICATORS];
+    REQUIRE_OK(fmi.GetContinuousStates(c, x, nx));
+    REQUIRE_OK(fmi.GetContinuousStateDerivatives(c, dx, nx));
+    for (size_t i = 0; i < nx; i++) x[i] += h * dx[i];
     REQUIRE_OK(fmi.SetTime(c, t));
-    REQUIRE_OK(fmi.SetContinuousStates(c, x, NX));
-    REQUIRE_OK(fmi.GetEventIndicators(c, z, NZ));
+    REQUIRE_OK(fmi.SetContinuousStates(c, x, nx));
+    REQUIRE_OK(fmi.GetEventIndicators(c, z_end, nz));
     fmi3Boolean enter = true, terminate = true;
     REQUIRE_OK(fmi.CompletedIntegratorStep(c, true, &enter, &terminate));
     if (terminate) fail("fmi3CompletedIntegratorStep: terminateSimulation", __LINE__);
-    if (enter || (z[0] > 0) != (*z_before > 0)) {
+    for (size_t i = 0; i < nz; i++) enter = enter || (z_end[i] > 0) != (z[i] > 0);
+    if (enter) {
         REQUIRE_OK(fmi.EnterEventMode(c));
         event_iteration(c);
         REQUIRE_OK(fmi.EnterContinuousTimeMode(c));
-        REQUIRE_OK(fmi.GetEventIndicators(c, z, NZ));
+        REQUIRE_OK(fmi.GetEventIndicators(c, z_end, nz));
     }
-    *z_before = z[0];
-    return t;
+    memcpy(z, z_end, nz * sizeof *z);
+    return enter;
 }
 
-static void model_exchange_row(FILE *csv, fmi3Instance c, double t, const fmi3Float64 dx[NX]) {
-    fmi3Float64 x[NX], z[NZ], values[MAX_OUTPUTS];
-    REQUIRE_OK(fmi.GetContinuousStates(c, x, NX));
-    REQUIRE_OK(fmi.GetEventIndicators(c, z, NZ));
+/* The header of a Model Exchange file: x0.., der_x0.., z0.., the outputs. */
+static void model_exchange_header(FILE *csv, size_t nx, size_t nz) {
+    fprintf(csv, "time");
+    for (size_t i = 0; i < nx; i++) fprintf(csv, ",x%zu", i);
+    for (size_t i = 0; i < nx; i++) fprintf(csv, ",der_x%zu", i);
+    for (size_t i = 0; i < nz; i++) fprintf(csv, ",z%zu", i);
+    for (size_t i = 0; i < n_outputs; i++) fprintf(csv, ",%u", (unsigned)outputs[i]);
+    fprintf(csv, "\n");
+}
+
+static void model_exchange_row(FILE *csv, fmi3Instance c, double t, size_t nx, size_t nz, const fmi3Float64 *dx) {
+    fmi3Float64 x[MAX_STATES], z[MAX_INDICATORS], values[MAX_OUTPUTS];
+    REQUIRE_OK(fmi.GetContinuousStates(c, x, nx));
+    REQUIRE_OK(fmi.GetEventIndicators(c, z, nz));
     REQUIRE_OK(fmi.GetFloat64(c, outputs, n_outputs, values, n_outputs));
     fprintf(csv, "%.17g", t);
-    for (int i = 0; i < NX; i++) fprintf(csv, ",%.17g", x[i]);
-    for (int i = 0; i < NX; i++) fprintf(csv, ",%.17g", dx[i]);
-    fprintf(csv, ",%.17g", z[0]);
+    for (size_t i = 0; i < nx; i++) fprintf(csv, ",%.17g", x[i]);
+    for (size_t i = 0; i < nx; i++) fprintf(csv, ",%.17g", dx[i]);
+    for (size_t i = 0; i < nz; i++) fprintf(csv, ",%.17g", z[i]);
     for (size_t i = 0; i < n_outputs; i++) fprintf(csv, ",%.17g", values[i]);
     fprintf(csv, "\n");
 }
 
 static void model_exchange(const char *dir) {
     FILE *csv = open_file(dir, "model_exchange.csv", "wb");
-    fprintf(csv, "time");
-    for (int i = 0; i < NX; i++) fprintf(csv, ",x%d", i);
-    for (int i = 0; i < NX; i++) fprintf(csv, ",der_x%d", i);
-    fprintf(csv, ",z0");
-    for (size_t i = 0; i < n_outputs; i++) fprintf(csv, ",%u", (unsigned)outputs[i]);
-    fprintf(csv, "\n");
-    fmi3Instance c = fmi.InstantiateModelExchange("model_exchange", token, NULL, false, false, NULL, logger);
-    if (!c) fail("fmi3InstantiateModelExchange returned NULL", __LINE__);
-    REQUIRE_OK(fmi.EnterInitializationMode(c, false, 0.0, 0.0, true, STEPS * STEP));
-    REQUIRE_OK(fmi.ExitInitializationMode(c));
+    model_exchange_header(csv, NX, NZ);
+    fmi3Instance c = model_exchange_instance("model_exchange");
     event_iteration(c);
     REQUIRE_OK(fmi.EnterContinuousTimeMode(c));
     fmi3Float64 dx[NX], z[NZ];
     REQUIRE_OK(fmi.GetContinuousStateDerivatives(c, dx, NX));
     REQUIRE_OK(fmi.GetEventIndicators(c, z, NZ));
     double t = 0.0;
-    model_exchange_row(csv, c, t, dx);
+    model_exchange_row(csv, c, t, NX, NZ, dx);
     for (int k = 1; k <= ME_STEPS; k++) {
-        t = euler_step(c, t, dx, &z[0]);
-        if (k % ME_ROW_EVERY == 0) model_exchange_row(csv, c, t, dx);
+        t += ME_STEP;
+        euler_step(c, ME_STEP, t, NX, NZ, dx, z);
+        if (k % ME_ROW_EVERY == 0) model_exchange_row(csv, c, t, NX, NZ, dx);
     }
     REQUIRE_OK(fmi.EnterEventMode(c));
     event_iteration(c);
@@ -499,7 +532,52 @@ static void parse_outputs(const char *list) {
 /* ------------------------------------------------------------ driven runs */
 
 #define MAX_INPUTS 16
-#define DRIVE_ARGS 6 /* NAME TOKEN OUTPUTS INPUTS DERIVATIVES TABLE */
+#define DRIVE_ARGS 7 /* NAME TOKEN OUTPUTS INPUTS DERIVATIVES TABLE MODE */
+#define DRIVE_SUBSTEPS 10 /* Model Exchange: Euler steps per 1 ms step, of 0.1 ms */
+
+/* MODE of a driven run: "cs" (Co-Simulation) or "me,NX,NZ" (Model
+ * Exchange of NX continuous states and NZ event indicators). */
+typedef struct {
+    bool model_exchange;
+    size_t nx, nz;
+} Mode;
+
+static Mode parse_mode(const char *text) {
+    Mode mode = {false, 0, 0};
+    if (strcmp(text, "cs") == 0) return mode;
+    unsigned long nx = 0, nz = 0;
+    char end = 0;
+    if (sscanf(text, "me,%lu,%lu%c", &nx, &nz, &end) != 2) {
+        fprintf(stderr, "bad MODE `%s`: cs or me,NX,NZ\n", text);
+        exit(2);
+    }
+    if (nx > MAX_STATES || nz > MAX_INDICATORS) {
+        fprintf(stderr, "MODE `%s`: at most %d continuous states and %d event indicators (harness_fmi3.c)\n", text,
+                MAX_STATES, MAX_INDICATORS);
+        exit(2);
+    }
+    mode.model_exchange = true;
+    mode.nx = nx;
+    mode.nz = nz;
+    return mode;
+}
+
+/* A Model Exchange instance of a driven run in Continuous-Time Mode, its
+ * numbers of states and event indicators checked against `mode`. */
+static fmi3Instance driven_model_exchange(const char *name, Mode mode) {
+    fmi3Instance c = model_exchange_instance(name);
+    event_iteration(c);
+    REQUIRE_OK(fmi.EnterContinuousTimeMode(c));
+    size_t nx = 0, nz = 0;
+    REQUIRE_OK(fmi.GetNumberOfContinuousStates(c, &nx));
+    REQUIRE_OK(fmi.GetNumberOfEventIndicators(c, &nz));
+    if (nx != mode.nx || nz != mode.nz) {
+        fprintf(stderr, "harness_fmi3.c: %s: %zu continuous states and %zu event indicators, MODE says %zu and %zu\n",
+                name, nx, nz, mode.nx, mode.nz);
+        exit(1);
+    }
+    return c;
+}
 
 /* One driven run (drive_NAME.csv in `dir`); sets `token` and the outputs. */
 static void drive(const char *dir, char **args) {
@@ -512,6 +590,7 @@ static void drive(const char *dir, char **args) {
         fprintf(stderr, "FMI 3.0 has no input derivatives: DERIVATIVES must be -\n");
         exit(2);
     }
+    const Mode mode = parse_mode(args[6]);
     size_t size = 0;
     fmi3Byte *table = read_file(args[5], &size);
     if (n_inputs == 0 || size == 0 || size % (n_inputs * sizeof(double)) != 0) {
@@ -524,30 +603,58 @@ static void drive(const char *dir, char **args) {
     char file[256];
     snprintf(file, sizeof file, "drive_%s.csv", name);
     FILE *csv = open_file(dir, file, "wb");
-    write_header(csv);
-    fmi3Instance c = initialized(file, &defaults, NULL);
-    write_values(csv, c, 0.0);
+    fmi3Instance c;
+    fmi3Float64 dx[MAX_STATES], z[MAX_INDICATORS]; /* Model Exchange */
+    if (mode.model_exchange) {
+        model_exchange_header(csv, mode.nx, mode.nz);
+        c = driven_model_exchange(file, mode);
+        REQUIRE_OK(fmi.GetContinuousStateDerivatives(c, dx, mode.nx));
+        REQUIRE_OK(fmi.GetEventIndicators(c, z, mode.nz));
+        model_exchange_row(csv, c, 0.0, mode.nx, mode.nz, dx);
+    } else {
+        write_header(csv);
+        c = initialized(file, &defaults, NULL);
+        write_values(csv, c, 0.0);
+    }
+    size_t events = 0;
     for (size_t k = 0; k < steps; k++) {
         fmi3Float64 values[MAX_INPUTS];
         memcpy(values, table + k * n_inputs * sizeof(double), n_inputs * sizeof(double));
         REQUIRE_OK(fmi.SetFloat64(c, inputs, n_inputs, values, n_inputs));
-        fmi3Boolean event = true, terminate = true, early = true;
-        fmi3Float64 last = -1.0;
-        REQUIRE_OK(fmi.DoStep(c, (double)k * STEP, STEP, true, &event, &terminate, &early, &last));
-        if (event || terminate || early || last != (double)k * STEP + STEP)
-            fail("fmi3DoStep did not complete its step", __LINE__);
-        write_values(csv, c, (double)(k + 1) * STEP);
+        const double t = (double)(k + 1) * STEP;
+        if (mode.model_exchange) {
+            /* Euler steps to t_k + j STEP / DRIVE_SUBSTEPS: the last ends at t exactly. */
+            double now = (double)k * STEP;
+            for (int j = 1; j <= DRIVE_SUBSTEPS; j++) {
+                const double next = ((double)k + (double)j / DRIVE_SUBSTEPS) * STEP;
+                events += euler_step(c, next - now, next, mode.nx, mode.nz, dx, z);
+                now = next;
+            }
+            REQUIRE_OK(fmi.GetContinuousStateDerivatives(c, dx, mode.nx)); /* the row's: at t */
+            model_exchange_row(csv, c, t, mode.nx, mode.nz, dx);
+        } else {
+            fmi3Boolean event = true, terminate = true, early = true;
+            fmi3Float64 last = -1.0;
+            REQUIRE_OK(fmi.DoStep(c, (double)k * STEP, STEP, true, &event, &terminate, &early, &last));
+            if (event || terminate || early || last != (double)k * STEP + STEP)
+                fail("fmi3DoStep did not complete its step", __LINE__);
+            write_values(csv, c, t);
+        }
     }
     finish(c);
     fclose(csv);
     free(table);
-    printf("harness_fmi3: drive %s: %zu outputs x %zu steps, %zu inputs\n", name, n_outputs, steps, n_inputs);
+    printf("harness_fmi3: drive %s: %zu outputs x %zu steps, %zu inputs", name, n_outputs, steps, n_inputs);
+    if (mode.model_exchange)
+        printf(", Model Exchange: %zu states, %zu event indicators, %zu events", mode.nx, mode.nz, events);
+    printf("\n");
 }
 
 int main(int argc, char **argv) {
     if (argc < 6 || (argc - 6) % DRIVE_ARGS != 0) {
         fprintf(stderr,
-                "usage: %s LIB TOKEN OUTPUT_VRS OUT_DIR STATE_IN [NAME TOKEN OUTPUTS INPUTS DERIVATIVES TABLE]...\n",
+                "usage: %s LIB TOKEN OUTPUT_VRS OUT_DIR STATE_IN"
+                " [NAME TOKEN OUTPUTS INPUTS DERIVATIVES TABLE MODE]...\n",
                 argv[0]);
         return 2;
     }
