@@ -1153,7 +1153,7 @@ pub const CORNER_ADDITIONS: &[Variable] = &[
         Q::Length,
         real!(body_displacement),
         Bound::Displacement,
-        "The body's attachment point: its displacement from the static equilibrium, positive up; from the time it is set the attachment moves at body_velocity until either input is set again",
+        "The body's attachment point: its displacement from the static equilibrium, positive up; in Co-Simulation the attachment moves at body_velocity from the time it is set until either input is set again, in Model Exchange it is the attachment now (set before each evaluation)",
     ),
     body_input(
         "body_velocity",
@@ -1161,7 +1161,7 @@ pub const CORNER_ADDITIONS: &[Variable] = &[
         Q::Velocity,
         real!(body_velocity),
         Bound::Velocity,
-        "The body's attachment point: its velocity, positive up (from the time it is set, until either input is set again)",
+        "The body's attachment point: its velocity, positive up (Co-Simulation: from the time it is set until either input is set again; Model Exchange: now)",
     ),
     output(
         "body_force",
