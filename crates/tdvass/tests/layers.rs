@@ -80,8 +80,8 @@ const EXCHANGE_LAYERS: layering::Layers = &[
 
 /// The files of `crates/tdvass/src/car`, from the ground up.
 const CAR_LAYERS: layering::Layers = &[
-    ("system", &["layout"]),
-    ("step maps, crossings", &["maps", "crossings"]),
+    ("system", &["layout", "mirror"]),
+    ("step maps, crossings", &["maps", "crossings", "averages"]),
     ("run", &["run"]),
     ("car", &["mod"]),
 ];

@@ -4,27 +4,35 @@
 //! `X(L) = Φ X(0) + Γ w`, both blocks from one exponential of the
 //! augmented matrix (the plant, and for each input a chain
 //! `w_0' = w_1, w_1' = w_2, …` whose first state drives its column),
-//! computed by the 2^N algorithm of `solver::expm`.
+//! computed by the 2^N algorithm of `solver::expm`, in the mirror
+//! coordinates of `mirror` (states, and the inputs' coefficients: `w` is
+//! given per corner and halved here).
 //!
 //! The maps of the lengths a run meets again (the step, the pieces of a
 //! step split at the delay or at a rear wheel's road breakpoints) are kept;
 //! a stretch that ends at a located switch takes its own exponential.
 //!
-//! Layer: the car's maps; it imports the car's `layout` and the solver's
-//! `expm`.
+//! Layer: the car's maps; it imports the car's `layout` and `mirror` and
+//! the solver's `expm`.
 
 use super::layout::{
     CORNERS, CarSystem, DELAY_ORDER, INPUTS, ROAD_ORDER, STATES, delay_input, road_input,
 };
+use super::mirror::{Pairs, mirror_matrix};
 use crate::solver::expm::precise_exp_dynamic;
 use nalgebra::{DMatrix, DVector};
 
 /// Most maps kept; the oldest is replaced first.
 const KEPT: usize = 64;
 
-/// The map of a stretch: `[Φ Γ]`, `STATES × (STATES + INPUTS)`.
+/// The map of a stretch: `[Φ Γ]`, `STATES × (STATES + INPUTS)`, in mirror
+/// coordinates.
 #[derive(Debug, Clone)]
-pub(super) struct StretchMap(DMatrix<f64>);
+pub(super) struct StretchMap {
+    map: DMatrix<f64>,
+    inputs: Pairs,
+    unknowns: Pairs,
+}
 
 impl StretchMap {
     /// `[Φ Γ]` of `mode` over `length` (s).
@@ -50,18 +58,27 @@ impl StretchMap {
                 augmented[(delay + p, delay + p + 1)] = 1.0;
             }
         }
-        let exponential = precise_exp_dynamic(&(augmented * length));
-        StretchMap(exponential.rows(0, STATES).into_owned())
+        let pairs = Pairs::augmented();
+        let mirrored = mirror_matrix(&augmented, &pairs, &pairs);
+        let exponential = precise_exp_dynamic(&(mirrored * length));
+        StretchMap {
+            map: exponential.rows(0, STATES).into_owned(),
+            inputs: Pairs::inputs(),
+            unknowns: Pairs::unknowns(),
+        }
     }
 
-    /// `Φ x + Γ w`.
-    pub fn apply(&self, x: &DVector<f64>, w: &DVector<f64>) -> DVector<f64> {
-        self.0.columns(0, STATES) * x + self.0.columns(STATES, INPUTS) * w
+    /// `Φ y + Γ w`: `y` in mirror coordinates, `w` per corner.
+    pub fn apply(&self, y: &DVector<f64>, w: &DVector<f64>) -> DVector<f64> {
+        self.map.columns(0, STATES) * y + self.map.columns(STATES, INPUTS) * self.inputs.halved(w)
     }
 
-    /// `Φ m + Γ n` for the columns of `m` (states) and `n` (inputs).
+    /// `Φ m + Γ n` for the columns of `m` (states, in mirror coordinates,
+    /// per mirrored unknown) and `n` (inputs per corner, per unknown
+    /// end-node wheel state).
     pub fn apply_columns(&self, m: &DMatrix<f64>, n: &DMatrix<f64>) -> DMatrix<f64> {
-        self.0.columns(0, STATES) * m + self.0.columns(STATES, INPUTS) * n
+        self.map.columns(0, STATES) * m
+            + self.map.columns(STATES, INPUTS) * mirror_matrix(n, &self.inputs, &self.unknowns)
     }
 }
 

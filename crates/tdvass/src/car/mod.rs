@@ -26,13 +26,16 @@
 //! quarter car's to rounding (`tests/car.rs`).
 //!
 //! Layer: engines (docs/architecture.md), beside the chassis and Model
-//! Exchange; `layout` (the state and the matrices), `maps` (the exact
+//! Exchange; `layout` (the state and the matrices), `mirror` (the mirror
+//! coordinates it is integrated in), `maps` (the exact
 //! step maps), `crossings` (a switch function's zeros inside a stretch),
 //! `run` (the integration) and this facade.
 
+mod averages;
 mod crossings;
 mod layout;
 mod maps;
+mod mirror;
 mod run;
 
 pub use layout::{CORNERS, STATES, corner_share};

@@ -28,27 +28,38 @@
 //!   from there in the new mode. With the bilateral tire the crossings
 //!   are counted and the time below zero measured on the interpolant.
 //!
+//! - **Mirror coordinates** (`mirror`): the state is kept as each left
+//!   corner's and its right twin's half-sum and half-difference, so that a
+//!   car whose right half mirrors its left, on the same road under both
+//!   tracks, keeps its left and right equal to the bit (no roll out of
+//!   rounding); twins whose contact margins are equal switch together.
+//!
 //! With the default chassis (`I_θ = m a b`, the centre of gravity midway)
 //! and the same road on both tracks, the car's four corners are four
 //! quarter cars; since the car takes the quarter car's grid and its
 //! every approximation, each corner's RMS values equal the quarter car's
 //! to rounding (`tests/car.rs`).
 //!
-//! Layer: the car's run; it imports the car's `layout`, `maps` and
-//! `crossings`, the solver's grid and `largest_magnitude`, and the crate's
+//! Layer: the car's run; it imports the car's `layout`, `mirror`, `maps`,
+//! `crossings` and `averages`, the solver's grid and `largest_magnitude`, and the crate's
 //! `error`, `model` and `road`.
 
-use super::crossings::{below_zero, first_crossing};
+use super::averages::{
+    ACCELERATION, ALL_GROUPS, Accumulated, CHASSIS_GROUP, Contact, DEFLECTION, GROUPS, INTEGRALS,
+    Point, TIRE, WEIGHTED_SQUARE,
+};
+use super::crossings::first_crossing;
 use super::layout::{
     CORNERS, CarSystem, DELAY_ORDER, INPUTS, ROAD_ORDER, STATES, check_divergence, delay_input,
     road_input, slot,
 };
 use super::maps::{Maps, StretchMap};
+use super::mirror::{Mirrored, corner_coordinates, corner_value, mirror_matrix};
 use crate::error::{Error, Result};
 use crate::model::dynamics::hermite;
 use crate::model::{V_T, X_T};
 use crate::road::Road;
-use crate::solver::{DelayGrid, DelayRegime, largest_magnitude};
+use crate::solver::{DelayGrid, DelayRegime};
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 use std::collections::VecDeque;
 
@@ -56,59 +67,8 @@ use std::collections::VecDeque;
 type WheelNodes = [[f64; 2]; CORNERS];
 /// The unknown wheel states at the step's end node (delay inside the step).
 const UNKNOWNS: usize = 2 * CORNERS;
-/// The integrals kept: `SDD²` and `TDD²` of each corner, the squares of
-/// `z''`, `θ''`, `φ''`, and `a_w²`, `a_w⁴`.
-pub(super) const INTEGRALS: usize = 2 * CORNERS + 3 + 2;
-/// Index of `∫ SDD²` of corner 0 (then `TDD²` at `CORNERS`, the
-/// accelerations at `2 CORNERS`).
-const DEFLECTION: usize = 0;
-const TIRE: usize = CORNERS;
-const ACCELERATION: usize = 2 * CORNERS;
-const WEIGHTED_SQUARE: usize = 2 * CORNERS + 3;
-const WEIGHTED_FOURTH: usize = 2 * CORNERS + 4;
-/// The groups of time averages: each corner's, then the chassis's.
-const GROUPS: usize = CORNERS + 1;
-/// The chassis's group.
-const CHASSIS_GROUP: usize = CORNERS;
-/// Every group's bit.
-const ALL_GROUPS: u8 = (1 << GROUPS) - 1;
 /// Most tire switches inside one step.
 const MAX_SWITCHES_PER_STEP: usize = 64;
-
-/// What a run accumulates.
-#[derive(Debug, Clone, Default)]
-pub(super) struct Accumulated {
-    /// The integrals ([`INTEGRALS`]).
-    pub integrals: [f64; INTEGRALS],
-    /// The largest |SDD| of each corner (m).
-    pub max_deflection: [f64; CORNERS],
-    /// The time each tire had no contact (s).
-    pub loss_time: [f64; CORNERS],
-    /// Each tire's lift-offs.
-    pub lift_offs: [u64; CORNERS],
-}
-
-impl Accumulated {
-    /// `∫ SDD²` of corner c.
-    pub fn deflection(&self, c: usize) -> f64 {
-        self.integrals[DEFLECTION + c]
-    }
-    /// `∫ TDD²` of corner c.
-    pub fn tire(&self, c: usize) -> f64 {
-        self.integrals[TIRE + c]
-    }
-    /// `∫` of the square of the chassis's acceleration i (heave, pitch, roll).
-    pub fn acceleration(&self, i: usize) -> f64 {
-        self.integrals[ACCELERATION + i]
-    }
-    /// `∫ a_w²` and `∫ a_w⁴`.
-    pub fn weighted(&self) -> (f64, f64) {
-        (
-            self.integrals[WEIGHTED_SQUARE],
-            self.integrals[WEIGHTED_FOURTH],
-        )
-    }
-}
 
 /// The car at a committed node, for a time history.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -138,28 +98,20 @@ struct Stretch {
     closes: u8,
 }
 
-/// The outputs the integrals need at an instant, with their rates.
-#[derive(Debug, Clone, Copy)]
-struct Point {
-    /// The integrands' outputs y: SDD, TDD of each corner, the three
-    /// accelerations, a_w.
-    value: [f64; INTEGRALS - 1],
-    rate: [f64; INTEGRALS - 1],
-    /// Each corner's contact margin and its rate.
-    margin: [[f64; 2]; CORNERS],
-}
-
 /// A run of the full car.
 #[derive(Debug, Clone)]
 pub(super) struct Run {
     system: CarSystem,
+    mirrored: Mirrored,
     grid: DelayGrid,
     start: f64,
     roads: [Road; CORNERS],
     harmonic: bool,
     unilateral: bool,
     maps: Maps,
+    /// Each mode's matrix, in mirror coordinates.
     mode_matrices: Vec<Option<DMatrix<f64>>>,
+    /// The committed node's state, in mirror coordinates.
     x: DVector<f64>,
     node: u64,
     flight: u8,
@@ -197,6 +149,7 @@ impl Run {
             }
         }
         Run {
+            mirrored: Mirrored::new(&system),
             system,
             grid,
             start,
@@ -252,7 +205,7 @@ impl Run {
 
     /// The committed node as a sample.
     fn sample(&self) -> CarSample {
-        let s = &self.system;
+        let s = &self.mirrored;
         let seat = &s.seat_row * &self.x;
         CarSample {
             time: self.node_time(self.node),
@@ -262,10 +215,11 @@ impl Run {
         }
     }
 
-    /// The matrix of `mode`, made once.
+    /// The matrix of `mode` in mirror coordinates, made once.
     fn mode_matrix(&mut self, mode: u8) -> &DMatrix<f64> {
-        let system = &self.system;
-        self.mode_matrices[mode as usize].get_or_insert_with(|| system.mode_matrix(mode))
+        let (system, states) = (&self.system, &self.mirrored.states);
+        self.mode_matrices[mode as usize]
+            .get_or_insert_with(|| mirror_matrix(&system.mode_matrix(mode), states, states))
     }
 
     /// The wheels at node `j` (the state at rest before the start).
@@ -283,14 +237,14 @@ impl Run {
     fn advance(&mut self, end: f64) -> Result<()> {
         let mut from = 0.0;
         let mut x_from = self.x.clone();
+        // Where each group's time averages started their current piece: a
+        // stretch end closes the groups whose integrands may have a kink
+        // there (`Stretch::closes`), a tire's switch the switching
+        // corners' and the chassis's, as the quarter car closes its runs.
+        let mut open: [Option<(f64, Point)>; GROUPS] = [None; GROUPS];
         for _ in 0..=MAX_SWITCHES_PER_STEP {
             let stretches = self.resolve(from, &x_from)?;
             let mut switched = None;
-            // Where each group's time averages started their current
-            // piece: a stretch end closes the groups whose integrands may
-            // have a kink there (`Stretch::closes`), as the quarter car
-            // closes its runs.
-            let mut open: [Option<(f64, Point)>; GROUPS] = [None; GROUPS];
             for stretch in stretches.iter().filter(|s| s.from < end) {
                 let to = stretch.to.min(end);
                 if open.iter().any(Option::is_none) {
@@ -299,13 +253,22 @@ impl Run {
                         *slot = Some((stretch.from, start));
                     }
                 }
-                if let Some((at, x_at, corner)) = self.switch_in(stretch, to)? {
+                if let Some((at, x_at, corners)) = self.switch_in(stretch, to)? {
                     let stop = self.point(at, &x_at, stretch, self.flight);
-                    for (group, start) in open.iter().enumerate() {
-                        let (from, start) = start.expect("every group is open");
-                        self.accumulate(group, at - from, &start, &stop);
+                    let closing = corners | 1 << CHASSIS_GROUP;
+                    for (group, start) in open.iter_mut().enumerate() {
+                        if closing & (1 << group) != 0 {
+                            let (from, start) = start.take().expect("every group is open");
+                            self.accumulated.add(
+                                group,
+                                at - from,
+                                &start,
+                                &stop,
+                                self.contact(group),
+                            );
+                        }
                     }
-                    self.flip(corner);
+                    self.flip(corners);
                     switched = Some((at, x_at));
                     break;
                 }
@@ -327,7 +290,8 @@ impl Run {
                 for (group, start) in open.iter_mut().enumerate() {
                     if closes & (1 << group) != 0 {
                         let (from, point) = start.take().expect("every group is open");
-                        self.accumulate(group, to - from, &point, &stop);
+                        self.accumulated
+                            .add(group, to - from, &point, &stop, self.contact(group));
                     }
                 }
             }
@@ -355,14 +319,14 @@ impl Run {
     fn commit(&mut self, end: f64, mut x: DVector<f64>) -> Result<()> {
         let h = self.grid.step;
         let time = self.node_time(self.node) + end;
-        check_divergence(&x, time)?;
+        check_divergence(&corner_coordinates(&x), time)?;
         if end < h * (1.0 - 1e-12) {
             return Ok(());
         }
         self.node += 1;
         self.system
             .set_oscillator(&mut x, self.node_time(self.node));
-        let wheels = std::array::from_fn(|c| [x[slot(c, X_T)], x[slot(c, V_T)]]);
+        let wheels = std::array::from_fn(|c| [corner_value(&x, c, X_T), corner_value(&x, c, V_T)]);
         self.x = x;
         self.history.push_back(wheels);
         let depth = self.grid.delay_steps() as usize + 1;
@@ -372,12 +336,27 @@ impl Run {
         Ok(())
     }
 
-    /// The tire of `corner` switches mode.
-    fn flip(&mut self, corner: usize) {
-        if self.flight & (1 << corner) == 0 {
-            self.accumulated.lift_offs[corner] += 1;
+    /// How group `group`'s tire meets the road now (none for the chassis).
+    fn contact(&self, group: usize) -> Contact {
+        if group >= CORNERS {
+            Contact::None
+        } else if !self.unilateral {
+            Contact::Bilateral
+        } else if self.flight & (1 << group) != 0 {
+            Contact::Flight
+        } else {
+            Contact::Ground
         }
-        self.flight ^= 1 << corner;
+    }
+
+    /// The tires of `corners` (bit c: corner c) switch mode.
+    fn flip(&mut self, corners: u8) {
+        for c in (0..CORNERS).filter(|c| corners & (1 << c) != 0) {
+            if self.flight & (1 << c) == 0 {
+                self.accumulated.lift_offs[c] += 1;
+            }
+        }
+        self.flight ^= corners;
     }
 
     /// The stretches from `from` to the step's end, in the current mode,
@@ -467,13 +446,15 @@ impl Run {
         } else {
             DVector::zeros(UNKNOWNS)
         };
+        // The end-node wheels in their own coordinates, for the inputs.
+        let wheels = self.mirrored.unknowns.restored(&y);
         for (a, b, x0, m, known, unknown, x_to, m_to) in affine {
             stretches.push(Stretch {
                 from: a,
                 to: b,
                 x_from: x0 + m * &y,
                 x_to: x_to + m_to * &y,
-                inputs: known + unknown * &y,
+                inputs: known + unknown * &wheels,
                 closes: closes(b),
             });
         }
@@ -541,39 +522,41 @@ impl Run {
     fn point(&mut self, at: f64, x: &DVector<f64>, stretch: &Stretch, mode: u8) -> Point {
         let s = at - stretch.from;
         let w = &stretch.inputs;
-        let mut rate = self.mode_matrix(mode) * x;
+        // Each input's value at s, in its value's place.
+        let mut now = DVector::<f64>::zeros(INPUTS);
         for c in 0..CORNERS {
             let road = road_input(c);
-            let r = w[road] + w[road + 1] * s;
+            now[road] = w[road] + w[road + 1] * s;
             let d = delay_input(c);
-            let u = w[d] + s * (w[d + 1] + s * (w[d + 2] / 2.0 + s * w[d + 3] / 6.0));
-            rate += &self.system.road_columns[c] * r + &self.system.delay_columns[c] * u;
+            now[d] = w[d] + s * (w[d + 1] + s * (w[d + 2] / 2.0 + s * w[d + 3] / 6.0));
         }
+        self.mirrored.inputs.halve(now.as_mut_slice());
+        let rate = self.mode_matrix(mode) * x + &self.mirrored.input_columns * now;
         let t_node = self.node_time(self.node);
         let t = t_node + at;
         // The stretch's own road piece: one-sided at a breakpoint.
         let middle = t_node + 0.5 * (stretch.from + stretch.to);
         let pieces: [_; CORNERS] = std::array::from_fn(|c| self.roads[c].piece(middle));
-        let system = &self.system;
+        let (system, rows) = (&self.system, &self.mirrored);
         let mut value = [0.0; INTEGRALS - 1];
         let mut rates = [0.0; INTEGRALS - 1];
         let mut margin = [[0.0; 2]; CORNERS];
         for c in 0..CORNERS {
-            value[DEFLECTION + c] = (&system.deflection_rows[c] * x)[0];
-            rates[DEFLECTION + c] = (&system.deflection_rows[c] * &rate)[0];
+            value[DEFLECTION + c] = (&rows.deflection_rows[c] * x)[0];
+            rates[DEFLECTION + c] = (&rows.deflection_rows[c] * &rate)[0];
             let piece = pieces[c];
-            let tire = x[slot(c, X_T)] - piece.value(t);
-            let tire_rate = x[slot(c, V_T)] - piece.slope(t);
+            let tire = corner_value(x, c, X_T) - piece.value(t);
+            let tire_rate = corner_value(x, c, V_T) - piece.slope(t);
             value[TIRE + c] = tire;
             rates[TIRE + c] = tire_rate;
             margin[c] = [system.limits[c] - tire, -tire_rate];
         }
         for i in 0..3 {
-            value[ACCELERATION + i] = (&system.acceleration_rows[i] * x)[0];
-            rates[ACCELERATION + i] = (&system.acceleration_rows[i] * &rate)[0];
+            value[ACCELERATION + i] = (&rows.acceleration_rows[i] * x)[0];
+            rates[ACCELERATION + i] = (&rows.acceleration_rows[i] * &rate)[0];
         }
-        value[WEIGHTED_SQUARE] = (&system.weighted_row * x)[0];
-        rates[WEIGHTED_SQUARE] = (&system.weighted_row * &rate)[0];
+        value[WEIGHTED_SQUARE] = (&rows.weighted_row * x)[0];
+        rates[WEIGHTED_SQUARE] = (&rows.weighted_row * &rate)[0];
         Point {
             value,
             rate: rates,
@@ -581,51 +564,12 @@ impl Run {
         }
     }
 
-    /// Adds a piece of `length` between the points `a` and `b` to the
-    /// time averages of `group` (a corner's SDD², TDD², largest |SDD| and
-    /// contact; the chassis's accelerations and a_w).
-    fn accumulate(&mut self, group: usize, length: f64, a: &Point, b: &Point) {
-        let acc = &mut self.accumulated;
-        let trapezoid = |f: [f64; 2], g: [f64; 2]| {
-            length / 2.0 * (f[0] + g[0]) - length * length / 12.0 * (g[1] - f[1])
-        };
-        let square = |p: &Point, i: usize| [p.value[i] * p.value[i], 2.0 * p.value[i] * p.rate[i]];
-        if group == CHASSIS_GROUP {
-            for i in ACCELERATION..WEIGHTED_SQUARE + 1 {
-                acc.integrals[i] += trapezoid(square(a, i), square(b, i));
-            }
-            let fourth = |p: &Point| {
-                let y = p.value[WEIGHTED_SQUARE];
-                [y * y * y * y, 4.0 * y * y * y * p.rate[WEIGHTED_SQUARE]]
-            };
-            acc.integrals[WEIGHTED_FOURTH] += trapezoid(fourth(a), fourth(b));
-            return;
-        }
-        let c = group;
-        for i in [DEFLECTION + c, TIRE + c] {
-            acc.integrals[i] += trapezoid(square(a, i), square(b, i));
-        }
-        let i = DEFLECTION + c;
-        let largest = largest_magnitude(length, [a.value[i], a.rate[i]], [b.value[i], b.rate[i]]);
-        acc.max_deflection[c] = acc.max_deflection[c].max(largest);
-        if self.unilateral {
-            if self.flight & (1 << c) != 0 {
-                acc.loss_time[c] += length;
-            }
-        } else {
-            let (below, downs) = below_zero(length, a.margin[c], b.margin[c]);
-            acc.loss_time[c] += below;
-            acc.lift_offs[c] += downs;
-        }
-    }
-
     /// The first switch of a unilateral tire in `stretch` up to `to`: its
-    /// offset, the state there and the corner.
-    fn switch_in(
-        &mut self,
-        stretch: &Stretch,
-        to: f64,
-    ) -> Result<Option<(f64, DVector<f64>, usize)>> {
+    /// offset, the state there and the corners that switch (bit c: corner
+    /// c): the first to cross and every corner in the same mode whose
+    /// contact margin is the same to the bit at both ends of the stretch,
+    /// on the same road (a twin, when the car mirrors itself).
+    fn switch_in(&mut self, stretch: &Stretch, to: f64) -> Result<Option<(f64, DVector<f64>, u8)>> {
         if !self.unilateral {
             return Ok(None);
         }
@@ -644,7 +588,7 @@ impl Run {
             // Within rounding of 0 a margin is on the side it moves to (a
             // corner that crosses with another, as the two of an axle do on
             // the same road, switches with it).
-            let tire = stretch.x_from[slot(c, X_T)];
+            let tire = corner_value(&stretch.x_from, c, X_T);
             let rounding = 64.0
                 * f64::EPSILON
                 * (self.system.limits[c]
@@ -668,6 +612,20 @@ impl Run {
         let Some((mut s, corner)) = first else {
             return Ok(None);
         };
+        let t_middle = self.node_time(self.node) + 0.5 * (stretch.from + stretch.to);
+        let own_piece = self.roads[corner].piece(t_middle);
+        let mut corners = 0u8;
+        for c in 0..CORNERS {
+            let same_mode = (self.flight >> c & 1) == (self.flight >> corner & 1);
+            if c == corner
+                || (same_mode
+                    && a.margin[c] == a.margin[corner]
+                    && b.margin[c] == b.margin[corner]
+                    && self.roads[c].piece(t_middle) == own_piece)
+            {
+                corners |= 1 << c;
+            }
+        }
         // Newton's method on the exact partial step.
         let t_node = self.node_time(self.node);
         for _ in 0..4 {
@@ -675,8 +633,9 @@ impl Run {
                 .apply(&stretch.x_from, &stretch.inputs);
             let t = t_node + stretch.from + s;
             let piece = self.roads[corner].piece(t_node + 0.5 * (stretch.from + stretch.to));
-            let margin = self.system.limits[corner] - (x[slot(corner, X_T)] - piece.value(t));
-            let rate = -(x[slot(corner, V_T)] - piece.slope(t));
+            let margin =
+                self.system.limits[corner] - (corner_value(&x, corner, X_T) - piece.value(t));
+            let rate = -(corner_value(&x, corner, V_T) - piece.slope(t));
             if rate == 0.0 || !rate.is_finite() {
                 break;
             }
@@ -689,6 +648,6 @@ impl Run {
         }
         let x =
             StretchMap::new(&self.system, self.flight, s).apply(&stretch.x_from, &stretch.inputs);
-        Ok(Some((stretch.from + s, x, corner)))
+        Ok(Some((stretch.from + s, x, corners)))
     }
 }
