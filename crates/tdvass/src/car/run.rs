@@ -14,13 +14,14 @@
 //!   split where a piece ends inside it: a rear wheel's breakpoints, delayed
 //!   by the wheelbase over the speed), the harmonic road through the
 //!   exosystem, reset to `sin ω t_k`, `cos ω t_k` at every node.
-//! - **The time averages** are the quarter car's corrected trapezoid,
-//!   `∫_a^b f = (b − a)/2 (f_a + f_b) − (b − a)²/12 (f'_b − f'_a)`, on
-//!   every stretch between nodes, road breakpoints and switches (the
-//!   rates one-sided, of the stretch's own inputs), of `SDD²`, `TDD²` of
-//!   each corner, the squares of the chassis's three accelerations, and
-//!   `a_w²`, `a_w⁴` at the seat. The largest |SDD| is that of each
-//!   stretch's cubic Hermite interpolant.
+//! - **The time averages** (`averages`) are the quarter car's corrected
+//!   trapezoid, `∫_a^b f = (b − a)/2 (f_a + f_b) − (b − a)²/12 (f'_b − f'_a)`,
+//!   on the pieces between nodes and the kinks of the integrands (the rates
+//!   one-sided, of the stretch's own inputs): a corner's `SDD²`, `TDD²`
+//!   between its own road breakpoints and switches, the squares of the
+//!   chassis's three accelerations and `a_w²`, `a_w⁴` at the seat between
+//!   every corner's. The largest |SDD| is that of each piece's cubic
+//!   Hermite interpolant.
 //! - **The unilateral tire** of each corner switches where its contact
 //!   margin `W_c/k_t − (x_t − x_g)` crosses zero: the crossing is bracketed
 //!   by the margin's cubic Hermite interpolant over the stretch and then
@@ -41,7 +42,7 @@
 //! to rounding (`tests/car.rs`).
 //!
 //! Layer: the car's run; it imports the car's `layout`, `mirror`, `maps`,
-//! `crossings` and `averages`, the solver's grid and `largest_magnitude`, and the crate's
+//! `crossings` and `averages`, the solver's grid, and the crate's
 //! `error`, `model` and `road`.
 
 use super::averages::{
