@@ -32,7 +32,7 @@ pub(super) const TWINS: [(usize, usize); 2] = [(0, 1), (2, 3)];
 /// The unknown end-node wheel states of a corner (`x_t`, `v_t`).
 const WHEEL_UNKNOWNS: usize = 2;
 
-/// The right twin of corner `c`'s pair and whether `c` is the left one.
+/// Corner `c`'s pair (left, right) and whether `c` is the left one.
 fn twin(c: usize) -> (usize, usize, bool) {
     let (left, right) = TWINS[c / 2];
     (left, right, c == left)
@@ -166,15 +166,22 @@ pub(super) fn mirror_matrix(m: &DMatrix<f64>, to: &Pairs, from: &Pairs) -> DMatr
 /// The car's rows and input columns in mirror coordinates.
 #[derive(Debug, Clone)]
 pub(super) struct Mirrored {
+    /// The pairs of the states.
     pub states: Pairs,
+    /// The pairs of the inputs' coefficients.
     pub inputs: Pairs,
+    /// The pairs of the unknown end-node wheel states.
     pub unknowns: Pairs,
     /// The road and delayed-input columns, one per input coefficient
     /// (the value's; the higher coefficients' are zero).
     pub input_columns: DMatrix<f64>,
+    /// SDD of each corner.
     pub deflection_rows: [RowDVector<f64>; CORNERS],
+    /// `[z'', θ'', φ'']`.
     pub acceleration_rows: [RowDVector<f64>; 3],
+    /// The seat's vertical acceleration.
     pub seat_row: RowDVector<f64>,
+    /// a_w at the seat.
     pub weighted_row: RowDVector<f64>,
 }
 
