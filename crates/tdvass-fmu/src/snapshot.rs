@@ -14,12 +14,14 @@
 //! The payload is the FMU-level state ([`SlaveState`]): the phase, every
 //! setting (by value reference, so the layout follows the variable table),
 //! input slope and its origin, the last two input values (for
-//! `input_extrapolation`), the hold-warning and contact-loss flags, start and stop time, the tolerance, last successful time, the terminate
-//! flag, the Model Exchange model if any ([`ModelExchange::to_bytes`],
-//! after a flag and its length; the flag 2 for the chassis in Model
-//! Exchange, whose motion follows as in Co-Simulation), then [`Simulator::to_bytes`] (time, solver state, the delay
-//! history, the road generator, the RMS accumulators, the configuration)
-//! or, for the chassis, its force rates and [`Chassis::write_motion`].
+//! `input_extrapolation`), the hold-warning and contact-loss flags, start
+//! and stop time, the tolerance, last successful time, the terminate flag,
+//! the Model Exchange model if any ([`ModelExchange::to_bytes`], after a
+//! flag and its length; the flag 2 for the chassis in Model Exchange,
+//! whose motion follows as in Co-Simulation), then
+//! [`Simulator::to_bytes`] (time, solver state, the delay history, the
+//! road generator, the RMS accumulators, the configuration) or, for the
+//! chassis, its force rates and [`Chassis::write_motion`].
 //! All numbers are little-endian; floats are stored as their bit patterns,
 //! so a restored state continues bit-identically.
 //!
@@ -27,6 +29,11 @@
 //! single-bit error), the admissible range of every setting and the
 //! consistency of the settings with the simulator: truncated, corrupted or
 //! foreign bytes give an error, never a panic.
+//!
+//! The file is over 700 lines because the format's tests stand beside it
+//! (the code is about 520 lines): round trips that must continue to the
+//! bit, a broken envelope, every single-bit flip, bad content under a good
+//! checksum.
 
 use crate::defaults::Model;
 use crate::error::FmiError;
