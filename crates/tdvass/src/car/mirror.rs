@@ -28,7 +28,7 @@ use crate::model::{V_T, X_H};
 use nalgebra::{DMatrix, DVector, RowDVector};
 
 /// The left corners and their right twins: (fl, fr) and (rl, rr).
-pub(super) const TWINS: [(usize, usize); 2] = [(0, 1), (2, 3)];
+const TWINS: [(usize, usize); 2] = [(0, 1), (2, 3)];
 /// The unknown end-node wheel states of a corner (`x_t`, `v_t`).
 const WHEEL_UNKNOWNS: usize = 2;
 
