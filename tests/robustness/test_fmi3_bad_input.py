@@ -974,7 +974,7 @@ def test_deserialize_trailing_bytes(serialized):
     refused_state(inst, data + b"\0", "")
 
 
-@pytest.mark.parametrize("version", [1, 2, 3, 4, 5, 7])
+@pytest.mark.parametrize("version", [1, 2, 3, 4, 5, 8])
 def test_deserialize_wrong_version(serialized, version):
     inst, data = serialized
     refused_state(inst, data[:8] + version.to_bytes(4, "little") + data[12:],

@@ -18,6 +18,7 @@ use tdvass::model::Params;
 use tdvass::solver::{DelayGrid, Simulator};
 
 mod exchange;
+mod extrapolation;
 mod fmu_states;
 mod logger;
 mod partials;
@@ -319,6 +320,7 @@ impl Slave {
         self.state.input_pending = false;
         self.state.previous_input = Some((self.state.start_time, self.state.settings.x_g));
         self.state.earlier_input = None;
+        self.start_input_history();
         self.state.phase = Phase::StepComplete;
         self.state.last_successful_time = self.state.start_time;
         self.state.terminate_requested = false;
@@ -351,6 +353,7 @@ impl Slave {
         let chassis = self.build_chassis()?;
         self.state.engine = Engine::Chassis(Some(Box::new(chassis)));
         self.state.input_pending = false;
+        self.start_input_history();
         self.state.phase = Phase::StepComplete;
         self.state.last_successful_time = self.state.start_time;
         self.state.terminate_requested = false;

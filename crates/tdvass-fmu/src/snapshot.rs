@@ -3,7 +3,7 @@
 //! ```text
 //! offset  size  content
 //! 0       8     magic "TDVASSFS"
-//! 8       4     format version (u32 LE), currently 6
+//! 8       4     format version (u32 LE), currently 7 (6 is read too)
 //! 12      4     GUID length n (u32 LE)
 //! 16      n     GUID of the FMU that wrote the state (ASCII)
 //! 16+n    8     payload length (u64 LE)
@@ -39,7 +39,7 @@ use crate::defaults::Model;
 use crate::error::FmiError;
 use crate::phase::Phase;
 use crate::settings::Settings;
-use crate::state::{Engine, SlaveState};
+use crate::state::{BondHistory, Engine, SlaveState};
 use crate::variables::{Access, FmiVersion, by_vr, variables_of};
 use tdvass::bytes::{ByteReader, ByteWriter};
 use tdvass::chassis::Chassis;
@@ -48,7 +48,7 @@ use tdvass::solver::Simulator;
 
 /// First bytes of every serialized state.
 pub const MAGIC: &[u8; 8] = b"TDVASSFS";
-/// Format version written (and the only one read). Version 2 added the
+/// Format version written. Version 2 added the
 /// time integral of the RMS outputs and the input extrapolation state,
 /// version 3 the FMI 3.0 settings (`intermediate_update_interval`,
 /// `root_count`) and the simulator's own versioned bytes with the
@@ -57,10 +57,14 @@ pub const MAGIC: &[u8; 8] = b"TDVASSFS";
 /// the simulator's step bound; version 5 the setting `tire_contact` and the
 /// simulator's contact mode; version 6 the Model Exchange model (its own
 /// versioned bytes: time, states, contact mode, delay history), before the
-/// simulator. Both FMI versions write the
+/// simulator; version 7 the history of the body inputs and forces for
+/// `input_extrapolation`, after the terminate flag (a version 6 state
+/// reads as one without it: [`OLDEST_READ`]). Both FMI versions write the
 /// same format; the header's token (the FMI 2.0 GUID or the FMI 3.0
 /// instantiation token) keeps a state of one from being read by the other.
-pub const FORMAT_VERSION: u32 = 6;
+pub const FORMAT_VERSION: u32 = 7;
+/// The oldest format version read.
+pub const OLDEST_READ: u32 = 6;
 /// The code of the Model Exchange model's presence that says the chassis
 /// runs in Model Exchange (its motion follows where the co-simulation's
 /// does; 0: no Model Exchange model, 1: the suspension's follows).
@@ -192,6 +196,7 @@ fn encode_payload(model: &SlaveState) -> Vec<u8> {
     w.f64(model.settings.tolerance);
     w.f64(model.last_successful_time);
     w.u8(model.terminate_requested as u8);
+    encode_bond_history(&mut w, &model.bonds);
     match (model.engine.exchange(), &model.engine) {
         (Some(exchange), _) => {
             let bytes = exchange.to_bytes();
@@ -228,6 +233,46 @@ fn encode_payload(model: &SlaveState) -> Vec<u8> {
     w.bytes
 }
 
+/// The history of the body inputs and forces (version 7 on), for
+/// `input_extrapolation`: the last body velocity set and its time, the
+/// attachment's acceleration and whether new body inputs wait; each
+/// force's last value and time; the forces that wait (a bit each).
+fn encode_bond_history(w: &mut ByteWriter, bonds: &BondHistory) {
+    for value in std::iter::once(bonds.previous_body).chain(bonds.previous_forces) {
+        w.u8(value.is_some() as u8);
+        let (time, value) = value.unwrap_or((0.0, 0.0));
+        w.f64(time);
+        w.f64(value);
+    }
+    w.f64(bonds.body_acceleration);
+    w.u8(bonds.body_pending as u8);
+    w.u8(bonds.forces_pending);
+}
+
+/// The bond history [`encode_bond_history`] wrote, from `r`.
+fn decode_bond_history(r: &mut Reader) -> Result<BondHistory, FmiError> {
+    let mut values = [None; 5];
+    for value in values.iter_mut() {
+        let defined = r.flag("a bond value defined")?;
+        let time = r.finite("a bond value's time")?;
+        let v = r.finite("a bond value")?;
+        *value = defined.then_some((time, v));
+    }
+    let body_acceleration = r.finite("the body attachment's acceleration")?;
+    let body_pending = r.flag("body inputs pending")?;
+    let forces_pending = r.u8("the forces pending")?;
+    if forces_pending > 0b1111 {
+        return Err(invalid(format_args!("forces pending {forces_pending:#b}")));
+    }
+    Ok(BondHistory {
+        previous_body: values[0],
+        body_pending,
+        body_acceleration,
+        previous_forces: [values[1], values[2], values[3], values[4]],
+        forces_pending,
+    })
+}
+
 /// The chassis's engine from `bytes` (the force rates, then its motion;
 /// [`encode_payload`]), its rates written into `settings`.
 fn decode_chassis(bytes: &[u8], settings: &mut Settings) -> Result<Chassis, FmiError> {
@@ -250,14 +295,17 @@ fn decode_chassis(bytes: &[u8], settings: &mut Settings) -> Result<Chassis, FmiE
     Ok(chassis)
 }
 
-fn decode_settings(r: &mut Reader, model: Model) -> Result<Settings, FmiError> {
+/// The settings by value reference. A state of an older `version` may
+/// lack settings added since (the chassis's `input_extrapolation` in
+/// version 7): they keep their start values.
+fn decode_settings(r: &mut Reader, model: Model, version: u32) -> Result<Settings, FmiError> {
     let mut settings = Settings::start_values(model);
     let expected: Vec<_> = variables_of(model, FmiVersion::Fmi3)
         .iter()
         .filter(|v| matches!(v.access, Access::Real { .. } | Access::Integer { .. }))
         .collect();
     let count = r.u32("the number of settings")? as usize;
-    if count != expected.len() {
+    if count > expected.len() || (version == FORMAT_VERSION && count != expected.len()) {
         return Err(invalid(format_args!(
             "{count} settings where {} were expected",
             expected.len()
@@ -306,13 +354,13 @@ fn decode_settings(r: &mut Reader, model: Model) -> Result<Settings, FmiError> {
     Ok(settings)
 }
 
-fn decode_payload(bytes: &[u8], model: Model) -> Result<SlaveState, FmiError> {
+fn decode_payload(bytes: &[u8], model: Model, version: u32) -> Result<SlaveState, FmiError> {
     let mut r = Reader::new(bytes);
     let code = r.u8("the phase")?;
     let phase = Phase::from_code(code)
         .filter(|s| *s != Phase::Fatal)
         .ok_or_else(|| invalid(format_args!("phase code {code}")))?;
-    let mut settings = decode_settings(&mut r, model)?;
+    let mut settings = decode_settings(&mut r, model, version)?;
     let input_slope = r.finite("the input slope")?;
     let input_pending = r.flag("input pending")?;
     let input_slope_given = r.flag("input slope given")?;
@@ -344,6 +392,11 @@ fn decode_payload(bytes: &[u8], model: Model) -> Result<SlaveState, FmiError> {
     settings.tolerance = tolerance;
     let last_successful_time = r.finite("the last successful time")?;
     let terminate_requested = r.flag("terminate requested")?;
+    let bonds = if version >= 7 {
+        decode_bond_history(&mut r)?
+    } else {
+        BondHistory::default()
+    };
     let exchange_code = r.u8("the Model Exchange model's presence")?;
     if exchange_code > CHASSIS_EXCHANGE
         || (exchange_code == CHASSIS_EXCHANGE && model != Model::Chassis)
@@ -450,6 +503,7 @@ fn decode_payload(bytes: &[u8], model: Model) -> Result<SlaveState, FmiError> {
         stop_time,
         last_successful_time,
         terminate_requested,
+        bonds,
         // The kind of a state from before initialization is not in its
         // bytes: the instance that restores it gives its own.
         engine: match (sim, exchange, chassis) {
@@ -488,9 +542,9 @@ pub fn deserialize(bytes: &[u8], guid: &str, model: Model) -> Result<SlaveState,
     }
     r.take(MAGIC.len(), "the magic")?;
     let version = r.u32("the format version")?;
-    if version != FORMAT_VERSION {
+    if !(OLDEST_READ..=FORMAT_VERSION).contains(&version) {
         return Err(invalid(format_args!(
-            "format version {version} is not supported (this FMU reads version {FORMAT_VERSION})"
+            "format version {version} is not supported (this FMU reads versions {OLDEST_READ} to {FORMAT_VERSION})"
         )));
     }
     let guid_len = r.u32("the GUID length")? as usize;
@@ -519,7 +573,7 @@ pub fn deserialize(bytes: &[u8], guid: &str, model: Model) -> Result<SlaveState,
             "checksum mismatch (stored {checksum:08x}, computed {actual:08x})"
         )));
     }
-    decode_payload(payload, model)
+    decode_payload(payload, model, version)
 }
 
 #[cfg(test)]
@@ -653,7 +707,7 @@ mod tests {
                 "{cut}: {e}"
             );
         }
-        for version in [1, 2, 3, 4, 5, 7] {
+        for version in [1, 2, 3, 4, 5, 8] {
             let mut other = bytes.clone();
             other[8] = version;
             assert!(err(&other).contains(&format!("format version {version}")));

@@ -136,6 +136,9 @@ pub struct SlaveState {
     /// `(t, x_g)` of the value applied before `previous_input` (the third
     /// value of `input_extrapolation = 2`).
     pub earlier_input: Option<(f64, f64)>,
+    /// The vehicle bonds' inputs at the last communication points, for
+    /// `input_extrapolation`.
+    pub bonds: BondHistory,
     /// The hold warning of a communication step was logged.
     pub hold_warned: bool,
     /// The first loss of tire contact was logged (bilateral tire; the
@@ -174,6 +177,7 @@ impl SlaveState {
             input_slope_given: false,
             previous_input: None,
             earlier_input: None,
+            bonds: BondHistory::default(),
             hold_warned: false,
             contact_warned: false,
             start_time: crate::defaults::DEFAULT_START_TIME,
@@ -190,4 +194,26 @@ impl Default for SlaveState {
     fn default() -> Self {
         SlaveState::new(Engine::CoSimulation(None), Model::QuarterCar)
     }
+}
+
+/// What `input_extrapolation` continues the vehicle's bonds from in
+/// Co-Simulation (`slave/extrapolation.rs`): a corner's body velocity, the
+/// chassis's forces.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct BondHistory {
+    /// `(t, body_velocity)` of a corner's body input applied at the last
+    /// communication point that set it.
+    pub previous_body: Option<(f64, f64)>,
+    /// A corner's body inputs were set since a step last applied them.
+    pub body_pending: bool,
+    /// The body attachment's extrapolated acceleration (m/s^2) in force
+    /// (0: the attachment moves at its velocity).
+    pub body_acceleration: f64,
+    /// Per force of the chassis (in [`tdvass::chassis::Corner::ALL`]
+    /// order), `(t, force)` applied at the last communication point that
+    /// set it.
+    pub previous_forces: [Option<(f64, f64)>; 4],
+    /// Bit i: the chassis's force i was set since a step last applied it,
+    /// and its derivative not given since.
+    pub forces_pending: u8,
 }

@@ -1147,13 +1147,23 @@ pub const CORNER_ADDITIONS: &[Variable] = &[
         real!(road_phase),
         "Harmonic road only (rad): x_g = road_amplitude sin(road_angular_frequency (t - road_delay) + road_phase) (a right track out of phase with the left excites roll)",
     ),
+    parameter(
+        "input_extrapolation",
+        48,
+        Fixed,
+        Q::Dimensionless,
+        0.0,
+        Range::Integers(0, 2),
+        integer!(input_extrapolation),
+        "Co-Simulation: 0 holds the inputs over each communication step (FMI default: the attachment moves at body_velocity, x_g is held). 1 and 2 extrapolate the attachment's velocity linearly from the last two body_velocity values set at communication points: over a step it reaches the extrapolated displacement and ends at the extrapolated velocity (the full car's coupling becomes second order in the step); road = 0: 1 extrapolates x_g linearly from its last two values, 2 along the line closest over the step to the parabola through the last three. The first step holds; an input derivative of x_g, when set, takes precedence",
+    ),
     body_input(
         "body_displacement",
         143,
         Q::Length,
         real!(body_displacement),
         Bound::Displacement,
-        "The body's attachment point: its displacement from the static equilibrium, positive up; in Co-Simulation the attachment moves at body_velocity from the time it is set until either input is set again, in Model Exchange it is the attachment now (set before each evaluation)",
+        "The body's attachment point: its displacement from the static equilibrium, positive up; in Co-Simulation the attachment moves at body_velocity (with input_extrapolation >= 1, on the extrapolated velocity) from the time it is set until either input is set again, in Model Exchange it is the attachment now (set before each evaluation)",
     ),
     body_input(
         "body_velocity",
@@ -1528,7 +1538,8 @@ const TABLE: &[Variable] = &[
         Range::Integers(0, 2),
         integer!(input_extrapolation),
         "road = 0: 0 holds x_g over each communication step (FMI default), 1 extrapolates it linearly from the last two values set at communication points, 2 along the line closest over the step to the parabola through the last three (the first step holds); input derivatives, when set, take precedence",
-    ),
+    )
+    .quarter_car(),
     parameter(
         "x_s_start",
         24,

@@ -122,6 +122,7 @@ impl Slave {
         } else {
             0.0
         };
+        let body_acceleration = self.body_acceleration_from(now);
         let Some(sim) = self.state.engine.simulator_mut() else {
             return Err(no_simulator());
         };
@@ -131,7 +132,7 @@ impl Slave {
             self.state.previous_input = Some((now, settings.x_g));
         }
         self.state.input_pending = false;
-        let advanced = sim.advance_to(until);
+        let advanced = Self::advance_extrapolated(sim, until, body_acceleration);
         // The lift-offs up to where the simulation stopped, whatever the
         // outcome.
         self.log_lift_offs();
@@ -204,6 +205,7 @@ impl Slave {
     /// where it was last set, along its input derivative); then its
     /// outputs must be finite.
     fn advance_chassis(&mut self, until: f64) -> Result<Status, FmiError> {
+        self.extrapolate_forces(self.time())?;
         let Some(chassis) = self.state.engine.chassis_mut() else {
             return Err(no_simulator());
         };
@@ -370,7 +372,7 @@ impl Slave {
         }
         if body_ignored {
             self.warning(format_args!(
-                "{}: the derivatives of {body_names:?} are ignored: the body's attachment point moves at body_velocity from body_displacement, from where they were set",
+                "{}: the derivatives of {body_names:?} are ignored: the body's attachment point moves at body_velocity from body_displacement, from where they were set (or on the velocity extrapolated from their last values: input_extrapolation)",
                 self.call(self.dialect.set_input_derivatives)
             ));
         }
@@ -398,6 +400,7 @@ impl Slave {
         values: &[f64],
     ) -> Result<Status, FmiError> {
         let mut rates = self.state.settings.force_rates;
+        let mut given = [false; 4];
         let mut ignored = false;
         for ((&vr, &order), &value) in vrs.iter().zip(orders).zip(values) {
             let var = self.variable(vr, VarType::Real)?;
@@ -415,11 +418,15 @@ impl Slave {
             }
             if order == 1 {
                 rates[i] = value;
+                given[i] = true;
             } else {
                 ignored = true;
             }
         }
         self.state.settings.force_rates = rates;
+        for i in (0..4).filter(|&i| given[i]) {
+            self.force_set(i, true);
+        }
         // The running chassis ramps each force from where it is now.
         if let Some(chassis) = self.state.engine.chassis_mut() {
             let (forces, _) = chassis.forces();

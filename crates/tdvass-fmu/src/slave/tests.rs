@@ -747,3 +747,4 @@ fn a_model_exchange_state_round_trips_and_stays_with_its_interface() {
 mod chassis;
 mod component_exchange;
 mod corner;
+mod extrapolation;

@@ -421,6 +421,7 @@ impl Slave {
             // given again; the running chassis takes it at once (its
             // accelerations depend on it directly).
             self.state.settings.force_rates[i] = 0.0;
+            self.force_set(i, false);
             if let Some(chassis) = self.state.engine.chassis_mut() {
                 let (mut forces, mut rates) = chassis.forces();
                 forces[i] = value;
@@ -483,6 +484,9 @@ impl Slave {
             gain_tuned |= var.name == "g" && self.state.settings.params.g != value;
             body_moved |= matches!(var.name, "body_displacement" | "body_velocity");
             self.apply_real(var, value)?;
+        }
+        if body_moved {
+            self.body_input_set();
         }
         // The corner's body attachment reaches the running simulation at
         // once (body_force depends on it directly), both inputs together.

@@ -214,11 +214,21 @@ pub const CHASSIS_VARIABLES: &[Variable] = &[
         chassis_real!(seat_y),
         "The seat point left of the centre of gravity (m)",
     ),
+    parameter(
+        "input_extrapolation",
+        209,
+        Fixed,
+        Q::Dimensionless,
+        0.0,
+        Range::Integers(0, 1),
+        integer!(input_extrapolation),
+        "Co-Simulation: 0 holds each force over a communication step (FMI default), 1 ramps each force set at a communication point along the line through its last two values set (the first step holds; with the corners' input_extrapolation the full car's coupling becomes second order in the step). An input derivative, when set, takes precedence",
+    ),
     force(
         "force_fl",
         210,
         force_input!(0),
-        "The front left corner's force on the body (N, positive up: its body_force), held over a communication step (or along its input derivative)",
+        "The front left corner's force on the body (N, positive up: its body_force), held over a communication step (or along its input derivative, or extrapolated: input_extrapolation)",
     ),
     force(
         "force_fr",

@@ -381,6 +381,15 @@ impl Simulator {
         Ok(())
     }
 
+    /// The body's attachment point now, `(x_s (m), v_s (m/s))`: a
+    /// corner's as set and moved at its velocity since
+    /// ([`Self::set_body_input`]), the sprung mass's otherwise.
+    pub fn body_attachment(&mut self) -> (f64, f64) {
+        self.settle();
+        let x = self.trajectory.current_state;
+        (x[X_S], x[V_S])
+    }
+
     /// Sets the body's attachment point from the current time on (only
     /// with [`crate::model::Body::Attached`], a corner): `x_s = displacement` (m) and
     /// `v_s = velocity` (m/s), moving at that velocity until the next

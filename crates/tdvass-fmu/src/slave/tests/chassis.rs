@@ -316,7 +316,8 @@ fn a_decoupled_car_of_four_corners_rides_as_the_quarter_car() {
 /// Exchange (format 6, commit 3920e17: the run of
 /// [`a_chassis_state_restores_and_continues_to_the_bit`] saved after its 7
 /// steps). Its GUID was that of the variables then; under this FMU's
-/// header its payload still loads, and the run continues as a fresh one.
+/// header of format 6 (still read) its payload loads, and the run
+/// continues as a fresh one.
 #[test]
 fn a_chassis_co_simulation_state_of_format_6_before_model_exchange_still_loads() {
     let old = include_bytes!("chassis_cs_state_3920e17.bin");
@@ -327,7 +328,7 @@ fn a_chassis_co_simulation_state_of_format_6_before_model_exchange_still_loads()
     let token = guid(Model::Chassis);
     let mut bytes = Vec::new();
     bytes.extend_from_slice(crate::snapshot::MAGIC);
-    bytes.extend_from_slice(&crate::snapshot::FORMAT_VERSION.to_le_bytes());
+    bytes.extend_from_slice(&crate::snapshot::OLDEST_READ.to_le_bytes());
     bytes.extend_from_slice(&(token.len() as u32).to_le_bytes());
     bytes.extend_from_slice(token.as_bytes());
     bytes.extend_from_slice(&(payload.len() as u64).to_le_bytes());
@@ -340,9 +341,6 @@ fn a_chassis_co_simulation_state_of_format_6_before_model_exchange_still_loads()
     for k in 0..7 {
         fresh.do_step(k as f64 * 1e-2, 1e-2).unwrap();
     }
-    let now = fresh.get_fmu_state(None).unwrap();
-    // The payload is the one this FMU writes for the same run.
-    assert_eq!(fresh.serialize_fmu_state(now).unwrap(), bytes);
     let mut old_run = slave_of(Model::Chassis);
     let restored = old_run.deserialize_fmu_state(&bytes, None).unwrap();
     old_run.set_fmu_state(restored).unwrap();
