@@ -216,9 +216,10 @@ fn power_bond_name(corner: Corner) -> String {
 /// default vehicle speed (`vehicle_speed`, on which both the road's
 /// spectrum and the rear wheels' delay depend), its seed (`road_seed`: the
 /// default on the left track, the next seed on the right) and its delay
-/// (`road_delay`: 0 at the front, wheelbase / speed at the rear). The
-/// static load is left at the corner's default, a quarter of the default
-/// chassis mass with the centre of gravity midway between the axles.
+/// (`road_delay`: 0 at the front, wheelbase / speed at the rear), and
+/// [`extrapolation`]. The static load is left at the corner's default, a
+/// quarter of the default chassis mass with the centre of gravity midway
+/// between the axles.
 pub fn corner_parameters(corner: Corner) -> Vec<ParameterSetting> {
     let road = RandomRoad::default();
     let chassis = ChassisParams::default();
@@ -251,7 +252,27 @@ pub fn corner_parameters(corner: Corner) -> Vec<ParameterSetting> {
             value: ParameterValue::Real(delay),
             unit: Some("s"),
         },
+        extrapolation(),
     ]
+}
+
+/// `input_extrapolation = 1`, set on the chassis and on every corner: each
+/// continues its bond's inputs (the forces; the body's attachment) over a
+/// communication step from their last two values instead of holding them,
+/// which makes the Jacobi coupling second order in the step
+/// (docs/full-car.md).
+pub fn extrapolation() -> ParameterSetting {
+    ParameterSetting {
+        name: "input_extrapolation",
+        value: ParameterValue::Integer(1),
+        unit: None,
+    }
+}
+
+/// The parameters the chassis is given: [`extrapolation`] (its other
+/// defaults are the paper's car).
+pub fn chassis_parameters() -> Vec<ParameterSetting> {
+    vec![extrapolation()]
 }
 
 /// The twelve connections of the car, corner by corner: the corner's
@@ -293,8 +314,9 @@ pub fn connections() -> Vec<Connection> {
 }
 
 /// The chassis's connectors: per corner, the force input and the
-/// displacement and velocity outputs.
+/// displacement and velocity outputs; then the parameters it is given.
 fn chassis_connectors() -> Vec<Connector> {
+    let parameters = parameter_connectors(chassis_parameters());
     Corner::ALL
         .iter()
         .flat_map(|&corner| {
@@ -316,7 +338,20 @@ fn chassis_connectors() -> Vec<Connector> {
                 },
             ]
         })
+        .chain(parameters)
         .collect()
+}
+
+/// The connectors of the parameters `parameters` (a Real's with its unit).
+fn parameter_connectors(parameters: Vec<ParameterSetting>) -> impl Iterator<Item = Connector> {
+    parameters.into_iter().map(|p| Connector {
+        name: p.name.to_string(),
+        kind: Kind::Parameter,
+        real_unit: match p.value {
+            ParameterValue::Real(_) => p.unit,
+            ParameterValue::Integer(_) => None,
+        },
+    })
 }
 
 /// A corner's connectors: the force output, the body inputs and the
@@ -332,15 +367,10 @@ fn corner_connectors(corner: Corner) -> Vec<Connector> {
         kind,
         real_unit: Some(unit),
     });
-    let parameters = corner_parameters(corner).into_iter().map(|p| Connector {
-        name: p.name.to_string(),
-        kind: Kind::Parameter,
-        real_unit: match p.value {
-            ParameterValue::Real(_) => p.unit,
-            ParameterValue::Integer(_) => None,
-        },
-    });
-    signals.into_iter().chain(parameters).collect()
+    signals
+        .into_iter()
+        .chain(parameter_connectors(corner_parameters(corner)))
+        .collect()
 }
 
 /// A number as XML Schema's `xs:double` reads it back: Rust's shortest
@@ -387,14 +417,12 @@ fn instances<'a>(corner_fmu: &'a str, chassis_fmu: &'a str) -> Vec<(&'static str
         .collect()
 }
 
-/// The parameters set on an instance (none on the chassis, whose defaults
-/// are the paper's car).
+/// The parameters set on an instance.
 fn parameters_of(instance: &str) -> Vec<ParameterSetting> {
     Corner::ALL
         .iter()
         .find(|c| c.name() == instance)
-        .map(|&c| corner_parameters(c))
-        .unwrap_or_default()
+        .map_or_else(chassis_parameters, |&c| corner_parameters(c))
 }
 
 /// `SystemStructure.ssd`, the SSP 1.0 description of the car for

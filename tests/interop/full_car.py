@@ -120,6 +120,9 @@ SCENARIOS = {
     # A 2 cm step under the front left wheel only, at the start: the car
     # heaves, pitches and rolls.
     "sedan-step": step_parameters(SEDAN, "fl", 0.02),
+    # The SSD's car with every input held over a communication step (the
+    # FMI default) instead of extrapolated (the SSD's input_extrapolation = 1).
+    "hold": {instance: {"input_extrapolation": 0} for instance in [CHASSIS, *CORNERS]},
 }
 
 
@@ -401,6 +404,8 @@ CORNER_FLAGS = ["variant", "m_h", "m_t", "k_s", "k_h", "k_t", "c_s", "c_h", "g",
                 "vehicle_speed", "road_cutoff_frequency", "tire_contact"]
 # The corners' parameters and inputs the flags account for otherwise.
 CORNER_DERIVED = ["road", "road_seed", "road_delay", "static_load", "x_g"]
+# How a co-simulation continues its inputs over a step: nothing to the car.
+COUPLING_ONLY = ["input_extrapolation"]
 
 
 def car_flags(fmu_dir: Path, overrides: dict, work: Path) -> list[str]:
@@ -419,7 +424,7 @@ def car_flags(fmu_dir: Path, overrides: dict, work: Path) -> list[str]:
     for instance, names in variables.items():
         given = {**components[instance][1], **overrides.get(instance, {})}
         known = CHASSIS_FLAGS if instance == CHASSIS else CORNER_FLAGS + CORNER_DERIVED
-        other = set(given) - set(known)
+        other = set(given) - set(known) - set(COUPLING_ONLY)
         if other:
             raise ValueError(f"tdvass car has no flag for {instance}'s {sorted(other)}")
         cast = {"Integer": int, "Real": float}

@@ -219,13 +219,15 @@ def test_the_full_car_in_model_exchange_is_the_limit_of_its_co_simulation(fmu_fi
     equation): within 1e-5 of every RMS value (measured: 1.8e-6).
 
     Against the Co-Simulation car of examples/full_car.py at h = 0.1 ms and
-    0.2 ms: the co-simulation's error is of first order in h (the forces
-    are held over each communication step), so CS(2h) - CS(h) estimates the
-    error of CS(h) (Richardson): Model Exchange must lie within 1.25 times
-    that estimate (plus 2e-6 of the value for its own solver), and within
-    1e-3 of CS(h). Measured: the chassis's RMS accelerations 2.7e-4 to
-    4.7e-4 of their value, the corners' outputs 1e-5 to 2.5e-5, each about
-    the Richardson estimate."""
+    0.2 ms: the co-simulation's error is of second order in h (the SSD's
+    `input_extrapolation = 1` continues the forces and the body's
+    attachment over each communication step), so (CS(2h) - CS(h)) / 3
+    estimates the error of CS(h) (Richardson): Model Exchange must lie
+    within 0.5 times CS(2h) - CS(h), 1.5 times that estimate (plus 2e-6 of
+    the value for its own solver), and within 1e-4 of CS(h). Measured: the
+    chassis's RMS accelerations 1.4e-5 to 1.8e-5 of their value, 0.32 to
+    0.35 times CS(2h) - CS(h); the corners' outputs 6e-8 to 4.6e-7, within
+    the solver's allowance."""
     ssp = fmu_file.with_name("full-car.ssp")
     if not ssp.is_file():
         pytest.fail(f"{ssp} not found; build it with `cargo run --release -p fmu-build`")
@@ -241,8 +243,8 @@ def test_the_full_car_in_model_exchange_is_the_limit_of_its_co_simulation(fmu_fi
         reference = cs[1e-4][key]
         richardson = abs(cs[2e-4][key] - reference)
         error = abs(value - reference)
-        assert error <= 1.25 * richardson + 2e-6 * abs(value), (key, value, reference, richardson)
-        assert error <= 1e-3 * abs(value), (key, value, reference)
+        assert error <= 0.5 * richardson + 2e-6 * abs(value), (key, value, reference, richardson)
+        assert error <= 1e-4 * abs(value), (key, value, reference)
 
 
 def test_a_step_under_one_wheel_in_model_exchange_is_the_monolithic_car(fmu_file, tmp_path):

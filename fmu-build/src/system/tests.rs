@@ -157,10 +157,15 @@ fn expected_parameters() -> BTreeMap<(String, String), f64> {
             ("vehicle_speed", 20.0),
             ("road_seed", seed),
             ("road_delay", delay),
+            ("input_extrapolation", 1.0),
         ] {
             all.insert((corner.to_string(), name.to_string()), value);
         }
     }
+    all.insert(
+        ("chassis".to_string(), "input_extrapolation".to_string()),
+        1.0,
+    );
     all
 }
 
@@ -346,7 +351,7 @@ fn the_ssd_connects_every_corner_to_the_chassis_through_declared_connectors() {
     }
 }
 
-/// Each corner's road: ISO 8608, 20 m/s, seed 2 on the right, 0.13 s delay at the rear, typed as the FMI 2.0 FMU declares them.
+/// Each corner's road: ISO 8608, 20 m/s, seed 2 on the right, 0.13 s delay at the rear, and every instance's input extrapolation, typed as the FMI 2.0 FMU declares them.
 #[test]
 fn the_ssd_puts_every_corner_on_its_own_iso_8608_road() {
     let root = ssd();
@@ -369,11 +374,12 @@ fn the_ssd_puts_every_corner_on_its_own_iso_8608_road() {
             if owner != instance {
                 continue;
             }
-            let expected_type = if name == "road" || name == "road_seed" {
-                "Integer"
-            } else {
-                "Real"
-            };
+            let expected_type =
+                if ["road", "road_seed", "input_extrapolation"].contains(&name.as_str()) {
+                    "Integer"
+                } else {
+                    "Real"
+                };
             assert_eq!(value_type, expected_type, "{owner}.{name}");
             let connector = c
                 .child("Connectors")
@@ -388,7 +394,7 @@ fn the_ssd_puts_every_corner_on_its_own_iso_8608_road() {
         .into_iter()
         .find(|c| c.attribute("name") == "chassis")
         .expect("the chassis");
-    assert_eq!(chassis.children_named("ParameterBindings").count(), 0);
+    assert_eq!(chassis.children_named("ParameterBindings").count(), 1);
 }
 
 /// The default experiment, libcosim's algorithm annotation, and a unit declaration for every unit named.
