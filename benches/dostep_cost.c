@@ -31,7 +31,8 @@
  * GUID only: 1 ms with t += h, the body's attachment point set before
  * every step, moving as 1 mm sin(2 pi 1.5 Hz t), as a chassis moves it;
  * 7, for the quarter car's GUID: the same with the road input, road = 0
- * and x_g set so before every step),
+ * and x_g set so before every step; 8, for the corner's GUID: case 6 with
+ * input_extrapolation = 1, the attachment on the extrapolated velocity),
  * for an instruction count: under callgrind, the difference of two CALLS
  * over their difference is the cost of one call.
  *
@@ -80,6 +81,8 @@ static const unsigned MAX_INTERNAL_STEP = 20;
 static const unsigned BODY_INPUTS[2] = {143, 144};
 /* Value references of the quarter car's road (Integer) and x_g. */
 static const unsigned ROAD = 12, ROAD_INPUT = 30;
+/* Value reference of input_extrapolation (Integer). */
+static const unsigned EXTRAPOLATION = 48;
 /* The default experiment's internal step at the default tolerance. */
 static const double DEFAULT_INTERNAL_STEP = 1e-3;
 /* The step sizes of the varying master (s), taken in turn. */
@@ -122,13 +125,15 @@ static double now(void) {
  * `calls` calls (0: 15 s, at most 200 000 calls); `accumulate`: t += h;
  * `bound`: the max_internal_step set before initialization (0: none);
  * `body`: 1, the corner's body inputs set before every step; 2, the
- * quarter car's road input. */
+ * quarter car's road input; 3, as 1 with input_extrapolation = 1. */
 static double run_body(const Library *l, const char *guid, double h, int accumulate, double bound,
                        long calls, int body) {
     fmi2Component c = l->instantiate("bench", 1, guid, NULL, &callbacks, 0, 0);
-    const int road_input = 0;
+    const int road_input = 0, extrapolate = 1;
     if (!c || l->set_real(c, &MAX_INTERNAL_STEP, 1, &bound) ||
-        (body == 2 && l->set_integer(c, &ROAD, 1, &road_input)) || l->setup(c, 0, 0.0, 0.0, 0, 0.0) ||
+        (body == 2 && l->set_integer(c, &ROAD, 1, &road_input)) ||
+        (body == 3 && l->set_integer(c, &EXTRAPOLATION, 1, &extrapolate)) ||
+        l->setup(c, 0, 0.0, 0.0, 0, 0.0) ||
         l->enter_init(c) || l->exit_init(c)) {
         fprintf(stderr, "cannot start an instance\n");
         exit(1);
@@ -143,8 +148,8 @@ static double run_body(const Library *l, const char *guid, double h, int accumul
         if (body) {
             const double w = 2.0 * 3.141592653589793 * 1.5;
             const double motion[2] = {1e-3 * __builtin_sin(w * t), 1e-3 * w * __builtin_cos(w * t)};
-            int refused = body == 1 ? l->set_real(c, BODY_INPUTS, 2, motion)
-                                    : l->set_real(c, &ROAD_INPUT, 1, motion);
+            int refused = body == 2 ? l->set_real(c, &ROAD_INPUT, 1, motion)
+                                    : l->set_real(c, BODY_INPUTS, 2, motion);
             if (refused) {
                 fprintf(stderr, "fmi2SetReal of the inputs failed (the GUID of another model?)\n");
                 exit(1);
@@ -231,17 +236,18 @@ static int interleaved(int argc, char **argv) {
 static int one_case(int argc, char **argv) {
     int which = argc == 6 ? atoi(argv[2]) : -1;
     long calls = argc == 6 ? atol(argv[4]) : 0;
-    if (which < 0 || which > CASES + 1 || calls <= 0) {
+    if (which < 0 || which > CASES + 2 || calls <= 0) {
         fprintf(stderr, "usage: %s --case N GUID CALLS LIB (N in 0..%d, CALLS > 0)\n", argv[0],
-                CASES + 1);
+                CASES + 2);
         return 2;
     }
     Library l = load(argv[5]);
     if (which >= CASES) {
         int body = which - CASES + 1;
         double s = run_body(&l, argv[3], 1e-3, 1, 0.0, calls, body);
-        printf("1 ms, t += h, %s: %.3f us per call\n",
-               body == 1 ? "body moving (corner)" : "road input moving (quarter car)", s * 1e6);
+        const char *what[3] = {"body moving (corner)", "road input moving (quarter car)",
+                               "body moving, extrapolated (corner)"};
+        printf("1 ms, t += h, %s: %.3f us per call\n", what[body - 1], s * 1e6);
         return 0;
     }
     double s = run(&l, argv[3], CASE_STEP[which], CASE_ACCUMULATED[which], 0.0, calls);
