@@ -1110,6 +1110,21 @@ const fn body_input(
     }
 }
 
+/// `input_extrapolation` (0 .. 2), as the quarter car and the corner
+/// each describe it.
+const fn input_extrapolation(description: &'static str) -> Variable {
+    parameter(
+        "input_extrapolation",
+        48,
+        Variability::Fixed,
+        Q::Dimensionless,
+        0.0,
+        Range::Integers(0, 2),
+        integer!(input_extrapolation),
+        description,
+    )
+}
+
 /// The corner's own variables ([`Model::Corner`]): its static load, the
 /// road as this wheel sees it, the body's attachment point and the force
 /// on it, and its own declarations of the outputs whose dependencies name
@@ -1147,14 +1162,7 @@ pub const CORNER_ADDITIONS: &[Variable] = &[
         real!(road_phase),
         "Harmonic road only (rad): x_g = road_amplitude sin(road_angular_frequency (t - road_delay) + road_phase) (a right track out of phase with the left excites roll)",
     ),
-    parameter(
-        "input_extrapolation",
-        48,
-        Fixed,
-        Q::Dimensionless,
-        0.0,
-        Range::Integers(0, 2),
-        integer!(input_extrapolation),
+    input_extrapolation(
         "Co-Simulation: 0 holds the inputs over each communication step (FMI default: the attachment moves at body_velocity, x_g is held). 1 and 2 extrapolate the attachment's velocity linearly from the last two body_velocity values set at communication points: over a step it reaches the extrapolated displacement and ends at the extrapolated velocity (the full car's coupling becomes second order in the step); road = 0: 1 extrapolates x_g linearly from its last two values, 2 along the line closest over the step to the parabola through the last three. The first step holds; an input derivative of x_g, when set, takes precedence",
     ),
     body_input(
@@ -1529,14 +1537,7 @@ const TABLE: &[Variable] = &[
     )
     .bounded(Bound::Weight)
     .quarter_car(),
-    parameter(
-        "input_extrapolation",
-        48,
-        Fixed,
-        Q::Dimensionless,
-        0.0,
-        Range::Integers(0, 2),
-        integer!(input_extrapolation),
+    input_extrapolation(
         "road = 0: 0 holds x_g over each communication step (FMI default), 1 extrapolates it linearly from the last two values set at communication points, 2 along the line closest over the step to the parabola through the last three (the first step holds); input derivatives, when set, take precedence",
     )
     .quarter_car(),

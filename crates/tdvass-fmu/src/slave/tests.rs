@@ -60,6 +60,20 @@ fn vr(name: &str) -> u32 {
         .vr
 }
 
+/// The value reference of `model`'s FMI 2.0 variable `name`.
+fn vr_of(model: Model, name: &str) -> u32 {
+    by_name(model, FmiVersion::Fmi2, name)
+        .unwrap_or_else(|| panic!("{model:?} has no `{name}`"))
+        .vr
+}
+
+/// The Real `name` of `s`'s model.
+fn get_of(s: &mut Slave, name: &str) -> f64 {
+    let mut v = [0.0];
+    s.get_real(&[vr_of(s.model(), name)], &mut v).unwrap();
+    v[0]
+}
+
 fn start(s: &mut Slave) {
     s.enter_initialization_mode().unwrap();
     s.exit_initialization_mode().unwrap();

@@ -12,18 +12,6 @@ fn slave_of(model: Model) -> Slave {
     Slave::new(TEST_DIALECT, model, guid(model), logger)
 }
 
-fn vr_of(model: Model, name: &str) -> u32 {
-    by_name(model, FmiVersion::Fmi2, name)
-        .unwrap_or_else(|| panic!("{model:?} has no `{name}`"))
-        .vr
-}
-
-fn get_of(s: &mut Slave, name: &str) -> f64 {
-    let mut v = [0.0];
-    s.get_real(&[vr_of(s.model(), name)], &mut v).unwrap();
-    v[0]
-}
-
 fn set_of(s: &mut Slave, name: &str, value: f64) {
     s.set_real(&[vr_of(s.model(), name)], &[value]).unwrap();
 }

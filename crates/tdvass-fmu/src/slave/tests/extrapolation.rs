@@ -4,18 +4,6 @@
 use super::*;
 use crate::variables::guid;
 
-fn vr_of(model: Model, name: &str) -> u32 {
-    by_name(model, FmiVersion::Fmi2, name)
-        .unwrap_or_else(|| panic!("{model:?} has no `{name}`"))
-        .vr
-}
-
-fn get_of(s: &mut Slave, name: &str) -> f64 {
-    let mut v = [0.0];
-    s.get_real(&[vr_of(s.model(), name)], &mut v).unwrap();
-    v[0]
-}
-
 /// A slave of `model` at t = 0 with `input_extrapolation = mode`.
 fn started_with(model: Model, mode: i32) -> Slave {
     let logger = Logger::new(Box::new(|_, _, _| {}), false);
