@@ -282,6 +282,9 @@ static const double G = 5386.0;
 /* The corner: the quarter car's VR_* above that it has (g, road, road_class,
  * vehicle_speed, x_g, tire_contact, lift_off_count), and the body's. */
 enum {
+    /* input_extrapolation (Integer; FMI 3.0 Int32): 1 in the corner's and
+     * the chassis's runs, as the full car's system files set it. */
+    VR_INPUT_EXTRAPOLATION = 48,
     CORNER_VR_BODY_DISPLACEMENT = 143,
     CORNER_VR_BODY_VELOCITY = 144,
     CORNER_VR_BODY_FORCE = 145,
@@ -293,6 +296,7 @@ static const double BODY_MASS = 345.0;
 
 /* The chassis. */
 enum {
+    CHASSIS_VR_INPUT_EXTRAPOLATION = 209,
     CHASSIS_VR_FORCE_FL = 210,
     CHASSIS_VR_FORCE_FR = 211,
     CHASSIS_VR_FORCE_RL = 212,
@@ -463,6 +467,10 @@ static long run_fmi2(void *library, const char *token, const Case *c, double sec
     const unsigned speed_vr = VR_VEHICLE_SPEED, g_vr = VR_G, x_g_vr = VR_X_G;
     if (set_integer(instance, integer_vrs, 3, integers) || set_real(instance, &speed_vr, 1, &c->speed))
         fail("setting the parameters", 0.0);
+    const unsigned extrapolation_vr = VR_INPUT_EXTRAPOLATION;
+    const int extrapolate = 1;
+    if (c->model == MODEL_CORNER && set_integer(instance, &extrapolation_vr, 1, &extrapolate))
+        fail("setting input_extrapolation", 0.0);
     if (setup(instance, 0, 0.0, 0.0, 0, 0.0) || enter_init(instance)) fail("initialization", 0.0);
     if (c->road == ROAD_INPUT) {
         double x_g = road_input(0.0);
@@ -591,6 +599,7 @@ static long run_fmi3(void *library, const char *token, const Case *c, double sec
     fmi3DoStepTYPE do_step;
     fmi3SetFloat64TYPE set_float64;
     fmi3SetInt64TYPE set_int64;
+    fmi3SetInt32TYPE set_int32;
     fmi3Status (*get_int32)(fmi3Instance, const fmi3ValueReference[], size_t, fmi3Int32[], size_t);
     fmi3Status (*get_output_derivatives)(fmi3Instance, const fmi3ValueReference[], size_t,
                                          const fmi3Int32[], fmi3Float64[], size_t);
@@ -601,6 +610,7 @@ static long run_fmi3(void *library, const char *token, const Case *c, double sec
     SYM(do_step, library, "fmi3DoStep");
     SYM(set_float64, library, "fmi3SetFloat64");
     SYM(set_int64, library, "fmi3SetInt64");
+    SYM(set_int32, library, "fmi3SetInt32");
     SYM(get_float64, library, "fmi3GetFloat64");
     SYM(get_int32, library, "fmi3GetInt32");
     SYM(get_output_derivatives, library, "fmi3GetOutputDerivatives");
@@ -615,6 +625,10 @@ static long run_fmi3(void *library, const char *token, const Case *c, double sec
     if (set_int64(instance3, enum_vrs, 3, enums, 3) ||
         set_float64(instance3, &speed_vr, 1, &c->speed, 1))
         fail("setting the parameters", 0.0);
+    const fmi3ValueReference extrapolation_vr = VR_INPUT_EXTRAPOLATION;
+    const fmi3Int32 extrapolate = 1;
+    if (c->model == MODEL_CORNER && set_int32(instance3, &extrapolation_vr, 1, &extrapolate, 1))
+        fail("setting input_extrapolation", 0.0);
     if (enter_init(instance3, 0, 0.0, 0.0, 0, 0.0)) fail("initialization", 0.0);
     if (c->road == ROAD_INPUT) {
         double x_g = road_input(0.0);
@@ -690,6 +704,7 @@ static long run_chassis(int fmi, void *library, const char *token, const Case *c
     fmi2Status (*exit_init2)(fmi2Component) = NULL;
     fmi2Status (*do_step2)(fmi2Component, double, double, int) = NULL;
     fmi2Status (*set_real2)(fmi2Component, const unsigned *, size_t, const double *) = NULL;
+    fmi2Status (*set_integer2)(fmi2Component, const unsigned *, size_t, const int *) = NULL;
     fmi2Status (*get_real2)(fmi2Component, const unsigned *, size_t, double *) = NULL;
     fmi2Status (*set_input_derivatives2)(fmi2Component, const unsigned *, size_t, const int *,
                                          const double *) = NULL;
@@ -699,8 +714,11 @@ static long run_chassis(int fmi, void *library, const char *token, const Case *c
     fmi3ExitInitializationModeTYPE exit_init3 = NULL;
     fmi3DoStepTYPE do_step3 = NULL;
     fmi3SetFloat64TYPE set_float64 = NULL;
+    fmi3SetInt32TYPE set_int32 = NULL;
     fmi3FreeInstanceTYPE free_instance3 = NULL;
     void *instance;
+    const unsigned extrapolation_vr = CHASSIS_VR_INPUT_EXTRAPOLATION;
+    const int extrapolate = 1;
     if (fmi == 2) {
         SYM(instantiate2, library, "fmi2Instantiate");
         SYM(setup2, library, "fmi2SetupExperiment");
@@ -708,6 +726,7 @@ static long run_chassis(int fmi, void *library, const char *token, const Case *c
         SYM(exit_init2, library, "fmi2ExitInitializationMode");
         SYM(do_step2, library, "fmi2DoStep");
         SYM(set_real2, library, "fmi2SetReal");
+        SYM(set_integer2, library, "fmi2SetInteger");
         SYM(get_real2, library, "fmi2GetReal");
         SYM(set_input_derivatives2, library, "fmi2SetRealInputDerivatives");
         SYM(free_instance2, library, "fmi2FreeInstance");
@@ -715,7 +734,8 @@ static long run_chassis(int fmi, void *library, const char *token, const Case *c
         static const fmi2CallbackFunctions callbacks = {logger2, master_allocate, free, NULL, NULL};
         instance = instantiate2("realtime", 1, token, NULL, &callbacks, 0, 0);
         if (!instance) fail("fmi2Instantiate", 0.0);
-        if (setup2(instance, 0, 0.0, 0.0, 0, 0.0) || enter_init2(instance) || exit_init2(instance))
+        if (set_integer2(instance, &extrapolation_vr, 1, &extrapolate) ||
+            setup2(instance, 0, 0.0, 0.0, 0, 0.0) || enter_init2(instance) || exit_init2(instance))
             fail("initialization", 0.0);
     } else {
         SYM(instantiate3, library, "fmi3InstantiateCoSimulation");
@@ -723,12 +743,15 @@ static long run_chassis(int fmi, void *library, const char *token, const Case *c
         SYM(exit_init3, library, "fmi3ExitInitializationMode");
         SYM(do_step3, library, "fmi3DoStep");
         SYM(set_float64, library, "fmi3SetFloat64");
+        SYM(set_int32, library, "fmi3SetInt32");
         SYM(get_float64, library, "fmi3GetFloat64");
         SYM(free_instance3, library, "fmi3FreeInstance");
         bind_states3(library);
         instance = instantiate3("realtime", token, NULL, 0, 0, 0, 0, NULL, 0, NULL, logger3, NULL);
         if (!instance) fail("fmi3InstantiateCoSimulation", 0.0);
-        if (enter_init3(instance, 0, 0.0, 0.0, 0, 0.0) || exit_init3(instance)) fail("initialization", 0.0);
+        if (set_int32(instance, &extrapolation_vr, 1, &extrapolate, 1) ||
+            enter_init3(instance, 0, 0.0, 0.0, 0, 0.0) || exit_init3(instance))
+            fail("initialization", 0.0);
     }
     const unsigned force_vrs[] = {CHASSIS_VR_FORCE_FL, CHASSIS_VR_FORCE_FR, CHASSIS_VR_FORCE_RL,
                                   CHASSIS_VR_FORCE_RR};

@@ -17,7 +17,10 @@ CompletedIntegratorStep, every output read), also after restoring a
 serialized state in the middle of the run, allocate nothing either.
 
 The corner and the chassis (driven in Co-Simulation), each from its own FMU,
-for 10 s with a serialized state restored after 5 s. The corner: every
+for 10 s with a serialized state restored after 5 s, both with
+`input_extrapolation = 1` as the full car's system files set it (the
+attachment moved on the extrapolated velocity, the forces ramped along
+their last two values, on top of what holding them does). The corner: every
 road x tire mode x the aligned, varying and 10 ms patterns, under a point
 mass moved by the body_force it reads (body_displacement, body_velocity
 and x_g set before every step; FMI 2.0: the body inputs' derivatives too,

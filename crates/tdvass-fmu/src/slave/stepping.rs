@@ -278,11 +278,17 @@ impl Slave {
                 return Ok(m.input_slope);
             }
             let earlier = if mode == 2 { m.earlier_input } else { None };
-            let values: Vec<(f64, f64)> = [earlier, m.previous_input, Some((now, x_g))]
+            // The values there are, in time order, without allocating.
+            let mut values = [(0.0, 0.0); 3];
+            let mut count = 0;
+            for value in [earlier, m.previous_input, Some((now, x_g))]
                 .into_iter()
                 .flatten()
-                .collect();
-            let slope = extrapolation_slope(&values, h);
+            {
+                values[count] = value;
+                count += 1;
+            }
+            let slope = extrapolation_slope(&values[..count], h);
             guards::check_input_slope(slope).map_err(|e| {
                 FmiError::error(format!(
                     "input_extrapolation = {mode}: the slope {slope} m/s through x_g = {x_g} m at {now} s and the values before it is refused: {}",
