@@ -373,23 +373,29 @@ class DrivenRun:
     inputs: object  # t -> {input name: value}, set before the step from t
     derivatives: object = None  # t -> {input name: order-1 derivative}; FMI 2.0 Co-Simulation only
     mode: str = CO_SIMULATION  # or MODEL_EXCHANGE: the harness's Euler steps, the inputs held over a step
+    extrapolate: bool = False  # Co-Simulation with input_extrapolation = 1, as the full car's system files set it
 
 
 # (FMI version, run) -> what `harness drive` runs: the corner on its default
 # harmonic road under a moving body, the chassis under four forces with the
 # slope of one of them and, to compare with FMI 3.0 (which has no input
 # derivatives), without it; the corner and the chassis again in Model
-# Exchange (*_me), with the inputs of their Co-Simulation twins.
+# Exchange (*_me), with the inputs of their Co-Simulation twins, and in
+# Co-Simulation extrapolating their inputs (*_extrapolated).
 DRIVEN_RUNS = {
     (2, "corner"): DrivenRun(CORNER, body_motion),
     (2, "chassis"): DrivenRun(CHASSIS, corner_forces, force_fl_slope),
     (2, "chassis_held"): DrivenRun(CHASSIS, corner_forces),
     (2, "corner_me"): DrivenRun(CORNER, body_motion, mode=MODEL_EXCHANGE),
     (2, "chassis_me"): DrivenRun(CHASSIS, corner_forces, mode=MODEL_EXCHANGE),
+    (2, "corner_extrapolated"): DrivenRun(CORNER, body_motion, extrapolate=True),
+    (2, "chassis_extrapolated"): DrivenRun(CHASSIS, corner_forces, extrapolate=True),
     (3, "corner"): DrivenRun(CORNER3, body_motion),
     (3, "chassis"): DrivenRun(CHASSIS3, corner_forces),
     (3, "corner_me"): DrivenRun(CORNER3, body_motion, mode=MODEL_EXCHANGE),
     (3, "chassis_me"): DrivenRun(CHASSIS3, corner_forces, mode=MODEL_EXCHANGE),
+    (3, "corner_extrapolated"): DrivenRun(CORNER3, body_motion, extrapolate=True),
+    (3, "chassis_extrapolated"): DrivenRun(CHASSIS3, corner_forces, extrapolate=True),
 }
 
 
@@ -458,8 +464,9 @@ def driven_table(version: int, name: str, spec: DrivenRun, m: Model) -> tuple[li
 
 def driven_arguments(version: int, platform: Platform) -> tuple[list[str], dict[str, str]]:
     """The harness's arguments for the driven runs of one FMI version (seven
-    per run, the last the mode: `cs`, or `me,NX,NZ` with the numbers of
-    continuous states and event indicators) and the line each run prints
+    per run, the last the mode: `cs`, `cs,VR` with input_extrapolation's
+    value reference, or `me,NX,NZ` with the numbers of continuous states
+    and event indicators) and the line each run prints
     (a pattern)."""
     arguments, lines = [], {}
     vrs = lambda values: ",".join(map(str, values)) or "-"  # noqa: E731
@@ -469,6 +476,9 @@ def driven_arguments(version: int, platform: Platform) -> tuple[list[str], dict[
             inputs, derivatives, table = driven_table(version, name, spec, m)
             lines[name] = f"{len(m.outputs)} outputs x {DRIVEN_STEPS} steps"
             mode = CO_SIMULATION
+            if spec.extrapolate:
+                assert spec.mode == CO_SIMULATION, f"{name}: input_extrapolation is Co-Simulation's"
+                mode = f"{CO_SIMULATION},{m.variables['input_extrapolation']}"
             if spec.mode == MODEL_EXCHANGE:
                 assert m.model_exchange, f"{spec.fmu.name} declares no ModelExchange"
                 assert not derivatives, f"{name}: input derivatives are Co-Simulation only"

@@ -50,7 +50,9 @@
  *                     gets the same bits (the C libraries' sin differ).
  *                     MODE "cs": Co-Simulation, a row of time and the
  *                     outputs OUTPUTS (value references) at t = 0 and
- *                     after each step. MODE "me,NX,NZ": Model Exchange of
+ *                     after each step; "cs,VR" the same with the Integer
+ *                     parameter VR (input_extrapolation) set to 1 before
+ *                     initialization. MODE "me,NX,NZ": Model Exchange of
  *                     NX continuous states and NZ event indicators (the
  *                     FMU's modelDescription.xml), each step integrated
  *                     with DRIVE_SUBSTEPS explicit Euler steps of 0.1 ms,
@@ -643,20 +645,23 @@ static void parse_outputs(const char *list) {
 #define DRIVE_ARGS 7 /* NAME TOKEN OUTPUTS INPUTS DERIVATIVES TABLE MODE */
 #define DRIVE_SUBSTEPS 10 /* Model Exchange: Euler steps per 1 ms step, of 0.1 ms */
 
-/* MODE of a driven run: "cs" (Co-Simulation) or "me,NX,NZ" (Model
- * Exchange of NX continuous states and NZ event indicators). */
+/* MODE of a driven run: "cs" (Co-Simulation), "cs,VR" (Co-Simulation with
+ * the Integer parameter VR, input_extrapolation, set to 1) or "me,NX,NZ"
+ * (Model Exchange of NX continuous states and NZ event indicators). */
 typedef struct {
     int model_exchange;
     size_t nx, nz;
+    unsigned long extrapolation_vr; /* "cs,VR": VR; else 0 */
 } Mode;
 
 static Mode parse_mode(const char *text) {
-    Mode mode = {0, 0, 0};
+    Mode mode = {0, 0, 0, 0};
     if (strcmp(text, "cs") == 0) return mode;
     unsigned long nx = 0, nz = 0;
     char end = 0;
+    if (sscanf(text, "cs,%lu%c", &mode.extrapolation_vr, &end) == 1 && mode.extrapolation_vr > 0) return mode;
     if (sscanf(text, "me,%lu,%lu%c", &nx, &nz, &end) != 2) {
-        fprintf(stderr, "bad MODE `%s`: cs or me,NX,NZ\n", text);
+        fprintf(stderr, "bad MODE `%s`: cs, cs,VR or me,NX,NZ\n", text);
         exit(2);
     }
     if (nx > MAX_STATES || nz > MAX_INDICATORS) {
@@ -709,8 +714,8 @@ static void drive(const char *dir, char **args) {
         model_exchange_row(csv, c, 0.0, mode.nx, mode.nz, dx);
     } else {
         write_header(csv);
-        static const Integers defaults = {0, {0}, {0}};
-        c = initialized(file, &defaults);
+        const Integers extrapolating = {mode.extrapolation_vr ? 1 : 0, {(fmi2ValueReference)mode.extrapolation_vr}, {1}};
+        c = initialized(file, &extrapolating);
         write_row(csv, c, 0.0);
     }
     size_t events = 0;

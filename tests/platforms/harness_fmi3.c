@@ -42,7 +42,9 @@
  *                     (binary doubles, one row of inputs per step). FMI
  *                     3.0 has no input derivatives: DERIVATIVES must be
  *                     "-". MODE "cs": Co-Simulation, the outputs OUTPUTS
- *                     at t = 0 and after each step. MODE "me,NX,NZ":
+ *                     at t = 0 and after each step; "cs,VR" the same with
+ *                     the Int32 parameter VR (input_extrapolation) set to
+ *                     1 before initialization. MODE "me,NX,NZ":
  *                     Model Exchange of NX continuous states and NZ event
  *                     indicators (modelDescription.xml; checked against
  *                     fmi3GetNumberOfContinuousStates and
@@ -277,9 +279,10 @@ typedef struct {
     fmi3Int64 values[3];
     fmi3Int32 seed; /* road_seed, when > 0 */
     fmi3Float64 max_internal_step; /* when > 0 */
+    fmi3ValueReference extrapolation; /* input_extrapolation's, set to 1, when > 0 */
 } Parameters;
 
-static const Parameters defaults = {0, {0}, {0}, 0, 0.0};
+static const Parameters defaults = {0, {0}, {0}, 0, 0.0, 0};
 
 static fmi3Instance initialized(const char *name, const Parameters *parameters, Environment *env) {
     fmi3Instance c = fmi.InstantiateCoSimulation(
@@ -297,6 +300,10 @@ static fmi3Instance initialized(const char *name, const Parameters *parameters, 
     if (parameters->max_internal_step > 0.0) {
         const fmi3ValueReference vr = VR_MAX_INTERNAL_STEP;
         REQUIRE_OK(fmi.SetFloat64(c, &vr, 1, &parameters->max_internal_step, 1));
+    }
+    if (parameters->extrapolation > 0) {
+        const fmi3Int32 one = 1;
+        REQUIRE_OK(fmi.SetInt32(c, &parameters->extrapolation, 1, &one, 1));
     }
     REQUIRE_OK(fmi.EnterInitializationMode(c, false, 0.0, 0.0, true, STEPS * STEP));
     REQUIRE_OK(fmi.ExitInitializationMode(c));
@@ -394,7 +401,7 @@ static long intermediate(const char *dir) {
     Environment env = {NULL, NULL, 0};
     env.csv = open_file(dir, "intermediate.csv", "wb");
     write_header(env.csv);
-    const Parameters fine = {0, {0}, {0}, 0, 1e-4};
+    const Parameters fine = {0, {0}, {0}, 0, 1e-4, 0};
     fmi3Instance c = initialized("intermediate", &fine, &env);
     run_steps(c, NULL, 0, INTERMEDIATE_STEPS);
     finish(c);
@@ -535,20 +542,23 @@ static void parse_outputs(const char *list) {
 #define DRIVE_ARGS 7 /* NAME TOKEN OUTPUTS INPUTS DERIVATIVES TABLE MODE */
 #define DRIVE_SUBSTEPS 10 /* Model Exchange: Euler steps per 1 ms step, of 0.1 ms */
 
-/* MODE of a driven run: "cs" (Co-Simulation) or "me,NX,NZ" (Model
+/* MODE of a driven run: "cs" (Co-Simulation), "cs,VR" (input_extrapolation
+ * VR set to 1) or "me,NX,NZ" (Model
  * Exchange of NX continuous states and NZ event indicators). */
 typedef struct {
     bool model_exchange;
     size_t nx, nz;
+    unsigned long extrapolation_vr; /* "cs,VR": input_extrapolation's VR, set to 1; else 0 */
 } Mode;
 
 static Mode parse_mode(const char *text) {
-    Mode mode = {false, 0, 0};
+    Mode mode = {false, 0, 0, 0};
     if (strcmp(text, "cs") == 0) return mode;
     unsigned long nx = 0, nz = 0;
     char end = 0;
+    if (sscanf(text, "cs,%lu%c", &mode.extrapolation_vr, &end) == 1 && mode.extrapolation_vr > 0) return mode;
     if (sscanf(text, "me,%lu,%lu%c", &nx, &nz, &end) != 2) {
-        fprintf(stderr, "bad MODE `%s`: cs or me,NX,NZ\n", text);
+        fprintf(stderr, "bad MODE `%s`: cs, cs,VR or me,NX,NZ\n", text);
         exit(2);
     }
     if (nx > MAX_STATES || nz > MAX_INDICATORS) {
@@ -613,7 +623,8 @@ static void drive(const char *dir, char **args) {
         model_exchange_row(csv, c, 0.0, mode.nx, mode.nz, dx);
     } else {
         write_header(csv);
-        c = initialized(file, &defaults, NULL);
+        const Parameters extrapolating = {0, {0}, {0}, 0, 0.0, (fmi3ValueReference)mode.extrapolation_vr};
+        c = initialized(file, &extrapolating, NULL);
         write_values(csv, c, 0.0);
     }
     size_t events = 0;
@@ -665,7 +676,7 @@ int main(int argc, char **argv) {
 
     experiment(dir, "default.csv", &defaults);
     static const Parameters iso_c_cs = {
-        3, {VR_VARIANT, VR_ROAD, VR_ROAD_CLASS}, {VARIANT_CS, ROAD_ISO8608, ROAD_CLASS_C}, 7, 0.0};
+        3, {VR_VARIANT, VR_ROAD, VR_ROAD_CLASS}, {VARIANT_CS, ROAD_ISO8608, ROAD_CLASS_C}, 7, 0.0, 0};
     experiment(dir, "iso_c_cs.csv", &iso_c_cs);
 
     size_t size = 0;

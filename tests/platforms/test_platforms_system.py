@@ -6,7 +6,8 @@ half a second at 1 ms steps in harness.c (FMI 2.0) and harness_fmi3.c (FMI
 corner under a body moving 1 mm sin(2π 1.5 Hz t) (displacement and
 velocity) on its default harmonic road, the chassis under four corner
 forces, in FMI 2.0 also with the order-1 derivative of one of them
-(conftest.py: DRIVEN_RUNS). Both run in Co-Simulation and, with the same
+(conftest.py: DRIVEN_RUNS). Both run in Co-Simulation (also with
+input_extrapolation = 1, the runs *_extrapolated) and, with the same
 inputs, in Model Exchange (the runs *_me): the harness integrates each step
 with ten explicit Euler steps of 0.1 ms under the inputs held and records
 the continuous states, their derivatives and the event indicators too.
@@ -64,6 +65,30 @@ def test_the_fmi3_corner_equals_the_fmi2_corner(driven):
 def test_the_fmi3_chassis_equals_the_fmi2_chassis_without_derivatives(driven):
     compare("fmi3 vs fmi2", "drive/chassis", driven(2, "chassis_held", "linux64"),
             driven(3, "chassis", "linux64"))
+
+
+@pytest.mark.parametrize("name", ["corner_extrapolated", "chassis_extrapolated"])
+def test_the_fmi3_extrapolating_run_equals_the_fmi2_one(driven, name):
+    """With input_extrapolation = 1 (the full car's system files), FMI 3.0
+    and FMI 2.0 (whose chassis run has no input derivative here) give the
+    same bits."""
+    compare("fmi3 vs fmi2", f"drive/{name}", driven(2, name, "linux64"), driven(3, name, "linux64"))
+
+
+@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("name,output", [("corner", "body_force"), ("chassis", "heave")])
+def test_extrapolating_the_inputs_changes_the_run_a_little(driven, version, name, output):
+    """The extrapolating runs are not their holding twins': the attachment
+    moves on the extrapolated velocity, the forces ramp. At 1 ms steps of
+    1.5 Hz inputs the two stay within 5 % of the output's largest
+    magnitude."""
+    held = f"{name}_held" if (version, name) == (2, "chassis") else name
+    vr = variables(version, name)[output]
+    plain = column(driven(version, held, "linux64"), vr)
+    extrapolated = column(driven(version, f"{name}_extrapolated", "linux64"), vr)
+    scale = max(abs(v) for v in plain)
+    difference = max(abs(a - b) for a, b in zip(plain, extrapolated))
+    assert 0.0 < difference < 0.05 * scale, (difference, scale)
 
 
 @pytest.mark.parametrize("name", ["corner_me", "chassis_me"])
