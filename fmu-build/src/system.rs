@@ -429,7 +429,8 @@ fn parameters_of(instance: &str) -> Vec<ParameterSetting> {
 /// `full-car.ssp`, whose `resources/` folder holds `corner_fmu` and
 /// `chassis_fmu` (file names, such as `tdvass-corner.fmu`): the five
 /// components with the connectors they use, the twelve connections, each
-/// corner's road parameters as an inline parameter set (all four named
+/// instance's parameters as an inline parameter set (the corners' roads,
+/// and [`extrapolation`] on all five; every set named
 /// [`PARAMETER_SET_NAME`]), the units, and the
 /// default experiment (0 s to 15 s) with libcosim's fixed-step algorithm at
 /// the FMUs' 1 ms step as an OSP annotation.
