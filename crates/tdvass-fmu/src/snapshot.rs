@@ -158,9 +158,26 @@ impl<'a> Reader<'a> {
             Err(invalid(format_args!("{what} = {v} is not finite")))
         }
     }
+    /// A value at a time, if any ([`write_timed`]): its flag, its time,
+    /// the value; `what` names it in an error.
+    fn timed(&mut self, what: &str) -> Result<Option<(f64, f64)>, FmiError> {
+        let defined = self.flag(&format!("{what} defined"))?;
+        let time = self.finite(&format!("{what}'s time"))?;
+        let value = self.finite(what)?;
+        Ok(defined.then_some((time, value)))
+    }
     fn rest(&mut self) -> &'a [u8] {
         self.0.rest()
     }
+}
+
+/// A value at a time, if any: a flag, the time, the value (zeros when
+/// there is none); [`Reader::timed`] reads it.
+fn write_timed(w: &mut ByteWriter, value: Option<(f64, f64)>) {
+    w.u8(value.is_some() as u8);
+    let (time, value) = value.unwrap_or((0.0, 0.0));
+    w.f64(time);
+    w.f64(value);
 }
 
 fn encode_payload(model: &SlaveState) -> Vec<u8> {
@@ -182,12 +199,8 @@ fn encode_payload(model: &SlaveState) -> Vec<u8> {
     w.f64(model.input_slope);
     w.u8(model.input_pending as u8);
     w.u8(model.input_slope_given as u8);
-    for input in [model.previous_input, model.earlier_input] {
-        w.u8(input.is_some() as u8);
-        let (time, value) = input.unwrap_or((0.0, 0.0));
-        w.f64(time);
-        w.f64(value);
-    }
+    write_timed(&mut w, model.previous_input);
+    write_timed(&mut w, model.earlier_input);
     w.u8(model.hold_warned as u8);
     w.u8(model.contact_warned as u8);
     w.f64(model.start_time);
@@ -239,10 +252,7 @@ fn encode_payload(model: &SlaveState) -> Vec<u8> {
 /// force's last value and time; the forces that wait (a bit each).
 fn encode_bond_history(w: &mut ByteWriter, bonds: &BondHistory) {
     for value in std::iter::once(bonds.previous_body).chain(bonds.previous_forces) {
-        w.u8(value.is_some() as u8);
-        let (time, value) = value.unwrap_or((0.0, 0.0));
-        w.f64(time);
-        w.f64(value);
+        write_timed(w, value);
     }
     w.f64(bonds.body_acceleration);
     w.u8(bonds.body_pending as u8);
@@ -253,10 +263,7 @@ fn encode_bond_history(w: &mut ByteWriter, bonds: &BondHistory) {
 fn decode_bond_history(r: &mut Reader) -> Result<BondHistory, FmiError> {
     let mut values = [None; 5];
     for value in values.iter_mut() {
-        let defined = r.flag("a bond value defined")?;
-        let time = r.finite("a bond value's time")?;
-        let v = r.finite("a bond value")?;
-        *value = defined.then_some((time, v));
+        *value = r.timed("a bond value")?;
     }
     let body_acceleration = r.finite("the body attachment's acceleration")?;
     let body_pending = r.flag("body inputs pending")?;
@@ -364,14 +371,8 @@ fn decode_payload(bytes: &[u8], model: Model, version: u32) -> Result<SlaveState
     let input_slope = r.finite("the input slope")?;
     let input_pending = r.flag("input pending")?;
     let input_slope_given = r.flag("input slope given")?;
-    let mut inputs = [None; 2];
-    for input in inputs.iter_mut() {
-        let defined = r.flag("input value defined")?;
-        let time = r.finite("an input time")?;
-        let value = r.finite("an input value")?;
-        *input = defined.then_some((time, value));
-    }
-    let [previous_input, earlier_input] = inputs;
+    let previous_input = r.timed("an input value")?;
+    let earlier_input = r.timed("an input value")?;
     let hold_warned = r.flag("hold warning logged")?;
     let contact_warned = r.flag("contact loss logged")?;
     let start_time = r.finite("the start time")?;

@@ -106,32 +106,26 @@ impl Slave {
 
     /// The chassis's forces from `now`: each set since the last step
     /// (without its derivative) ramps along the line through its last two
-    /// values, which it then becomes the later of.
+    /// values, which it then becomes the later of. Holding
+    /// (`input_extrapolation = 0`), nothing is kept.
     pub(super) fn extrapolate_forces(&mut self, now: f64) -> Result<(), FmiError> {
-        let pending = self.state.bonds.forces_pending;
-        if pending == 0 {
+        let pending = std::mem::take(&mut self.state.bonds.forces_pending);
+        if pending == 0 || !self.extrapolates() {
             return Ok(());
         }
-        let extrapolates = self.extrapolates();
         let m = &mut self.state;
         let Some(chassis) = m.engine.chassis_mut() else {
             return Ok(());
         };
         let (forces, mut rates) = chassis.forces();
         for (i, previous) in m.bonds.previous_forces.iter_mut().enumerate() {
-            if pending & (1 << i) == 0 {
-                continue;
-            }
-            let force = m.settings.forces[i];
-            if extrapolates {
+            if pending & (1 << i) != 0 {
+                let force = m.settings.forces[i];
                 rates[i] = slope_through(*previous, now, force);
+                *previous = Some((now, force));
             }
-            *previous = Some((now, force));
         }
-        m.bonds.forces_pending = 0;
-        if extrapolates {
-            chassis.set_forces(forces, rates)?;
-        }
+        chassis.set_forces(forces, rates)?;
         Ok(())
     }
 }
