@@ -92,6 +92,7 @@ const ISO_NODE_INTERVAL: f64 = tdvass::road::ISO_NODE_INTERVAL;
 
 /// The internal steps and road breakpoints a step of `h` s needs with the
 /// internal step `grid_step`.
+#[inline]
 pub fn step_work(s: &Settings, grid_step: f64, h: f64) -> f64 {
     let road = match s.road_type() {
         Some(RoadType::Iso8608) => h / ISO_NODE_INTERVAL,
@@ -132,14 +133,21 @@ pub fn check_step_work(
 pub const MAX_TIME_IN_STEPS: f64 = tdvass::solver::Simulator::MAX_START_TIME_IN_STEPS;
 
 /// Refuses a time `t` (s) too large for the internal step `grid_step`.
+#[inline]
 pub fn check_time_resolution(what: &str, t: f64, grid_step: f64) -> Result<(), FmiError> {
     if t.abs() > grid_step * MAX_TIME_IN_STEPS {
-        return Err(FmiError::error(format!(
-            "{what} {t} s is too large for the internal step {grid_step:e} s: |time| must be at most {:e} s (2^42 internal steps) so that times resolve the steps",
-            grid_step * MAX_TIME_IN_STEPS
-        )));
+        return Err(time_too_large(what, t, grid_step));
     }
     Ok(())
+}
+
+/// The error of [`check_time_resolution`], out of the callers' line.
+#[cold]
+fn time_too_large(what: &str, t: f64, grid_step: f64) -> FmiError {
+    FmiError::error(format!(
+        "{what} {t} s is too large for the internal step {grid_step:e} s: |time| must be at most {:e} s (2^42 internal steps) so that times resolve the steps",
+        grid_step * MAX_TIME_IN_STEPS
+    ))
 }
 
 /// The first state of `state` (solver order) that is not finite, with its

@@ -115,9 +115,12 @@ impl Slave {
             return self.advance_chassis(until);
         }
         let now = self.time();
-        let settings = self.state.settings;
+        // The settings are read where needed, not copied: they hold every
+        // model's values (the chassis's too), and a copy a step is a
+        // `memcpy` of all of them.
+        let road_is_input = self.state.settings.road_is_input();
         let pending = self.state.input_pending;
-        let slope = if settings.road_is_input() {
+        let slope = if road_is_input {
             self.input_slope_for_step(now, span)?
         } else {
             0.0
@@ -126,10 +129,11 @@ impl Slave {
         let Some(sim) = self.state.engine.simulator_mut() else {
             return Err(no_simulator());
         };
-        if pending && settings.road_is_input() {
-            sim.set_road_input(settings.x_g, slope)?;
+        if pending && road_is_input {
+            let x_g = self.state.settings.x_g;
+            sim.set_road_input(x_g, slope)?;
             self.state.earlier_input = self.state.previous_input;
-            self.state.previous_input = Some((now, settings.x_g));
+            self.state.previous_input = Some((now, x_g));
         }
         self.state.input_pending = false;
         let advanced = Self::advance_extrapolated(sim, until, body_acceleration);
@@ -190,8 +194,8 @@ impl Slave {
                     "{e}; the FMU stays at t = {stopped} s ({}) and asks to terminate ({}); g = {} N/m, tau = {} s",
                     self.dialect.last_successful_time,
                     self.dialect.terminate_flag,
-                    settings.params.g,
-                    settings.params.tau
+                    self.state.settings.params.g,
+                    self.state.settings.params.tau
                 )))
             }
             Err(e) => {
