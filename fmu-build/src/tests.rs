@@ -1,3 +1,7 @@
+//! The builder's tests: platforms, archives, the generated files and the
+//! system structures, in one file beside the one binary they test (hence
+//! its length).
+
 use super::*;
 use tdvass_fmu::Model;
 

@@ -66,6 +66,9 @@
  * Exit code 0 when every file was written; 1 (message on stderr) when a call
  * of the good experiments did not return fmi2OK. Bad input is judged by the
  * tests, not here: the harness records what it observed.
+ *
+ * One source for every platform and every model on purpose (each platform
+ * compiles this one file): hence its length.
  */
 #define __USE_MINGW_ANSI_STDIO 1 /* C99 printf on Windows: exact %.17g */
 #include <stdarg.h>

@@ -58,6 +58,9 @@
  * Exit code 0 when every file was written; 1 (message on stderr) when a call
  * did not return fmi3OK, fmi3DoStep did not reach the end of its step or
  * a Model Exchange run's NX or NZ is not the FMU's.
+ *
+ * One source for every platform and every model on purpose (each platform
+ * compiles this one file): hence its length.
  */
 #define __USE_MINGW_ANSI_STDIO 1 /* C99 printf on Windows: exact %.17g */
 #include <stdio.h>

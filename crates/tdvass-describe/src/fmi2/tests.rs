@@ -1,3 +1,7 @@
+//! The FMI 2.0 model descriptions of every model, attribute by attribute
+//! against the one variable table: one file for the whole description, so
+//! that each test reads it the same way (hence its length).
+
 use super::*;
 use crate::parsed::elements;
 use tdvass::solver::CONTINUOUS_STATES;

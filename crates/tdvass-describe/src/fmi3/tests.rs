@@ -1,3 +1,7 @@
+//! The FMI 3.0 model descriptions of every model, attribute by attribute
+//! against the one variable table: one file for the whole description, so
+//! that each test reads it the same way (hence its length).
+
 use super::*;
 use crate::parsed::{Element, elements};
 use std::collections::{HashMap, HashSet};

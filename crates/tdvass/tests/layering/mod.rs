@@ -19,6 +19,9 @@
 //! Inside a folder the files are compared by the folder's table; across
 //! folders, and between a folder and a top-level module, the top-level
 //! modules are compared by the crate's table.
+//!
+//! One file on purpose: both crates' layers tests include it by path, and
+//! the parser is one piece (hence its length).
 
 // Each test crate that includes this file uses a part of it.
 #![allow(dead_code)]
