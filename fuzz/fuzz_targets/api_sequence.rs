@@ -1,6 +1,7 @@
 //! Fuzzes sequences of FMI calls with random arguments on up to two
-//! instances (Co-Simulation or Model Exchange, as the input chooses) and
-//! their FMU states: wrong states, NULL arrays, unknown value references,
+//! instances (Co-Simulation or Model Exchange, of the quarter car, the
+//! corner or the chassis, as the input chooses) and their FMU states
+//! (also between two models): wrong states, NULL arrays, unknown value references,
 //! NaN/Inf/huge values, bad steps, foreign and freed FMU states (also
 //! between the two kinds), corrupted serializations, and Model Exchange:
 //! time, continuous states with fuzzed values and counts, derivatives,
@@ -22,11 +23,14 @@ mod common;
 use common::*;
 use libfuzzer_sys::fuzz_target;
 use std::ptr::{null, null_mut};
+use tdvass_fmi2::Model;
 
 struct Slot {
     c: fmi2Component,
     /// The time the master believes the instance is at.
     time: f64,
+    /// The model its GUID names.
+    model: Model,
 }
 
 struct State {
@@ -60,9 +64,29 @@ fn slot_of(b: &mut Bytes) -> usize {
     b.u8() as usize % 2
 }
 
-/// `n` value references, or NULL (with `n` > 0 sometimes).
-fn vrs(b: &mut Bytes, n: usize) -> Vec<u32> {
-    (0..n).map(|_| value_reference(b)).collect()
+/// `n` value references of `model`, or NULL (with `n` > 0 sometimes).
+fn vrs(b: &mut Bytes, n: usize, model: Model) -> Vec<u32> {
+    (0..n).map(|_| value_reference_of(b, model)).collect()
+}
+
+/// The models an instance may be of, by the byte that also picks its
+/// interface type (the quarter car twice as often).
+const MODELS: [Model; 4] = [
+    Model::QuarterCar,
+    Model::QuarterCar,
+    Model::Corner,
+    Model::Chassis,
+];
+
+/// The values a master sets while simulating: `model`'s inputs and tunable
+/// parameters.
+fn settable(model: Model) -> Vec<u32> {
+    use tdvass_fmi2::variables::{Causality, FmiVersion, Variability, variables_of};
+    variables_of(model, FmiVersion::Fmi2)
+        .iter()
+        .filter(|v| v.causality == Causality::Input || v.variability == Variability::Tunable)
+        .map(|v| v.vr)
+        .collect()
 }
 
 fn maybe_null<T>(b: &mut Bytes, v: &[T]) -> *const T {
@@ -80,10 +104,6 @@ fn maybe_null_mut<T>(b: &mut Bytes, v: &mut [T]) -> *mut T {
         v.as_mut_ptr()
     }
 }
-
-/// Model Exchange: continuous states and event indicators.
-const NX: usize = 20;
-const NZ: usize = 1;
 
 /// A count near `n`: the right one most of the time.
 fn count_near(b: &mut Bytes, n: usize) -> usize {
@@ -112,7 +132,6 @@ fn flag(value: fmi2Boolean) {
 
 fuzz_target!(|data: &[u8]| {
     let callbacks = callbacks();
-    let guid = guid();
     let mut b = Bytes::new(data);
     let mut slots: [Option<Slot>; 2] = [None, None];
     let mut states: Vec<State> = Vec::new();
@@ -121,14 +140,26 @@ fuzz_target!(|data: &[u8]| {
         calls += 1;
         let op = b.u8() % 30;
         let i = slot_of(&mut b);
+        // The slot's model (the quarter car for an empty slot): its value
+        // references, and for Model Exchange its counts of continuous
+        // states and event indicators.
+        let model = slots[i].as_ref().map_or(Model::QuarterCar, |s| s.model);
+        let (nx, nz) = (model.continuous_states().len(), model.event_indicators());
         if trace() {
             eprintln!("call {calls}: op {op} on slot {i}");
         }
         if op == 0 {
             if slots[i].is_none() {
                 let name = b.pick(&[c"a".as_ptr(), c"".as_ptr(), null()]);
-                // fmi2CoSimulation, fmi2ModelExchange, or an unknown type.
-                let kind = b.pick(&[1, 1, 0, 0, 7]);
+                // fmi2CoSimulation, fmi2ModelExchange, or an unknown type;
+                // the same byte picks the model.
+                let pick = b.u8() as usize;
+                let kind = [1, 1, 0, 0, 7][pick % 5];
+                let model = MODELS[pick / 5 % MODELS.len()];
+                let guid = guid_of(model);
+                if trace() {
+                    eprintln!("  fmi2Instantiate: {model:?}, fmi2Type {kind}");
+                }
                 let g = b.pick(&[guid.as_ptr(), guid.as_ptr(), c"{x}".as_ptr(), null()]);
                 let uri = b.pick(&[
                     null(),
@@ -142,7 +173,11 @@ fuzz_target!(|data: &[u8]| {
                     fmi2Instantiate(name, kind, g, uri, &callbacks, 0, b.u8() as i32 % 2)
                 };
                 if !c.is_null() {
-                    slots[i] = Some(Slot { c, time: 0.0 });
+                    slots[i] = Some(Slot {
+                        c,
+                        time: 0.0,
+                        model,
+                    });
                 }
             }
             continue;
@@ -196,7 +231,7 @@ fuzz_target!(|data: &[u8]| {
                 }
                 7 => {
                     let n = b.u8() as usize % 4;
-                    let v = vrs(&mut b, n);
+                    let v = vrs(&mut b, n, model);
                     let values: Vec<f64> = (0..n).map(|_| real(&mut b)).collect();
                     if trace() {
                         eprintln!("  fmi2SetReal({v:?}, {values:?})");
@@ -210,7 +245,7 @@ fuzz_target!(|data: &[u8]| {
                 }
                 8 => {
                     let n = b.u8() as usize % 4;
-                    let v = vrs(&mut b, n);
+                    let v = vrs(&mut b, n, model);
                     let values: Vec<i32> = (0..n)
                         .map(|_| b.pick(&[0, 1, 2, 3, 4, 8, 9, -1, i32::MAX, i32::MIN]))
                         .collect();
@@ -226,7 +261,7 @@ fuzz_target!(|data: &[u8]| {
                 }
                 9 => {
                     let n = b.u8() as usize % 3;
-                    let v = vrs(&mut b, n);
+                    let v = vrs(&mut b, n, model);
                     let values: Vec<i32> = (0..n).map(|_| b.u8() as i32 - 1).collect();
                     check(fmi2SetBoolean(
                         c,
@@ -237,7 +272,7 @@ fuzz_target!(|data: &[u8]| {
                 }
                 10 => {
                     let n = b.u8() as usize % 5;
-                    let v = vrs(&mut b, n);
+                    let v = vrs(&mut b, n, model);
                     let mut reals = vec![0.0; n];
                     let p = maybe_null(&mut b, &v);
                     let out = maybe_null_mut(&mut b, &mut reals);
@@ -273,7 +308,7 @@ fuzz_target!(|data: &[u8]| {
                         if let Some(slot) = slots[i].as_mut() {
                             slot.time = t + h;
                         }
-                        assert_outputs_finite(c);
+                        assert_outputs_of_finite(c, model);
                     }
                 }
                 12 => {
@@ -388,8 +423,8 @@ fuzz_target!(|data: &[u8]| {
                 17 => {
                     let n = b.u8() as usize % 3;
                     let m = b.u8() as usize % 3;
-                    let unknowns = vrs(&mut b, n);
-                    let knowns = vrs(&mut b, m);
+                    let unknowns = vrs(&mut b, n, model);
+                    let knowns = vrs(&mut b, m, model);
                     let seed: Vec<f64> = (0..m).map(|_| real(&mut b)).collect();
                     let mut result = vec![0.0; n];
                     if check(fmi2GetDirectionalDerivative(
@@ -407,7 +442,7 @@ fuzz_target!(|data: &[u8]| {
                 }
                 18 => {
                     let n = b.u8() as usize % 3;
-                    let v = vrs(&mut b, n);
+                    let v = vrs(&mut b, n, model);
                     let orders: Vec<i32> = (0..n).map(|_| b.pick(&[1, 1, 2, 0, -1, 3])).collect();
                     let values: Vec<f64> = (0..n).map(|_| real(&mut b)).collect();
                     check(fmi2SetRealInputDerivatives(
@@ -466,10 +501,11 @@ fuzz_target!(|data: &[u8]| {
                 }
                 23 => {
                     // Continuous states: the current ones perturbed, or
-                    // fuzzed values; a count near 20, sometimes NULL.
-                    let mut x = [0.0; NX + 4];
-                    if check(fmi2GetContinuousStates(c, x.as_mut_ptr(), NX)) != OK {
-                        x = [0.0; NX + 4];
+                    // fuzzed values; a count near the model's, sometimes
+                    // NULL.
+                    let mut x = vec![0.0; nx + 4];
+                    if check(fmi2GetContinuousStates(c, x.as_mut_ptr(), nx)) != OK {
+                        x = vec![0.0; nx + 4];
                     }
                     for _ in 0..b.u8() % 4 {
                         let k = b.u8() as usize % x.len();
@@ -479,29 +515,32 @@ fuzz_target!(|data: &[u8]| {
                             _ => x[k] + b.pick(&[1e-3, -1e-2, 0.1, 1e9]),
                         };
                     }
-                    let n = count_near(&mut b, NX).min(x.len());
+                    let n = count_near(&mut b, nx).min(x.len());
                     if trace() {
                         eprintln!("  fmi2SetContinuousStates({:?}, {n})", &x[..n]);
                     }
                     check(fmi2SetContinuousStates(c, maybe_null(&mut b, &x), n));
                 }
                 24 => {
-                    let n = count_near(&mut b, NX);
+                    let n = count_near(&mut b, nx);
                     let mut dx = vec![f64::NAN; n.max(1)];
                     if check(fmi2GetDerivatives(c, maybe_null_mut(&mut b, &mut dx), n)) == OK {
-                        assert_eq!(n, NX);
+                        assert_eq!(n, nx);
                         assert!(
-                            dx.iter().all(|v| v.is_finite()),
+                            dx[..n].iter().all(|v| v.is_finite()),
                             "fmi2GetDerivatives gave {dx:?}"
                         );
                     }
                 }
                 25 => {
-                    let n = count_near(&mut b, NZ);
+                    let n = count_near(&mut b, nz);
                     let mut z = vec![f64::NAN; n.max(1)];
                     if check(fmi2GetEventIndicators(c, maybe_null_mut(&mut b, &mut z), n)) == OK {
-                        assert_eq!(n, NZ);
-                        assert!(z[0].is_finite(), "fmi2GetEventIndicators gave {z:?}");
+                        assert_eq!(n, nz);
+                        assert!(
+                            z[..n].iter().all(|v| v.is_finite()),
+                            "fmi2GetEventIndicators gave {z:?}"
+                        );
                     }
                 }
                 26 => {
@@ -566,7 +605,7 @@ fuzz_target!(|data: &[u8]| {
                     }
                 }
                 28 => {
-                    let n = count_near(&mut b, NX);
+                    let n = count_near(&mut b, nx);
                     let mut x = vec![f64::NAN; n.max(1)];
                     if check(fmi2GetContinuousStates(
                         c,
@@ -576,7 +615,7 @@ fuzz_target!(|data: &[u8]| {
                     {
                         assert!(x[..n].iter().all(|v| v.is_finite()), "states {x:?}");
                     }
-                    let n = count_near(&mut b, NX);
+                    let n = count_near(&mut b, nx);
                     let mut nominal = vec![f64::NAN; n.max(1)];
                     if check(fmi2GetNominalsOfContinuousStates(
                         c,
@@ -595,10 +634,10 @@ fuzz_target!(|data: &[u8]| {
                     // master makes them (the way deep into a run).
                     let h = b.pick(&[1e-5, 1e-4, 1e-4, 1e-3, 0.01]);
                     for _ in 0..1 + b.u8() % 8 {
-                        let mut x = [0.0; NX];
-                        let mut dx = [0.0; NX];
-                        if check(fmi2GetContinuousStates(c, x.as_mut_ptr(), NX)) != OK
-                            || check(fmi2GetDerivatives(c, dx.as_mut_ptr(), NX)) != OK
+                        let mut x = vec![0.0; nx];
+                        let mut dx = vec![0.0; nx];
+                        if check(fmi2GetContinuousStates(c, x.as_mut_ptr(), nx)) != OK
+                            || check(fmi2GetDerivatives(c, dx.as_mut_ptr(), nx)) != OK
                         {
                             break;
                         }
@@ -613,7 +652,7 @@ fuzz_target!(|data: &[u8]| {
                             *v += h * d;
                         }
                         let (mut enter, mut terminate) = (7, 7);
-                        if check(fmi2SetContinuousStates(c, x.as_ptr(), NX)) != OK
+                        if check(fmi2SetContinuousStates(c, x.as_ptr(), nx)) != OK
                             || check(fmi2CompletedIntegratorStep(
                                 c,
                                 1,
@@ -629,11 +668,11 @@ fuzz_target!(|data: &[u8]| {
                             break;
                         }
                     }
-                    assert_outputs_finite(c);
+                    assert_outputs_of_finite(c, model);
                 }
                 _ => {
                     // Tunable and input values while simulating.
-                    let vr = b.pick(&[10u32, 21, 22, 23, 30]);
+                    let vr = b.pick(&settable(model));
                     let value = real(&mut b);
                     if trace() {
                         eprintln!("  fmi2SetReal([{vr}], [{value:e}])");

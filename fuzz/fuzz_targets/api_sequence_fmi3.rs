@@ -1,7 +1,8 @@
 //! (A fuzz target is one source file: hence its length.) Fuzzes sequences
 //! of FMI 3.0 calls with random arguments on up to two
-//! instances (Co-Simulation or Model Exchange, as the input chooses) and
-//! their FMU states: wrong states, Configuration Mode and structural
+//! instances (Co-Simulation or Model Exchange, of the quarter car, the
+//! corner or the chassis, as the input chooses) and their FMU states (also
+//! between two models): wrong states, Configuration Mode and structural
 //! parameters, NULL arrays and out-pointers, unknown value references and
 //! wrong types, array lengths, NaN/Inf/huge values, bad steps, foreign and
 //! freed FMU states (also between the two kinds), corrupted serializations
@@ -19,7 +20,7 @@
 //! getters and setters is refused; an early return happens only when the
 //! master allowed and asked for it, at a time inside the step; successful
 //! Model Exchange getters give finite values (nominals > 0), the sizes are
-//! 20 and 1, the flags written are 0 or 1 (and no event is asked for: the
+//! the model's, the flags written are 0 or 1 (and no event is asked for: the
 //! model has state events only); every call returns (libFuzzer's -timeout
 //! catches a hang).
 #![no_main]
@@ -31,24 +32,38 @@ use common::{Bytes, real};
 use libfuzzer_sys::fuzz_target;
 use std::ffi::{CStr, c_char, c_int};
 use std::ptr::{null, null_mut};
+use tdvass_fmi2::Model;
+use tdvass_fmi2::variables::{FmiVersion, variables_of};
 use tdvass_fmi3::ffi::*;
 
 const OK: fmi3Status = 0;
 const ERROR: fmi3Status = 3;
 
-/// The variables (value references 1..=52; 51 is the array
-/// `rightmost_roots`), plus unknown ones.
-fn value_reference(b: &mut Bytes) -> u32 {
+/// A variable of `model` (the quarter car's value references are 1..=52,
+/// 51 the array `rightmost_roots`), or an unknown value reference.
+fn value_reference(b: &mut Bytes, model: Model) -> u32 {
     match b.u8() % 8 {
         0 => b.u32(),
         1 => b.pick(&[0, 53, 99, u32::MAX]),
-        _ => 1 + b.u8() as u32 % 52,
+        _ => {
+            let variables = variables_of(model, FmiVersion::Fmi3);
+            variables[b.u8() as usize % variables.len()].vr
+        }
     }
 }
 
-fn vrs(b: &mut Bytes, n: usize) -> Vec<u32> {
-    (0..n).map(|_| value_reference(b)).collect()
+fn vrs(b: &mut Bytes, n: usize, model: Model) -> Vec<u32> {
+    (0..n).map(|_| value_reference(b, model)).collect()
 }
+
+/// The models an instance may be of, by the byte that also picks its
+/// name (the quarter car twice as often).
+const MODELS: [Model; 4] = [
+    Model::QuarterCar,
+    Model::QuarterCar,
+    Model::Corner,
+    Model::Chassis,
+];
 
 fn maybe_null<T>(b: &mut Bytes, v: &[T]) -> *const T {
     if b.u8().is_multiple_of(16) {
@@ -75,10 +90,6 @@ fn count_near(b: &mut Bytes, n: usize) -> usize {
         _ => n,
     }
 }
-
-/// Model Exchange: continuous states and event indicators.
-const NX: usize = 20;
-const NZ: usize = 1;
 
 /// A time step of a master's integrator (or a fuzzed value).
 fn time_step(b: &mut Bytes) -> f64 {
@@ -132,6 +143,8 @@ unsafe extern "C" fn logger(
 /// fuzzer bytes (a copy taken when the step began), read at each update.
 struct Master {
     instance: fmi3Instance,
+    /// The model its instantiation token names.
+    model: Model,
     script: Vec<u8>,
     at: usize,
     early_return_allowed: bool,
@@ -304,7 +317,7 @@ unsafe extern "C" fn on_update(
                 }
                 3 => {
                     let n = b.u8() as usize % 3;
-                    let v = vrs(&mut b, n);
+                    let v = vrs(&mut b, n, master.model);
                     if b.u8().is_multiple_of(2) {
                         get_all(&mut b, c, &v);
                     } else {
@@ -355,6 +368,8 @@ struct Slot {
     /// The time the master believes the instance is at.
     time: f64,
     master: *mut Master,
+    /// The model its instantiation token names.
+    model: Model,
 }
 
 struct State {
@@ -398,10 +413,8 @@ unsafe fn free_slot(slot: Slot) {
 }
 
 fuzz_target!(|data: &[u8]| {
-    let token = std::ffi::CString::new(tdvass_fmi3::instantiation_token(
-        tdvass_fmi2::Model::QuarterCar,
-    ))
-    .unwrap();
+    let tokens = MODELS
+        .map(|model| std::ffi::CString::new(tdvass_fmi3::instantiation_token(model)).unwrap());
     let fmi2_guid = tdvass_fmi2::guid(tdvass_fmi2::Model::QuarterCar);
     let mut b = Bytes::new(data);
     let mut slots: [Option<Slot>; 2] = [None, None];
@@ -411,12 +424,24 @@ fuzz_target!(|data: &[u8]| {
         calls += 1;
         let op = b.u8() % 32;
         let i = slot_of(&mut b);
+        // The slot's model (the quarter car for an empty slot): its value
+        // references, and for Model Exchange its counts of continuous
+        // states and event indicators.
+        let model = slots[i].as_ref().map_or(Model::QuarterCar, |s| s.model);
+        let (nx, nz) = (model.continuous_states().len(), model.event_indicators());
         if trace() {
             eprintln!("call {calls}: op {op} on slot {i}");
         }
         if op == 0 {
             if slots[i].is_none() {
-                let name = b.pick(&[c"a".as_ptr(), c"a".as_ptr(), c"".as_ptr(), null()]);
+                // The byte that picks the name picks the model too.
+                let pick = b.u8() as usize;
+                let name = [c"a".as_ptr(), c"a".as_ptr(), c"".as_ptr(), null()][pick % 4];
+                let which = pick / 4 % MODELS.len();
+                let (model, token) = (MODELS[which], &tokens[which]);
+                if trace() {
+                    eprintln!("  instantiate: {model:?}");
+                }
                 let t = b.pick(&[
                     token.as_ptr(),
                     token.as_ptr(),
@@ -431,12 +456,13 @@ fuzz_target!(|data: &[u8]| {
                 let with_callback = flags & 2 != 0;
                 let event_mode = flags & 0x1c == 0x1c;
                 let required: Vec<u32> = if flags & 0x20 != 0 {
-                    vrs(&mut b, 2)
+                    vrs(&mut b, 2, model)
                 } else {
                     Vec::new()
                 };
                 let master = Box::into_raw(Box::new(Master {
                     instance: null_mut(),
+                    model,
                     script: Vec::new(),
                     at: 0,
                     early_return_allowed: early,
@@ -489,6 +515,7 @@ fuzz_target!(|data: &[u8]| {
                         c,
                         time: 0.0,
                         master,
+                        model,
                     });
                 }
             }
@@ -551,19 +578,19 @@ fuzz_target!(|data: &[u8]| {
                 }
                 6 | 7 => {
                     let n = b.u8() as usize % 4;
-                    let v = vrs(&mut b, n);
+                    let v = vrs(&mut b, n, model);
                     set_one(&mut b, c, &v);
                 }
                 8 => {
                     let n = b.u8() as usize % 5;
-                    let v = vrs(&mut b, n);
+                    let v = vrs(&mut b, n, model);
                     get_all(&mut b, c, &v);
                 }
                 9 => {
                     // rightmost_roots (root_count x 2), alone or with scalars.
                     let mut v = vec![51u32];
                     if b.u8().is_multiple_of(2) {
-                        v.push(value_reference(&mut b));
+                        v.push(value_reference(&mut b, model));
                     }
                     let n = b.u8() as usize % 40;
                     let mut out = vec![0.0; n];
@@ -756,8 +783,8 @@ fuzz_target!(|data: &[u8]| {
                 17 => {
                     let n = b.u8() as usize % 3;
                     let m = b.u8() as usize % 3;
-                    let unknowns = vrs(&mut b, n);
-                    let knowns = vrs(&mut b, m);
+                    let unknowns = vrs(&mut b, n, model);
+                    let knowns = vrs(&mut b, m, model);
                     let adjoint = b.u8().is_multiple_of(2);
                     let (n_seed, n_out) = if adjoint { (n, m) } else { (m, n) };
                     let (n_seed, n_out) = (count_near(&mut b, n_seed), count_near(&mut b, n_out));
@@ -785,7 +812,7 @@ fuzz_target!(|data: &[u8]| {
                 }
                 18 => {
                     let n = b.u8() as usize % 3;
-                    let v = vrs(&mut b, n);
+                    let v = vrs(&mut b, n, model);
                     let orders: Vec<i32> = (0..n).map(|_| b.pick(&[1, 1, 2, 0, -1])).collect();
                     let mut out = vec![0.0; n];
                     if check(fmi3GetOutputDerivatives(
@@ -799,7 +826,7 @@ fuzz_target!(|data: &[u8]| {
                     {
                         assert!(out.iter().all(|x| x.is_finite()), "{out:?}");
                     }
-                    let vr = value_reference(&mut b);
+                    let vr = value_reference(&mut b, model);
                     let mut k = 0usize;
                     if check(fmi3GetNumberOfVariableDependencies(c, vr, &mut k)) == OK {
                         let k = count_near(&mut b, k);
@@ -825,7 +852,7 @@ fuzz_target!(|data: &[u8]| {
                         // root_count, sometimes out of range or with another variable.
                         let mut v = vec![50u32];
                         if b.u8().is_multiple_of(4) {
-                            v.push(value_reference(&mut b));
+                            v.push(value_reference(&mut b, model));
                         }
                         let values: Vec<u64> =
                             v.iter().map(|_| b.pick(&[1, 3, 4, 6, 16, 0, 17])).collect();
@@ -899,10 +926,11 @@ fuzz_target!(|data: &[u8]| {
                 }
                 25 => {
                     // Continuous states: the current ones perturbed, or
-                    // fuzzed values; a count near 20, sometimes NULL.
-                    let mut x = [0.0; NX + 4];
-                    if check(fmi3GetContinuousStates(c, x.as_mut_ptr(), NX)) != OK {
-                        x = [0.0; NX + 4];
+                    // fuzzed values; a count near the model's, sometimes
+                    // NULL.
+                    let mut x = vec![0.0; nx + 4];
+                    if check(fmi3GetContinuousStates(c, x.as_mut_ptr(), nx)) != OK {
+                        x = vec![0.0; nx + 4];
                     }
                     for _ in 0..b.u8() % 4 {
                         let k = b.u8() as usize % x.len();
@@ -912,14 +940,14 @@ fuzz_target!(|data: &[u8]| {
                             _ => x[k] + b.pick(&[1e-3, -1e-2, 0.1, 1e9]),
                         };
                     }
-                    let n = count_near(&mut b, NX).min(x.len());
+                    let n = count_near(&mut b, nx).min(x.len());
                     if trace() {
                         eprintln!("  fmi3SetContinuousStates({:?}, {n})", &x[..n]);
                     }
                     check(fmi3SetContinuousStates(c, maybe_null(&mut b, &x), n));
                 }
                 26 => {
-                    let n = count_near(&mut b, NX);
+                    let n = count_near(&mut b, nx);
                     let mut dx = vec![f64::NAN; n.max(1)];
                     if check(fmi3GetContinuousStateDerivatives(
                         c,
@@ -927,14 +955,17 @@ fuzz_target!(|data: &[u8]| {
                         n,
                     )) == OK
                     {
-                        assert_eq!(n, NX);
-                        assert!(dx.iter().all(|v| v.is_finite()), "derivatives {dx:?}");
+                        assert_eq!(n, nx);
+                        assert!(dx[..n].iter().all(|v| v.is_finite()), "derivatives {dx:?}");
                     }
-                    let n = count_near(&mut b, NZ);
+                    let n = count_near(&mut b, nz);
                     let mut z = vec![f64::NAN; n.max(1)];
                     if check(fmi3GetEventIndicators(c, maybe_null_mut(&mut b, &mut z), n)) == OK {
-                        assert_eq!(n, NZ);
-                        assert!(z[0].is_finite(), "event indicators {z:?}");
+                        assert_eq!(n, nz);
+                        assert!(
+                            z[..n].iter().all(|v| v.is_finite()),
+                            "event indicators {z:?}"
+                        );
                     }
                 }
                 27 => {
@@ -1001,7 +1032,7 @@ fuzz_target!(|data: &[u8]| {
                     }
                 }
                 29 => {
-                    let n = count_near(&mut b, NX);
+                    let n = count_near(&mut b, nx);
                     let mut x = vec![f64::NAN; n.max(1)];
                     if check(fmi3GetContinuousStates(
                         c,
@@ -1011,7 +1042,7 @@ fuzz_target!(|data: &[u8]| {
                     {
                         assert!(x[..n].iter().all(|v| v.is_finite()), "states {x:?}");
                     }
-                    let n = count_near(&mut b, NX);
+                    let n = count_near(&mut b, nx);
                     let mut nominal = vec![f64::NAN; n.max(1)];
                     if check(fmi3GetNominalsOfContinuousStates(
                         c,
@@ -1033,7 +1064,7 @@ fuzz_target!(|data: &[u8]| {
                         &mut n as *mut usize
                     };
                     if check(fmi3GetNumberOfContinuousStates(c, p)) == OK {
-                        assert_eq!(n, NX);
+                        assert_eq!(n, nx);
                     }
                     let mut n = 7usize;
                     let p = if b.u8().is_multiple_of(16) {
@@ -1042,7 +1073,7 @@ fuzz_target!(|data: &[u8]| {
                         &mut n as *mut usize
                     };
                     if check(fmi3GetNumberOfEventIndicators(c, p)) == OK {
-                        assert_eq!(n, NZ);
+                        assert_eq!(n, nz);
                     }
                 }
                 31 => {
@@ -1050,10 +1081,10 @@ fuzz_target!(|data: &[u8]| {
                     // master makes them (the way deep into a run).
                     let h = b.pick(&[1e-5, 1e-4, 1e-4, 1e-3, 0.01]);
                     for _ in 0..1 + b.u8() % 8 {
-                        let mut x = [0.0; NX];
-                        let mut dx = [0.0; NX];
-                        if check(fmi3GetContinuousStates(c, x.as_mut_ptr(), NX)) != OK
-                            || check(fmi3GetContinuousStateDerivatives(c, dx.as_mut_ptr(), NX))
+                        let mut x = vec![0.0; nx];
+                        let mut dx = vec![0.0; nx];
+                        if check(fmi3GetContinuousStates(c, x.as_mut_ptr(), nx)) != OK
+                            || check(fmi3GetContinuousStateDerivatives(c, dx.as_mut_ptr(), nx))
                                 != OK
                         {
                             break;
@@ -1069,7 +1100,7 @@ fuzz_target!(|data: &[u8]| {
                             *v += h * d;
                         }
                         let (mut enter, mut terminate) = (7u8, 7u8);
-                        if check(fmi3SetContinuousStates(c, x.as_ptr(), NX)) != OK
+                        if check(fmi3SetContinuousStates(c, x.as_ptr(), nx)) != OK
                             || check(fmi3CompletedIntegratorStep(
                                 c,
                                 1,

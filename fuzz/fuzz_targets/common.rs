@@ -205,6 +205,19 @@ pub fn value_reference(b: &mut Bytes) -> u32 {
     }
 }
 
+/// A value reference for `model`: mostly one of its variables', sometimes
+/// another model's or none at all.
+pub fn value_reference_of(b: &mut Bytes, model: tdvass_fmi2::Model) -> u32 {
+    use tdvass_fmi2::variables::{FmiVersion, variables_of};
+    match b.u8() % 4 {
+        0 => value_reference(b),
+        _ => {
+            let variables = variables_of(model, FmiVersion::Fmi2);
+            variables[b.u8() as usize % variables.len()].vr
+        }
+    }
+}
+
 /// Every output of the quarter car is finite.
 pub fn assert_outputs_finite(c: fmi2Component) {
     assert_outputs_of_finite(c, tdvass_fmi2::Model::QuarterCar);
