@@ -69,15 +69,6 @@ fn vrs(b: &mut Bytes, n: usize, model: Model) -> Vec<u32> {
     (0..n).map(|_| value_reference_of(b, model)).collect()
 }
 
-/// The models an instance may be of, by the byte that also picks its
-/// interface type (the quarter car twice as often).
-const MODELS: [Model; 4] = [
-    Model::QuarterCar,
-    Model::QuarterCar,
-    Model::Corner,
-    Model::Chassis,
-];
-
 /// The values a master sets while simulating: `model`'s inputs and tunable
 /// parameters.
 fn settable(model: Model) -> Vec<u32> {

@@ -28,7 +28,7 @@
 #[path = "common.rs"]
 mod common;
 
-use common::{Bytes, real};
+use common::{Bytes, MODELS, real};
 use libfuzzer_sys::fuzz_target;
 use std::ffi::{CStr, c_char, c_int};
 use std::ptr::{null, null_mut};
@@ -55,15 +55,6 @@ fn value_reference(b: &mut Bytes, model: Model) -> u32 {
 fn vrs(b: &mut Bytes, n: usize, model: Model) -> Vec<u32> {
     (0..n).map(|_| value_reference(b, model)).collect()
 }
-
-/// The models an instance may be of, by the byte that also picks its
-/// name (the quarter car twice as often).
-const MODELS: [Model; 4] = [
-    Model::QuarterCar,
-    Model::QuarterCar,
-    Model::Corner,
-    Model::Chassis,
-];
 
 fn maybe_null<T>(b: &mut Bytes, v: &[T]) -> *const T {
     if b.u8().is_multiple_of(16) {

@@ -205,6 +205,15 @@ pub fn value_reference(b: &mut Bytes) -> u32 {
     }
 }
 
+/// The models a call-sequence target instantiates, picked by a byte it
+/// reads anyway (the quarter car twice as often).
+pub const MODELS: [tdvass_fmi2::Model; 4] = [
+    tdvass_fmi2::Model::QuarterCar,
+    tdvass_fmi2::Model::QuarterCar,
+    tdvass_fmi2::Model::Corner,
+    tdvass_fmi2::Model::Chassis,
+];
+
 /// A value reference for `model`: mostly one of its variables', sometimes
 /// another model's or none at all.
 pub fn value_reference_of(b: &mut Bytes, model: tdvass_fmi2::Model) -> u32 {
