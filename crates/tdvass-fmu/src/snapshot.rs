@@ -484,9 +484,13 @@ fn decode_payload(bytes: &[u8], model: Model, version: u32) -> Result<SlaveState
                 "simulator time {now} s (committed {committed} s) does not fit its start {start_time} s and internal step {step} s"
             )));
         }
-        if let Some((name, value)) =
-            crate::guards::non_finite_output(settings.model, &sim.outputs())
-        {
+        // A current state saved to be found later stays so (its bytes
+        // round-trip): the outputs are checked on a copy that finds it.
+        let outputs = match sim.computed_state() {
+            Some(_) => sim.outputs(),
+            None => sim.clone().outputs(),
+        };
+        if let Some((name, value)) = crate::guards::non_finite_output(settings.model, &outputs) {
             return Err(invalid(format_args!("output `{name}` = {value}")));
         }
     }

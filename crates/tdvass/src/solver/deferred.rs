@@ -9,10 +9,12 @@
 //! point (a getter of the time averages does not need it). So the
 //! simulator may defer it: `current_state` then holds the committed state
 //! and `Simulator::settle` computes the state at `t` when it is first
-//! needed (the state, the outputs, the saved bytes, a change of the
-//! operators or of the road), by the same function of the same values
-//! (the committed point, the step, the history and the road do not change
-//! before it), so the result is the same to the bit.
+//! needed (the state, the outputs, a change of the operators or of the
+//! road), by the same function of the same values (the committed point,
+//! the step, the history and the road do not change before it), so the
+//! result is the same to the bit. The saved bytes keep it deferred: they
+//! hold what finds it (format 7), and a restored simulator finds it
+//! when first asked, from the same values again.
 //!
 //! **The divergence check.** `advance_to` checks the state at `t`. A
 //! deferred state is shown to pass it by bounds of `|x_i(t) − x_c,i|`
@@ -61,6 +63,28 @@ pub(super) enum Kind {
     /// [`Stepping::integrate_within_step`](super::stepping::Stepping::integrate_within_step)
     /// from the committed point.
     InsideStep,
+}
+
+impl Kind {
+    /// The byte a saved state holds for `deferral` (0: the state is
+    /// computed).
+    pub(super) fn code(deferral: Option<Kind>) -> u8 {
+        match deferral {
+            None => 0,
+            Some(Kind::NearNode) => 1,
+            Some(Kind::InsideStep) => 2,
+        }
+    }
+
+    /// The deferral of [`Kind::code`]'s byte (`None` for an unknown one).
+    pub(super) fn from_code(code: u8) -> Option<Option<Kind>> {
+        match code {
+            0 => Some(None),
+            1 => Some(Some(Kind::NearNode)),
+            2 => Some(Some(Kind::InsideStep)),
+            _ => None,
+        }
+    }
 }
 
 /// A deferred current state: what finds it and bounds of `|x_i − x_c,i|`.
@@ -296,9 +320,9 @@ mod tests {
         }
     }
 
-    /// The state, the saved bytes, the first loss of contact and the
-    /// outputs of `sim` (its state deferred) are those of its state
-    /// computed.
+    /// The state, the state restored from the saved bytes, the first loss
+    /// of contact and the outputs of `sim` (its state deferred) are those
+    /// of its state computed.
     fn same_as_at_once(name: &str, sim: &Simulator) {
         let t = sim.time();
         let mut settled = sim.clone();
@@ -309,7 +333,16 @@ mod tests {
             bits(settled.trajectory.current_state),
             "{name}, t = {t}"
         );
-        assert_eq!(sim.to_bytes(), settled.to_bytes(), "{name}, t = {t}");
+        // Saved as it stands, and found after the restore.
+        let bytes = sim.to_bytes();
+        let restored = Simulator::from_bytes(&bytes).unwrap();
+        assert!(restored.computed_state().is_none(), "{name}, t = {t}");
+        assert_eq!(restored.to_bytes(), bytes, "{name}, t = {t}");
+        assert_eq!(
+            bits(restored.state()),
+            bits(settled.trajectory.current_state),
+            "{name}, t = {t}"
+        );
         assert_eq!(
             sim.clone().first_contact_loss(),
             settled.clone().first_contact_loss(),

@@ -39,8 +39,12 @@ use crate::road::RoadState;
 /// version 4 still loads (its flight in progress says the mode). Version 6
 /// added the body ([`crate::model::Body`]) and the road's shift
 /// ([`crate::road::RoadShift`]) to the configuration; versions 4 and 5 load
-/// with the sprung mass and the road as it is.
-pub const STATE_FORMAT_VERSION: u64 = 6;
+/// with the sprung mass and the road as it is. Version 7 added, after the
+/// points, what finds a current state still to be found (`deferred`): such
+/// a state is saved as it stands, without computing it, and found when
+/// first asked for after a restore, the same value to the bit; versions 4
+/// to 6 load with the state computed.
+pub const STATE_FORMAT_VERSION: u64 = 7;
 
 /// The oldest version read.
 const OLDEST_FORMAT_VERSION: u64 = 4;
@@ -64,18 +68,15 @@ fn read_step_bound(r: &mut ByteReader, config: &SimulationConfig) -> Result<f64>
 }
 
 /// [`Simulator::to_bytes`]: each part writes its own bytes, in this order.
+/// A deferred current state is written as it stands (nothing is computed
+/// or copied).
 pub(super) fn to_bytes(sim: &Simulator) -> Vec<u8> {
-    if sim.computed_state().is_none() {
-        // The same bytes as when the state was computed at once.
-        let mut settled = sim.clone();
-        settled.settle();
-        return settled.to_bytes();
-    }
     let mut w = ByteWriter::default();
     w.u64(STATE_FORMAT_VERSION);
     sim.config.write(&mut w);
     w.f64(sim.step_choice.step_bound);
     sim.trajectory.write_points(&mut w);
+    sim.trajectory.write_deferral(&mut w);
     sim.inputs.write_history(&mut w);
     sim.observers.write_sums(&mut w);
     sim.trajectory.write_filter(&mut w);
@@ -100,6 +101,11 @@ pub(super) fn from_bytes(bytes: &[u8]) -> Result<Simulator> {
     let step_bound = read_step_bound(&mut r, &config)?;
     let mut sim = Simulator::with_step_bound(config, step_bound)?;
     sim.trajectory.read_points(&mut r)?;
+    let deferral = if version >= 7 {
+        sim.trajectory.read_deferral(&mut r)?
+    } else {
+        None
+    };
     sim.inputs.read_history(&mut r)?;
     sim.observers.read_sums(&mut r)?;
     sim.trajectory.read_filter(&mut r)?;
@@ -141,6 +147,16 @@ pub(super) fn from_bytes(bytes: &[u8]) -> Result<Simulator> {
     sim.inputs
         .road
         .restore_dynamic_state(&road, sim.trajectory.committed_time, horizon)?;
+    // A deferred state's bounds, found again from the same values (they
+    // passed when it was saved).
+    if let Some(kind) = deferral
+        && !sim.defer(sim.trajectory.current_time, kind)
+    {
+        return Err(Error::InvalidState(format!(
+            "the current state at {} s is saved to be found later ({kind:?}), but its bounds do not show that it passes the divergence check",
+            sim.trajectory.current_time
+        )));
+    }
     Ok(sim)
 }
 

@@ -7,7 +7,7 @@
 //! `deferred`, `stepping`, `system` and the crate's `bytes`, `error`,
 //! `model`.
 
-use super::deferred::Deferred;
+use super::deferred::{Deferred, Kind};
 use super::stepping::Committed;
 use super::system::Filter;
 use crate::bytes::{ByteReader, ByteWriter};
@@ -61,7 +61,8 @@ impl Trajectory {
     }
 
     /// Writes the grid index and the committed and current points (a
-    /// deferred current state is settled before).
+    /// deferred current state as the committed one: see
+    /// [`Trajectory::write_deferral`]).
     pub(super) fn write_points(&self, w: &mut ByteWriter) {
         w.u64(self.grid_index);
         w.f64(self.committed_time);
@@ -83,6 +84,27 @@ impl Trajectory {
             *v = r.f64()?;
         }
         Ok(())
+    }
+
+    /// Writes what finds a deferred current state (one byte,
+    /// [`Kind::code`]); the bounds are found again when the bytes are read.
+    pub(super) fn write_deferral(&self, w: &mut ByteWriter) {
+        w.u8(Kind::code(self.deferred.map(|d| d.kind)));
+    }
+
+    /// Reads what [`Trajectory::write_deferral`] wrote. A deferred state
+    /// must have been written as the committed one.
+    pub(super) fn read_deferral(&self, r: &mut ByteReader) -> Result<Option<Kind>> {
+        let code = r.u8()?;
+        let deferral = Kind::from_code(code)
+            .ok_or_else(|| Error::InvalidState(format!("deferral {code}: 0, 1 or 2 is read")))?;
+        let bits = |x: &State| x.map(f64::to_bits);
+        if deferral.is_some() && bits(&self.current_state) != bits(&self.committed_state) {
+            return Err(Error::InvalidState(
+                "a deferred current state must be written as the committed one".into(),
+            ));
+        }
+        Ok(deferral)
     }
 
     /// Writes the filter state at the committed point.

@@ -2,7 +2,7 @@
 //! a message naming it.
 
 use super::*;
-use crate::model::{Body, TireContact};
+use crate::model::{Body, State, TireContact};
 use crate::road::{RandomRoad, RoadClass, RoadSpec};
 use crate::solver::Metrics;
 
@@ -80,9 +80,10 @@ fn grid_index_inconsistent_with_the_committed_time_is_refused() {
 fn rms_accumulators_inconsistent_with_the_grid_index_are_refused() {
     let sim = running();
     let bytes = sim.to_bytes();
-    // After the history ring (its length, then 2 values per node) come
-    // the three sums of squares and the sample count.
-    let sums_at = current_time_at(&sim) + 8 + 6 * 8 + 8 + 16 * sim.inputs.history.len();
+    // After the deferral byte and the history ring (its length, then 2
+    // values per node) come the three sums of squares and the sample
+    // count.
+    let sums_at = current_time_at(&sim) + 8 + 6 * 8 + 1 + 8 + 16 * sim.inputs.history.len();
     let samples_at = sums_at + 3 * 8;
     assert_eq!(
         bytes[samples_at..samples_at + 8],
@@ -307,13 +308,13 @@ fn states_of_format_4_still_load() {
             continue;
         }
         (saw_flight, saw_contact) = (saw_flight || in_flight, saw_contact || !in_flight);
-        let bytes = sim.to_bytes();
+        let bytes = settled(&sim).to_bytes();
         let road_len = 16 + 8 + 8 + 8 * sim.inputs.road.dynamic_state().nodes.len() + 8;
         let flight_len = if in_flight { 16 } else { 8 };
         let mode_at = bytes.len() - road_len - flight_len - 8;
         let mut old = bytes[..mode_at].to_vec();
         old.extend(&bytes[mode_at + 8..]);
-        let old = without_body(&sim, &old, 4);
+        let old = as_format(&sim, &old, 4);
         let restored = Simulator::from_bytes(&old).unwrap();
         assert_eq!(restored.in_flight(), in_flight);
         assert_eq!(restored.to_bytes(), bytes, "in flight: {in_flight}");
@@ -473,14 +474,29 @@ fn last_node_until_is_bounded_where_node_times_do_not_resolve_steps() {
     assert!(reached(&sim, j) && !reached(&sim, j + 1));
 }
 
-/// `bytes` (of `sim`) as format `version` (4 or 5) wrote them: without
-/// the configuration's body and road shift (its last three words).
-fn without_body(sim: &Simulator, bytes: &[u8], version: u64) -> Vec<u8> {
-    let mut config = ByteWriter::default();
-    sim.config.write(&mut config);
-    let body_at = 8 + config.bytes.len() - 24;
-    let mut old = bytes[..body_at].to_vec();
-    old.extend(&bytes[body_at + 24..]);
+/// `sim` with its current state computed, as the formats before 7 saved
+/// it.
+fn settled(sim: &Simulator) -> Simulator {
+    let mut settled = sim.clone();
+    settled.settle();
+    settled
+}
+
+/// `bytes` (of `sim`, its state computed) as format `version` (4 to 6)
+/// wrote them: without the deferral byte after the points (format 7), and
+/// before 6 without the configuration's body and road shift (its last
+/// three words).
+fn as_format(sim: &Simulator, bytes: &[u8], version: u64) -> Vec<u8> {
+    let deferral_at = current_time_at(sim) + 8 + 6 * 8;
+    assert_eq!(bytes[deferral_at], 0, "a computed state");
+    let mut old = bytes[..deferral_at].to_vec();
+    old.extend(&bytes[deferral_at + 1..]);
+    if version < 6 {
+        let mut config = ByteWriter::default();
+        sim.config.write(&mut config);
+        let body_at = 8 + config.bytes.len() - 24;
+        old.drain(body_at..body_at + 24);
+    }
     put(&mut old, 0, version);
     old
 }
@@ -493,10 +509,63 @@ fn states_of_format_5_still_load_with_the_sprung_mass() {
     })
     .unwrap();
     sim.advance_to(0.1234).unwrap();
-    let bytes = sim.to_bytes();
-    let restored = Simulator::from_bytes(&without_body(&sim, &bytes, 5)).unwrap();
+    let bytes = settled(&sim).to_bytes();
+    let restored = Simulator::from_bytes(&as_format(&sim, &bytes, 5)).unwrap();
     assert_eq!(restored.config().body, Body::Mass);
     assert_eq!(restored.to_bytes(), bytes);
+}
+
+/// The bytes of format 6, which saved every current state computed, still
+/// load: a corner inside a step, on the delayed random road.
+#[test]
+fn states_of_format_6_still_load() {
+    let mut sim = Simulator::new(SimulationConfig {
+        body: Body::Attached,
+        road: RoadSpec::Iso8608(RandomRoad::default()),
+        road_shift: crate::road::RoadShift {
+            delay: 0.01,
+            phase: 0.0,
+        },
+        ..SimulationConfig::default()
+    })
+    .unwrap();
+    sim.advance_to(0.03).unwrap();
+    sim.set_body_input(0.002, -0.03).unwrap();
+    sim.advance_to(0.08765).unwrap();
+    let bytes = settled(&sim).to_bytes();
+    let mut restored = Simulator::from_bytes(&as_format(&sim, &bytes, 6)).unwrap();
+    assert!(restored.computed_state().is_some());
+    assert_eq!(restored.to_bytes(), bytes);
+    sim.advance_to(0.2).unwrap();
+    restored.advance_to(0.2).unwrap();
+    assert_eq!(restored.to_bytes(), sim.to_bytes());
+}
+
+/// A state saved while still to be found is saved as it stands and found
+/// after the restore; a deferral byte out of range, or a deferred state
+/// not written as the committed one, is refused by name.
+#[test]
+fn a_deferred_state_is_saved_as_it_stands() {
+    let mut sim = running();
+    sim.advance_to(0.06234).unwrap();
+    assert!(sim.computed_state().is_none(), "inside a step: deferred");
+    let bytes = sim.to_bytes();
+    let deferral_at = current_time_at(&sim) + 8 + 6 * 8;
+    assert_eq!(bytes[deferral_at], 2);
+    let mut restored = Simulator::from_bytes(&bytes).unwrap();
+    assert!(restored.computed_state().is_none());
+    assert_eq!(restored.to_bytes(), bytes);
+    let bits = |x: State| x.map(f64::to_bits);
+    assert_eq!(bits(restored.state()), bits(sim.state()));
+    sim.advance_to(0.1).unwrap();
+    restored.advance_to(0.1).unwrap();
+    assert_eq!(restored.to_bytes(), sim.to_bytes());
+    let mut wrong = bytes.clone();
+    wrong[deferral_at] = 3;
+    refused(&wrong, &["deferral 3"]);
+    let mut wrong = bytes.clone();
+    put(&mut wrong, current_time_at(&sim) + 8, 1e-3f64.to_bits());
+    refused(&wrong, &["deferred", "committed"]);
 }
 
 #[test]
