@@ -139,8 +139,8 @@ fn stability_command(a: StabilityArgs) -> Result<String> {
 
 fn execute(cli: Cli) -> Result<String> {
     match cli.command {
-        Command::Simulate(a) => simulate_command(a),
-        Command::Stability(a) => stability_command(a),
+        Command::Simulate(a) => simulate_command(a.0),
+        Command::Stability(a) => stability_command(a.0),
         Command::Stable(a) => {
             let report =
                 StableReport::compute(&a.model.params(), parse_variant(&a.variant)?, a.roots)?;
@@ -188,9 +188,9 @@ fn execute(cli: Cli) -> Result<String> {
                 csv
             })
         }
-        Command::Optimize(a) => optimize_command(a),
-        Command::Map(a) => map_command(a),
-        Command::Car(a) => car::car_command(*a),
+        Command::Optimize(a) => optimize_command(a.0),
+        Command::Map(a) => map_command(a.0),
+        Command::Car(a) => car::car_command(*a.0),
     }
 }
 

@@ -1,7 +1,7 @@
 //! The command line's arguments: the clap definitions of every subcommand
 //! and the parsing of names (variant, road, target).
 
-use clap::{Args, CommandFactory, Parser, Subcommand};
+use clap::{ArgMatches, Args, CommandFactory, FromArgMatches, Parser, Subcommand};
 use tdvass::TireContact;
 use tdvass::analysis::optimize::{
     CONTROLLER_DELAY_RANGE, CONTROLLER_GAIN_RANGE, DEFAULT_TRAVEL_LIMIT, Objective, Target,
@@ -28,25 +28,92 @@ pub struct Cli {
 #[derive(Debug, Subcommand)]
 pub(super) enum Command {
     /// Time-domain run from rest; RMS of BA, SDD, TDD and the objective J.
-    Simulate(SimulateArgs),
+    Simulate(Deferred<SimulateArgs>),
     /// Delay-independent range, crossing frequencies, critical delays and
     /// stable delay intervals for a gain g (section 3), of the linear model
     /// (the bilateral tire; --tire-contact does not apply).
-    Stability(StabilityArgs),
+    Stability(Deferred<StabilityArgs>),
     /// Rightmost characteristic roots and stability at one (g, tau), of the
     /// linear model (the bilateral tire; --tire-contact does not apply).
-    Stable(StableArgs),
+    Stable(Deferred<StableArgs>),
     /// Amplitude-frequency characteristics, Eq. (4) and (5), of the linear
     /// model (the bilateral tire; --tire-contact does not apply).
-    Frf(FrfArgs),
+    Frf(Deferred<FrfArgs>),
     /// Particle swarm optimisation of the absorber or the controller.
-    Optimize(OptimizeArgs),
+    Optimize(Deferred<OptimizeArgs>),
     /// The (g, tau) stability map as CSV, of the linear model (the bilateral
     /// tire; --tire-contact does not apply).
-    Map(MapArgs),
+    Map(Deferred<MapArgs>),
     /// The monolithic full car: the chassis on four corners in one delay
     /// equation (the reference of the corner and chassis FMUs' co-simulation).
-    Car(Box<CarArgs>),
+    Car(Deferred<Box<CarArgs>>),
+}
+
+/// A subcommand's arguments, declared to clap only when that subcommand
+/// is parsed or its help is asked for (`clap::Command::defer`): a run
+/// does not pay for the arguments of the subcommands it does not use.
+#[derive(Debug, Clone)]
+pub(super) struct Deferred<T>(pub(super) T);
+
+impl<T> std::ops::Deref for Deferred<T> {
+    type Target = T;
+
+    fn deref(&self) -> &T {
+        &self.0
+    }
+}
+
+impl<T: FromArgMatches> FromArgMatches for Deferred<T> {
+    fn from_arg_matches(matches: &ArgMatches) -> std::result::Result<Self, clap::Error> {
+        T::from_arg_matches(matches).map(Deferred)
+    }
+
+    fn update_from_arg_matches(
+        &mut self,
+        matches: &ArgMatches,
+    ) -> std::result::Result<(), clap::Error> {
+        self.0.update_from_arg_matches(matches)
+    }
+}
+
+impl<T: Args> Args for Deferred<T> {
+    fn augment_args(cmd: clap::Command) -> clap::Command {
+        cmd.defer(augment_keeping_about::<T, false>)
+    }
+
+    fn augment_args_for_update(cmd: clap::Command) -> clap::Command {
+        cmd.defer(augment_keeping_about::<T, true>)
+    }
+}
+
+/// `T`'s arguments added to `cmd` (for an update with `UPDATE`), with
+/// negative numbers accepted as the value of every flag that takes one
+/// (`--tau -1` reaches the model's own check; a switch such as `--json`
+/// takes none, and clap refuses the setting on it), keeping the
+/// subcommand's own help text: the documentation of the groups of
+/// arguments it flattens, declared after it, would otherwise replace it.
+fn augment_keeping_about<T: Args, const UPDATE: bool>(cmd: clap::Command) -> clap::Command {
+    let (about, long_about) = (cmd.get_about().cloned(), cmd.get_long_about().cloned());
+    let cmd = if UPDATE {
+        T::augment_args_for_update(cmd)
+    } else {
+        T::augment_args(cmd)
+    };
+    let cmd = cmd.mut_args(|arg| {
+        if arg.get_action().takes_values() {
+            arg.allow_negative_numbers(true)
+        } else {
+            arg
+        }
+    });
+    let cmd = match about {
+        Some(about) => cmd.about(about),
+        None => cmd.about(None::<&str>),
+    };
+    match long_about {
+        Some(long_about) => cmd.long_about(long_about),
+        None => cmd.long_about(None::<&str>),
+    }
 }
 
 /// Model parameters, named as the FMU parameters (defaults: Table 1, g1, tau1).
@@ -617,20 +684,10 @@ pub(super) fn write_text(path: &str, text: &str) -> Result<()> {
     std::fs::write(path, text).map_err(|e| io_error("writing", path, &e))
 }
 
-/// The command line: the derived parser, with negative numbers accepted as
-/// the value of every flag that takes one (`--tau -1` reaches the model's
-/// own check; a switch such as `--json` takes none, and clap refuses the
-/// setting on it).
+/// The command line: the derived parser, each subcommand's arguments
+/// declared when it is parsed ([`Deferred`]).
 pub(super) fn command() -> clap::Command {
-    Cli::command().mut_subcommands(|sub| {
-        sub.mut_args(|arg| {
-            if arg.get_action().takes_values() {
-                arg.allow_negative_numbers(true)
-            } else {
-                arg
-            }
-        })
-    })
+    Cli::command()
 }
 
 #[cfg(test)]
@@ -641,9 +698,13 @@ mod tests {
     /// rule is checked here in any build, and clap's checks where they run.
     #[test]
     fn the_parser_passes_clap_s_checks() {
-        let command = super::command();
+        let mut command = super::command();
+        // Declares every subcommand's deferred arguments.
+        command.build();
+        let mut negative = 0;
         for sub in command.get_subcommands() {
             for arg in sub.get_arguments() {
+                negative += usize::from(arg.is_allow_negative_numbers_set());
                 assert!(
                     !arg.is_allow_negative_numbers_set() || arg.get_action().takes_values(),
                     "{} --{}: negative numbers for a flag that takes no value",
@@ -652,6 +713,7 @@ mod tests {
                 );
             }
         }
+        assert!(negative > 50, "{negative} flags take negative numbers");
         command.debug_assert();
     }
 }
