@@ -33,7 +33,7 @@ use libfuzzer_sys::fuzz_target;
 use std::ffi::{CStr, c_char, c_int};
 use std::ptr::{null, null_mut};
 use tdvass_fmi2::Model;
-use tdvass_fmi2::variables::{FmiVersion, variables_of};
+use tdvass_fmi2::variables::{Causality, FmiVersion, VarType, variables_of};
 use tdvass_fmi3::ffi::*;
 
 const OK: fmi3Status = 0;
@@ -50,6 +50,15 @@ fn value_reference(b: &mut Bytes, model: Model) -> u32 {
             variables[b.u8() as usize % variables.len()].vr
         }
     }
+}
+
+/// The value references of `model`'s Float64 variables of `causality`.
+fn of_causality(model: Model, causality: Causality) -> Vec<u32> {
+    variables_of(model, FmiVersion::Fmi3)
+        .iter()
+        .filter(|v| v.causality == causality && v.var_type() == VarType::Real)
+        .map(|v| v.vr)
+        .collect()
 }
 
 fn vrs(b: &mut Bytes, n: usize, model: Model) -> Vec<u32> {
@@ -296,13 +305,16 @@ unsafe extern "C" fn on_update(
         for _ in 0..(b.u8() % 3) {
             match b.u8() % 8 {
                 0 | 1 => {
-                    // The outputs and x_g, x_s .. objective.
+                    // The model's outputs.
                     let n = 1 + b.u8() as usize % 4;
-                    let v: Vec<u32> = (0..n).map(|_| 30 + b.u8() as u32 % 16).collect();
+                    let outputs = of_causality(master.model, Causality::Output);
+                    let v: Vec<u32> = (0..n).map(|_| b.pick(&outputs)).collect();
                     get_all(&mut b, c, &v);
                 }
                 2 => {
-                    let v = [30u32];
+                    // One of the model's inputs (the quarter car's x_g; the
+                    // corner's body attachment; the chassis's forces).
+                    let v = [b.pick(&of_causality(master.model, Causality::Input))];
                     let value = [real(&mut b)];
                     check(fmi3SetFloat64(c, v.as_ptr(), 1, value.as_ptr(), 1));
                 }
