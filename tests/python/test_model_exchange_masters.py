@@ -118,14 +118,20 @@ def output_vrs(master):
             if v.causality == "output" and v.type in ("Real", "Float64")]
 
 
-def check_partials(master, road_input=None):
+def check_partials(master, road_input=None, inputs=()):
     """The FMU's partials of the derivatives and the Real outputs at the
     master's point against central differences of GetDerivatives and
     GetReal, each evaluated from the same saved FMU state (so the delay
-    history is the same for every evaluation)."""
+    history is the same for every evaluation). The knowns are the states,
+    `x_g` when `road_input` = (its value reference, its value) is given,
+    and the inputs named in `inputs` ((name, value) pairs, set at those
+    values)."""
+    inputs = ([("x_g", road_input[1])] if road_input else []) + list(inputs)
+    for name, value in inputs:
+        master.set(name, value)
     t, x = master.t, master.x.copy()
     master.set_point(t, x)
-    knowns = list(master.state_vrs) + ([road_input[0]] if road_input else [])
+    knowns = list(master.state_vrs) + [master.by_name[name].valueReference for name, _ in inputs]
     unknowns = list(master.derivative_vrs) + output_vrs(master)
     saved = master.save()
     exact_matrix = master.partials(unknowns, knowns)
@@ -143,13 +149,14 @@ def check_partials(master, road_input=None):
                      lambda: master.derivatives(t, y)):
             master.restore(saved)
             if j >= master.n:
-                master.set("x_g", road_input[1] + delta)
+                name, value = inputs[j - master.n]
+                master.set(name, value + delta)
             master.set_point(t, y)
             values.append(np.asarray(read()))
         return np.concatenate([values[1], values[0]])
 
     for j in range(len(knowns)):
-        size = max(abs(x[j]), nominals[j]) if j < master.n else max(abs(road_input[1]), 1e-3)
+        size = max(abs(x[j]), nominals[j]) if j < master.n else max(abs(inputs[j - master.n][1]), 1e-3)
         # Most partials are of functions linear in the known: a step far
         # above the rounding of the values (1e-4) costs nothing there.
         delta = 1e-4 * size
@@ -202,4 +209,34 @@ def test_directional_derivatives_in_flight_and_with_the_road_input(version, unzi
     master.t, master.x = master.t + 3e-4, x
     x[0] += 0.1 * (x[4] - x[0])  # off the largest |SDD| the event recorded
     check_partials(master, road_input=(x_g, 0.01))
+    master.free()
+
+
+@pytest.mark.parametrize("which", ["fmi2", "fmi3"])
+@pytest.mark.parametrize("start", [{"variant": 3, "tau": 2e-4, "road": 0, "tire_contact": 1},
+                                   {"variant": 2}, {"variant": 3, "tau": 0.011}],
+                         ids=["tdvass-unilateral-x_g", "pvass", "tdvass-11ms"])
+def test_the_corner_s_directional_derivatives_agree_with_central_differences(which, start, corner_file,
+                                                                           corner_fmi3_file):
+    """The corner's partials of its 7 derivatives and its Real outputs
+    (`body_force` among them) with respect to its states and its inputs:
+    the body attachment, and x_g where the road is the input."""
+    fmu = corner_file if which == "fmi2" else corner_fmi3_file
+    master = ModelExchangeMaster(fmu, start, fmpy.extract(str(fmu)))
+    inputs = [("body_displacement", 0.004), ("body_velocity", -0.03)]
+    if start.get("road") == 0:
+        inputs.append(("x_g", 0.01))
+    for name, value in inputs:
+        master.set(name, value)
+    explicit(master, RK4, 0.3, 1e-3, complete=False)
+    master.t += 7e-4
+    matrix = check_partials(master, inputs=inputs)
+    forces = [i for i, vr in enumerate(output_vrs(master)) if vr == master.by_name["body_force"].valueReference]
+    row = matrix[master.n + forces[0]]
+    # The force moves with the attachment (the suspension's spring and damper).
+    assert row[master.n] < 0 and row[master.n + 1] < 0, row
+    if master.fmi3:
+        seed = np.arange(1.0, master.n + 1)
+        adjoint = master.fmu.getAdjointDerivative(master.derivative_vrs, master.state_vrs, list(seed), master.n)
+        assert np.allclose(adjoint, matrix[: master.n, : master.n].T @ seed, rtol=1e-12, atol=0.0)
     master.free()

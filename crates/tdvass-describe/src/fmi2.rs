@@ -256,18 +256,6 @@ pub const MODEL_EXCHANGE_CAPABILITIES: [(&str, &str); 7] = [
     ("providesDirectionalDerivative", "true"),
 ];
 
-/// The corner's `ModelExchange` attributes ([`Model::Corner`]), in the
-/// order of [`MODEL_EXCHANGE_CAPABILITIES`]: no directional derivatives.
-pub const CORNER_MODEL_EXCHANGE_CAPABILITIES: [(&str, &str); 7] = [
-    ("needsExecutionTool", "false"),
-    ("completedIntegratorStepNotNeeded", "false"),
-    ("canBeInstantiatedOnlyOncePerProcess", "false"),
-    ("canNotUseMemoryManagementFunctions", "true"),
-    ("canGetAndSetFMUstate", "true"),
-    ("canSerializeFMUstate", "true"),
-    ("providesDirectionalDerivative", "false"),
-];
-
 /// The chassis's `ModelExchange` attributes ([`Model::Chassis`]): no
 /// delay history, so completed integrator steps are not needed; no
 /// directional derivatives.
@@ -284,8 +272,7 @@ pub const CHASSIS_MODEL_EXCHANGE_CAPABILITIES: [(&str, &str); 7] = [
 /// The `ModelExchange` attributes of `model` after `modelIdentifier`.
 pub fn model_exchange_capabilities(model: Model) -> &'static [(&'static str, &'static str)] {
     match model {
-        Model::QuarterCar => &MODEL_EXCHANGE_CAPABILITIES,
-        Model::Corner => &CORNER_MODEL_EXCHANGE_CAPABILITIES,
+        Model::QuarterCar | Model::Corner => &MODEL_EXCHANGE_CAPABILITIES,
         Model::Chassis => &CHASSIS_MODEL_EXCHANGE_CAPABILITIES,
     }
 }

@@ -46,20 +46,6 @@ pub const MODEL_EXCHANGE_CAPABILITIES: [(&str, &str); 8] = [
     ("providesEvaluateDiscreteStates", "false"),
 ];
 
-/// The corner's `ModelExchange` attributes ([`Model::Corner`]), in the
-/// order of [`MODEL_EXCHANGE_CAPABILITIES`]: no directional or adjoint
-/// derivatives.
-pub const CORNER_MODEL_EXCHANGE_CAPABILITIES: [(&str, &str); 8] = [
-    ("needsExecutionTool", "false"),
-    ("canBeInstantiatedOnlyOncePerProcess", "false"),
-    ("canGetAndSetFMUState", "true"),
-    ("canSerializeFMUState", "true"),
-    ("providesDirectionalDerivatives", "false"),
-    ("providesAdjointDerivatives", "false"),
-    ("needsCompletedIntegratorStep", "true"),
-    ("providesEvaluateDiscreteStates", "false"),
-];
-
 /// The chassis's `ModelExchange` attributes ([`Model::Chassis`]): no
 /// delay history, so completed integrator steps are not needed; no
 /// directional or adjoint derivatives.
@@ -77,8 +63,7 @@ pub const CHASSIS_MODEL_EXCHANGE_CAPABILITIES: [(&str, &str); 8] = [
 /// The `ModelExchange` attributes of `model` after `modelIdentifier`.
 pub fn model_exchange_capabilities(model: Model) -> &'static [(&'static str, &'static str)] {
     match model {
-        Model::QuarterCar => &MODEL_EXCHANGE_CAPABILITIES,
-        Model::Corner => &CORNER_MODEL_EXCHANGE_CAPABILITIES,
+        Model::QuarterCar | Model::Corner => &MODEL_EXCHANGE_CAPABILITIES,
         Model::Chassis => &CHASSIS_MODEL_EXCHANGE_CAPABILITIES,
     }
 }

@@ -266,8 +266,7 @@ impl OutputId {
             OutputId::TireDeflection => p.tire_deflection,
             OutputId::RoadDisplacement => p.road_displacement,
             OutputId::ControlForce => p.control_force,
-            // Only the corner has it, and it has no Model Exchange.
-            OutputId::BodyForce => Gradient::ZERO,
+            OutputId::BodyForce => p.body_force,
             OutputId::RmsBodyAcceleration => p.rms_body_acceleration,
             OutputId::RmsSuspensionDeflection => p.rms_suspension_deflection,
             OutputId::RmsTireDeflection => p.rms_tire_deflection,

@@ -656,12 +656,15 @@ fn the_corner_is_described_with_model_exchange() {
         ]
     );
     let me = els.iter().find(|e| e.name == "ModelExchange").unwrap();
-    assert_eq!(
-        me.attributes.len(),
-        1 + CORNER_MODEL_EXCHANGE_CAPABILITIES.len()
-    );
-    for (flag, value) in CORNER_MODEL_EXCHANGE_CAPABILITIES {
+    assert_eq!(me.attributes.len(), 1 + MODEL_EXCHANGE_CAPABILITIES.len());
+    for (flag, value) in MODEL_EXCHANGE_CAPABILITIES {
         assert_eq!(me.attr(flag), value, "{flag}");
+    }
+    for flag in [
+        "providesDirectionalDerivatives",
+        "providesAdjointDerivatives",
+    ] {
+        assert_eq!(me.attr(flag), "true", "{flag}");
     }
     let cs = els.iter().find(|e| e.name == "CoSimulation").unwrap();
     assert_eq!(cs.attr("modelIdentifier"), "tdvass");

@@ -1,7 +1,8 @@
 //! Exact partial derivatives (directional and adjoint derivatives):
 //! Co-Simulation, of the outputs with respect to the input and the plant's
 //! states; Model Exchange, of the state derivatives and the outputs with
-//! respect to the continuous states and the input.
+//! respect to the continuous states and the inputs (`x_g`, and a
+//! corner's body attachment).
 
 use super::Slave;
 use crate::defaults::Model;
@@ -12,11 +13,14 @@ use tdvass::exchange::Gradient;
 use tdvass::model::{V_S, Variant, X_S};
 use tdvass::solver::CONTINUOUS_STATES;
 
-/// A known of Model Exchange's partials: a continuous state or the input.
+/// A known of Model Exchange's partials: a continuous state, the road
+/// input `x_g`, or a corner's body attachment (0: `body_displacement`,
+/// 1: `body_velocity`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum ExchangeKnown {
     State(usize),
     RoadInput,
+    BodyInput(usize),
 }
 
 /// An unknown of Model Exchange's partials.
@@ -29,7 +33,7 @@ enum ExchangeUnknown {
 impl Slave {
     /// The exact partials `∂unknown_i/∂known_j`, row by row: for Model
     /// Exchange, of the state derivatives and the Real outputs with respect
-    /// to the continuous states and `x_g`; for Co-Simulation, of the
+    /// to the continuous states and the inputs; for Co-Simulation, of the
     /// outputs (`unknowns`) with respect to the input `x_g` and the states
     /// (`knowns`, the states addressed by the value references of the
     /// outputs `x_s` .. `v_t`).
@@ -40,11 +44,6 @@ impl Slave {
             ));
         }
         if self.state.engine.exchange().is_some() {
-            if self.model() != Model::QuarterCar {
-                return Err(FmiError::error(
-                    "the corner provides no directional derivatives in Model Exchange (its ModelExchange element: providesDirectionalDerivative = false)",
-                ));
-            }
             return self.exchange_partials(unknowns, knowns);
         }
         let known: Vec<Known> = knowns
@@ -137,8 +136,9 @@ impl Slave {
 
     /// Model Exchange: the exact partials of the state derivatives
     /// (`der(...)`) and the Real outputs (`unknowns`) with respect to the
-    /// continuous states and the input `x_g` (`knowns`), at the current
-    /// time and states ([`tdvass::exchange::ModelExchange::jacobian`]).
+    /// continuous states and the inputs `x_g` and a corner's
+    /// `body_displacement`, `body_velocity` (`knowns`), at the current time
+    /// and states ([`tdvass::exchange::ModelExchange::jacobian`]).
     fn exchange_partials(
         &mut self,
         unknowns: &[u32],
@@ -153,12 +153,16 @@ impl Slave {
             .iter()
             .map(|&vr| {
                 let var: &Variable = lookup(vr)?;
-                match var.access {
-                    Access::Real { .. } if var.causality == Causality::Input => Ok(ExchangeKnown::RoadInput),
-                    Access::Output(OutputId::State(i)) | Access::ContinuousState(i) => Ok(ExchangeKnown::State(i)),
-                    Access::Output(OutputId::ContactLossTime) => Ok(ExchangeKnown::State(CONTINUOUS_STATES - 1)),
+                match (var.access, var.name) {
+                    // A corner's body attachment: the plant's body
+                    // coordinates, read from the inputs.
+                    (Access::Real { .. }, "body_displacement") => Ok(ExchangeKnown::BodyInput(0)),
+                    (Access::Real { .. }, "body_velocity") => Ok(ExchangeKnown::BodyInput(1)),
+                    (Access::Real { .. }, _) if var.causality == Causality::Input => Ok(ExchangeKnown::RoadInput),
+                    (Access::Output(OutputId::State(i)) | Access::ContinuousState(i), _) => Ok(ExchangeKnown::State(i)),
+                    (Access::Output(OutputId::ContactLossTime), _) => Ok(ExchangeKnown::State(CONTINUOUS_STATES - 1)),
                     _ => Err(FmiError::error(format!(
-                        "`{}` is not a known of the directional derivative (Model Exchange: the continuous states and the input x_g)",
+                        "`{}` is not a known of the directional derivative (Model Exchange: the continuous states and the inputs)",
                         var.name
                     ))),
                 }
@@ -194,6 +198,7 @@ impl Slave {
                 known.iter().map(move |k| match *k {
                     ExchangeKnown::State(j) => row.states[j],
                     ExchangeKnown::RoadInput => row.road_input,
+                    ExchangeKnown::BodyInput(k) => row.body_input[k],
                 })
             })
             .collect())

@@ -114,6 +114,10 @@ pub struct OutputPartials {
     pub rms_dynamic_tire_load_ratio: Gradient,
     pub contact_loss_time: Gradient,
     pub max_suspension_deflection: Gradient,
+    /// The suspension's force on the body
+    /// ([`crate::model::Plant::body_force`]): a corner's partials with
+    /// respect to its body attachment are in [`Gradient::body_input`].
+    pub body_force: Gradient,
 }
 
 /// What the partials at the current point are built from.
@@ -146,8 +150,8 @@ impl ModelExchange {
         }
     }
 
-    /// `∂BA`, `∂SDD`, `∂TDD` and `∂a_w` at `p`.
-    fn performance_gradients(&self, p: &Point) -> [Gradient; 4] {
+    /// `∂BA`, `∂SDD`, `∂TDD`, `∂a_w` and the body force's partials at `p`.
+    fn performance_gradients(&self, p: &Point) -> [Gradient; 5] {
         let mut acceleration = Gradient::ZERO;
         acceleration.states[..6].copy_from_slice(&p.acceleration_row);
         let mut deflection = Gradient::ZERO;
@@ -159,7 +163,9 @@ impl ModelExchange {
         for k in 0..crate::comfort::WK_STATES {
             weighted.states[FILTER_STATES_AT + k] = self.wk.output_vector[k];
         }
-        let gradients = [acceleration, deflection, tire, weighted];
+        let mut body_force = Gradient::ZERO;
+        body_force.states[..6].copy_from_slice(self.plant.body_force_row.as_slice());
+        let gradients = [acceleration, deflection, tire, weighted, body_force];
         if self.body_input.is_some() {
             gradients.map(Gradient::attached)
         } else {
@@ -204,7 +210,7 @@ impl ModelExchange {
                 row[FILTER_STATES_AT + k] = wk.state_matrix[(i, k)];
             }
         }
-        let [acceleration, deflection, tire, weighted] = self.performance_gradients(&p);
+        let [acceleration, deflection, tire, weighted, _] = self.performance_gradients(&p);
         let aw = p.weighted;
         let integrands = [
             acceleration.scaled(2.0 * p.body_acceleration),
@@ -239,7 +245,7 @@ impl ModelExchange {
     pub fn output_partials(&mut self) -> OutputPartials {
         let delayed = self.delayed_now();
         let p = self.point();
-        let [acceleration, deflection, tire, weighted] = self.performance_gradients(&p);
+        let [acceleration, deflection, tire, weighted, body_force] = self.performance_gradients(&p);
         let duration = self.time - self.config.start_time;
         let integral = |k: usize| self.states[INTEGRALS_AT + k];
         // ∂ sqrt(I_k / duration) / ∂ I_k.
@@ -302,6 +308,7 @@ impl ModelExchange {
             rms_dynamic_tire_load_ratio: rms(2).scaled(k_t / self.static_load),
             contact_loss_time: Gradient::of_state(CONTINUOUS_STATES - 1),
             max_suspension_deflection: max_deflection,
+            body_force,
         }
     }
 }
