@@ -8,6 +8,7 @@ use crate::defaults::Model;
 use tdvass::TireContact;
 use tdvass::chassis::ChassisParams;
 use tdvass::metrics::Weights;
+use tdvass::model::inputs::{BODY_ATTACHMENT, PRESCRIBED, PrescribedValues};
 use tdvass::model::{Body, Params, STANDARD_GRAVITY, State, Variant};
 use tdvass::road::{RandomRoad, RoadClass, RoadShift, RoadSpec, RoadType};
 use tdvass::solver::{DEFAULT_TOLERANCE, Metrics, SimulationConfig};
@@ -162,9 +163,15 @@ impl Settings {
     /// The corner's body attachment point `(displacement, velocity)`;
     /// `None` for the quarter car.
     pub fn body_input(&self) -> Option<(f64, f64)> {
-        self.body()
-            .is_attached()
-            .then_some((self.body_displacement, self.body_velocity))
+        self.prescribed()[BODY_ATTACHMENT].map(|[displacement, velocity]| (displacement, velocity))
+    }
+
+    /// The values of the inputs that prescribe coordinates
+    /// ([`tdvass::model::inputs::PRESCRIBED`], by index), `None` for one
+    /// the model does not have.
+    pub fn prescribed(&self) -> PrescribedValues {
+        let values = [[self.body_displacement, self.body_velocity]];
+        std::array::from_fn(|i| (PRESCRIBED[i].applies)(self.body()).then_some(values[i]))
     }
 
     /// The variant (`variant` code checked).

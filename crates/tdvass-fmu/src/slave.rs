@@ -278,10 +278,13 @@ impl Slave {
         if m.settings.road_is_input() {
             sim.set_road_input(m.settings.x_g, m.input_slope)?;
         }
-        // The corner's body attachment, like the road input, is applied to
-        // the simulation (the configuration does not depend on inputs).
-        if let Some((displacement, velocity)) = m.settings.body_input() {
-            sim.set_body_input(displacement, velocity)?;
+        // The inputs that prescribe coordinates (the corner's body
+        // attachment), like the road input, are applied to the simulation
+        // (the configuration does not depend on inputs).
+        for (input, values) in m.settings.prescribed().into_iter().enumerate() {
+            if let Some(values) = values {
+                sim.set_prescribed(input, values)?;
+            }
         }
         // Stepping, the getters and the setters allocate nothing from here
         // on (docs/fmu.md, "Real-time").

@@ -123,27 +123,31 @@ impl Bound {
     }
 }
 
-/// Checks a corner's body attachment `(displacement (m), velocity (m/s))`
-/// for the body `body`: an input only of a corner
-/// ([`crate::model::Body::Attached`]), finite and within the divergence
-/// bounds. The error names the variable and the value.
-pub fn check_body_input(body: Body, displacement: f64, velocity: f64) -> Result<()> {
-    if !body.is_attached() {
+/// Checks the values `[position (m), velocity (m/s)]` of the input
+/// `input` (an index into [`crate::model::inputs::PRESCRIBED`], a corner's
+/// body attachment) for a configuration with the body `body`: an input
+/// only where it applies, finite and within the divergence bounds. The
+/// error names the variable and the value.
+pub fn check_prescribed(body: Body, input: usize, values: [f64; 2]) -> Result<()> {
+    let p = &crate::model::inputs::PRESCRIBED[input];
+    if !(p.applies)(body) {
         return Err(Error::InvalidSetting {
             name: "body",
             value: body.code() as i64,
-            reason: "the body's attachment point is an input only of a corner (a body outside the model, body = 1)",
+            reason: p.absent,
         });
     }
-    for (name, value, bound) in [
-        ("body_displacement", displacement, Bound::Displacement),
-        ("body_velocity", velocity, Bound::Velocity),
-    ] {
+    for ((name, value), bound) in p
+        .names
+        .into_iter()
+        .zip(values)
+        .zip([Bound::Displacement, Bound::Velocity])
+    {
         if !value.is_finite() {
             return Err(Error::InvalidParameter {
                 name,
                 value,
-                reason: "the body's attachment point must be finite",
+                reason: "must be finite",
             });
         }
         check_value(bound, name, value)?;

@@ -53,7 +53,7 @@ const SOLVER_LAYERS: layering::Layers = &[
 /// The files of `crates/tdvass/src/model`, from the ground up.
 const MODEL_LAYERS: layering::Layers = &[
     ("parameters and state", &["params"]),
-    ("element laws", &["equations", "tire", "body"]),
+    ("element laws", &["equations", "tire", "body", "inputs"]),
     ("plant", &["plant"]),
     ("dynamics", &["dynamics"]),
     ("model", &["mod"]),

@@ -84,8 +84,10 @@ impl Slave {
         if m.settings.road_is_input() {
             model.set_road_input(m.settings.x_g)?;
         }
-        if let Some((displacement, velocity)) = m.settings.body_input() {
-            model.set_body_input(displacement, velocity)?;
+        for (input, values) in m.settings.prescribed().into_iter().enumerate() {
+            if let Some(values) = values {
+                model.set_prescribed(input, values)?;
+            }
         }
         Ok(model)
     }

@@ -10,17 +10,20 @@ use crate::error::{FmiError, Status};
 use crate::outputs::{Known, Linearization, OutputId};
 use crate::variables::{Access, Causality, Variable, by_vr};
 use tdvass::exchange::Gradient;
-use tdvass::model::{V_S, Variant, X_S};
+use tdvass::model::inputs::{PRESCRIBED, prescribed_by_name};
+use tdvass::model::{V_S, Variant};
 use tdvass::solver::CONTINUOUS_STATES;
 
 /// A known of Model Exchange's partials: a continuous state, the road
-/// input `x_g`, or a corner's body attachment (0: `body_displacement`,
-/// 1: `body_velocity`).
+/// input `x_g`, or a value of an input that prescribes coordinates (its
+/// index into [`tdvass::model::inputs::PRESCRIBED`], then 0 for the
+/// position, 1 for the velocity: the corner's `body_displacement`,
+/// `body_velocity`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum ExchangeKnown {
     State(usize),
     RoadInput,
-    BodyInput(usize),
+    Prescribed(usize, usize),
 }
 
 /// An unknown of Model Exchange's partials.
@@ -50,12 +53,11 @@ impl Slave {
             .iter()
             .map(|&vr| {
                 let var = by_vr(self.model(), self.dialect.version, vr).ok_or_else(|| FmiError::error(format!("unknown value reference {vr}")))?;
-                match (var.access, var.name) {
+                match (var.access, prescribed_by_name(var.name)) {
                     // The corner's body attachment is the plant's body
                     // coordinates, set from outside.
-                    (Access::Real { .. }, "body_displacement") => Ok(Known::State(X_S)),
-                    (Access::Real { .. }, "body_velocity") => Ok(Known::State(V_S)),
-                    (Access::Real { .. }, _) if var.causality == Causality::Input => Ok(Known::RoadInput),
+                    (Access::Real { .. }, Some((input, k))) => Ok(Known::State(PRESCRIBED[input].coordinates[k])),
+                    (Access::Real { .. }, None) if var.causality == Causality::Input => Ok(Known::RoadInput),
                     (Access::Output(OutputId::State(i)), _) => Ok(Known::State(i)),
                     _ => Err(FmiError::error(format!(
                         "`{}` is not a known of the directional derivative (only the inputs and the states x_s, v_s, x_h, v_h, x_t, v_t)",
@@ -153,12 +155,11 @@ impl Slave {
             .iter()
             .map(|&vr| {
                 let var: &Variable = lookup(vr)?;
-                match (var.access, var.name) {
+                match (var.access, prescribed_by_name(var.name)) {
                     // A corner's body attachment: the plant's body
                     // coordinates, read from the inputs.
-                    (Access::Real { .. }, "body_displacement") => Ok(ExchangeKnown::BodyInput(0)),
-                    (Access::Real { .. }, "body_velocity") => Ok(ExchangeKnown::BodyInput(1)),
-                    (Access::Real { .. }, _) if var.causality == Causality::Input => Ok(ExchangeKnown::RoadInput),
+                    (Access::Real { .. }, Some((input, k))) => Ok(ExchangeKnown::Prescribed(input, k)),
+                    (Access::Real { .. }, None) if var.causality == Causality::Input => Ok(ExchangeKnown::RoadInput),
                     (Access::Output(OutputId::State(i)) | Access::ContinuousState(i), _) => Ok(ExchangeKnown::State(i)),
                     (Access::Output(OutputId::ContactLossTime), _) => Ok(ExchangeKnown::State(CONTINUOUS_STATES - 1)),
                     _ => Err(FmiError::error(format!(
@@ -189,7 +190,7 @@ impl Slave {
             ExchangeUnknown::Derivative(i) => Gradient {
                 states: jacobian.states[i],
                 road_input: jacobian.road_input[i],
-                body_input: jacobian.body_input[i],
+                prescribed: jacobian.prescribed[i],
             },
             ExchangeUnknown::Output(id) => id.exchange_gradient(&outputs),
         });
@@ -198,7 +199,7 @@ impl Slave {
                 known.iter().map(move |k| match *k {
                     ExchangeKnown::State(j) => row.states[j],
                     ExchangeKnown::RoadInput => row.road_input,
-                    ExchangeKnown::BodyInput(k) => row.body_input[k],
+                    ExchangeKnown::Prescribed(input, k) => row.prescribed[input][k],
                 })
             })
             .collect())

@@ -13,6 +13,7 @@ use crate::variables::{
 };
 use tdvass::analysis::spectrum::CharacteristicRootSolver;
 use tdvass::model::Variant;
+use tdvass::model::inputs::{BODY_ATTACHMENT, prescribed_by_name};
 use tdvass::solver::{Instantaneous, Outputs, TimeAverages};
 
 /// What one getter call has computed of the outputs so far: each part at
@@ -478,36 +479,46 @@ impl Slave {
             guards::check_rates(&candidate)?;
         }
         let mut gain_tuned = false;
-        let mut body_moved = false;
+        // The inputs that prescribe coordinates set here, a bit each.
+        let mut moved = 0u32;
         for (&vr, &value) in vrs.iter().zip(values) {
             let var = self.variable(vr, VarType::Real)?;
             gain_tuned |= var.name == "g" && self.state.settings.params.g != value;
-            body_moved |= matches!(var.name, "body_displacement" | "body_velocity");
+            if let Some((input, _)) = prescribed_by_name(var.name) {
+                moved |= 1 << input;
+            }
             self.apply_real(var, value)?;
         }
-        if body_moved {
-            self.body_input_set();
-        }
-        // The corner's body attachment reaches the running simulation at
-        // once (body_force depends on it directly), both inputs together.
-        if let (true, Some(sim), Some((displacement, velocity))) = (
-            body_moved,
-            self.state.engine.simulator_mut(),
-            self.state.settings.body_input(),
-        ) {
-            sim.set_body_input(displacement, velocity)?;
-        }
-        if let (true, Some(model), Some((displacement, velocity))) = (
-            body_moved,
-            self.state.engine.exchange_mut(),
-            self.state.settings.body_input(),
-        ) {
-            model.set_body_input(displacement, velocity)?;
+        if moved != 0 {
+            self.prescribed_set(moved)?;
         }
         if gain_tuned && self.state.phase.is_simulating() {
             return Ok(self.stability_check(self.call(self.dialect.set_float)));
         }
         Ok(Status::Ok)
+    }
+
+    /// The inputs in `moved` (a bit per index into
+    /// [`tdvass::model::inputs::PRESCRIBED`]; the corner's body attachment)
+    /// reach the running simulation at once (`body_force` depends on them
+    /// directly), both values of each together.
+    fn prescribed_set(&mut self, moved: u32) -> Result<(), FmiError> {
+        if moved & (1 << BODY_ATTACHMENT) != 0 {
+            self.body_input_set();
+        }
+        let values = self.state.settings.prescribed();
+        for (input, values) in values.into_iter().enumerate() {
+            let Some(values) = values.filter(|_| moved & (1 << input) != 0) else {
+                continue;
+            };
+            if let Some(sim) = self.state.engine.simulator_mut() {
+                sim.set_prescribed(input, values)?;
+            }
+            if let Some(model) = self.state.engine.exchange_mut() {
+                model.set_prescribed(input, values)?;
+            }
+        }
+        Ok(())
     }
 
     /// `SetInteger` (all Integer variables are fixed parameters).

@@ -14,7 +14,8 @@ use crate::model::dynamics::{
     CONTINUOUS_STATES, FILTER_STATES_AT, INTEGRALS_AT, Mode, SWITCHES, Switch, Switching,
     folded_delay, folded_feedback,
 };
-use crate::model::{Plant, State, V_S, V_T, X_S, X_T};
+use crate::model::inputs::{PrescribedValues, with_prescribed};
+use crate::model::{Plant, State, V_T, X_T};
 use crate::road::Road;
 use crate::solver::SimulationConfig;
 use nalgebra::{Matrix6, SVector};
@@ -112,10 +113,12 @@ pub struct ModelExchange {
     pub(super) road: Road,
     /// The switching elements and their switch functions' constants.
     pub(super) switching: Switching,
-    /// A corner's body attachment `[x_s (m), v_s (m/s)]`, the input its
-    /// rates and outputs take the body's coordinates from
-    /// ([`crate::model::Body::Attached`]); `None` with the sprung mass.
-    pub(super) body_input: Option<[f64; 2]>,
+    /// The values of the inputs that prescribe coordinates
+    /// ([`crate::model::inputs::PRESCRIBED`]; a corner's body attachment
+    /// `[x_s (m), v_s (m/s)]`), which the rates and outputs take those
+    /// coordinates from; `None` for an input the configuration does not
+    /// have (the sprung mass's).
+    pub(super) prescribed: PrescribedValues,
     /// W (N).
     pub(super) static_load: f64,
     pub(super) time: f64,
@@ -137,15 +140,14 @@ pub struct ModelExchange {
 }
 
 impl ModelExchange {
-    /// The plant's state X: the first six continuous states, a corner's
-    /// body coordinates from its input.
+    /// The plant's state X: the first six continuous states, with the
+    /// coordinates that inputs prescribe (a corner's body attachment) from
+    /// those inputs.
     pub(super) fn plant_state(&self) -> State {
-        let mut x = State::from_column_slice(&self.states[..6]);
-        if let Some([displacement, velocity]) = self.body_input {
-            x[X_S] = displacement;
-            x[V_S] = velocity;
-        }
-        x
+        with_prescribed(
+            State::from_column_slice(&self.states[..6]),
+            &self.prescribed,
+        )
     }
 
     /// The W_k filter's state w.

@@ -23,6 +23,7 @@
 
 use super::instance::ModelExchange;
 use crate::model::dynamics::Switch;
+use crate::model::inputs::{PRESCRIBED, PrescribedValues};
 use crate::model::{V_S, V_T, Variant, X_H, X_S, X_T};
 use crate::solver::{CONTINUOUS_STATES, FILTER_STATES_AT, INTEGRALS_AT};
 
@@ -33,9 +34,11 @@ pub struct Jacobian {
     pub states: [[f64; CONTINUOUS_STATES]; CONTINUOUS_STATES],
     /// `∂ẋ_i/∂x_g` (0 unless the road is the input `x_g`).
     pub road_input: [f64; CONTINUOUS_STATES],
-    /// `∂ẋ_i/∂[x_s, v_s]` of a corner's body attachment (its input; 0 with
-    /// the sprung mass, whose `x_s`, `v_s` are states).
-    pub body_input: [[f64; 2]; CONTINUOUS_STATES],
+    /// `∂ẋ_i/∂[position, velocity]` of each input that prescribes
+    /// coordinates ([`PRESCRIBED`]: a corner's body attachment `[x_s,
+    /// v_s]`), 0 for one the configuration does not have (the sprung
+    /// mass's `x_s`, `v_s` are states).
+    pub prescribed: [[[f64; 2]; PRESCRIBED.len()]; CONTINUOUS_STATES],
 }
 
 /// The partials of one output with respect to the continuous states and
@@ -46,8 +49,9 @@ pub struct Gradient {
     pub states: [f64; CONTINUOUS_STATES],
     /// `∂y/∂x_g`.
     pub road_input: f64,
-    /// `∂y/∂[x_s, v_s]` of a corner's body attachment (its input).
-    pub body_input: [f64; 2],
+    /// `∂y/∂[position, velocity]` of each input that prescribes
+    /// coordinates ([`PRESCRIBED`]: a corner's body attachment).
+    pub prescribed: [[f64; 2]; PRESCRIBED.len()],
 }
 
 impl Gradient {
@@ -55,7 +59,7 @@ impl Gradient {
     pub const ZERO: Gradient = Gradient {
         states: [0.0; CONTINUOUS_STATES],
         road_input: 0.0,
-        body_input: [0.0; 2],
+        prescribed: [[0.0; 2]; PRESCRIBED.len()],
     };
 
     /// The gradient of the continuous state `j` itself.
@@ -68,17 +72,18 @@ impl Gradient {
     fn scaled(mut self, factor: f64) -> Gradient {
         self.states.iter_mut().for_each(|v| *v *= factor);
         self.road_input *= factor;
-        self.body_input.iter_mut().for_each(|v| *v *= factor);
+        self.prescribed
+            .iter_mut()
+            .flatten()
+            .for_each(|v| *v *= factor);
         self
     }
 
-    /// The partials with respect to a corner's body coordinates moved
-    /// from the states `x_s`, `v_s` to the attachment input they are read
-    /// from.
-    fn attached(mut self) -> Gradient {
-        self.body_input = [self.states[X_S], self.states[V_S]];
-        self.states[X_S] = 0.0;
-        self.states[V_S] = 0.0;
+    /// The partials with respect to the coordinates that the inputs in
+    /// `values` prescribe (a corner's `x_s`, `v_s`) moved from the states
+    /// to the inputs they are read from.
+    fn prescribed_by(mut self, values: &PrescribedValues) -> Gradient {
+        move_to_inputs(&mut self.states, &mut self.prescribed, values);
         self
     }
 
@@ -87,10 +92,29 @@ impl Gradient {
             *v += o;
         }
         self.road_input += other.road_input;
-        for (v, o) in self.body_input.iter_mut().zip(other.body_input) {
-            *v += o;
+        for (v, o) in self.prescribed.iter_mut().zip(other.prescribed) {
+            v[0] += o[0];
+            v[1] += o[1];
         }
         self
+    }
+}
+
+/// Moves the partials in `states` with respect to the coordinates that the
+/// inputs in `values` prescribe to `inputs` (by input: position, velocity),
+/// leaving 0 in `states`.
+fn move_to_inputs(
+    states: &mut [f64; CONTINUOUS_STATES],
+    inputs: &mut [[f64; 2]; PRESCRIBED.len()],
+    values: &PrescribedValues,
+) {
+    for ((p, value), partials) in PRESCRIBED.iter().zip(values).zip(inputs) {
+        if value.is_some() {
+            for (k, &c) in p.coordinates.iter().enumerate() {
+                partials[k] = states[c];
+                states[c] = 0.0;
+            }
+        }
     }
 }
 
@@ -116,7 +140,7 @@ pub struct OutputPartials {
     pub max_suspension_deflection: Gradient,
     /// The suspension's force on the body
     /// ([`crate::model::Plant::body_force`]): a corner's partials with
-    /// respect to its body attachment are in [`Gradient::body_input`].
+    /// respect to its body attachment are in [`Gradient::prescribed`].
     pub body_force: Gradient,
 }
 
@@ -166,11 +190,7 @@ impl ModelExchange {
         let mut body_force = Gradient::ZERO;
         body_force.states[..6].copy_from_slice(self.plant.body_force_row.as_slice());
         let gradients = [acceleration, deflection, tire, weighted, body_force];
-        if self.body_input.is_some() {
-            gradients.map(Gradient::attached)
-        } else {
-            gradients
-        }
+        gradients.map(|g| g.prescribed_by(&self.prescribed))
     }
 
     /// The exact partials of the derivatives at the current time and
@@ -219,24 +239,21 @@ impl ModelExchange {
             weighted.scaled(2.0 * aw),
             weighted.scaled(4.0 * aw * aw * aw),
         ];
-        let mut body_input = [[0.0; 2]; CONTINUOUS_STATES];
-        if self.body_input.is_some() {
-            // A corner's rates read the body's coordinates from its input.
-            for (row, partials) in states.iter_mut().zip(body_input.iter_mut()) {
-                *partials = [row[X_S], row[V_S]];
-                row[X_S] = 0.0;
-                row[V_S] = 0.0;
-            }
+        // The rates read the prescribed coordinates (a corner's body
+        // attachment) from their inputs.
+        let mut prescribed = [[[0.0; 2]; PRESCRIBED.len()]; CONTINUOUS_STATES];
+        for (row, partials) in states.iter_mut().zip(prescribed.iter_mut()) {
+            move_to_inputs(row, partials, &self.prescribed);
         }
         for (k, g) in integrands.iter().enumerate() {
             states[INTEGRALS_AT + k] = g.states;
             road_input[INTEGRALS_AT + k] = g.road_input;
-            body_input[INTEGRALS_AT + k] = g.body_input;
+            prescribed[INTEGRALS_AT + k] = g.prescribed;
         }
         Jacobian {
             states,
             road_input,
-            body_input,
+            prescribed,
         }
     }
 

@@ -92,7 +92,8 @@ use crate::model::dynamics::{
     CONTINUOUS_STATES, FILTER_STATES_AT, INTEGRAL_NAMES, INTEGRALS_AT, Instant, Mode, SWITCHES,
     Switch, Switching, continuous_rates, flight_input, plant_rates, tire_load,
 };
-use crate::model::{Performance, Plant, STATE_NAMES, State, V_S, V_T, X_S, X_T};
+use crate::model::inputs::{BODY_ATTACHMENT, prescribed_from};
+use crate::model::{Performance, Plant, STATE_NAMES, State, V_T, X_S, X_T};
 use crate::road::Road;
 use crate::solver::{
     ComfortValues, ContactLoss, MIN_RESOLVED_DELAY, Metrics, Outputs, RoadHolding,
@@ -168,7 +169,7 @@ impl ModelExchange {
             wk: wk_state_space(),
             road,
             switching,
-            body_input: config.body.is_attached().then_some([x[X_S], x[V_S]]),
+            prescribed: prescribed_from(config.body, &x),
             static_load,
             time: t0,
             states,
@@ -274,15 +275,28 @@ impl ModelExchange {
 
     /// Sets a corner's body attachment (only with
     /// [`crate::model::Body::Attached`]): `x_s = displacement` (m),
-    /// `v_s = velocity` (m/s), which the rates and outputs take as the
-    /// body's coordinates from now on (the continuous states `x_s`, `v_s`
-    /// integrate the velocity given, and nothing reads them). Refused by
-    /// name when not finite or beyond the divergence bounds, or for the
-    /// sprung mass; a refused value changes nothing.
+    /// `v_s = velocity` (m/s) ([`Self::set_prescribed`]).
     pub fn set_body_input(&mut self, displacement: f64, velocity: f64) -> Result<()> {
-        crate::limits::check_body_input(self.config.body, displacement, velocity)?;
-        self.body_input = Some([displacement, velocity]);
+        self.set_prescribed(BODY_ATTACHMENT, [displacement, velocity])
+    }
+
+    /// Sets the input `input` (an index into [`PRESCRIBED`](crate::model::inputs::PRESCRIBED)), `values` =
+    /// `[position (m), velocity (m/s)]`, which the rates and outputs take
+    /// as those coordinates from now on (the continuous states of them
+    /// integrate the velocity given, and nothing reads them). Refused by
+    /// name when not finite or beyond the divergence bounds, or where the
+    /// configuration does not have the input; a refused value changes
+    /// nothing.
+    pub fn set_prescribed(&mut self, input: usize, values: [f64; 2]) -> Result<()> {
+        crate::limits::check_prescribed(self.config.body, input, values)?;
+        self.prescribed[input] = Some(values);
         Ok(())
+    }
+
+    /// The values of the input `input` (an index into [`PRESCRIBED`](crate::model::inputs::PRESCRIBED)), if
+    /// the configuration has it.
+    pub fn prescribed(&self, input: usize) -> Option<[f64; 2]> {
+        self.prescribed[input]
     }
 
     /// The suspension's force on the body (N) now

@@ -7,13 +7,17 @@
 //! completion habits; a state of version 1 still loads (its floor is the
 //! latest of its accepted time and what its history and road still hold).
 //! Version 3 adds a corner's body attachment (a tag, then its displacement
-//! and velocity) at the end.
+//! and velocity) at the end; version 4 writes there the count of the
+//! inputs that prescribe coordinates ([`PRESCRIBED`]), then each one's tag
+//! and values, so that a state saved before an input existed loads (the
+//! input then takes its coordinates from the saved states).
 
 use super::history::{DelayHistory, HistoryPoint};
 use super::instance::{Delay, HYSTERESIS, ModelExchange};
 use crate::bytes::{ByteReader, ByteWriter};
 use crate::error::{Error, Result};
 use crate::model::dynamics::SWITCHES;
+use crate::model::inputs::PRESCRIBED;
 use crate::road::RoadState;
 use crate::solver::CONTINUOUS_STATES;
 
@@ -22,11 +26,16 @@ const MAX_ROAD_NODES: u64 = crate::limits::MAX_WORK_PER_CALL as u64;
 
 /// Version of the byte form; a saved state of a later version is refused.
 /// Version 3 added the count of switching elements before their sides and
-/// a corner's body attachment (its input) at the end.
-pub const EXCHANGE_FORMAT_VERSION: u32 = 3;
+/// a corner's body attachment (its input) at the end; version 4 the count
+/// of the inputs that prescribe coordinates before them.
+pub const EXCHANGE_FORMAT_VERSION: u32 = 4;
 
 /// The first version with a corner's body attachment.
 const BODY_VERSION: u32 = 3;
+
+/// The first version with the count of the inputs that prescribe
+/// coordinates.
+const PRESCRIBED_VERSION: u32 = 4;
 
 /// The first version with the floor and the completion habits.
 const FLOOR_VERSION: u32 = 2;
@@ -96,13 +105,16 @@ impl ModelExchange {
             }
             None => w.u8(0),
         }
-        match self.body_input {
-            Some([displacement, velocity]) => {
-                w.u8(1);
-                w.f64(displacement);
-                w.f64(velocity);
+        w.u8(PRESCRIBED.len() as u8);
+        for value in &self.prescribed {
+            match value {
+                Some([position, velocity]) => {
+                    w.u8(1);
+                    w.f64(*position);
+                    w.f64(*velocity);
+                }
+                None => w.u8(0),
             }
-            None => w.u8(0),
         }
         w.bytes
     }
@@ -230,18 +242,20 @@ impl ModelExchange {
                 "{kept} road nodes: a model keeps at most {MAX_ROAD_NODES}"
             )));
         }
-        let body_input = match (version >= BODY_VERSION).then(|| r.u8()).transpose()? {
-            Some(0) | None => None,
-            Some(_) => Some([r.f64()?, r.f64()?]),
-        };
-        // Before version 3 a corner's input is in its states (below).
-        if version >= BODY_VERSION && body_input.is_some() != self.body_input.is_some() {
-            return Err(invalid(
-                "a body attachment for a model without one, or none for a corner".into(),
-            ));
-        }
-        if body_input.is_some_and(|b| b.iter().any(|v| !v.is_finite())) {
-            return Err(invalid("the body attachment is not finite".into()));
+        let saved = read_prescribed(&mut r, version)?;
+        for (i, (saved, value)) in saved.iter().zip(&self.prescribed).enumerate() {
+            if saved.is_some_and(|s| s.is_some() != value.is_some()) {
+                return Err(invalid(format!(
+                    "{} for a model without it, or none for one with it",
+                    PRESCRIBED[i].what
+                )));
+            }
+            if saved
+                .flatten()
+                .is_some_and(|v| v.iter().any(|v| !v.is_finite()))
+            {
+                return Err(invalid(format!("{} is not finite", PRESCRIBED[i].what)));
+            }
         }
         if !r.is_empty() {
             return Err(invalid(
@@ -288,10 +302,13 @@ impl ModelExchange {
         self.latest = latest;
         self.completes = completes;
         self.states.copy_from_slice(&states);
-        if self.body_input.is_some() {
-            // A state before version 3 (never a corner's) keeps the body's
-            // coordinates in its states.
-            self.body_input = body_input.or(Some([states[0], states[1]]));
+        for ((p, saved), value) in PRESCRIBED.iter().zip(saved).zip(&mut self.prescribed) {
+            if value.is_some() {
+                // An input the state was saved without (before version 3,
+                // never a corner's, or before the input existed) takes its
+                // coordinates from the saved states.
+                *value = saved.flatten().or(Some(p.coordinates.map(|c| states[c])));
+            }
         }
         self.discrete = discrete;
         self.delay = delay;
@@ -299,4 +316,33 @@ impl ModelExchange {
         self.reserve();
         Ok(())
     }
+}
+
+/// The saved values of the inputs that prescribe coordinates, by index
+/// into [`PRESCRIBED`]: `None` for one the state was saved without (before
+/// version 3 or before the input existed), `Some(None)` for one saved as
+/// absent. Version 3 saved the body attachment alone, without the count.
+fn read_prescribed(
+    r: &mut ByteReader,
+    version: u32,
+) -> Result<[Option<Option<[f64; 2]>>; PRESCRIBED.len()]> {
+    let count = match version {
+        v if v >= PRESCRIBED_VERSION => usize::from(r.u8()?),
+        v if v >= BODY_VERSION => 1,
+        _ => 0,
+    };
+    if count > PRESCRIBED.len() {
+        return Err(invalid(format!(
+            "{count} inputs that prescribe coordinates: this FMU knows {}",
+            PRESCRIBED.len()
+        )));
+    }
+    let mut saved = [None; PRESCRIBED.len()];
+    for value in saved.iter_mut().take(count) {
+        *value = Some(match r.u8()? {
+            0 => None,
+            _ => Some([r.f64()?, r.f64()?]),
+        });
+    }
+    Ok(saved)
 }

@@ -9,6 +9,7 @@
 mod body;
 pub mod dynamics;
 mod equations;
+pub mod inputs;
 mod params;
 mod plant;
 mod tire;

@@ -76,14 +76,18 @@ impl Plant {
         })
     }
 
-    /// This plant carrying `body`: with [`Body::Attached`] the body's
-    /// attachment point moves at its given velocity (A's body row
-    /// `dv_s/dt` is zero; `dx_s/dt = v_s` stays), its motion set from
+    /// This plant carrying `body`: every coordinate an input prescribes in
+    /// that configuration ([`super::inputs::PRESCRIBED`]; with
+    /// [`Body::Attached`] the body's attachment point) moves at its given
+    /// velocity (A's row of the velocity is zero, `dv_s/dt = 0`; the
+    /// position's row, `dx_s/dt = v_s`, stays), its motion set from
     /// outside.
     pub fn with_body(mut self, body: Body) -> Plant {
         self.body = body;
-        if body.is_attached() {
-            self.a.row_mut(V_S).fill(0.0);
+        for input in super::inputs::PRESCRIBED {
+            if (input.applies)(body) {
+                self.a.row_mut(input.coordinates[1]).fill(0.0);
+            }
         }
         self
     }

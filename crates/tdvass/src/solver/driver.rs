@@ -30,7 +30,8 @@ use crate::error::{Error, Result};
 use crate::metrics::rms_values;
 use crate::metrics::{RmsValues, Weights};
 use crate::model::dynamics::Mode;
-use crate::model::{Params, Plant, State, V_S, V_T, X_S, X_T};
+use crate::model::inputs::{BODY_ATTACHMENT, PRESCRIBED};
+use crate::model::{Params, Plant, State, V_T, X_T};
 use crate::road::{Road, RoadPiece};
 
 /// Rounding drift covered by the snap tolerance, in additions: a time
@@ -385,25 +386,42 @@ impl Simulator {
     /// corner's as set and moved at its velocity since
     /// ([`Self::set_body_input`]), the sprung mass's otherwise.
     pub fn body_attachment(&mut self) -> (f64, f64) {
+        let [displacement, velocity] = self.prescribed(BODY_ATTACHMENT);
+        (displacement, velocity)
+    }
+
+    /// The coordinates `[position, velocity]` that the input `input` (an
+    /// index into [`PRESCRIBED`]) sets, now.
+    pub fn prescribed(&mut self, input: usize) -> [f64; 2] {
         self.settle();
         let x = self.trajectory.current_state;
-        (x[X_S], x[V_S])
+        PRESCRIBED[input].coordinates.map(|c| x[c])
     }
 
     /// Sets the body's attachment point from the current time on (only
-    /// with [`crate::model::Body::Attached`], a corner): `x_s = displacement` (m) and
-    /// `v_s = velocity` (m/s), moving at that velocity until the next
-    /// change (the plant's body row, [`Plant::with_body`]). The current
-    /// point is committed first (the RMS run closes there, as at a change
-    /// of the road input); the history of the delayed `x_t` is the wheel's
-    /// and stays. A value that is not finite or beyond the divergence
-    /// bounds is refused by name and changes nothing.
+    /// with [`crate::model::Body::Attached`], a corner): `x_s = displacement`
+    /// (m) and `v_s = velocity` (m/s) ([`Self::set_prescribed`]).
     pub fn set_body_input(&mut self, displacement: f64, velocity: f64) -> Result<()> {
-        crate::limits::check_body_input(self.config.body, displacement, velocity)?;
+        self.set_prescribed(BODY_ATTACHMENT, [displacement, velocity])
+    }
+
+    /// Sets the coordinates that the input `input` (an index into
+    /// [`PRESCRIBED`]) prescribes from the current time on, `values` =
+    /// `[position (m), velocity (m/s)]`, moving at that velocity until
+    /// the next change (the plant's law, [`Plant::with_body`]). The
+    /// current point is committed first (the RMS run closes there, as at a
+    /// change of the road input); the history of the delayed `x_t` stays.
+    /// An input the configuration does not have, or a value that is not
+    /// finite or beyond the divergence bounds, is refused by name and
+    /// changes nothing.
+    pub fn set_prescribed(&mut self, input: usize, values: [f64; 2]) -> Result<()> {
+        crate::limits::check_prescribed(self.config.body, input, values)?;
         self.settle();
+        let coordinates = PRESCRIBED[input].coordinates;
         let x = self.trajectory.current_state;
-        if x[X_S].to_bits() == displacement.to_bits() && x[V_S].to_bits() == velocity.to_bits() {
-            // The attachment is where it was set to be: nothing to commit.
+        if (0..2).all(|k| x[coordinates[k]].to_bits() == values[k].to_bits()) {
+            // The coordinates are where they were set to be: nothing to
+            // commit.
             return Ok(());
         }
         self.outputs_cache = None;
@@ -413,11 +431,11 @@ impl Simulator {
             &mut self.trajectory.committed_state,
             &mut self.trajectory.current_state,
         ] {
-            point[X_S] = displacement;
-            point[V_S] = velocity;
+            point[coordinates[0]] = values[0];
+            point[coordinates[1]] = values[1];
         }
         if self.config.metrics.road_holding() {
-            // The largest |SDD| sees the new attachment at once.
+            // The largest |SDD| sees the new coordinates at once.
             self.observers
                 .holding
                 .add_node(&self.trajectory.committed_state.into());

@@ -59,8 +59,9 @@ enum Known {
     State(usize),
     /// The road input `x_g`.
     Road,
-    /// A corner's body attachment: 0 its displacement, 1 its velocity.
-    Body(usize),
+    /// An input that prescribes coordinates (a corner's body attachment),
+    /// and which of its values: 0 the position, 1 the velocity.
+    Prescribed(usize, usize),
 }
 
 /// The knowns of `model`: the states, x_g where the road is the input, a
@@ -76,8 +77,10 @@ fn knowns_of(model: &ModelExchange) -> Vec<Known> {
     if model.road.is_input() {
         knowns.push(Known::Road);
     }
-    if model.body_input.is_some() {
-        knowns.extend([Known::Body(0), Known::Body(1)]);
+    for (i, value) in model.prescribed.iter().enumerate() {
+        if value.is_some() {
+            knowns.extend([Known::Prescribed(i, 0), Known::Prescribed(i, 1)]);
+        }
     }
     knowns
 }
@@ -93,10 +96,10 @@ fn evaluate(model: &ModelExchange, known: Known, delta: f64, x_g: f64) -> (Vec<f
             copy.set_states(&x).unwrap();
         }
         Known::Road => copy.set_road_input(x_g + delta).unwrap(),
-        Known::Body(k) => {
-            let mut body = copy.body_input.unwrap();
-            body[k] += delta;
-            copy.set_body_input(body[0], body[1]).unwrap();
+        Known::Prescribed(i, k) => {
+            let mut values = copy.prescribed(i).unwrap();
+            values[k] += delta;
+            copy.set_prescribed(i, values).unwrap();
         }
     }
     let outputs = output_values(&copy.outputs());
@@ -108,7 +111,7 @@ fn partial(g: &Gradient, known: Known) -> f64 {
     match known {
         Known::State(j) => g.states[j],
         Known::Road => g.road_input,
-        Known::Body(k) => g.body_input[k],
+        Known::Prescribed(i, k) => g.prescribed[i][k],
     }
 }
 
@@ -132,7 +135,7 @@ fn check(model: &mut ModelExchange, x_g: f64) {
         let size = match known {
             Known::State(j) => model.states()[j].abs().max(nominals[j]),
             Known::Road => x_g.abs().max(1e-3),
-            Known::Body(k) => model.body_input.unwrap()[k].abs().max(1e-3),
+            Known::Prescribed(i, k) => model.prescribed(i).unwrap()[k].abs().max(1e-3),
         };
         // Most partials are of functions linear in the known: a step far
         // above the rounding of the values (1e-4) costs nothing there.
@@ -144,7 +147,7 @@ fn check(model: &mut ModelExchange, x_g: f64) {
             let row = Gradient {
                 states: jacobian.states[i],
                 road_input: jacobian.road_input[i],
-                body_input: jacobian.body_input[i],
+                prescribed: jacobian.prescribed[i],
             };
             let exact = partial(&row, known);
             assert!(
@@ -158,7 +161,7 @@ fn check(model: &mut ModelExchange, x_g: f64) {
             let scale = g
                 .states
                 .iter()
-                .chain(&g.body_input)
+                .chain(g.prescribed.iter().flatten())
                 .fold(g.road_input.abs(), |m, v| m.max(v.abs()));
             assert!(
                 close(exact, difference, scale * size),
@@ -256,9 +259,9 @@ fn a_corner_s_partials_with_respect_to_its_body_attachment_agree_with_central_di
         // The suspension pulls the body back: its force falls as the
         // attachment rises or moves up.
         assert!(
-            force.body_input[0] < 0.0 && force.body_input[1] < 0.0,
+            force.prescribed[0][0] < 0.0 && force.prescribed[0][1] < 0.0,
             "{force:?}"
         );
-        assert_eq!((force.states[X_S], force.states[V_S]), (0.0, 0.0));
+        assert_eq!((force.states[X_S], force.states[X_S + 1]), (0.0, 0.0));
     }
 }

@@ -243,8 +243,9 @@ fn a_saved_state_on_a_random_road_replays_exactly_from_its_nodes() {
     integrate(&mut copy, 1.0, 1e-4, true);
     assert_eq!(model.states(), copy.states());
     // Without the road's nodes the state is refused.
-    // The road's bytes, then the body tag (0: no corner).
-    let without = [&bytes[..bytes.len() - road_bytes - 1], &[0u8, 0u8][..]].concat();
+    // The road's bytes, then the count of the inputs that prescribe
+    // coordinates and the body tag (0: no corner).
+    let without = [&bytes[..bytes.len() - road_bytes - 2], &[0u8, 1, 0][..]].concat();
     let refused = copy.restore(&without).unwrap_err().to_string();
     assert!(refused.contains("without its nodes"), "{refused}");
 }
@@ -336,9 +337,10 @@ fn version_1_bytes(model: &ModelExchange) -> Vec<u8> {
         w.u8(r.u8().unwrap() & 1);
         r.f64().unwrap();
     }
-    // Without the body tag (0: no corner) of version 3.
+    // Without the count of the inputs that prescribe coordinates (version
+    // 4) and the body tag (0: no corner) of version 3.
     let rest = r.rest();
-    w.raw(&rest[..rest.len() - 1]);
+    w.raw(&rest[..rest.len() - 2]);
     w.bytes
 }
 
@@ -408,4 +410,43 @@ fn a_state_with_more_switching_elements_than_the_model_has_is_refused() {
     bytes[at] += 1;
     let e = model.restore(&bytes).unwrap_err().to_string();
     assert!(e.contains("switching elements"), "{e}");
+}
+
+#[test]
+fn a_corner_s_state_of_format_version_3_still_loads_and_a_wrong_count_is_refused() {
+    use crate::model::Body;
+    use crate::model::inputs::{BODY_ATTACHMENT, PRESCRIBED};
+    let c = SimulationConfig {
+        body: Body::Attached,
+        ..config(Variant::Tdvass, 0.011, 5386.0, RoadSpec::paper_harmonic())
+    };
+    let mut model = ModelExchange::new(c.clone()).unwrap();
+    model.set_body_input(0.004, -0.03).unwrap();
+    integrate(&mut model, 0.3, 1e-4, true);
+    let bytes = model.to_bytes();
+    // Version 4 ends with the count, then the body's tag and values.
+    let tail = bytes.len() - 1 - 1 - 16;
+    assert_eq!(usize::from(bytes[tail]), PRESCRIBED.len());
+    let mut version_3 = [&bytes[..tail], &bytes[tail + 1..]].concat();
+    version_3[4..8].copy_from_slice(&3u32.to_le_bytes());
+    let mut copy = ModelExchange::new(c.clone()).unwrap();
+    copy.restore(&version_3).unwrap();
+    assert_eq!(copy.states(), model.states());
+    assert_eq!(copy.prescribed(BODY_ATTACHMENT), Some([0.004, -0.03]));
+    assert_eq!(copy.to_bytes(), bytes);
+    // More inputs than this build knows: refused by name.
+    let mut more = bytes.clone();
+    more[tail] = PRESCRIBED.len() as u8 + 1;
+    let e = copy.restore(&more).unwrap_err().to_string();
+    assert!(e.contains("inputs that prescribe coordinates"), "{e}");
+    // A quarter car's state (no attachment) into a corner: refused.
+    let quarter = ModelExchange::new(config(
+        Variant::Tdvass,
+        0.011,
+        5386.0,
+        RoadSpec::paper_harmonic(),
+    ))
+    .unwrap();
+    let e = copy.restore(&quarter.to_bytes()).unwrap_err().to_string();
+    assert!(e.contains("the body attachment"), "{e}");
 }
