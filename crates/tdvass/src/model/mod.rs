@@ -35,6 +35,28 @@ mod tests {
     }
 
     #[test]
+    fn attaching_the_body_zeroes_its_velocity_row_of_a_and_nothing_else() {
+        // Neither the control force nor the road acts on the body: the
+        // rows of b and e that the prescribed coordinates' law zeroes are
+        // zero already, so the corner's plant is the quarter car's but for
+        // A's body row.
+        for variant in Variant::ALL {
+            let plant = Plant::new(Params::default(), variant).unwrap();
+            let attached = plant.clone().with_body(Body::Attached);
+            assert_eq!(attached.b, plant.b, "{variant:?}");
+            assert_eq!(attached.e, plant.e, "{variant:?}");
+            assert!(attached.a.row(V_S).iter().all(|v| *v == 0.0));
+            for row in [X_S, X_H, V_H, X_T, V_T] {
+                assert_eq!(
+                    attached.a.row(row),
+                    plant.a.row(row),
+                    "{variant:?} row {row}"
+                );
+            }
+        }
+    }
+
+    #[test]
     fn invalid_parameters_name_the_parameter_and_value() {
         let p = Params {
             m_h: -1.0,

@@ -79,14 +79,18 @@ impl Plant {
     /// This plant carrying `body`: every coordinate an input prescribes in
     /// that configuration ([`super::inputs::PRESCRIBED`]; with
     /// [`Body::Attached`] the body's attachment point) moves at its given
-    /// velocity (A's row of the velocity is zero, `dv_s/dt = 0`; the
-    /// position's row, `dx_s/dt = v_s`, stays), its motion set from
-    /// outside.
+    /// velocity (the velocity's rows of A, b and e are zero, `dv_s/dt = 0`;
+    /// the position's row, `dx_s/dt = v_s`, stays), its motion set from
+    /// outside. (The body's rows of b and e are zero already: neither the
+    /// control force nor the road acts on the body.)
     pub fn with_body(mut self, body: Body) -> Plant {
         self.body = body;
         for input in super::inputs::PRESCRIBED {
             if (input.applies)(body) {
-                self.a.row_mut(input.coordinates[1]).fill(0.0);
+                let velocity = input.coordinates[1];
+                self.a.row_mut(velocity).fill(0.0);
+                self.b[velocity] = 0.0;
+                self.e[velocity] = 0.0;
             }
         }
         self
