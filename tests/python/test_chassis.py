@@ -6,6 +6,7 @@ immediate feedthrough of the forces to the accelerations, the decoupling
 pitch inertia, the independence of the result from the communication
 grid, FMU states and refused values."""
 
+import re
 import zipfile
 
 import pytest
@@ -198,12 +199,17 @@ def test_description_declares_a_cosimulation_and_model_exchange_chassis(chassis_
     assert cs.maxOutputDerivativeOrder == 0
     assert cs.providesIntermediateUpdate is False
     assert cs.canHandleVariableCommunicationStepSize is True
+    # Exact directional derivatives in Model Exchange, none in Co-Simulation.
+    model_exchange = re.search(r"<ModelExchange [^>]*>", xml).group(0)
+    co_simulation = re.search(r"<CoSimulation [^>]*>", xml).group(0)
     if md.fmiVersion == "2.0":
         assert cs.canInterpolateInputs is True
-        assert 'providesDirectionalDerivative="false"' in xml
+        assert 'providesDirectionalDerivative="false"' in co_simulation
+        assert 'providesDirectionalDerivative="true"' in model_exchange
         assert 'canGetAndSetFMUstate="true"' in xml and 'canSerializeFMUstate="true"' in xml
     else:
-        assert 'providesDirectionalDerivatives="false"' in xml
+        assert 'providesDirectionalDerivatives="false"' in co_simulation
+        assert 'providesDirectionalDerivatives="true"' in model_exchange
         assert 'canGetAndSetFMUState="true"' in xml and 'canSerializeFMUState="true"' in xml
     variables = {v.name: v for v in md.modelVariables}
     for name in GEOMETRY:

@@ -257,8 +257,8 @@ pub const MODEL_EXCHANGE_CAPABILITIES: [(&str, &str); 7] = [
 ];
 
 /// The chassis's `ModelExchange` attributes ([`Model::Chassis`]): no
-/// delay history, so completed integrator steps are not needed; no
-/// directional derivatives.
+/// delay history, so completed integrator steps are not needed; exact
+/// directional derivatives of its derivatives and outputs.
 pub const CHASSIS_MODEL_EXCHANGE_CAPABILITIES: [(&str, &str); 7] = [
     ("needsExecutionTool", "false"),
     ("completedIntegratorStepNotNeeded", "true"),
@@ -266,7 +266,7 @@ pub const CHASSIS_MODEL_EXCHANGE_CAPABILITIES: [(&str, &str); 7] = [
     ("canNotUseMemoryManagementFunctions", "true"),
     ("canGetAndSetFMUstate", "true"),
     ("canSerializeFMUstate", "true"),
-    ("providesDirectionalDerivative", "false"),
+    ("providesDirectionalDerivative", "true"),
 ];
 
 /// The `ModelExchange` attributes of `model` after `modelIdentifier`.

@@ -47,15 +47,15 @@ pub const MODEL_EXCHANGE_CAPABILITIES: [(&str, &str); 8] = [
 ];
 
 /// The chassis's `ModelExchange` attributes ([`Model::Chassis`]): no
-/// delay history, so completed integrator steps are not needed; no
-/// directional or adjoint derivatives.
+/// delay history, so completed integrator steps are not needed; exact
+/// directional and adjoint derivatives of its derivatives and outputs.
 pub const CHASSIS_MODEL_EXCHANGE_CAPABILITIES: [(&str, &str); 8] = [
     ("needsExecutionTool", "false"),
     ("canBeInstantiatedOnlyOncePerProcess", "false"),
     ("canGetAndSetFMUState", "true"),
     ("canSerializeFMUState", "true"),
-    ("providesDirectionalDerivatives", "false"),
-    ("providesAdjointDerivatives", "false"),
+    ("providesDirectionalDerivatives", "true"),
+    ("providesAdjointDerivatives", "true"),
     ("needsCompletedIntegratorStep", "false"),
     ("providesEvaluateDiscreteStates", "false"),
 ];

@@ -688,5 +688,8 @@ impl Chassis {
     }
 }
 
+mod partials;
+pub use partials::{ChassisGradient, ChassisOutputPartials};
+
 #[cfg(test)]
 mod tests;

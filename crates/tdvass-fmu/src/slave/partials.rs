@@ -4,11 +4,13 @@
 //! respect to the continuous states and the inputs (`x_g`, and a
 //! corner's body attachment).
 
-use super::Slave;
+use super::{Engine, Slave};
+use crate::chassis_outputs::ChassisOutputId;
 use crate::defaults::Model;
 use crate::error::{FmiError, Status};
 use crate::outputs::{Known, Linearization, OutputId};
 use crate::variables::{Access, Causality, Variable, by_vr};
+use tdvass::chassis::{CHASSIS_STATES, ChassisGradient, Corner};
 use tdvass::exchange::Gradient;
 use tdvass::model::inputs::{PRESCRIBED, prescribed_by_name};
 use tdvass::model::{V_S, Variant};
@@ -42,9 +44,7 @@ impl Slave {
     /// outputs `x_s` .. `v_t`).
     pub fn partials(&mut self, unknowns: &[u32], knowns: &[u32]) -> Result<Vec<f64>, FmiError> {
         if self.model() == Model::Chassis {
-            return Err(FmiError::error(
-                "the chassis provides no directional derivatives (providesDirectionalDerivative = false)",
-            ));
+            return self.chassis_partials(unknowns, knowns);
         }
         if self.state.engine.exchange().is_some() {
             return self.exchange_partials(unknowns, knowns);
@@ -201,6 +201,82 @@ impl Slave {
                     ExchangeKnown::RoadInput => row.road_input,
                     ExchangeKnown::Prescribed(input, k) => row.prescribed[input][k],
                 })
+            })
+            .collect())
+    }
+
+    /// The chassis in Model Exchange: the exact partials of its state
+    /// derivatives and Real outputs (`unknowns`) with respect to its
+    /// continuous states and the corners' forces (`knowns`), at the current
+    /// states and forces ([`tdvass::chassis::Chassis::jacobian`]). Its
+    /// Co-Simulation provides none.
+    fn chassis_partials(&mut self, unknowns: &[u32], knowns: &[u32]) -> Result<Vec<f64>, FmiError> {
+        let version = self.dialect.version;
+        let lookup = |vr: u32| {
+            by_vr(Model::Chassis, version, vr)
+                .ok_or_else(|| FmiError::error(format!("unknown value reference {vr}")))
+        };
+        // A known: a state's index, or 19 + a force's corner.
+        let known: Vec<usize> = knowns
+            .iter()
+            .map(|&vr| {
+                let var: &Variable = lookup(vr)?;
+                let force = Corner::ALL.iter().position(|c| c.force_name() == var.name);
+                match (var.state_index(), force) {
+                    (Some(i), _) => Ok(i),
+                    (None, Some(c)) => Ok(CHASSIS_STATES + c),
+                    _ => Err(FmiError::error(format!(
+                        "`{}` is not a known of the chassis's directional derivative (its continuous states and the forces)",
+                        var.name
+                    ))),
+                }
+            })
+            .collect::<Result<_, _>>()?;
+        let Engine::ChassisExchange(Some(chassis)) = &self.state.engine else {
+            return Err(FmiError::error(
+                "the chassis provides directional derivatives in Model Exchange only (its CoSimulation element: providesDirectionalDerivative = false)",
+            ));
+        };
+        let rows = chassis.jacobian();
+        let outputs = chassis.output_partials();
+        let corner = |c: Corner| Corner::ALL.iter().position(|k| *k == c).unwrap_or(0);
+        let gradients = unknowns
+            .iter()
+            .map(|&vr| {
+                let var: &Variable = lookup(vr)?;
+                use ChassisOutputId as C;
+                Ok(match var.access {
+                    Access::StateDerivative(i) => rows[i],
+                    Access::ChassisOutput(id) => match id {
+                        C::Displacement(c) => outputs.displacement[corner(c)],
+                        C::Velocity(c) => outputs.velocity[corner(c)],
+                        C::Position(k) => ChassisGradient::of_state(k),
+                        C::Rate(k) => ChassisGradient::of_state(3 + k),
+                        C::Acceleration(k) => outputs.acceleration[k],
+                        C::SeatAcceleration => outputs.seat_acceleration,
+                        C::RmsAcceleration(k) => outputs.rms_acceleration[k],
+                        C::WeightedSeatAcceleration => outputs.weighted_seat_acceleration,
+                        C::RmsWeightedSeatAcceleration => outputs.rms_weighted_seat_acceleration,
+                        C::SeatVibrationDoseValue => outputs.seat_vibration_dose_value,
+                    },
+                    _ => {
+                        return Err(FmiError::error(format!(
+                            "`{}` is not an unknown of the chassis's directional derivative (its state derivatives and Real outputs)",
+                            var.name
+                        )));
+                    }
+                })
+            })
+            .collect::<Result<Vec<ChassisGradient>, FmiError>>()?;
+        Ok(gradients
+            .iter()
+            .flat_map(|g| {
+                known
+                    .iter()
+                    .map(move |&j| match j.checked_sub(CHASSIS_STATES) {
+                        Some(c) => g.forces[c],
+                        None => g.states[j],
+                    })
             })
             .collect())
     }

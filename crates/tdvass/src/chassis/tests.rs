@@ -375,3 +375,103 @@ fn the_model_exchange_states_round_trip_and_refusals_name_the_value() {
     chassis.set_time(0.0).unwrap();
     assert_eq!(chassis.outputs().rms_acceleration, [0.0; 3]);
 }
+
+/// The outputs the partials are of, in the order of [`partials_in_order`].
+fn output_values(c: &Chassis) -> Vec<f64> {
+    let o = c.outputs();
+    let mut values: Vec<f64> = Corner::ALL.iter().map(|k| c.attachment(*k).0).collect();
+    values.extend(Corner::ALL.iter().map(|k| c.attachment(*k).1));
+    values.extend(o.acceleration);
+    values.push(o.seat_acceleration);
+    values.extend(o.rms_acceleration);
+    values.extend([
+        o.weighted_seat_acceleration,
+        o.rms_weighted_seat_acceleration,
+        o.seat_vibration_dose_value,
+    ]);
+    values
+}
+
+fn partials_in_order(p: &ChassisOutputPartials) -> Vec<ChassisGradient> {
+    let mut g: Vec<ChassisGradient> = p.displacement.to_vec();
+    g.extend(p.velocity);
+    g.extend(p.acceleration);
+    g.push(p.seat_acceleration);
+    g.extend(p.rms_acceleration);
+    g.extend([
+        p.weighted_seat_acceleration,
+        p.rms_weighted_seat_acceleration,
+        p.seat_vibration_dose_value,
+    ]);
+    g
+}
+
+#[test]
+fn the_model_exchange_partials_agree_with_central_differences() {
+    let mut c = moving([900.0, -400.0, 650.0, 300.0], 0.0);
+    c.set_time(0.7).unwrap();
+    let forces = [1200.0, -350.0, 500.0, 80.0];
+    c.set_forces(forces, [0.0; 4]).unwrap();
+    let rows = c.jacobian();
+    let outputs = partials_in_order(&c.output_partials());
+    let x = c.states();
+    let nominals = chassis_nominals();
+    let evaluate = |j: usize, delta: f64| {
+        let mut copy = c.clone();
+        if j < CHASSIS_STATES {
+            let mut y = x;
+            y[j] += delta;
+            copy.set_states(&y).unwrap();
+        } else {
+            let mut f = forces;
+            f[j - CHASSIS_STATES] += delta;
+            copy.set_forces(f, [0.0; 4]).unwrap();
+        }
+        (copy.rates().to_vec(), output_values(&copy))
+    };
+    let close = |exact: f64, difference: f64, scale: f64| {
+        (exact - difference).abs() <= 1e-6 * exact.abs().max(difference.abs()).max(1e-6 * scale)
+    };
+    let mut nonzero_force_partials = 0;
+    for j in 0..CHASSIS_STATES + 4 {
+        let size = if j < CHASSIS_STATES {
+            x[j].abs().max(nominals[j])
+        } else {
+            forces[j - CHASSIS_STATES].abs().max(1.0)
+        };
+        let delta = 1e-4 * size;
+        let (up, out_up) = evaluate(j, delta);
+        let (down, out_down) = evaluate(j, -delta);
+        let exact_of = |g: &ChassisGradient| {
+            if j < CHASSIS_STATES {
+                g.states[j]
+            } else {
+                g.forces[j - CHASSIS_STATES]
+            }
+        };
+        let scale_of = |g: &ChassisGradient| {
+            g.states
+                .iter()
+                .chain(&g.forces)
+                .fold(0.0f64, |m, v| m.max(v.abs()))
+        };
+        for (i, row) in rows.iter().enumerate() {
+            let difference = (up[i] - down[i]) / (2.0 * delta);
+            let exact = exact_of(row);
+            assert!(
+                close(exact, difference, scale_of(row) * size),
+                "d rate {i} / d {j}: {exact} vs {difference}"
+            );
+            nonzero_force_partials += usize::from(j >= CHASSIS_STATES && exact != 0.0);
+        }
+        for (k, g) in outputs.iter().enumerate() {
+            let difference = (out_up[k] - out_down[k]) / (2.0 * delta);
+            let exact = exact_of(g);
+            assert!(
+                close(exact, difference, scale_of(g) * size),
+                "d output {k} / d {j}: {exact} vs {difference}"
+            );
+        }
+    }
+    assert!(nonzero_force_partials > 20, "{nonzero_force_partials}");
+}
