@@ -130,6 +130,22 @@ impl Bound {
 /// error names the variable and the value.
 pub fn check_prescribed(body: Body, input: usize, values: [f64; 2]) -> Result<()> {
     let p = &crate::model::inputs::PRESCRIBED[input];
+    // False for NaN: a value not finite is refused below.
+    let within = values[0].abs() <= Bound::Displacement.limit()
+        && values[1].abs() <= Bound::Velocity.limit();
+    if within && (p.applies)(body) {
+        return Ok(());
+    }
+    refuse_prescribed(body, p, values)
+}
+
+/// The refusal of [`check_prescribed`], naming the variable and the value.
+#[cold]
+fn refuse_prescribed(
+    body: Body,
+    p: &crate::model::inputs::Prescribed,
+    values: [f64; 2],
+) -> Result<()> {
     if !(p.applies)(body) {
         return Err(Error::InvalidSetting {
             name: "body",

@@ -417,9 +417,11 @@ impl Simulator {
     pub fn set_prescribed(&mut self, input: usize, values: [f64; 2]) -> Result<()> {
         crate::limits::check_prescribed(self.config.body, input, values)?;
         self.settle();
-        let coordinates = PRESCRIBED[input].coordinates;
+        let [position, velocity] = PRESCRIBED[input].coordinates;
         let x = self.trajectory.current_state;
-        if (0..2).all(|k| x[coordinates[k]].to_bits() == values[k].to_bits()) {
+        if x[position].to_bits() == values[0].to_bits()
+            && x[velocity].to_bits() == values[1].to_bits()
+        {
             // The coordinates are where they were set to be: nothing to
             // commit.
             return Ok(());
@@ -431,8 +433,8 @@ impl Simulator {
             &mut self.trajectory.committed_state,
             &mut self.trajectory.current_state,
         ] {
-            point[coordinates[0]] = values[0];
-            point[coordinates[1]] = values[1];
+            point[position] = values[0];
+            point[velocity] = values[1];
         }
         if self.config.metrics.road_holding() {
             // The largest |SDD| sees the new coordinates at once.
