@@ -146,6 +146,31 @@ pub fn weighted_averages(square: f64, fourth: f64, duration: f64) -> (f64, f64) 
     (rms, fourth.max(0.0).sqrt().sqrt())
 }
 
+/// `∂ sqrt(I / duration) / ∂I = 1 / (2 sqrt(I duration))`: the partial of
+/// a running RMS with respect to its integral `I = ∫ y² dt`, taken as 0
+/// where the integral or the duration is 0 (the square root's slope is
+/// unbounded there).
+#[inline]
+pub fn rms_slope(integral: f64, duration: f64) -> f64 {
+    if duration > 0.0 && integral > 0.0 {
+        0.5 / (integral * duration).sqrt()
+    } else {
+        0.0
+    }
+}
+
+/// `∂ I^{1/4} / ∂I = I^{−3/4} / 4`: the partial of a vibration dose value
+/// with respect to its integral `I = ∫ a_w⁴ dt`, taken as 0 where the
+/// integral is 0.
+#[inline]
+pub fn dose_slope(fourth: f64) -> f64 {
+    if fourth > 0.0 {
+        0.25 / fourth.powf(0.75)
+    } else {
+        0.0
+    }
+}
+
 /// The running RMS of the dynamic tire load over the static load W (N):
 /// `k_t RMS(TDD) / W`, k_t (N/m), RMS(TDD) (m).
 pub fn tire_load_ratio(k_t: f64, rms_tire_deflection: f64, static_load: f64) -> f64 {

@@ -19,6 +19,7 @@ use super::{
     WEIGHTED_FOURTH, WEIGHTED_SQUARE,
 };
 use crate::comfort::WK_STATES;
+use crate::metrics::{dose_slope, rms_slope};
 
 /// The partials of one value with respect to the chassis's continuous
 /// states and the corners' forces.
@@ -137,22 +138,9 @@ impl Chassis {
     pub fn output_partials(&self) -> ChassisOutputPartials {
         let (acceleration, seat, weighted) = self.acceleration_gradients();
         let duration = self.time - self.start_time;
-        let integral = |k: usize| self.integrals[k];
-        // ∂ sqrt(I_k / duration) / ∂ I_k.
         let rms = |k: usize| {
-            let value = integral(k);
-            let slope = if duration > 0.0 && value > 0.0 {
-                0.5 / (value * duration).sqrt()
-            } else {
-                0.0
-            };
+            let slope = rms_slope(self.integrals[k], duration);
             ChassisGradient::of_state(INTEGRALS_AT + k).scaled(slope)
-        };
-        let fourth = integral(WEIGHTED_FOURTH);
-        let dose_slope = if fourth > 0.0 {
-            0.25 / fourth.powf(0.75)
-        } else {
-            0.0
         };
         let along = |corner: Corner, at: usize| {
             let (x, y) = self.params.position(corner);
@@ -169,7 +157,7 @@ impl Chassis {
             weighted_seat_acceleration: weighted,
             rms_weighted_seat_acceleration: rms(WEIGHTED_SQUARE),
             seat_vibration_dose_value: ChassisGradient::of_state(INTEGRALS_AT + WEIGHTED_FOURTH)
-                .scaled(dose_slope),
+                .scaled(dose_slope(self.integrals[WEIGHTED_FOURTH])),
         }
     }
 }

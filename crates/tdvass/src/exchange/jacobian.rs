@@ -22,6 +22,7 @@
 //! unbounded) and at the start.
 
 use super::instance::ModelExchange;
+use crate::metrics::{dose_slope, rms_slope};
 use crate::model::dynamics::Switch;
 use crate::model::inputs::{PRESCRIBED, PrescribedValues};
 use crate::model::{V_S, V_T, Variant, X_H, X_S, X_T};
@@ -265,27 +266,15 @@ impl ModelExchange {
         let [acceleration, deflection, tire, weighted, body_force] = self.performance_gradients(&p);
         let duration = self.time - self.config.start_time;
         let integral = |k: usize| self.states[INTEGRALS_AT + k];
-        // ∂ sqrt(I_k / duration) / ∂ I_k.
         let rms = |k: usize| {
-            let value = integral(k);
-            let slope = if duration > 0.0 && value > 0.0 {
-                0.5 / (value * duration).sqrt()
-            } else {
-                0.0
-            };
-            Gradient::of_state(INTEGRALS_AT + k).scaled(slope)
+            Gradient::of_state(INTEGRALS_AT + k).scaled(rms_slope(integral(k), duration))
         };
         let weights = self.config.weights;
         let objective = rms(0)
             .scaled(weights.body_acceleration)
             .plus(&rms(1).scaled(weights.suspension_deflection))
             .plus(&rms(2).scaled(weights.tire_deflection));
-        let fourth = integral(4);
-        let dose_slope = if fourth > 0.0 {
-            0.25 / fourth.powf(0.75)
-        } else {
-            0.0
-        };
+
         let k_t = self.config.params.k_t;
         // The tire law `max(k_t (x_g − x_t), −W)` of a unilateral tire is
         // flat where it holds the load at −W (the kink counts as contact).
@@ -320,7 +309,8 @@ impl ModelExchange {
             objective,
             weighted_body_acceleration: weighted,
             rms_weighted_body_acceleration: rms(3),
-            vibration_dose_value: Gradient::of_state(INTEGRALS_AT + 4).scaled(dose_slope),
+            vibration_dose_value: Gradient::of_state(INTEGRALS_AT + 4)
+                .scaled(dose_slope(integral(4))),
             dynamic_tire_load: tire_load,
             rms_dynamic_tire_load_ratio: rms(2).scaled(k_t / self.static_load),
             contact_loss_time: Gradient::of_state(CONTINUOUS_STATES - 1),
