@@ -232,10 +232,18 @@ impl Slave {
                 }
             })
             .collect::<Result<_, _>>()?;
-        let Engine::ChassisExchange(Some(chassis)) = &self.state.engine else {
-            return Err(FmiError::error(
-                "the chassis provides directional derivatives in Model Exchange only (its CoSimulation element: providesDirectionalDerivative = false)",
-            ));
+        let chassis = match &self.state.engine {
+            Engine::ChassisExchange(Some(chassis)) => chassis,
+            Engine::ChassisExchange(None) => {
+                return Err(FmiError::error(
+                    "no Model Exchange model: the instance is not initialized",
+                ));
+            }
+            _ => {
+                return Err(FmiError::error(
+                    "the chassis provides directional derivatives in Model Exchange only (its CoSimulation element: providesDirectionalDerivative = false)",
+                ));
+            }
         };
         let rows = chassis.jacobian();
         let outputs = chassis.output_partials();

@@ -340,3 +340,49 @@ fn the_corner_in_model_exchange_refuses_bad_body_inputs_states_and_times_by_name
     // Still usable.
     euler(&mut s, 20, 30, &[]);
 }
+
+#[test]
+fn the_chassis_s_model_exchange_partials_are_exact_and_bad_calls_are_named() {
+    let model = Model::Chassis;
+    // Before initialization there is no model to differentiate.
+    let mut s = slave_of(model);
+    s.use_model_exchange();
+    s.setup_experiment(None, 0.0, None).unwrap();
+    let e = refusal(s.partials(
+        &[vr_of(model, "der(heave_velocity)")],
+        &[vr_of(model, "force_fl")],
+    ));
+    assert!(e.contains("not initialized"), "{e}");
+    let mut s = exchange_of(model);
+    inputs(&mut s, 3);
+    let mass = get_of(&mut s, "mass");
+    let heave_rate = vr_of(model, "der(heave_velocity)");
+    let forces: Vec<u32> = ["force_fl", "force_fr", "force_rl", "force_rr"]
+        .iter()
+        .map(|n| vr_of(model, n))
+        .collect();
+    // m z'' = Σ f: each force moves the heave acceleration by 1/m.
+    let row = s.partials(&[heave_rate], &forces).unwrap();
+    assert_eq!(row.len(), 4);
+    for value in row {
+        assert!((value - 1.0 / mass).abs() <= 1e-15 / mass, "{value}");
+    }
+    // The heave is the integral of its velocity.
+    let partial = s
+        .partials(
+            &[vr_of(model, "der(heave)")],
+            &[vr_of(model, "heave_velocity")],
+        )
+        .unwrap();
+    assert_eq!(partial, [1.0]);
+    let e = refusal(s.partials(&[heave_rate], &[vr_of(model, "mass")]));
+    assert!(e.contains("`mass` is not a known"), "{e}");
+    let e = refusal(s.partials(&[vr_of(model, "mass")], &forces));
+    assert!(e.contains("`mass` is not an unknown"), "{e}");
+    // Co-Simulation provides none.
+    let mut cs = slave_of(model);
+    cs.setup_experiment(None, 0.0, None).unwrap();
+    start(&mut cs);
+    let e = refusal(cs.partials(&[vr_of(model, "heave")], &forces));
+    assert!(e.contains("Model Exchange only"), "{e}");
+}
