@@ -2,7 +2,7 @@
 //!
 //! Each sets one of the plant's positions and its velocity from outside,
 //! at its changes; between changes the position moves at the velocity (the
-//! velocity's row of A is zero where the input applies:
+//! velocity's rows of A, b and e are zero where the input applies:
 //! [`super::Plant::with_body`]). Both engines, their saved states, their
 //! partials and the FMU's setters read this list:
 //!
