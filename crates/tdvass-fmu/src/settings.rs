@@ -170,7 +170,9 @@ impl Settings {
     /// ([`tdvass::model::inputs::PRESCRIBED`], by index), `None` for one
     /// the model does not have.
     pub fn prescribed(&self) -> PrescribedValues {
-        let values = [[self.body_displacement, self.body_velocity]];
+        // One pair per entry of the list: a new entry without its values
+        // here does not compile.
+        let values: [[f64; 2]; PRESCRIBED.len()] = [[self.body_displacement, self.body_velocity]];
         std::array::from_fn(|i| (PRESCRIBED[i].applies)(self.body()).then_some(values[i]))
     }
 
