@@ -70,6 +70,16 @@ impl Corner {
         Corner::RearRight,
     ];
 
+    /// Its place in [`Corner::ALL`] (the order of the force inputs).
+    pub fn index(self) -> usize {
+        match self {
+            Corner::FrontLeft => 0,
+            Corner::FrontRight => 1,
+            Corner::RearLeft => 2,
+            Corner::RearRight => 3,
+        }
+    }
+
     /// The name of its force input (`force_fl` …).
     pub fn force_name(self) -> &'static str {
         match self {

@@ -247,7 +247,6 @@ impl Slave {
         };
         let rows = chassis.jacobian();
         let outputs = chassis.output_partials();
-        let corner = |c: Corner| Corner::ALL.iter().position(|k| *k == c).unwrap_or(0);
         let gradients = unknowns
             .iter()
             .map(|&vr| {
@@ -256,8 +255,8 @@ impl Slave {
                 Ok(match var.access {
                     Access::StateDerivative(i) => rows[i],
                     Access::ChassisOutput(id) => match id {
-                        C::Displacement(c) => outputs.displacement[corner(c)],
-                        C::Velocity(c) => outputs.velocity[corner(c)],
+                        C::Displacement(c) => outputs.displacement[c.index()],
+                        C::Velocity(c) => outputs.velocity[c.index()],
                         C::Position(k) => ChassisGradient::of_state(k),
                         C::Rate(k) => ChassisGradient::of_state(3 + k),
                         C::Acceleration(k) => outputs.acceleration[k],

@@ -407,6 +407,13 @@ fn partials_in_order(p: &ChassisOutputPartials) -> Vec<ChassisGradient> {
 }
 
 #[test]
+fn each_corner_s_index_is_its_place_among_all() {
+    for (i, corner) in Corner::ALL.iter().enumerate() {
+        assert_eq!(corner.index(), i);
+    }
+}
+
+#[test]
 fn the_model_exchange_partials_agree_with_central_differences() {
     let mut c = moving([900.0, -400.0, 650.0, 300.0], 0.0);
     c.set_time(0.7).unwrap();
