@@ -30,6 +30,7 @@ pub const MAX_SIMULATE_STEPS: f64 = 1e10;
 
 mod args;
 mod car;
+mod deferred;
 mod warnings;
 
 use args::*;
