@@ -4,6 +4,8 @@
  * under wine) and with the aarch64 GNU toolchain (run under qemu-user). It
  * loads one platform's library and writes what it computed as files, which
  * the tests (test_platforms.py) compare with the native Linux x86-64 run.
+ * One source file on purpose (one compiler call per platform, no build
+ * system): hence its length.
  *
  *   harness LIB GUID OUTPUT_VRS OUT_DIR STATE_IN [NAME TOKEN OUTPUTS INPUTS DERIVATIVES TABLE MODE]...
  *

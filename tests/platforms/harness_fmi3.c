@@ -4,7 +4,8 @@
  * x86_64-linux, with MinGW-w64 for x86_64-windows (run under wine) and
  * with the aarch64 GNU toolchain for aarch64-linux (run under qemu-user),
  * each run loads that platform's binary of tdvass-fmi3.fmu. The FMI 3.0
- * types are declared in tests/include/fmi3_types.h.
+ * types are declared in tests/include/fmi3_types.h. One source file on
+ * purpose, as harness.c (one compiler call per platform): hence its length.
  *
  *   harness_fmi3 LIB TOKEN OUTPUT_VRS OUT_DIR STATE_IN [NAME TOKEN OUTPUTS INPUTS DERIVATIVES TABLE MODE]...
  *

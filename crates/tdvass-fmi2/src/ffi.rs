@@ -1,7 +1,7 @@
 //! The C ABI: every fmi2 function of FMI 2.0 Co-Simulation and Model
 //! Exchange, exported with C linkage. The standard has 47 functions, each a
 //! few lines of conversions; they stay together so that every `unsafe` of
-//! this crate is in one file.
+//! this crate is in one file (hence its length).
 //!
 //! This layer holds the C signatures, converts `fmi2Boolean`, `fmi2Byte`
 //! and `fmi2Status`, and calls the safe [`Instance`] through
