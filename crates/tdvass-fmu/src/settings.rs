@@ -160,6 +160,17 @@ impl Settings {
         }
     }
 
+    /// What the model's simulation computes: every metric (ISO 2631-1
+    /// comfort, road holding, working space) whatever the master reads;
+    /// the corner all but comfort, since it carries no body to weigh (its
+    /// body acceleration is zero; a car's comfort is its chassis's).
+    pub fn metrics(&self) -> Metrics {
+        match self.body() {
+            Body::Mass => Metrics::Comfort,
+            Body::Attached => Metrics::RoadHolding,
+        }
+    }
+
     /// The corner's body attachment point `(displacement, velocity)`;
     /// `None` for the quarter car.
     pub fn body_input(&self) -> Option<(f64, f64)> {
@@ -259,9 +270,7 @@ impl Settings {
             start_time,
             initial_state: State::from(self.initial_state),
             weights: self.weights(),
-            // The FMU computes every metric (ISO 2631-1 comfort, road
-            // holding, working space) whatever the master reads.
-            metrics: Metrics::Comfort,
+            metrics: self.metrics(),
         })
     }
 }

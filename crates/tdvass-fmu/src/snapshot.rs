@@ -44,7 +44,7 @@ use crate::variables::{Access, FmiVersion, by_vr, variables_of};
 use tdvass::bytes::{ByteReader, ByteWriter};
 use tdvass::chassis::Chassis;
 use tdvass::exchange::ModelExchange;
-use tdvass::solver::Simulator;
+use tdvass::solver::{SimulationConfig, Simulator};
 
 /// First bytes of every serialized state.
 pub const MAGIC: &[u8; 8] = b"TDVASSFS";
@@ -361,6 +361,19 @@ fn decode_settings(r: &mut Reader, model: Model, version: u32) -> Result<Setting
     Ok(settings)
 }
 
+/// Whether a saved simulator's configuration is the one `settings` give:
+/// the same, or the same but for more metrics (a corner saved while it
+/// still weighed a comfort it has no body for continues with it; see
+/// [`Settings::metrics`]).
+fn saved_config_matches(saved: &SimulationConfig, settings: &SimulationConfig) -> bool {
+    saved.metrics >= settings.metrics
+        && *saved
+            == (SimulationConfig {
+                metrics: saved.metrics,
+                ..settings.clone()
+            })
+}
+
 fn decode_payload(bytes: &[u8], model: Model, version: u32) -> Result<SlaveState, FmiError> {
     let mut r = Reader::new(bytes);
     let code = r.u8("the phase")?;
@@ -471,7 +484,7 @@ fn decode_payload(bytes: &[u8], model: Model, version: u32) -> Result<SlaveState
     if let Some(sim) = &mut sim {
         crate::guards::check_rates(&settings).map_err(|e| invalid(e.message))?;
         let config = settings.to_config(start_time).map_err(invalid)?;
-        if *sim.config() != config {
+        if !saved_config_matches(sim.config(), &config) {
             return Err(invalid("the simulator does not match the settings"));
         }
         // The committed time lies a representable number of steps after the
@@ -585,6 +598,7 @@ pub fn deserialize(bytes: &[u8], guid: &str, model: Model) -> Result<SlaveState,
 mod tests {
     use super::*;
     use crate::guid;
+    use tdvass::solver::Metrics;
 
     /// The simulator of a Co-Simulation state.
     fn simulator(state: SlaveState) -> Simulator {
@@ -633,6 +647,46 @@ mod tests {
         .unwrap();
         assert!(back.engine.simulator().is_none());
         assert_eq!(back.settings, fresh.settings);
+    }
+
+    #[test]
+    fn a_corner_saved_while_it_weighed_comfort_loads_and_fewer_metrics_are_refused() {
+        let corner = SlaveState::new(Engine::CoSimulation(None), Model::Corner);
+        let config = corner.settings.to_config(0.0).unwrap();
+        assert_eq!(config.metrics, Metrics::RoadHolding);
+        let with = |metrics: Metrics, mut model: SlaveState| {
+            let mut sim = Simulator::new(SimulationConfig {
+                metrics,
+                ..model.settings.to_config(0.0).unwrap()
+            })
+            .unwrap();
+            sim.advance_to(0.0123).unwrap();
+            model.engine = Engine::CoSimulation(Some(Box::new(sim)));
+            model.phase = Phase::StepComplete;
+            model
+        };
+        let older = with(Metrics::Comfort, corner.clone());
+        let bytes = serialize(&older, &guid(Model::Corner));
+        let back = deserialize(&bytes, &guid(Model::Corner), Model::Corner).unwrap();
+        assert_eq!(simulator(back).config().metrics, Metrics::Comfort);
+        let (mut a, mut b) = (
+            simulator(older),
+            simulator(with(Metrics::RoadHolding, corner)),
+        );
+        a.advance_to(0.5).unwrap();
+        b.advance_to(0.5).unwrap();
+        let (a, b) = (a.outputs(), b.outputs());
+        assert_eq!((a.rms, a.road_holding), (b.rms, b.road_holding));
+
+        let fewer = with(Metrics::RoadHolding, SlaveState::default());
+        let bytes = serialize(&fewer, &guid(Model::QuarterCar));
+        let refused = deserialize(&bytes, &guid(Model::QuarterCar), Model::QuarterCar);
+        assert!(
+            refused
+                .unwrap_err()
+                .message
+                .contains("the simulator does not match the settings")
+        );
     }
 
     #[test]
