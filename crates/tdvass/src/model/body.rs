@@ -16,7 +16,10 @@ use crate::error::{Error, Result};
 ///   [`super::Plant::with_body`]). The suspension's force on the body,
 ///   [`super::Plant::body_force`], is the corner's output, and
 ///   `m_s = W_c / g0` carries the corner's share W_c of the body's weight
-///   (it sets the tire's static load W, and nothing else).
+///   (it sets the tire's static load W, and nothing else). Its BA (the
+///   body row of A) is zero, so its comfort outputs are zero too: the
+///   corner FMU runs it at [`crate::solver::Metrics::RoadHolding`], with
+///   no W_k filter to integrate.
 ///
 /// The quarter car is the corner under a body that is a point mass m_s
 /// driven by that force.
